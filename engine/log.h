@@ -1,0 +1,20 @@
+/* log.h - the one logger: severity, printf-checked format, source location.
+ * Messages go to stderr; TESSERA_LOG=debug|info|warn|error sets the threshold. */
+#ifndef TESSERA_LOG_H
+#define TESSERA_LOG_H
+
+enum log_level { LOG_DEBUG, LOG_INFO, LOG_WARN, LOG_ERROR };
+
+void log_write(enum log_level level, const char *file, int line, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+/* As log_write, with ": strerror(errno)" appended (errno read on entry). */
+void log_write_errno(enum log_level level, const char *file, int line, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+#define log_debug(...) log_write(LOG_DEBUG, __FILE__, __LINE__, __VA_ARGS__)
+#define log_info(...) log_write(LOG_INFO, __FILE__, __LINE__, __VA_ARGS__)
+#define log_warn(...) log_write(LOG_WARN, __FILE__, __LINE__, __VA_ARGS__)
+#define log_error(...) log_write(LOG_ERROR, __FILE__, __LINE__, __VA_ARGS__)
+#define log_errno(level, ...) log_write_errno(level, __FILE__, __LINE__, __VA_ARGS__)
+
+#endif

@@ -1,0 +1,228 @@
+#include "mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+mesh *mesh_create(void) { return calloc(1, sizeof(mesh)); }
+
+void mesh_destroy(mesh *m)
+{
+    if (!m)
+        return;
+    free(m->positions);
+    free(m->normals);
+    free(m->colors);
+    free(m->indices);
+    free(m->triangle_material);
+    free(m->materials);
+    free(m);
+}
+
+/* realloc an array of `count` items of `item_bytes`, NULL-safe and overflow-checked */
+static bool grow(void *ptr_to_array, size_t count, size_t item_bytes)
+{
+    void **array = ptr_to_array;
+    if (count > SIZE_MAX / item_bytes)
+        return false;
+    void *p = realloc(*array, count * item_bytes ? count * item_bytes : 1);
+    if (!p)
+        return false;
+    *array = p;
+    return true;
+}
+
+bool mesh_reserve_vertices(mesh *m, uint32_t n)
+{
+    if (n <= m->vertex_capacity)
+        return true;
+    if (!grow(&m->positions, n, 3 * sizeof(float)))
+        return false;
+    if (m->normals && !grow(&m->normals, n, 3 * sizeof(float)))
+        return false;
+    if (m->colors && !grow(&m->colors, n, 3 * sizeof(float)))
+        return false;
+    m->vertex_capacity = n;
+    return true;
+}
+
+bool mesh_reserve_triangles(mesh *m, uint32_t n)
+{
+    if (n <= m->triangle_capacity)
+        return true;
+    if (!grow(&m->indices, n, 3 * sizeof(uint32_t)))
+        return false;
+    if (m->triangle_material && !grow(&m->triangle_material, n, sizeof(uint32_t)))
+        return false;
+    m->triangle_capacity = n;
+    return true;
+}
+
+bool mesh_enable_normals(mesh *m)
+{
+    if (m->normals)
+        return true;
+    m->normals = calloc((size_t)m->vertex_capacity + 1, 3 * sizeof(float));
+    return m->normals != NULL;
+}
+
+bool mesh_enable_colors(mesh *m)
+{
+    if (m->colors)
+        return true;
+    m->colors = calloc((size_t)m->vertex_capacity + 1, 3 * sizeof(float));
+    return m->colors != NULL;
+}
+
+bool mesh_enable_triangle_materials(mesh *m)
+{
+    if (m->triangle_material)
+        return true;
+    m->triangle_material = calloc((size_t)m->triangle_capacity + 1, sizeof(uint32_t));
+    return m->triangle_material != NULL;
+}
+
+static uint32_t next_capacity(uint32_t current)
+{
+    if (current < 1024)
+        return 1024;
+    return current > UINT32_MAX / 2 ? UINT32_MAX : current * 2;
+}
+
+bool mesh_add_vertex(mesh *m, float x, float y, float z)
+{
+    if (m->vertex_count == UINT32_MAX)
+        return false;
+    if (m->vertex_count == m->vertex_capacity && !mesh_reserve_vertices(m, next_capacity(m->vertex_capacity)))
+        return false;
+    float *p = m->positions + 3 * (size_t)m->vertex_count;
+    p[0] = x;
+    p[1] = y;
+    p[2] = z;
+    m->vertex_count++;
+    return true;
+}
+
+bool mesh_add_triangle(mesh *m, uint32_t a, uint32_t b, uint32_t c)
+{
+    if (m->triangle_count == UINT32_MAX)
+        return false;
+    if (m->triangle_count == m->triangle_capacity &&
+        !mesh_reserve_triangles(m, next_capacity(m->triangle_capacity)))
+        return false;
+    uint32_t *t = m->indices + 3 * (size_t)m->triangle_count;
+    t[0] = a;
+    t[1] = b;
+    t[2] = c;
+    if (m->triangle_material)
+        m->triangle_material[m->triangle_count] = 0;
+    m->triangle_count++;
+    return true;
+}
+
+static bool all_finite(const float *v, size_t n, size_t *bad)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i])) {
+            *bad = i;
+            return false;
+        }
+    return true;
+}
+
+bool mesh_validate(const mesh *m, const char *source, tess_error *err)
+{
+    size_t bad;
+    if (!all_finite(m->positions, 3 * (size_t)m->vertex_count, &bad))
+        return tess_error_set(err, "%s: vertex %zu: coordinate %c is %g (must be finite)", source, bad / 3,
+                              "xyz"[bad % 3], (double)m->positions[bad]);
+    if (m->normals && !all_finite(m->normals, 3 * (size_t)m->vertex_count, &bad))
+        return tess_error_set(err, "%s: vertex %zu: normal component %c is not finite", source, bad / 3,
+                              "xyz"[bad % 3]);
+    if (m->colors && !all_finite(m->colors, 3 * (size_t)m->vertex_count, &bad))
+        return tess_error_set(err, "%s: vertex %zu: colour is not finite", source, bad / 3);
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        if (m->indices[i] >= m->vertex_count)
+            return tess_error_set(err, "%s: triangle %zu: vertex index %u out of range (mesh has %u vertices)",
+                                  source, i / 3, m->indices[i], m->vertex_count);
+    if (m->triangle_material)
+        for (size_t i = 0; i < m->triangle_count; i++)
+            if (m->triangle_material[i] >= m->material_count)
+                return tess_error_set(err, "%s: triangle %zu: material %u out of range (%u materials)", source,
+                                      i, m->triangle_material[i], m->material_count);
+    return true;
+}
+
+bool mesh_bounds(const mesh *m, float lo[3], float hi[3])
+{
+    if (m->vertex_count == 0)
+        return false;
+    for (int k = 0; k < 3; k++)
+        lo[k] = hi[k] = m->positions[k];
+    for (size_t i = 1; i < m->vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            float v = m->positions[3 * i + (size_t)k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    return true;
+}
+
+void mesh_transform(mesh *m, const float x[12])
+{
+    for (size_t i = 0; i < m->vertex_count; i++) {
+        float *p = m->positions + 3 * i;
+        float px = p[0], py = p[1], pz = p[2];
+        p[0] = x[0] * px + x[1] * py + x[2] * pz + x[3];
+        p[1] = x[4] * px + x[5] * py + x[6] * pz + x[7];
+        p[2] = x[8] * px + x[9] * py + x[10] * pz + x[11];
+    }
+    if (!m->normals)
+        return;
+    /* normals transform by the inverse transpose of the linear part: the
+     * cofactor matrix is proportional to it, and we renormalise anyway */
+    float c[9] = {
+        x[5] * x[10] - x[6] * x[9], x[6] * x[8] - x[4] * x[10], x[4] * x[9] - x[5] * x[8],
+        x[2] * x[9] - x[1] * x[10], x[0] * x[10] - x[2] * x[8], x[1] * x[8] - x[0] * x[9],
+        x[1] * x[6] - x[2] * x[5],  x[2] * x[4] - x[0] * x[6],  x[0] * x[5] - x[1] * x[4],
+    };
+    for (size_t i = 0; i < m->vertex_count; i++) {
+        float *n = m->normals + 3 * i;
+        float nx = c[0] * n[0] + c[3] * n[1] + c[6] * n[2];
+        float ny = c[1] * n[0] + c[4] * n[1] + c[7] * n[2];
+        float nz = c[2] * n[0] + c[5] * n[1] + c[8] * n[2];
+        float len = sqrtf(nx * nx + ny * ny + nz * nz);
+        float inv = len > 0.f ? 1.f / len : 0.f;
+        n[0] = nx * inv;
+        n[1] = ny * inv;
+        n[2] = nz * inv;
+    }
+}
+
+size_t mesh_bytes(const mesh *m)
+{
+    size_t v = m->vertex_count, t = m->triangle_count;
+    size_t bytes = v * 3 * sizeof(float) + t * 3 * sizeof(uint32_t);
+    if (m->normals)
+        bytes += v * 3 * sizeof(float);
+    if (m->colors)
+        bytes += v * 3 * sizeof(float);
+    if (m->triangle_material)
+        bytes += t * sizeof(uint32_t);
+    bytes += m->material_count * sizeof(mesh_material);
+    return bytes;
+}
+
+static bool has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+mesh *mesh_load(const char *path, tess_error *err)
+{
+    if (has_extension(path, ".ply"))
+        return mesh_load_ply(path, err);
+    return mesh_load_assimp(path, err);
+}

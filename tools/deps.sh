@@ -1,0 +1,33 @@
+#!/bin/sh
+# deps.sh - make sure the Debian packages tessera builds against are installed.
+# As root: installs what is missing with apt-get (and says so).
+# Otherwise: prints the exact apt-get line and fails.
+# Usage: tools/deps.sh [--bench]   (--bench adds what `make bench` needs)
+set -eu
+
+PACKAGES="gcc g++ make pkg-config libdrm-dev libinput-dev libevdev-dev \
+libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev"
+if [ "${1:-}" = "--bench" ]; then
+    PACKAGES="$PACKAGES libembree-dev"
+fi
+
+missing=""
+for p in $PACKAGES; do
+    status=$(dpkg-query -W -f='${db:Status-Status}' "$p" 2>/dev/null || true)
+    [ "$status" = "installed" ] || missing="$missing $p"
+done
+[ -z "$missing" ] && exit 0
+
+if [ "$(id -u)" -eq 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "deps: installing missing Debian packages:$missing"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    # shellcheck disable=SC2086
+    apt-get install -y -qq --no-install-recommends $missing >/dev/null
+    echo "deps: installed."
+    exit 0
+fi
+echo "deps: missing Debian packages:$missing" >&2
+echo "deps: install them with:" >&2
+echo "  sudo apt-get install -y$missing" >&2
+exit 1

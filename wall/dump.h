@@ -1,0 +1,48 @@
+/* dump.h - the dump-to-file backend: frames written through OpenImageIO.
+ *
+ * The format follows the file extension: .png (and other 8-bit formats such as
+ * .jpg, .tif, .ppm) get 8-bit sRGB-encoded values; .exr gets linear float.
+ * Implemented in dump_oiio.cpp; every C++ exception is caught there and
+ * becomes a tess_error naming the path and OpenImageIO's message. */
+#ifndef TESSERA_DUMP_H
+#define TESSERA_DUMP_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine/err.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Write a W x H image of linear RGB floats (3 per pixel, row-major, top row
+ * first) to `path`. */
+bool dump_write_rgb(const char *path, int width_px, int height_px, const float *rgb_linear, tess_error *err);
+
+/* Read an image as 8-bit RGB (3 bytes per pixel, top row first), as stored in
+ * the file (no colour conversion); for tests and reference images. The caller
+ * frees *rgb_out with free(). */
+bool dump_read_rgb8(const char *path, int *width_px, int *height_px, uint8_t **rgb_out, tess_error *err);
+
+/* Read an image as float RGB (3 per pixel) with the file's values (EXR: linear). */
+bool dump_read_rgbf(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err);
+
+/* The file name of frame `frame` of a sequence written to `pattern`: a run of
+ * '#' becomes the zero-padded frame number (at least as many digits as '#'s),
+ * as does a printf-style "%d" or "%0Nd". A pattern without either gets
+ * "_NNNN" before the extension when `sequence` is true, and is used as is
+ * otherwise. False (with err) when the result does not fit in out_bytes or
+ * the pattern has more than one frame-number field. */
+bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes,
+                     tess_error *err);
+
+/* sRGB encode one linear value (clamped to [0, 1]) to 8 bits, rounding to nearest. */
+uint8_t dump_srgb_encode_u8(float linear);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
