@@ -56,10 +56,10 @@ $(LIB): $(LIB_OBJ)
 	ar rcs $@ $^
 
 tessera: $(CLI_OBJ) $(LIB)
-	$(CXX) $(CFLAGS) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
 $(TEST_BIN): $(TEST_OBJ) $(LIB) tessera
-	$(CXX) $(CFLAGS) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 
 # the main job on the built-in default scene (headless: frames to out/)
 run: deps
@@ -78,7 +78,7 @@ test-asan: deps
 	cd tests && TESSERA_BIN=../tessera-asan ASAN_OPTIONS=detect_leaks=1 ../build-asan/tessera_tests --jobs 2
 
 tessera-asan: $(CLI_OBJ) $(LIB)
-	$(CXX) $(CFLAGS) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
 # every header compiles on its own
 HEADERS := $(wildcard engine/*.h wall/*.h input/*.h tools/cli/*.h)
@@ -88,7 +88,6 @@ check-headers:
 	done
 
 bench: deps
-	@sh tools/deps.sh --bench
 	$(MAKE) tessera
 	sh tools/bench.sh
 

@@ -24,7 +24,9 @@ void tess_error_prefix(tess_error *err, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(prefix, sizeof prefix, fmt, ap);
     va_end(ap);
-    char joined[TESS_ERROR_MSG_BYTES];
+    /* room for both; the result is cut to the message size */
+    char joined[2 * TESS_ERROR_MSG_BYTES];
     snprintf(joined, sizeof joined, "%s%s", prefix, err->msg);
-    memcpy(err->msg, joined, sizeof joined);
+    memcpy(err->msg, joined, sizeof err->msg - 1);
+    err->msg[sizeof err->msg - 1] = '\0';
 }

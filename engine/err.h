@@ -9,6 +9,10 @@
 
 #include <stdbool.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define TESS_ERROR_MSG_BYTES 512 /* long enough for a path, a field name and a reason */
 
 typedef struct tess_error {
@@ -24,5 +28,9 @@ bool tess_error_set(tess_error *err, const char *fmt, ...) __attribute__((format
 void tess_error_prefix(tess_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
 static inline bool tess_error_is_set(const tess_error *err) { return err && err->msg[0] != '\0'; }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -26,7 +26,8 @@ static bool grow(void *ptr_to_array, size_t count, size_t item_bytes)
     void **array = ptr_to_array;
     if (count > SIZE_MAX / item_bytes)
         return false;
-    void *p = realloc(*array, count * item_bytes ? count * item_bytes : 1);
+    size_t bytes = count * item_bytes;
+    void *p = realloc(*array, bytes > 0 ? bytes : 1);
     if (!p)
         return false;
     *array = p;

@@ -2,7 +2,7 @@
 # deps.sh - make sure the Debian packages tessera builds against are installed.
 # As root: installs what is missing with apt-get (and says so).
 # Otherwise: prints the exact apt-get line and fails.
-# Usage: tools/deps.sh [--bench]   (--bench adds what `make bench` needs)
+# Usage: tools/deps.sh [--bench]   (--bench adds Embree, for the peer comparison)
 set -eu
 
 PACKAGES="gcc g++ make pkg-config libdrm-dev libinput-dev libevdev-dev \

@@ -1,0 +1,32 @@
+/* accel.h - the scene's acceleration structure: one BVH per geometry (mesh or
+ * sphere set) under a top-level BVH over the geometries' bounds.
+ *
+ * Built once per scene; read-only afterwards, so any number of render threads
+ * may trace through it concurrently without locks. */
+#ifndef TESSERA_ACCEL_H
+#define TESSERA_ACCEL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "err.h"
+#include "ray.h"
+
+struct scene;
+typedef struct accel accel;
+
+/* The scene must outlive the accel and stay unchanged while it is used. */
+accel *accel_build(const struct scene *s, tess_error *err);
+void accel_destroy(accel *a); /* NULL is fine */
+
+/* Closest hit in (r->t_near, r->t_far]; fills *h (hit_none() on a miss) and
+ * returns whether something was hit. Degenerate rays miss. */
+bool accel_intersect(const accel *a, const ray *r, hit *h);
+
+/* Any hit in (r->t_near, r->t_far]; stops at the first one found. */
+bool accel_occluded(const accel *a, const ray *r);
+
+/* Bytes of acceleration data (nodes, primitive order), not counting the scene. */
+size_t accel_bytes(const accel *a);
+
+#endif

@@ -1,0 +1,183 @@
+#include "render.h"
+
+#include <float.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+
+#include "accel.h"
+#include "log.h"
+#include "scene.h"
+
+/* What shading needs to know about a hit. */
+typedef struct surface {
+    vec3 position;       /* world */
+    vec3 geometric_n;    /* unit, facing the incoming ray */
+    vec3 shading_n;      /* unit, same hemisphere as geometric_n */
+    vec3 kd;             /* diffuse reflectance */
+    const material *mat;
+} surface;
+
+static vec3 mesh_vertex(const float *array, uint32_t i)
+{
+    const float *p = array + 3 * (size_t)i;
+    return v3(p[0], p[1], p[2]);
+}
+
+static vec3 interpolate(const float *array, const uint32_t *idx, float u, float v)
+{
+    vec3 a = mesh_vertex(array, idx[0]), b = mesh_vertex(array, idx[1]), c = mesh_vertex(array, idx[2]);
+    return v3_add(v3_scale(a, 1.f - u - v), v3_add(v3_scale(b, u), v3_scale(c, v)));
+}
+
+static surface describe_hit(const scene *s, const ray *r, const hit *h)
+{
+    surface sf;
+    if (h->geom_id < s->mesh_count) {
+        const scene_mesh *sm = &s->meshes[h->geom_id];
+        const mesh *m = sm->mesh;
+        const uint32_t *idx = m->indices + 3 * (size_t)h->prim_id;
+        vec3 v0 = mesh_vertex(m->positions, idx[0]), v1 = mesh_vertex(m->positions, idx[1]),
+             v2 = mesh_vertex(m->positions, idx[2]);
+        /* from barycentrics rather than org + t dir: accurate to the surface */
+        sf.position = interpolate(m->positions, idx, h->u, h->v);
+        sf.geometric_n = v3_normalize(v3_cross(v3_sub(v1, v0), v3_sub(v2, v0)));
+        sf.shading_n = m->normals ? v3_normalize(interpolate(m->normals, idx, h->u, h->v)) : sf.geometric_n;
+        uint32_t mat_id = sm->material_id;
+        if (sm->mesh_material_ids && m->triangle_material)
+            mat_id = sm->mesh_material_ids[m->triangle_material[h->prim_id]];
+        sf.mat = &s->materials[mat_id];
+        sf.kd = m->colors ? interpolate(m->colors, idx, h->u, h->v) : sf.mat->diffuse;
+    } else {
+        const sphere_set *sp = &s->spheres;
+        vec3 c = v3(sp->center_x[h->prim_id], sp->center_y[h->prim_id], sp->center_z[h->prim_id]);
+        sf.position = v3_add(r->org, v3_scale(r->dir, h->t));
+        sf.geometric_n = v3_scale(v3_sub(sf.position, c), 1.f / sp->radius[h->prim_id]);
+        sf.geometric_n = v3_normalize(sf.geometric_n);
+        sf.shading_n = sf.geometric_n;
+        sf.mat = &s->materials[sp->material_id[h->prim_id]];
+        sf.kd = sf.mat->diffuse;
+    }
+    /* two-sided: face the viewer */
+    if (v3_dot(sf.geometric_n, r->dir) > 0.f)
+        sf.geometric_n = v3_scale(sf.geometric_n, -1.f);
+    if (v3_dot(sf.shading_n, sf.geometric_n) < 0.f)
+        sf.shading_n = v3_scale(sf.shading_n, -1.f);
+    return sf;
+}
+
+static vec3 shade_light(const render_view *v, const surface *sf, const light *l, vec3 to_viewer)
+{
+    vec3 to_light;
+    float shadow_t_far, falloff = 1.f;
+    if (l->kind == LIGHT_DIRECTIONAL) {
+        to_light = l->direction;
+        shadow_t_far = FLT_MAX;
+    } else {
+        vec3 d = v3_sub(l->position, sf->position);
+        float dist2 = v3_dot(d, d);
+        if (!(dist2 > 0.f))
+            return v3(0.f, 0.f, 0.f);
+        falloff = 1.f / dist2;
+        to_light = v3_scale(d, 1.f / sqrtf(dist2));
+        shadow_t_far = sqrtf(dist2);
+    }
+    float n_dot_l = v3_dot(sf->shading_n, to_light);
+    /* a light below the geometric surface cannot reach it, whatever the shading normal says */
+    if (n_dot_l <= 0.f || v3_dot(sf->geometric_n, to_light) <= 0.f)
+        return v3(0.f, 0.f, 0.f);
+    if (v->shadows && l->casts_shadows) {
+        ray shadow = {ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, shadow_t_far};
+        if (accel_occluded(v->accel, &shadow))
+            return v3(0.f, 0.f, 0.f);
+    }
+    vec3 reflected = v3_scale(sf->kd, n_dot_l);
+    if (sf->mat->model == MATERIAL_PHONG) {
+        vec3 mirror = v3_sub(v3_scale(sf->shading_n, 2.f * n_dot_l), to_light);
+        float r_dot_v = v3_dot(mirror, to_viewer);
+        if (r_dot_v > 0.f)
+            reflected = v3_add(reflected, v3_scale(sf->mat->specular, powf(r_dot_v, sf->mat->shininess)));
+    }
+    return v3_mul(reflected, v3_scale(l->color, l->intensity * falloff));
+}
+
+vec3 render_shade(const render_view *v, const ray *r)
+{
+    const scene *s = v->scene;
+    hit h;
+    if (!accel_intersect(v->accel, r, &h))
+        return s->background;
+    surface sf = describe_hit(s, r, &h);
+    vec3 to_viewer = v3_normalize(v3_scale(r->dir, -1.f));
+    vec3 colour = v3_mul(v3_scale(s->ambient, sf.mat->ambient), sf.kd);
+    for (uint32_t i = 0; i < s->light_count; i++)
+        colour = v3_add(colour, shade_light(v, &sf, &s->lights[i], to_viewer));
+    return colour;
+}
+
+void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb)
+{
+    const camera_basis *cam = &v->camera;
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            ray r = {cam->eye, v3_normalize(camera_pixel_direction(cam, x, y)), 0.f, FLT_MAX};
+            vec3 c = render_shade(v, &r);
+            float *out = rgb + 3 * ((size_t)y * (size_t)cam->width_px + (size_t)x);
+            out[0] = c.x;
+            out[1] = c.y;
+            out[2] = c.z;
+        }
+}
+
+/* Shared by the threads of one render_image call. */
+typedef struct tile_queue {
+    const render_view *view;
+    float *rgb;
+    int tiles_x, tile_count;
+    atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
+} tile_queue;
+
+static void *render_worker(void *arg)
+{
+    tile_queue *q = arg;
+    const camera_basis *cam = &q->view->camera;
+    for (;;) {
+        int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
+        if (tile >= q->tile_count)
+            return NULL;
+        int x0 = (tile % q->tiles_x) * RENDER_TILE_PX, y0 = (tile / q->tiles_x) * RENDER_TILE_PX;
+        int x1 = x0 + RENDER_TILE_PX < cam->width_px ? x0 + RENDER_TILE_PX : cam->width_px;
+        int y1 = y0 + RENDER_TILE_PX < cam->height_px ? y0 + RENDER_TILE_PX : cam->height_px;
+        render_tile(q->view, x0, y0, x1, y1, q->rgb);
+    }
+}
+
+/* Most threads render_image starts: more than any machine we target has cores. */
+#define RENDER_MAX_THREADS 256
+
+void render_image(const render_view *v, int threads, float *rgb)
+{
+    tile_queue q = {.view = v, .rgb = rgb};
+    q.tiles_x = (v->camera.width_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX;
+    q.tile_count = q.tiles_x * ((v->camera.height_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX);
+    atomic_init(&q.next_tile, 0);
+    if (threads < 1)
+        threads = 1;
+    if (threads > RENDER_MAX_THREADS)
+        threads = RENDER_MAX_THREADS;
+    pthread_t ids[RENDER_MAX_THREADS];
+    int started = 0;
+    /* the calling thread is worker 0; if the system refuses more threads the
+     * frame is still finished by those that run (a kiosk stays up) */
+    for (int i = 1; i < threads; i++) {
+        if (pthread_create(&ids[started], NULL, render_worker, &q) != 0) {
+            log_warn("render: could start only %d of %d render threads", started + 1, threads);
+            break;
+        }
+        started++;
+    }
+    render_worker(&q);
+    for (int i = 0; i < started; i++)
+        pthread_join(ids[i], NULL);
+}

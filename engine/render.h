@@ -1,0 +1,51 @@
+/* render.h - the ray tracer: primary rays through a pinhole camera, Lambert
+ * and Phong shading with hard shadows from every light, background colour.
+ *
+ * Shading model (linear RGB, per pixel):
+ *   colour = ambient * kd * material.ambient
+ *          + sum over lights not shadowed of
+ *              E_light * (kd * max(0, N.L) + ks * max(0, R.V)^shininess [Phong])
+ * where E_light = color * intensity for a directional light and
+ * color * intensity / d^2 for a point light at distance d, kd is the vertex
+ * colour when the mesh has one, else the material's diffuse colour. There is no
+ * 1/pi: intensity is the radiance scale a white Lambert surface facing the
+ * light shows. Surfaces are two-sided (normals face the viewer).
+ *
+ * Everything here is a pure function of (scene, camera, pixel): images are the
+ * same for any thread count and tile order. */
+#ifndef TESSERA_RENDER_H
+#define TESSERA_RENDER_H
+
+#include <stdbool.h>
+
+#include "camera.h"
+#include "err.h"
+#include "ray.h"
+#include "vec3.h"
+
+struct scene;
+struct accel;
+
+typedef struct render_view {
+    const struct scene *scene;  /* read-only while rendering */
+    const struct accel *accel;  /* built from scene */
+    camera_basis camera;        /* includes the image size */
+    bool shadows;               /* trace shadow rays (lights may also opt out) */
+} render_view;
+
+/* Tile edge in pixels: 16 x 16 float RGB rows are 192 bytes, whole cache lines. */
+#define RENDER_TILE_PX 16
+
+/* Shade the ray's closest hit (or the background). */
+vec3 render_shade(const render_view *v, const ray *r);
+
+/* Render pixels [x0, x1) x [y0, y1) into rgb (3 floats per pixel, the whole
+ * image, row-major, top row first). */
+void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb);
+
+/* Render the whole image with `threads` threads (the caller's included)
+ * pulling tiles from an atomic counter. Threads the system refuses are logged
+ * and the image is finished by the others. */
+void render_image(const render_view *v, int threads, float *rgb);
+
+#endif

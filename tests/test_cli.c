@@ -1,0 +1,205 @@
+/* test_cli.c - the tessera binary end to end: every bad input gets one clear
+ * line and a non-zero exit, never a crash or a hang; good input writes images.
+ * Runs ../tessera (or $TESSERA_BIN) from the tests/ directory. */
+#include <criterion/criterion.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "wall/dump.h"
+
+/* Seconds any single command may take before the test counts it as a hang. */
+#define CLI_TIMEOUT_S 60
+
+static char tmp_dir[256];
+
+static void make_tmp_dir(void)
+{
+    snprintf(tmp_dir, sizeof tmp_dir, "/tmp/tessera-cli-XXXXXX");
+    cr_assert(mkdtemp(tmp_dir), "mkdtemp");
+}
+
+static const char *tessera_bin(void)
+{
+    const char *bin = getenv("TESSERA_BIN");
+    return bin ? bin : "../tessera";
+}
+
+static void write_text(const char *name, const char *text)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", tmp_dir, name);
+    FILE *f = fopen(path, "wb");
+    cr_assert(f, "cannot write %s", path);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Run `tessera ARGS` (ARGS may use %s for the temp dir, several times) and
+ * return its exit status (128+signal when killed); output goes to `out`. */
+static int run_tessera(char *out, size_t out_bytes, const char *args_fmt)
+{
+    char args[2048], cmd[4096], log_path[512];
+    /* every %s in args_fmt is the temp dir */
+    const char *dirs[8] = {tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir};
+    snprintf(args, sizeof args, args_fmt, dirs[0], dirs[1], dirs[2], dirs[3], dirs[4], dirs[5], dirs[6], dirs[7]);
+    snprintf(log_path, sizeof log_path, "%s/cli.log", tmp_dir);
+    snprintf(cmd, sizeof cmd, "timeout %d %s %s > %s 2>&1", CLI_TIMEOUT_S, tessera_bin(), args, log_path);
+    int status = system(cmd);
+    FILE *f = fopen(log_path, "rb");
+    size_t n = f ? fread(out, 1, out_bytes - 1, f) : 0;
+    out[n] = '\0';
+    if (f)
+        fclose(f);
+    if (WIFSIGNALED(status))
+        return 128 + WTERMSIG(status);
+    return WEXITSTATUS(status);
+}
+
+/* Expect failure with a message containing every needle (NULL-terminated). */
+static void expect_error(const char *args_fmt, const char *const *needles)
+{
+    char out[8192];
+    int code = run_tessera(out, sizeof out, args_fmt);
+    cr_expect(code != 0 && code < 124, "'%s' should fail cleanly, got exit %d: %s", args_fmt, code, out);
+    cr_expect(strstr(out, "error") != NULL, "no error line for '%s': %s", args_fmt, out);
+    for (const char *const *n = needles; *n; n++)
+        cr_expect(strstr(out, *n) != NULL, "'%s': message lacks '%s': %s", args_fmt, *n, out);
+}
+
+#define EXPECT_ERROR(args, ...) expect_error(args, (const char *const[]){__VA_ARGS__, NULL})
+
+TestSuite(cli, .init = make_tmp_dir, .timeout = 300);
+
+Test(cli, help_lists_commands_and_options)
+{
+    char out[8192];
+    cr_expect_eq(run_tessera(out, sizeof out, "--help"), 0);
+    cr_expect(strstr(out, "render") && strstr(out, "run"), "%s", out);
+    cr_expect_eq(run_tessera(out, sizeof out, "render --help"), 0);
+    const char *options[] = {"--scene", "--size", "--out", "--camera", "--threads", "--frames"};
+    for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
+        cr_expect(strstr(out, options[i]), "render --help lacks %s", options[i]);
+    cr_expect_eq(run_tessera(out, sizeof out, "run --help"), 0);
+}
+
+Test(cli, renders_default_scene_to_png_and_exr)
+{
+    char out[8192];
+    cr_assert_eq(run_tessera(out, sizeof out, "render --size 64x48 --out %s/a.png"), 0, "%s", out);
+    cr_expect(strstr(out, "frames/s"), "no frame rate: %s", out);
+    char path[512];
+    snprintf(path, sizeof path, "%s/a.png", tmp_dir);
+    int w, h;
+    uint8_t *rgb;
+    tess_error err = {{0}};
+    cr_assert(dump_read_rgb8(path, &w, &h, &rgb, &err), "%s", err.msg);
+    cr_expect(w == 64 && h == 48);
+    free(rgb);
+    cr_assert_eq(run_tessera(out, sizeof out, "render --size 32x24 --frames 3 --out %s/seq_###.exr"), 0, "%s", out);
+    for (int f = 0; f < 3; f++) {
+        snprintf(path, sizeof path, "%s/seq_%03d.exr", tmp_dir, f);
+        cr_expect(access(path, R_OK) == 0, "missing %s", path);
+    }
+}
+
+Test(cli, camera_option_changes_the_view)
+{
+    char out[8192];
+    cr_assert_eq(run_tessera(out, sizeof out, "render --size 32x24 --out %s/a.png"), 0, "%s", out);
+    cr_assert_eq(run_tessera(out, sizeof out, "render --size 32x24 --out %s/b.png --camera 0,10,0.1,0,0,0,0,1,0,30"),
+                 0, "%s", out);
+    char pa[512], pb[512];
+    snprintf(pa, sizeof pa, "%s/a.png", tmp_dir);
+    snprintf(pb, sizeof pb, "%s/b.png", tmp_dir);
+    int w, h;
+    uint8_t *a, *b;
+    tess_error err = {{0}};
+    cr_assert(dump_read_rgb8(pa, &w, &h, &a, &err) && dump_read_rgb8(pb, &w, &h, &b, &err));
+    cr_expect(memcmp(a, b, (size_t)w * h * 3) != 0);
+    free(a);
+    free(b);
+}
+
+Test(cli, unknown_command_and_option)
+{
+    EXPECT_ERROR("frobnicate", "unknown command", "frobnicate");
+    EXPECT_ERROR("render --bogus", "unknown option", "--bogus");
+    EXPECT_ERROR("render --size", "--size", "needs a value");
+}
+
+Test(cli, malformed_values_say_what_was_expected)
+{
+    EXPECT_ERROR("render --size 0x10 --out %s/a.png", "--size", "0x10", "from 1");
+    EXPECT_ERROR("render --size 640 --out %s/a.png", "--size", "WIDTHxHEIGHT");
+    EXPECT_ERROR("render --size 64x48x2 --out %s/a.png", "--size", "WIDTHxHEIGHT");
+    EXPECT_ERROR("render --threads two --out %s/a.png", "--threads", "whole number");
+    EXPECT_ERROR("render --frames 0 --out %s/a.png", "--frames", "from 1");
+    EXPECT_ERROR("render --camera 1,2,3 --out %s/a.png", "--camera", "10 finite numbers");
+    EXPECT_ERROR("render --camera 0,0,0,0,0,0,0,1,0,40 --out %s/a.png", "--camera", "same point");
+    EXPECT_ERROR("render --camera 0,0,5,0,0,0,0,1,0,nan --out %s/a.png", "--camera");
+    EXPECT_ERROR("render --camera 0,0,5,0,0,0,0,1,0,200 --out %s/a.png", "--camera", "fov");
+}
+
+Test(cli, missing_scene_file)
+{
+    EXPECT_ERROR("render --scene %s/nope.json --out %s/a.png", "nope.json");
+    EXPECT_ERROR("render --scene %s/nope.ply --out %s/a.png", "nope.ply");
+}
+
+Test(cli, unwritable_output_path)
+{
+    EXPECT_ERROR("render --size 8x8 --out %s/no/such/dir/a.png", "no/such/dir", "does not exist");
+    write_text("file", "x");
+    EXPECT_ERROR("render --size 8x8 --out %s/file/a.png", "file/a.png", "not a directory");
+    EXPECT_ERROR("render --size 8x8 --out %s/a.unknownformat", "a.unknownformat");
+}
+
+Test(cli, broken_scene_and_mesh_files)
+{
+    write_text("syntax.json", "{\n  \"background\": [0, 0, 0],\n  \"lights\": [ }\n");
+    EXPECT_ERROR("render --scene %s/syntax.json --out %s/a.png", "syntax.json:3");
+    write_text("field.json", "{ \"spheres\": [ {\"center\": [0,0,0], \"radius\": 1, \"colour\": 1} ] }");
+    EXPECT_ERROR("render --scene %s/field.json --out %s/a.png", "field.json", "colour");
+    write_text("type.json", "{ \"spheres\": [ {\"center\": [0,0,0], \"radius\": \"big\"} ] }");
+    EXPECT_ERROR("render --scene %s/type.json --out %s/a.png", "type.json", "radius");
+    write_text("range.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                            "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+    EXPECT_ERROR("render --scene %s/range.ply --out %s/a.png", "range.ply", "out of range");
+    write_text("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_ERROR("render --scene %s/nan.ply --out %s/a.png", "nan.ply");
+    write_text("words.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                            "0 0 0\n1 abc 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_ERROR("render --scene %s/words.ply --out %s/a.png", "words.ply", "abc");
+    /* binary PLY whose face block is cut short */
+    write_text("cut.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                          "property float y\nproperty float z\nelement face 1\n"
+                          "property list uchar int vertex_indices\nend_header\n");
+    char path[512];
+    snprintf(path, sizeof path, "%s/cut.ply", tmp_dir);
+    FILE *f = fopen(path, "ab");
+    cr_assert(f);
+    const float vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const unsigned char face_start[3] = {3, 0, 0}; /* count, then half of the first index */
+    fwrite(vertices, sizeof vertices, 1, f);
+    fwrite(face_start, sizeof face_start, 1, f);
+    fclose(f);
+    EXPECT_ERROR("render --scene %s/cut.ply --out %s/a.png", "cut.ply");
+}
+
+Test(cli, run_writes_frames_and_reports_rate)
+{
+    char out[8192];
+    cr_assert_eq(run_tessera(out, sizeof out, "run --size 32x24 --frames 4 --out %s/f_####.png"), 0, "%s", out);
+    cr_expect(strstr(out, "frames/s"), "%s", out);
+    char path[512];
+    snprintf(path, sizeof path, "%s/f_0003.png", tmp_dir);
+    cr_expect(access(path, R_OK) == 0, "missing %s: %s", path, out);
+}

@@ -1,0 +1,43 @@
+/* main.c - wires the engine and the outputs into the tessera command. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+typedef struct command {
+    const char *name;
+    int (*run)(int argc, char **argv); /* argv[0] is the command name */
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    {"run", cli_run, "the main job: render the scene (headless: frames to out/) and report the frame rate"},
+    {"render", cli_render, "render a scene headless and write image files"},
+};
+
+static void usage(FILE *f)
+{
+    fputs("usage: tessera COMMAND [options]\n"
+          "tessera - an interactive ray tracer for display walls.\n\ncommands:\n",
+          f);
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(f, "  %-8s %s\n", commands[i].name, commands[i].summary);
+    fputs("\n'tessera COMMAND --help' describes the options of each command.\n", f);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
+        usage(stdout);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(argv[1], commands[i].name))
+            return commands[i].run(argc - 1, argv + 1);
+    cli_error("unknown command '%s' (expected one of: run, render; see 'tessera --help')", argv[1]);
+    return 2;
+}

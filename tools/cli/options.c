@@ -1,0 +1,99 @@
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+void cli_error(const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "tessera: error: %s\n", msg);
+}
+
+double cli_now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+const char *cli_option_value(int argc, char **argv, int *i)
+{
+    if (*i + 1 >= argc) {
+        cli_error("option %s needs a value", argv[*i]);
+        return NULL;
+    }
+    return argv[++*i];
+}
+
+bool cli_parse_int(const char *option, const char *text, int min, int max, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(text, &end, 10);
+    if (end == text || *end != '\0' || errno == ERANGE || v < min || v > max) {
+        cli_error("%s: expected a whole number from %d to %d, got '%s'", option, min, max, text);
+        return false;
+    }
+    *out = (int)v;
+    return true;
+}
+
+bool cli_parse_size(const char *option, const char *text, int *width_px, int *height_px)
+{
+    char *end;
+    errno = 0;
+    long w = strtol(text, &end, 10);
+    long h = -1;
+    if (end != text && (*end == 'x' || *end == 'X')) {
+        const char *hs = end + 1;
+        h = strtol(hs, &end, 10);
+        if (end == hs)
+            h = -1;
+    }
+    if (h < 0 || *end != '\0' || errno == ERANGE || text[0] == '-' || text[0] == '+') {
+        cli_error("%s: expected WIDTHxHEIGHT in pixels (e.g. 1920x1080), got '%s'", option, text);
+        return false;
+    }
+    if (w < 1 || h < 1 || w > CLI_MAX_IMAGE_EDGE_PX || h > CLI_MAX_IMAGE_EDGE_PX) {
+        cli_error("%s: image size %ldx%ld: width and height must be from 1 to %d", option, w, h,
+                  CLI_MAX_IMAGE_EDGE_PX);
+        return false;
+    }
+    *width_px = (int)w;
+    *height_px = (int)h;
+    return true;
+}
+
+bool cli_parse_camera(const char *option, const char *text, camera_desc *out)
+{
+    float v[10];
+    const char *p = text;
+    for (int k = 0; k < 10; k++) {
+        char *end;
+        v[k] = strtof(p, &end);
+        if (end == p || !isfinite(v[k]) || (k < 9 && *end != ',') || (k == 9 && *end != '\0')) {
+            cli_error("%s: expected 10 finite numbers ex,ey,ez,lx,ly,lz,ux,uy,uz,fov_deg; value %d of '%s' is "
+                      "wrong",
+                      option, k + 1, text);
+            return false;
+        }
+        p = end + 1;
+    }
+    camera_desc c = {v3(v[0], v[1], v[2]), v3(v[3], v[4], v[5]), v3(v[6], v[7], v[8]), v[9]};
+    tess_error err = {{0}};
+    if (!camera_validate(&c, &err)) {
+        cli_error("%s: %s", option, err.msg);
+        return false;
+    }
+    *out = c;
+    return true;
+}

@@ -1,0 +1,504 @@
+/* dump_oiio.cpp - wall/dump.h on top of OpenImageIO (the project's one C++ file).
+ *
+ * Boundary rule: every extern "C" function runs its body inside guarded(), so
+ * no C++ exception ever unwinds into C; exceptions and OIIO failures become a
+ * tess_error "PATH: what failed: OIIO's message". Every OIIO call that can
+ * fail is checked, including close(), and a file left behind by a failed
+ * write is removed so a partial frame is never mistaken for a good one. */
+
+#include "engine/err.h"
+#include "wall/dump.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace {
+
+/* Encode table resolution: 2^12 buckets over [0, 1). The narrowest step
+ * between two 8-bit codes is 1 / (255 * 12.92) ~= 3.04e-4 (the linear toe),
+ * wider than one bucket (2.44e-4), so each bucket holds at most one rounding
+ * boundary and one comparison against that boundary makes the result exact. */
+constexpr int SRGB_BUCKETS = 4096;
+
+/* The reference: the sRGB curve in double, clamped, rounded to nearest. */
+int srgb_encode_exact(float linear)
+{
+    if (!(linear > 0.0f)) /* also NaN */
+        return 0;
+    if (linear >= 1.0f)
+        return 255;
+    double x = linear;
+    double v = x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1.0 / 2.4) - 0.055;
+    double code = std::floor(v * 255.0 + 0.5);
+    return code < 0.0 ? 0 : code > 255.0 ? 255 : (int)code;
+}
+
+struct srgb_table {
+    uint8_t bucket_code[SRGB_BUCKETS]; /* exact code of the bucket's lower end, i / SRGB_BUCKETS */
+    float code_up[256];                /* [k]: smallest float whose code is > k; +inf for k = 255 */
+
+    srgb_table()
+    {
+        for (int i = 0; i < SRGB_BUCKETS; i++)
+            bucket_code[i] = (uint8_t)srgb_encode_exact((float)i / SRGB_BUCKETS);
+        for (int k = 0; k < 255; k++) {
+            /* Start at the inverse curve of code k + 0.5, then walk float by
+             * float to the exact first value the reference rounds above k
+             * (the reference is monotone in its input). */
+            double v = (k + 0.5) / 255.0;
+            double x = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+            float f = (float)x;
+            while (f > 0.0f && srgb_encode_exact(std::nextafter(f, 0.0f)) > k)
+                f = std::nextafter(f, 0.0f);
+            while (srgb_encode_exact(f) <= k)
+                f = std::nextafter(f, 2.0f);
+            code_up[k] = f;
+        }
+        code_up[255] = INFINITY;
+    }
+};
+
+/* Built once, on first use; C++11 makes the initialisation thread-safe. */
+const srgb_table &srgb_lut()
+{
+    static const srgb_table table;
+    return table;
+}
+
+inline uint8_t srgb_encode(const srgb_table &t, float linear)
+{
+    if (!(linear > 0.0f)) /* also NaN */
+        return 0;
+    if (linear >= 1.0f)
+        return 255;
+    /* linear * 4096 is exact (a power of two), so the bucket index is too. */
+    uint8_t code = t.bucket_code[(int)(linear * (float)SRGB_BUCKETS)];
+    return (uint8_t)(code + (linear >= t.code_up[code]));
+}
+
+const char *shown(const char *s) { return s ? s : "(null)"; }
+
+/* OIIO's message on one line ("; " between its lines), never empty. */
+std::string one_line(std::string msg)
+{
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' '))
+        msg.pop_back();
+    for (size_t at = msg.find('\n'); at != std::string::npos; at = msg.find('\n', at))
+        msg.replace(at, 1, "; ");
+    return msg.empty() ? std::string("unknown OpenImageIO error") : msg;
+}
+
+/* The error of a failed call on `obj`, or the global one if it left none;
+ * both are consumed so a stale message never leaks into a later report. */
+template <class T> std::string oiio_error(const T &obj)
+{
+    std::string own = obj.geterror();
+    std::string global = OIIO::geterror();
+    return one_line(own.empty() ? global : own);
+}
+
+std::string oiio_global_error() { return one_line(OIIO::geterror()); }
+
+/* Run `body` with every C++ exception turned into an error naming `path`. */
+template <class F> bool guarded(const char *path, tess_error *err, F &&body)
+{
+    try {
+        return body();
+    } catch (const std::exception &e) {
+        return tess_error_set(err, "%s: %s", shown(path), e.what());
+    } catch (...) {
+        return tess_error_set(err, "%s: unknown C++ exception", shown(path));
+    }
+}
+
+/* The file name extension after the last '.' of the last path component,
+ * lower-cased; "" when there is none. */
+std::string extension_of(const char *path)
+{
+    const char *base = std::strrchr(path, '/');
+    base = base ? base + 1 : path;
+    const char *dot = std::strrchr(base, '.');
+    std::string ext = (dot && dot != base) ? dot + 1 : "";
+    for (char &c : ext)
+        if (c >= 'A' && c <= 'Z')
+            c = (char)(c - 'A' + 'a');
+    return ext;
+}
+
+/* Formats that keep linear float values; everything else gets 8-bit sRGB. */
+bool is_float_format(const std::string &ext)
+{
+    return ext == "exr" || ext == "sxr" || ext == "mxr" || ext == "hdr" || ext == "rgbe" || ext == "pfm";
+}
+
+/* Removes `path` on scope exit unless `keep` is set. */
+struct remove_unless_kept {
+    const char *path;
+    bool keep;
+    ~remove_unless_kept()
+    {
+        if (!keep)
+            std::remove(path);
+    }
+};
+
+/* The output file as an OIIO IOProxy that keeps the first I/O failure.
+ * With OIIO 2.4 writing files itself, a PNG written to a full disk
+ * (/dev/full) is reported as a success; through this proxy the failure is
+ * read back after close(). Reads are served too, as a writer may read back
+ * what it wrote. */
+class checked_file final : public OIIO::Filesystem::IOProxy {
+public:
+    checked_file() = default;
+    ~checked_file() override { close(); }
+    checked_file(const checked_file &) = delete;
+    checked_file &operator=(const checked_file &) = delete;
+
+    /* Create or truncate `path`; false with errno set. */
+    bool create(const char *path)
+    {
+        fd_ = ::open(path, O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+        if (fd_ < 0)
+            return false;
+        m_filename = path;
+        m_mode = Write;
+        m_pos = 0;
+        return true;
+    }
+    /* errno of the first failed call, 0 when all succeeded. */
+    int first_errno() const { return errno_.load(); }
+
+    const char *proxytype() const override { return "tessera_checked_file"; }
+    void close() override
+    {
+        if (fd_ >= 0 && ::close(fd_) != 0)
+            fail(errno);
+        fd_ = -1;
+        m_mode = Closed;
+    }
+    bool seek(int64_t offset) override
+    {
+        if (offset < 0) {
+            fail(EINVAL);
+            return false;
+        }
+        m_pos = offset;
+        return true;
+    }
+    size_t write(const void *buf, size_t size) override
+    {
+        size_t done = pwrite(buf, size, m_pos);
+        m_pos += (int64_t)done;
+        return done;
+    }
+    size_t read(void *buf, size_t size) override
+    {
+        size_t done = pread(buf, size, m_pos);
+        m_pos += (int64_t)done;
+        return done;
+    }
+    /* pwrite/pread may run on several threads at once (OIIO's contract). */
+    size_t pwrite(const void *buf, size_t size, int64_t offset) override
+    {
+        size_t done = 0;
+        while (done < size) {
+            ssize_t n = ::pwrite(fd_, (const char *)buf + done, size - done, (off_t)offset + (off_t)done);
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n <= 0) {
+                fail(n < 0 ? errno : EIO);
+                break;
+            }
+            done += (size_t)n;
+        }
+        return done;
+    }
+    size_t pread(void *buf, size_t size, int64_t offset) override
+    {
+        size_t done = 0;
+        while (done < size) {
+            ssize_t n = ::pread(fd_, (char *)buf + done, size - done, (off_t)offset + (off_t)done);
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n < 0)
+                fail(errno);
+            if (n <= 0) /* end of file is no failure: a short read reports it */
+                break;
+            done += (size_t)n;
+        }
+        return done;
+    }
+    size_t size() const override
+    {
+        struct stat st;
+        return fd_ >= 0 && fstat(fd_, &st) == 0 ? (size_t)st.st_size : 0;
+    }
+
+private:
+    void fail(int e)
+    {
+        int none = 0;
+        errno_.compare_exchange_strong(none, e ? e : EIO);
+    }
+
+    int fd_ = -1;                 /* open from create() to close() */
+    std::atomic<int> errno_ {0}; /* first failure; written by any thread in pwrite */
+};
+
+bool write_rgb(const char *path, int width_px, int height_px, const float *rgb_linear, tess_error *err)
+{
+    if (!path || !*path)
+        return tess_error_set(err, "dump: no output path");
+    if (width_px <= 0 || height_px <= 0)
+        return tess_error_set(err, "%s: image size %dx%d: width and height must be positive", path, width_px,
+                              height_px);
+    if (!rgb_linear)
+        return tess_error_set(err, "%s: no pixel data", path);
+
+    /* Declared before `out`, whose destructor may still write to it. */
+    checked_file file;
+
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out)
+        return tess_error_set(err, "%s: cannot write this format: %s", path, oiio_global_error().c_str());
+
+    const size_t values = (size_t)width_px * (size_t)height_px * 3;
+    const bool as_float = is_float_format(extension_of(path));
+    /* Float formats get the caller's buffer as is (FLOAT, not HALF: frames
+     * are references and must round-trip bit exact); 8-bit ones get a
+     * converted copy. */
+    std::vector<uint8_t> encoded;
+    OIIO::ImageSpec spec(width_px, height_px, 3, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+    const void *pixels = rgb_linear;
+    if (as_float) {
+        spec.attribute("oiio:ColorSpace", "Linear");
+    } else {
+        spec.attribute("oiio:ColorSpace", "sRGB");
+        const srgb_table &lut = srgb_lut();
+        encoded.resize(values);
+        for (size_t i = 0; i < values; i++)
+            encoded[i] = srgb_encode(lut, rgb_linear[i]);
+        pixels = encoded.data();
+    }
+
+    /* Formats that take an IOProxy write through `file`, created first so
+     * an unwritable path fails before any encoding. The others are written
+     * by OIIO itself, whose write failures may pass unnoticed: SGI, HEIF,
+     * FITS, ... (no proxy support) and TIFF, whose 2.4 writer makes
+     * unreadable files through any proxy once metadata such as
+     * oiio:ColorSpace is set (fixed upstream by OIIO pull request 4300). */
+    const bool checked = out->supports("ioproxy") != 0 && std::strcmp(out->format_name(), "tiff") != 0;
+    remove_unless_kept partial{path, true}; /* armed once the file exists */
+    if (checked) {
+        if (!file.create(path))
+            return tess_error_set(err, "%s: cannot open for writing: %s", path, std::strerror(errno));
+        partial.keep = false;
+        if (!out->set_ioproxy(&file))
+            return tess_error_set(err, "%s: cannot write through a checked file: %s", path, oiio_error(*out).c_str());
+    }
+    if (!out->open(path, spec))
+        return tess_error_set(err, "%s: cannot open for writing: %s", path, oiio_error(*out).c_str());
+    partial.keep = false;
+    if (!out->write_image(spec.format, pixels))
+        return tess_error_set(err, "%s: write failed: %s", path, oiio_error(*out).c_str());
+    if (!out->close())
+        return tess_error_set(err, "%s: close failed (file incomplete): %s", path, oiio_error(*out).c_str());
+    if (checked) {
+        file.close();
+        if (file.first_errno() != 0)
+            return tess_error_set(err, "%s: write failed (file incomplete): %s", path,
+                                  std::strerror(file.first_errno()));
+    }
+    partial.keep = true;
+    return true;
+}
+
+/* free() for unique_ptr, so a throw between malloc and the hand-over frees. */
+struct free_deleter {
+    void operator()(void *p) const { std::free(p); }
+};
+
+/* Read the first subimage of `path` as 3 channels of T: grey (1 or 2
+ * channels) is replicated, channels past the third (alpha) are dropped. */
+template <class T>
+bool read_rgb(const char *path, OIIO::TypeDesc type, int *width_px, int *height_px, T **rgb_out,
+              tess_error *err)
+{
+    if (!path || !width_px || !height_px || !rgb_out)
+        return tess_error_set(err, "%s: dump_read: NULL argument", shown(path));
+    *width_px = *height_px = 0;
+    *rgb_out = nullptr;
+
+    /* Keep colour values as stored: without this hint OIIO premultiplies
+     * them by alpha on read (PNG, TGA...), which dropping alpha would bake in. */
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in)
+        return tess_error_set(err, "%s: cannot read: %s", path, oiio_global_error().c_str());
+
+    const OIIO::ImageSpec &spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.nchannels <= 0)
+        return tess_error_set(err, "%s: unsupported image shape %dx%dx%d with %d channels", path, spec.width,
+                              spec.height, spec.depth, spec.nchannels);
+    const int w = spec.width, h = spec.height;
+    const size_t values = (size_t)w * (size_t)h * 3;
+    std::unique_ptr<T, free_deleter> rgb((T *)std::malloc(values * sizeof(T)));
+    if (!rgb)
+        return tess_error_set(err, "%s: out of memory for %dx%d pixels", path, w, h);
+
+    const bool grey = spec.nchannels < 3;
+    const OIIO::stride_t pixel_bytes = 3 * (OIIO::stride_t)sizeof(T);
+    if (!in->read_image(0, 0, 0, grey ? 1 : 3, type, rgb.get(), pixel_bytes, pixel_bytes * w))
+        return tess_error_set(err, "%s: read failed: %s", path, oiio_error(*in).c_str());
+    if (!in->close())
+        return tess_error_set(err, "%s: close failed: %s", path, oiio_error(*in).c_str());
+    if (grey) {
+        T *p = rgb.get();
+        for (size_t i = 0; i < values; i += 3)
+            p[i + 1] = p[i + 2] = p[i];
+    }
+    *width_px = w;
+    *height_px = h;
+    *rgb_out = rgb.release();
+    return true;
+}
+
+/* One frame-number field found in a pattern: pattern[at, at + len) becomes
+ * the frame number zero-padded to `digits`. */
+struct frame_field {
+    size_t at, len, digits;
+};
+
+/* Find the frame-number field of `pattern`: *found says whether there is
+ * one (then *field is set); false (with err) for a malformed pattern. */
+bool find_field(const char *pattern, frame_field *field, bool *found, tess_error *err)
+{
+    /* Wider than any path; caps %0Nd parsing well below overflow. */
+    const size_t max_digits = 4096;
+    *found = false;
+    for (size_t i = 0; pattern[i];) {
+        frame_field f = {i, 0, 0};
+        if (pattern[i] == '#') {
+            while (pattern[i + f.len] == '#')
+                f.len++;
+            f.digits = f.len;
+        } else if (pattern[i] == '%') {
+            size_t j = i + 1;
+            const bool zero = pattern[j] == '0';
+            size_t width = 0;
+            while (pattern[j] >= '0' && pattern[j] <= '9') {
+                width = width * 10 + (size_t)(pattern[j++] - '0');
+                if (width > max_digits)
+                    return tess_error_set(err, "%s: frame-number field width too large", pattern);
+            }
+            if (pattern[j] == 'd') {
+                if (width > 0 && !zero)
+                    return tess_error_set(err, "%s: space-padded '%%Nd' is not supported, use '%%0Nd' or '#'",
+                                          pattern);
+                f.len = j + 1 - i;
+                f.digits = width > 0 ? width : 1;
+            }
+        }
+        if (f.len == 0) { /* any other character, including a lone '%', is literal */
+            i++;
+            continue;
+        }
+        if (*found)
+            return tess_error_set(err, "%s: more than one frame-number field", pattern);
+        *field = f;
+        *found = true;
+        i += f.len;
+    }
+    return true;
+}
+
+bool frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes, tess_error *err)
+{
+    if (!pattern || !out || out_bytes == 0)
+        return tess_error_set(err, "%s: frame path: NULL argument or empty buffer", shown(pattern));
+    out[0] = '\0';
+    if (frame < 0)
+        return tess_error_set(err, "%s: frame number %d is negative", pattern, frame);
+
+    frame_field field = {0, 0, 0};
+    bool found;
+    if (!find_field(pattern, &field, &found, err))
+        return false;
+
+    std::string path = pattern;
+    if (found || sequence) {
+        if (!found) { /* "_NNNN" before the extension of the last component */
+            const char *base = std::strrchr(pattern, '/');
+            base = base ? base + 1 : pattern;
+            const char *dot = std::strrchr(base, '.');
+            field.at = (dot && dot != base) ? (size_t)(dot - pattern) : path.size();
+            field.len = 0;
+            field.digits = 4;
+            path.insert(field.at, "_");
+            field.at++;
+        }
+        std::string number = std::to_string(frame);
+        if (number.size() < field.digits)
+            number.insert(0, field.digits - number.size(), '0');
+        path.replace(field.at, field.len, number);
+    }
+    if (path.size() >= out_bytes)
+        return tess_error_set(err, "%s: frame %d path needs %zu bytes, buffer has %zu", pattern, frame,
+                              path.size() + 1, out_bytes);
+    std::memcpy(out, path.c_str(), path.size() + 1);
+    return true;
+}
+
+} // namespace
+
+extern "C" {
+
+bool dump_write_rgb(const char *path, int width_px, int height_px, const float *rgb_linear, tess_error *err)
+{
+    return guarded(path, err, [&] { return write_rgb(path, width_px, height_px, rgb_linear, err); });
+}
+
+bool dump_read_rgb8(const char *path, int *width_px, int *height_px, uint8_t **rgb_out, tess_error *err)
+{
+    return guarded(path, err,
+                   [&] { return read_rgb<uint8_t>(path, OIIO::TypeDesc::UINT8, width_px, height_px, rgb_out, err); });
+}
+
+bool dump_read_rgbf(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
+{
+    return guarded(path, err,
+                   [&] { return read_rgb<float>(path, OIIO::TypeDesc::FLOAT, width_px, height_px, rgb_out, err); });
+}
+
+bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes,
+                     tess_error *err)
+{
+    return guarded(pattern, err, [&] { return frame_path(pattern, frame, sequence, out, out_bytes, err); });
+}
+
+uint8_t dump_srgb_encode_u8(float linear)
+{
+    try {
+        return srgb_encode(srgb_lut(), linear);
+    } catch (...) { /* the table's construction allocates nothing; never reached */
+        return (uint8_t)srgb_encode_exact(linear);
+    }
+}
+
+} // extern "C"
