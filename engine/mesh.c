@@ -181,20 +181,23 @@ void mesh_transform(mesh *m, const float x[12])
     }
     if (!m->normals)
         return;
-    /* normals transform by the inverse transpose of the linear part: the
-     * cofactor matrix is proportional to it, and we renormalise anyway */
+    /* normals transform by the inverse transpose of the linear part M, which is
+     * C / det(M) with C the cofactor matrix (row-major below); we renormalise,
+     * so only the sign of det matters (a mirroring transform flips it) */
     float c[9] = {
         x[5] * x[10] - x[6] * x[9], x[6] * x[8] - x[4] * x[10], x[4] * x[9] - x[5] * x[8],
         x[2] * x[9] - x[1] * x[10], x[0] * x[10] - x[2] * x[8], x[1] * x[8] - x[0] * x[9],
         x[1] * x[6] - x[2] * x[5],  x[2] * x[4] - x[0] * x[6],  x[0] * x[5] - x[1] * x[4],
     };
+    float det = x[0] * c[0] + x[1] * c[1] + x[2] * c[2];
+    float det_sign = det < 0.f ? -1.f : 1.f;
     for (size_t i = 0; i < m->vertex_count; i++) {
         float *n = m->normals + 3 * i;
-        float nx = c[0] * n[0] + c[3] * n[1] + c[6] * n[2];
-        float ny = c[1] * n[0] + c[4] * n[1] + c[7] * n[2];
-        float nz = c[2] * n[0] + c[5] * n[1] + c[8] * n[2];
+        float nx = c[0] * n[0] + c[1] * n[1] + c[2] * n[2];
+        float ny = c[3] * n[0] + c[4] * n[1] + c[5] * n[2];
+        float nz = c[6] * n[0] + c[7] * n[1] + c[8] * n[2];
         float len = sqrtf(nx * nx + ny * ny + nz * nz);
-        float inv = len > 0.f ? 1.f / len : 0.f;
+        float inv = len > 0.f ? det_sign / len : 0.f;
         n[0] = nx * inv;
         n[1] = ny * inv;
         n[2] = nz * inv;

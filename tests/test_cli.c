@@ -110,7 +110,7 @@ Test(cli, camera_option_changes_the_view)
 {
     char out[8192];
     cr_assert_eq(run_tessera(out, sizeof out, "render --size 32x24 --out %s/a.png"), 0, "%s", out);
-    cr_assert_eq(run_tessera(out, sizeof out, "render --size 32x24 --out %s/b.png --camera 0,10,0.1,0,0,0,0,1,0,30"),
+    cr_assert_eq(run_tessera(out, sizeof out, "render --size 32x24 --out %s/b.png --camera 0,10,0.1,0,0,0,0,0,-1,30"),
                  0, "%s", out);
     char pa[512], pb[512];
     snprintf(pa, sizeof pa, "%s/a.png", tmp_dir);

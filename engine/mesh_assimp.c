@@ -1,0 +1,387 @@
+/* mesh_assimp.c - every mesh format assimp reads (.obj with .mtl, .stl, .off,
+ * .gltf, ...) through its C API, merged into one tessera mesh.
+ *
+ * The scene is flattened (node transforms baked in), triangulated and split by
+ * primitive type; every triangle mesh is appended, points and lines are
+ * dropped. Normals and colours are kept only when every triangle mesh has them
+ * (assimp is not asked to invent normals). Materials: see wants_materials().
+ *
+ * Two holes in assimp 5.2 are plugged here:
+ *  - its OBJ parser drops a "v" line with a non-numeric coordinate ("v 1 abc 2")
+ *    without a word, shifting every later vertex index, and reads "2abc" as 2;
+ *    check_obj_numbers() reads the numbers of .obj files itself first;
+ *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
+ *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
+ *    therefore checked for non-finite values before that step runs. */
+#include "mesh.h"
+
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* PreTransformVertices bakes the node hierarchy into the vertices, so all
+ * meshes share one object space; ValidateDataStructure turns out-of-range
+ * indices into an import failure instead of a scene we would have to distrust.
+ * JoinIdenticalVertices runs afterwards, once the scene is known to be finite. */
+#define IMPORT_FLAGS                                                                                              \
+    (aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure |                            \
+     aiProcess_PreTransformVertices)
+#define JOIN_FLAGS aiProcess_JoinIdenticalVertices
+
+/* aiPrimitiveType bits that name a primitive (5.2 adds an n-gon encoding flag) */
+#define PRIMITIVE_MASK                                                                                            \
+    (aiPrimitiveType_POINT | aiPrimitiveType_LINE | aiPrimitiveType_TRIANGLE | aiPrimitiveType_POLYGON)
+
+/* Diffuse colour for a material that names none (assimp's own default grey). */
+#define DEFAULT_DIFFUSE 0.6f
+
+/* assimp's C API keeps the last import error in one process-wide string,
+ * written inside a failing aiImportFile and read by aiGetErrorString. This lock
+ * makes the pair atomic so concurrent loads report their own errors; it is the
+ * file's only shared state and guards nothing else. */
+static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* ---- OBJ numbers, checked before assimp sees them ---------------------- */
+
+static bool has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* How many numbers an OBJ vertex-data line holds. */
+static const struct obj_vertex_data {
+    const char *keyword; /* first word of the line */
+    int min, max;        /* numbers it may carry */
+} obj_vertex_data[] = {
+    {"v", 3, 7},  /* x y z, optional w, or x y z r g b (a common extension) */
+    {"vn", 3, 3}, /* normal */
+    {"vt", 1, 3}, /* u, optional v w */
+};
+
+/* Check one line: a vertex-data line must carry only finite numbers, as many
+ * as its keyword takes. Other lines are assimp's business. */
+static bool check_obj_line(char *line, unsigned long line_no, const char *path, tess_error *err)
+{
+    char *save;
+    char *word = strtok_r(line, " \t\r\n\v\f", &save);
+    const struct obj_vertex_data *kind = NULL;
+    for (size_t i = 0; word && i < sizeof obj_vertex_data / sizeof obj_vertex_data[0]; i++)
+        if (strcmp(word, obj_vertex_data[i].keyword) == 0)
+            kind = &obj_vertex_data[i];
+    if (!kind)
+        return true;
+    int count = 0;
+    for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", &save)) && token[0] != '#'; count++) {
+        char *end;
+        double v = strtod(token, &end);
+        if (end == token || *end != '\0')
+            return tess_error_set(err, "%s:%lu: '%s' line: expected a number, got '%.40s'", path, line_no,
+                                  kind->keyword, token);
+        if (!isfinite(v))
+            return tess_error_set(err, "%s:%lu: '%s' line: value %d is %.40s (must be finite)", path, line_no,
+                                  kind->keyword, count + 1, token);
+    }
+    if (count < kind->min || count > kind->max)
+        return tess_error_set(err, "%s:%lu: '%s' line: expected %d to %d numbers, got %d", path, line_no,
+                              kind->keyword, kind->min, kind->max, count);
+    return true;
+}
+
+static bool check_obj_numbers(const char *path, tess_error *err)
+{
+    FILE *file = fopen(path, "r");
+    if (!file) {
+        char text[128];
+        if (strerror_r(errno, text, sizeof text) != 0)
+            snprintf(text, sizeof text, "error %d", errno);
+        return tess_error_set(err, "%s: cannot open: %s", path, text);
+    }
+    char *line = NULL;
+    size_t capacity = 0;
+    unsigned long line_no = 0;
+    bool ok = true;
+    while (ok && getline(&line, &capacity, file) >= 0)
+        ok = check_obj_line(line, ++line_no, path, err);
+    if (ok && ferror(file))
+        ok = tess_error_set(err, "%s: read error", path);
+    free(line);
+    fclose(file);
+    return ok;
+}
+
+/* ---- the scene ---------------------------------------------------------- */
+
+static const struct aiScene *import_scene(const char *path, tess_error *err)
+{
+    pthread_mutex_lock(&import_lock);
+    const struct aiScene *scene = aiImportFile(path, IMPORT_FLAGS);
+    if (!scene)
+        tess_error_set(err, "%s: assimp: %s", path, aiGetErrorString());
+    pthread_mutex_unlock(&import_lock);
+    return scene;
+}
+
+static bool is_triangle_mesh(const struct aiMesh *am)
+{
+    return (am->mPrimitiveTypes & PRIMITIVE_MASK) == aiPrimitiveType_TRIANGLE && am->mNumFaces > 0 &&
+           am->mNumVertices > 0;
+}
+
+/* Where a vector array first holds a non-finite component. */
+typedef struct nonfinite {
+    unsigned index; /* which vector */
+    int axis;       /* 0, 1, 2 for x, y, z */
+    float value;    /* NaN or an infinity */
+} nonfinite;
+
+static bool vectors_finite(const struct aiVector3D *v, unsigned n, nonfinite *bad)
+{
+    for (unsigned i = 0; i < n; i++) {
+        const float c[3] = {v[i].x, v[i].y, v[i].z};
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(c[k])) {
+                *bad = (nonfinite){i, k, c[k]};
+                return false;
+            }
+    }
+    return true;
+}
+
+/* Every position and normal of every triangle mesh is finite (before
+ * JoinIdenticalVertices can hide a NaN by merging it away). */
+static bool check_scene_finite(const struct aiScene *scene, const char *path, tess_error *err)
+{
+    nonfinite bad;
+    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
+        const struct aiMesh *am = scene->mMeshes[i];
+        if (!is_triangle_mesh(am))
+            continue;
+        if (!vectors_finite(am->mVertices, am->mNumVertices, &bad))
+            return tess_error_set(err, "%s: mesh %u ('%s') vertex %u: coordinate '%c' is %g (must be finite)", path,
+                                  i, am->mName.data, bad.index, "xyz"[bad.axis], (double)bad.value);
+        if (am->mNormals && !vectors_finite(am->mNormals, am->mNumVertices, &bad))
+            return tess_error_set(err, "%s: mesh %u ('%s') vertex %u: normal component '%c' is not finite", path, i,
+                                  am->mName.data, bad.index, "xyz"[bad.axis]);
+    }
+    return true;
+}
+
+/* What the merged mesh will hold. */
+typedef struct merge_plan {
+    uint64_t vertex_count;   /* sum over triangle meshes */
+    uint64_t triangle_count; /* sum over triangle meshes */
+    bool normals;            /* every triangle mesh has normals */
+    bool colors;             /* every triangle mesh has a first colour set */
+} merge_plan;
+
+static merge_plan plan_merge(const struct aiScene *scene)
+{
+    merge_plan plan = {.normals = true, .colors = true};
+    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
+        const struct aiMesh *am = scene->mMeshes[i];
+        if (!is_triangle_mesh(am))
+            continue;
+        plan.vertex_count += am->mNumVertices;
+        plan.triangle_count += am->mNumFaces;
+        plan.normals &= am->mNormals != NULL;
+        plan.colors &= am->mColors[0] != NULL;
+    }
+    return plan;
+}
+
+static bool material_diffuse(const struct aiMaterial *mat, float rgb[3])
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(mat, AI_MATKEY_COLOR_DIFFUSE, &c) != aiReturn_SUCCESS)
+        return false;
+    rgb[0] = c.r;
+    rgb[1] = c.g;
+    rgb[2] = c.b;
+    return true;
+}
+
+static bool is_default_material(const struct aiMaterial *mat)
+{
+    struct aiString name;
+    return aiGetMaterialString(mat, AI_MATKEY_NAME, &name) != aiReturn_SUCCESS ||
+           strcmp(name.data, AI_DEFAULT_MATERIAL_NAME) == 0;
+}
+
+/* The rule: per-triangle materials are kept when a triangle mesh uses a
+ * material that the file itself defines, i.e. one with a diffuse colour and a
+ * name other than the "DefaultMaterial" assimp makes up for files without
+ * materials (an OBJ without MTL, STL, PLY). One MTL material is enough. */
+static bool wants_materials(const struct aiScene *scene)
+{
+    float rgb[3];
+    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
+        const struct aiMesh *am = scene->mMeshes[i];
+        if (!is_triangle_mesh(am) || am->mMaterialIndex >= scene->mNumMaterials)
+            continue;
+        const struct aiMaterial *mat = scene->mMaterials[am->mMaterialIndex];
+        if (!is_default_material(mat) && material_diffuse(mat, rgb))
+            return true;
+    }
+    return false;
+}
+
+static void describe_material(const struct aiMaterial *mat, mesh_material *out)
+{
+    struct aiString name;
+    out->name[0] = '\0';
+    if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS) {
+        size_t n = strnlen(name.data, sizeof out->name - 1); /* longer names are cut */
+        memcpy(out->name, name.data, n);
+        out->name[n] = '\0';
+    }
+    if (!material_diffuse(mat, out->diffuse_rgb))
+        out->diffuse_rgb[0] = out->diffuse_rgb[1] = out->diffuse_rgb[2] = DEFAULT_DIFFUSE;
+}
+
+/* Give m one mesh_material per scene material some triangle mesh uses, in
+ * scene order; remap[scene index] = tessera index (UINT32_MAX when unused). */
+static bool collect_materials(const struct aiScene *scene, mesh *m, uint32_t *remap)
+{
+    m->materials = calloc(scene->mNumMaterials ? scene->mNumMaterials : 1, sizeof *m->materials);
+    if (!m->materials)
+        return false;
+    for (unsigned i = 0; i < scene->mNumMaterials; i++)
+        remap[i] = UINT32_MAX;
+    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
+        unsigned s = scene->mMeshes[i]->mMaterialIndex;
+        if (is_triangle_mesh(scene->mMeshes[i]) && s < scene->mNumMaterials && remap[s] == UINT32_MAX)
+            remap[s] = 0; /* mark used; numbered below in scene order */
+    }
+    for (unsigned s = 0; s < scene->mNumMaterials; s++)
+        if (remap[s] != UINT32_MAX) {
+            remap[s] = m->material_count;
+            describe_material(scene->mMaterials[s], &m->materials[m->material_count++]);
+        }
+    return true;
+}
+
+static inline float clamp_unit(float v) { return v < 0.f ? 0.f : v > 1.f ? 1.f : v; } /* NaN passes through */
+
+/* Append one triangle mesh's vertices (and attributes) at m->vertex_count. */
+static void append_vertices(mesh *m, const struct aiMesh *am)
+{
+    size_t base = 3 * (size_t)m->vertex_count;
+    for (unsigned v = 0; v < am->mNumVertices; v++) {
+        float *p = m->positions + base + 3 * (size_t)v;
+        p[0] = am->mVertices[v].x;
+        p[1] = am->mVertices[v].y;
+        p[2] = am->mVertices[v].z;
+        if (m->normals) {
+            float *n = m->normals + base + 3 * (size_t)v;
+            n[0] = am->mNormals[v].x;
+            n[1] = am->mNormals[v].y;
+            n[2] = am->mNormals[v].z;
+        }
+        if (m->colors) {
+            float *c = m->colors + base + 3 * (size_t)v;
+            c[0] = clamp_unit(am->mColors[0][v].r);
+            c[1] = clamp_unit(am->mColors[0][v].g);
+            c[2] = clamp_unit(am->mColors[0][v].b);
+        }
+    }
+}
+
+/* Append one triangle mesh's faces, offset by its first vertex. */
+static bool append_triangles(mesh *m, const struct aiMesh *am, uint32_t first_vertex, uint32_t material,
+                             const char *path, tess_error *err)
+{
+    for (unsigned f = 0; f < am->mNumFaces; f++) {
+        const struct aiFace *face = &am->mFaces[f];
+        if (face->mNumIndices != 3) /* SortByPType promises triangles; trust, but check */
+            return tess_error_set(err, "%s: mesh '%s' face %u has %u indices after triangulation", path,
+                                  am->mName.data, f, face->mNumIndices);
+        uint32_t *t = m->indices + 3 * (size_t)m->triangle_count;
+        for (int k = 0; k < 3; k++)
+            t[k] = first_vertex + face->mIndices[k];
+        if (m->triangle_material)
+            m->triangle_material[m->triangle_count] = material;
+        m->triangle_count++;
+    }
+    return true;
+}
+
+static bool allocate(mesh *m, const merge_plan *plan, bool materials)
+{
+    return mesh_reserve_vertices(m, (uint32_t)plan->vertex_count) &&
+           mesh_reserve_triangles(m, (uint32_t)plan->triangle_count) && (!plan->normals || mesh_enable_normals(m)) &&
+           (!plan->colors || mesh_enable_colors(m)) && (!materials || mesh_enable_triangle_materials(m));
+}
+
+static mesh *convert_scene(const struct aiScene *scene, const char *path, tess_error *err)
+{
+    merge_plan plan = plan_merge(scene);
+    if (plan.triangle_count == 0) {
+        tess_error_set(err, "%s: no triangles", path);
+        return NULL;
+    }
+    if (plan.vertex_count > UINT32_MAX || plan.triangle_count > UINT32_MAX) {
+        tess_error_set(err, "%s: %llu vertices, %llu triangles: more than a mesh can hold", path,
+                       (unsigned long long)plan.vertex_count, (unsigned long long)plan.triangle_count);
+        return NULL;
+    }
+    bool materials = wants_materials(scene);
+    mesh *m = mesh_create();
+    uint32_t *remap = calloc(scene->mNumMaterials ? scene->mNumMaterials : 1, sizeof *remap);
+    if (!m || !remap || !allocate(m, &plan, materials) || (materials && !collect_materials(scene, m, remap))) {
+        tess_error_set(err, "%s: out of memory for %llu vertices and %llu triangles", path,
+                       (unsigned long long)plan.vertex_count, (unsigned long long)plan.triangle_count);
+        goto fail;
+    }
+    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
+        const struct aiMesh *am = scene->mMeshes[i];
+        if (!is_triangle_mesh(am))
+            continue;
+        uint32_t material = materials && am->mMaterialIndex < scene->mNumMaterials ? remap[am->mMaterialIndex] : 0;
+        uint32_t first = m->vertex_count;
+        append_vertices(m, am);
+        m->vertex_count += am->mNumVertices;
+        if (!append_triangles(m, am, first, material, path, err))
+            goto fail;
+    }
+    free(remap);
+    return m;
+fail:
+    free(remap);
+    mesh_destroy(m);
+    return NULL;
+}
+
+mesh *mesh_load_assimp(const char *path, tess_error *err)
+{
+    if (has_extension(path, ".obj") && !check_obj_numbers(path, err))
+        return NULL;
+    const struct aiScene *scene = import_scene(path, err);
+    if (!scene)
+        return NULL;
+    if (!check_scene_finite(scene, path, err)) {
+        aiReleaseImport(scene);
+        return NULL;
+    }
+    /* on failure aiApplyPostProcessing releases the scene itself */
+    scene = aiApplyPostProcessing(scene, JOIN_FLAGS);
+    if (!scene) {
+        tess_error_set(err, "%s: assimp: joining identical vertices failed", path);
+        return NULL;
+    }
+    mesh *m = convert_scene(scene, path, err);
+    aiReleaseImport(scene);
+    if (m && !mesh_validate(m, path, err)) {
+        mesh_destroy(m);
+        return NULL;
+    }
+    return m;
+}
