@@ -1,0 +1,331 @@
+/* scene.c - the scene container: growth of its arrays, bounds, defaults, and
+ * scene_load's dispatch between JSON scene files and bare mesh files.
+ * scene_create_default lives in scene_default.c, scene_load_json in scene_json.c. */
+#include "scene.h"
+
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+/* First capacity of a growing array; it doubles from there. Small because most
+ * scenes hold a handful of materials, lights and meshes. */
+#define SCENE_FIRST_CAPACITY 8u
+/* Counts stay below this so every index fits the int that scene_add_* returns. */
+#define SCENE_MAX_COUNT ((uint32_t)INT_MAX)
+
+/* Defaults of a fresh scene (linear RGB): a near-black blue-ish background, so
+ * silhouettes stay visible against it, and a dim grey ambient light. */
+static const vec3 scene_default_background = {0.02f, 0.02f, 0.03f};
+static const vec3 scene_default_ambient = {0.1f, 0.1f, 0.1f};
+
+scene *scene_create(void)
+{
+    scene *s = calloc(1, sizeof *s);
+    if (!s)
+        return NULL;
+    s->background = scene_default_background;
+    s->ambient = scene_default_ambient;
+    s->has_camera = false;
+    return s;
+}
+
+static void sphere_set_finish(sphere_set *ss)
+{
+    free(ss->center_x);
+    free(ss->center_y);
+    free(ss->center_z);
+    free(ss->radius);
+    free(ss->material_id);
+    memset(ss, 0, sizeof *ss);
+}
+
+void scene_destroy(scene *s)
+{
+    if (!s)
+        return;
+    for (uint32_t i = 0; i < s->mesh_count; i++) {
+        mesh_destroy(s->meshes[i].mesh);
+        free(s->meshes[i].mesh_material_ids);
+    }
+    free(s->meshes);
+    sphere_set_finish(&s->spheres);
+    free(s->materials);
+    free(s->lights);
+    free(s);
+}
+
+/* realloc to `count` items of `item_bytes`, overflow-checked. Returns the new
+ * block, or NULL with `array` untouched. */
+static void *resize_array(void *array, size_t count, size_t item_bytes)
+{
+    if (count == 0 || count > SIZE_MAX / item_bytes)
+        return NULL;
+    return realloc(array, count * item_bytes);
+}
+
+/* The capacity to grow to so that at least `needed` items fit: doubling from
+ * SCENE_FIRST_CAPACITY, at most SCENE_MAX_COUNT. 0 when `needed` is too large. */
+static uint32_t grown_capacity(uint32_t capacity, uint64_t needed)
+{
+    if (needed > SCENE_MAX_COUNT)
+        return 0;
+    uint64_t cap = capacity ? capacity : SCENE_FIRST_CAPACITY;
+    while (cap < needed)
+        cap *= 2;
+    return cap > SCENE_MAX_COUNT ? SCENE_MAX_COUNT : (uint32_t)cap;
+}
+
+/* Make room for `extra` more materials. */
+static bool reserve_materials(scene *s, uint32_t extra)
+{
+    uint64_t needed = (uint64_t)s->material_count + extra;
+    if (needed <= s->material_capacity)
+        return true;
+    uint32_t cap = grown_capacity(s->material_capacity, needed);
+    material *p = cap ? resize_array(s->materials, cap, sizeof *p) : NULL;
+    if (!p)
+        return false;
+    s->materials = p;
+    s->material_capacity = cap;
+    return true;
+}
+
+int scene_add_material(scene *s, const material *m)
+{
+    if (!reserve_materials(s, 1))
+        return -1;
+    s->materials[s->material_count] = *m;
+    /* the name is always terminated, whatever the caller filled in */
+    s->materials[s->material_count].name[SCENE_NAME_BYTES - 1] = '\0';
+    return (int)s->material_count++;
+}
+
+int scene_add_light(scene *s, const light *l)
+{
+    if (s->light_count == s->light_capacity) {
+        uint32_t cap = grown_capacity(s->light_capacity, (uint64_t)s->light_count + 1);
+        light *p = cap ? resize_array(s->lights, cap, sizeof *p) : NULL;
+        if (!p)
+            return -1;
+        s->lights = p;
+        s->light_capacity = cap;
+    }
+    s->lights[s->light_count] = *l;
+    return (int)s->light_count++;
+}
+
+/* A scene material for a material the mesh file named (OBJ's MTL): Lambert with
+ * its diffuse colour, clamped to [0, 1] (NaN becomes 0), everything else as
+ * material_default(). */
+static material material_from_mesh(const mesh_material *mm)
+{
+    material m = material_default();
+    float rgb[3];
+    for (int k = 0; k < 3; k++)
+        rgb[k] = fminf(fmaxf(mm->diffuse_rgb[k], 0.f), 1.f);
+    m.diffuse = v3(rgb[0], rgb[1], rgb[2]);
+    snprintf(m.name, sizeof m.name, "%.*s", (int)(sizeof m.name - 1), mm->name);
+    return m;
+}
+
+/* Append one scene material per mesh material; ids[i] receives the scene id of
+ * mesh material i. All or nothing: false leaves the scene unchanged. */
+static bool add_mesh_materials(scene *s, const mesh *m, uint32_t *ids)
+{
+    if (!reserve_materials(s, m->material_count))
+        return false;
+    for (uint32_t i = 0; i < m->material_count; i++) {
+        ids[i] = s->material_count;
+        s->materials[s->material_count++] = material_from_mesh(&m->materials[i]);
+    }
+    return true;
+}
+
+int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name)
+{
+    uint32_t *ids = NULL;
+    if (!m)
+        return -1;
+    if (s->mesh_count == s->mesh_capacity) {
+        uint32_t cap = grown_capacity(s->mesh_capacity, (uint64_t)s->mesh_count + 1);
+        scene_mesh *p = cap ? resize_array(s->meshes, cap, sizeof *p) : NULL;
+        if (!p)
+            goto fail;
+        s->meshes = p;
+        s->mesh_capacity = cap;
+    }
+    bool own_materials = m->material_count > 0 && m->triangle_material != NULL;
+    if (own_materials) {
+        ids = malloc((size_t)m->material_count * sizeof *ids);
+        if (!ids || !add_mesh_materials(s, m, ids))
+            goto fail;
+    }
+    scene_mesh *sm = &s->meshes[s->mesh_count];
+    memset(sm, 0, sizeof *sm);
+    sm->mesh = m;
+    sm->material_id = material_id;
+    sm->mesh_material_ids = ids;
+    snprintf(sm->name, sizeof sm->name, "%.*s", (int)(sizeof sm->name - 1), name ? name : "");
+    return (int)s->mesh_count++;
+
+fail:
+    free(ids);
+    mesh_destroy(m);
+    return -1;
+}
+
+/* Grow every array of the sphere set to hold at least `needed` spheres. An
+ * array that was already resized when a later one fails is merely larger than
+ * `capacity`, which is harmless. */
+static bool sphere_set_reserve(sphere_set *ss, uint64_t needed)
+{
+    if (needed <= ss->capacity)
+        return true;
+    uint32_t cap = grown_capacity(ss->capacity, needed);
+    if (cap == 0)
+        return false;
+    float *cx = resize_array(ss->center_x, cap, sizeof *cx);
+    if (!cx)
+        return false;
+    ss->center_x = cx;
+    float *cy = resize_array(ss->center_y, cap, sizeof *cy);
+    if (!cy)
+        return false;
+    ss->center_y = cy;
+    float *cz = resize_array(ss->center_z, cap, sizeof *cz);
+    if (!cz)
+        return false;
+    ss->center_z = cz;
+    float *r = resize_array(ss->radius, cap, sizeof *r);
+    if (!r)
+        return false;
+    ss->radius = r;
+    uint32_t *mid = resize_array(ss->material_id, cap, sizeof *mid);
+    if (!mid)
+        return false;
+    ss->material_id = mid;
+    ss->capacity = cap;
+    return true;
+}
+
+int scene_add_sphere(scene *s, vec3 center, float radius, uint32_t material_id)
+{
+    sphere_set *ss = &s->spheres;
+    if (!sphere_set_reserve(ss, (uint64_t)ss->count + 1))
+        return -1;
+    ss->center_x[ss->count] = center.x;
+    ss->center_y[ss->count] = center.y;
+    ss->center_z[ss->count] = center.z;
+    ss->radius[ss->count] = radius;
+    ss->material_id[ss->count] = material_id;
+    return (int)ss->count++;
+}
+
+bool scene_bounds(const scene *s, vec3 *lo, vec3 *hi)
+{
+    bool found = false;
+    vec3 box_lo = v3(0.f, 0.f, 0.f), box_hi = v3(0.f, 0.f, 0.f);
+    for (uint32_t i = 0; i < s->mesh_count; i++) {
+        float mlo[3], mhi[3];
+        if (!mesh_bounds(s->meshes[i].mesh, mlo, mhi))
+            continue;
+        vec3 a = v3(mlo[0], mlo[1], mlo[2]), b = v3(mhi[0], mhi[1], mhi[2]);
+        box_lo = found ? v3_min(box_lo, a) : a;
+        box_hi = found ? v3_max(box_hi, b) : b;
+        found = true;
+    }
+    const sphere_set *ss = &s->spheres;
+    for (uint32_t i = 0; i < ss->count; i++) {
+        vec3 c = v3(ss->center_x[i], ss->center_y[i], ss->center_z[i]);
+        vec3 r = v3(ss->radius[i], ss->radius[i], ss->radius[i]);
+        vec3 a = v3_sub(c, r), b = v3_add(c, r);
+        box_lo = found ? v3_min(box_lo, a) : a;
+        box_hi = found ? v3_max(box_hi, b) : b;
+        found = true;
+    }
+    if (found) {
+        *lo = box_lo;
+        *hi = box_hi;
+    }
+    return found;
+}
+
+size_t scene_triangle_count(const scene *s)
+{
+    size_t total = 0;
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        total += s->meshes[i].mesh->triangle_count;
+    return total;
+}
+
+material material_default(void)
+{
+    return (material){
+        .name = "default",
+        .model = MATERIAL_LAMBERT,
+        .diffuse = v3(0.7f, 0.7f, 0.7f),
+        .specular = v3(0.f, 0.f, 0.f),
+        .shininess = 0.f,
+        .ambient = 1.f,
+    };
+}
+
+light light_default_directional(void)
+{
+    return (light){
+        .kind = LIGHT_DIRECTIONAL,
+        .direction = v3_normalize(v3(0.4f, 1.f, 0.3f)),
+        .position = v3(0.f, 0.f, 0.f),
+        .color = v3(1.f, 1.f, 1.f),
+        .intensity = 1.f,
+        .casts_shadows = true,
+    };
+}
+
+static bool has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* The last path component, for naming a mesh after its file. */
+static const char *path_basename(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+/* A scene of one mesh file in file coordinates, the default material and light. */
+static scene *scene_load_mesh_file(const char *path, tess_error *err)
+{
+    mesh *m = mesh_load(path, err);
+    if (!m)
+        return NULL;
+    if (m->triangle_count == 0) {
+        mesh_destroy(m);
+        tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
+        return NULL;
+    }
+    scene *s = scene_create();
+    material def_mat = material_default();
+    light def_light = light_default_directional();
+    int mat_id = s ? scene_add_material(s, &def_mat) : -1;
+    if (mat_id < 0 || scene_add_mesh(s, m, (uint32_t)mat_id, path_basename(path)) < 0 ||
+        scene_add_light(s, &def_light) < 0) {
+        if (mat_id < 0)
+            mesh_destroy(m); /* scene_add_mesh was never reached to take it */
+        scene_destroy(s);
+        tess_error_set(err, "%s: out of memory building the scene", path);
+        return NULL;
+    }
+    return s;
+}
+
+scene *scene_load(const char *path, tess_error *err)
+{
+    if (has_extension(path, ".json"))
+        return scene_load_json(path, err);
+    return scene_load_mesh_file(path, err);
+}
