@@ -270,10 +270,12 @@ Test(render, default_scene_matches_reference)
 
 Test(render, example_scenes_match_references)
 {
-    const char *names[] = {"spheres", "cornell_like"};
-    for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
+    /* two JSON scenes with their own cameras, and a mesh file framed by the peer rule */
+    const char *files[] = {"spheres.json", "cornell_like.json", "data/cube.ply"};
+    const char *names[] = {"spheres", "cornell_like", "cube_ply_framed"};
+    for (size_t k = 0; k < sizeof files / sizeof files[0]; k++) {
         char path[256];
-        snprintf(path, sizeof path, "../configs/scenes/%s.json", names[k]);
+        snprintf(path, sizeof path, "../configs/scenes/%s", files[k]);
         tess_error err = {{0}};
         scene *s = scene_load(path, &err);
         cr_assert(s, "%s", err.msg);
