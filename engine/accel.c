@@ -66,8 +66,9 @@ static bool build_spheres(geom_accel *g, const sphere_set *s, aabb *bounds, tess
     return ok;
 }
 
-accel *accel_build(const scene *s, tess_error *err)
+accel *accel_build(const scene *s, int threads, tess_error *err)
 {
+    (void)threads; /* the parallel build comes with the wide BVH */
     accel *a = calloc(1, sizeof *a);
     uint32_t count = s->mesh_count + (s->spheres.count > 0 ? 1u : 0u);
     aabb *geom_bounds = calloc((size_t)count + 1, sizeof *geom_bounds);
@@ -227,4 +228,38 @@ bool accel_occluded(const accel *a, const ray *r)
 {
     ray local = *r;
     return trace(a, &local, NULL, true);
+}
+
+void accel_intersect_packet(const accel *a, packet_range r)
+{
+    ray_packet *p = r.packet;
+    uint64_t todo = packet_range_mask(r);
+    while (todo) {
+        uint32_t i = (uint32_t)__builtin_ctzll(todo);
+        todo &= todo - 1;
+        ray one = packet_get_ray(p, i);
+        hit h;
+        if (accel_intersect(a, &one, &h)) {
+            p->hit_t[i] = h.t;
+            p->hit_u[i] = h.u;
+            p->hit_v[i] = h.v;
+            p->prim_id[i] = h.prim_id;
+            p->geom_id[i] = h.geom_id;
+            p->t_far[i] = h.t;
+        }
+    }
+}
+
+uint64_t accel_occluded_packet(const accel *a, packet_range r)
+{
+    ray_packet *p = r.packet;
+    uint64_t todo = packet_range_mask(r), occluded = 0;
+    while (todo) {
+        uint32_t i = (uint32_t)__builtin_ctzll(todo);
+        todo &= todo - 1;
+        ray one = packet_get_ray(p, i);
+        if (accel_occluded(a, &one))
+            occluded |= 1ull << i;
+    }
+    return occluded;
 }

@@ -10,13 +10,15 @@
 #include <stddef.h>
 
 #include "err.h"
+#include "packet.h"
 #include "ray.h"
 
 struct scene;
 typedef struct accel accel;
 
-/* The scene must outlive the accel and stay unchanged while it is used. */
-accel *accel_build(const struct scene *s, tess_error *err);
+/* The scene must outlive the accel and stay unchanged while it is used.
+ * `threads` threads build it (the caller's included). */
+accel *accel_build(const struct scene *s, int threads, tess_error *err);
 void accel_destroy(accel *a); /* NULL is fine */
 
 /* Closest hit in (r->t_near, r->t_far]; fills *h (hit_none() on a miss) and
@@ -25,6 +27,15 @@ bool accel_intersect(const accel *a, const ray *r, hit *h);
 
 /* Any hit in (r->t_near, r->t_far]; stops at the first one found. */
 bool accel_occluded(const accel *a, const ray *r);
+
+/* Closest hits for the active rays of a sub-packet: fills hit_* and shrinks
+ * t_far of each ray that hits. Results are bit-identical to accel_intersect on
+ * each ray alone (ties in t go to the lowest geometry id, then primitive id). */
+void accel_intersect_packet(const accel *a, packet_range r);
+
+/* Any-hit for the active rays of a sub-packet: returns the mask of rays
+ * (bits as in packet->active) that are occluded. */
+uint64_t accel_occluded_packet(const accel *a, packet_range r);
 
 /* Bytes of acceleration data (nodes, primitive order), not counting the scene. */
 size_t accel_bytes(const accel *a);

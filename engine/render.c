@@ -67,7 +67,7 @@ static surface describe_hit(const scene *s, const ray *r, const hit *h)
     return sf;
 }
 
-static vec3 shade_light(const render_view *v, const surface *sf, const light *l, vec3 to_viewer)
+static vec3 shade_light(const render_view *v, const surface *sf, const light *l, vec3 to_viewer, uint64_t *shadow_rays)
 {
     vec3 to_light;
     float shadow_t_far, falloff = 1.f;
@@ -89,6 +89,7 @@ static vec3 shade_light(const render_view *v, const surface *sf, const light *l,
         return v3(0.f, 0.f, 0.f);
     if (v->shadows && l->casts_shadows) {
         ray shadow = {ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, shadow_t_far};
+        ++*shadow_rays;
         if (accel_occluded(v->accel, &shadow))
             return v3(0.f, 0.f, 0.f);
     }
@@ -102,7 +103,7 @@ static vec3 shade_light(const render_view *v, const surface *sf, const light *l,
     return v3_mul(reflected, v3_scale(l->color, l->intensity * falloff));
 }
 
-vec3 render_shade(const render_view *v, const ray *r)
+vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
 {
     const scene *s = v->scene;
     hit h;
@@ -112,17 +113,18 @@ vec3 render_shade(const render_view *v, const ray *r)
     vec3 to_viewer = v3_normalize(v3_scale(r->dir, -1.f));
     vec3 colour = v3_mul(v3_scale(s->ambient, sf.mat->ambient), sf.kd);
     for (uint32_t i = 0; i < s->light_count; i++)
-        colour = v3_add(colour, shade_light(v, &sf, &s->lights[i], to_viewer));
+        colour = v3_add(colour, shade_light(v, &sf, &s->lights[i], to_viewer, shadow_rays));
     return colour;
 }
 
-void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb)
+void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb, render_counts *counts)
 {
     const camera_basis *cam = &v->camera;
     for (int y = y0; y < y1; y++)
         for (int x = x0; x < x1; x++) {
             ray r = {cam->eye, v3_normalize(camera_pixel_direction(cam, x, y)), 0.f, FLT_MAX};
-            vec3 c = render_shade(v, &r);
+            vec3 c = render_shade(v, &r, &counts->shadow_rays);
+            counts->primary_rays++;
             float *out = rgb + 3 * ((size_t)y * (size_t)cam->width_px + (size_t)x);
             out[0] = c.x;
             out[1] = c.y;
@@ -136,32 +138,39 @@ typedef struct tile_queue {
     float *rgb;
     int tiles_x, tile_count;
     atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
+    atomic_uint_fast64_t primary_rays, shadow_rays; /* totals, added once per thread */
 } tile_queue;
 
 static void *render_worker(void *arg)
 {
     tile_queue *q = arg;
     const camera_basis *cam = &q->view->camera;
+    render_counts counts = {0, 0}; /* this thread's, folded in once at the end */
     for (;;) {
         int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
-        if (tile >= q->tile_count)
+        if (tile >= q->tile_count) {
+            atomic_fetch_add_explicit(&q->primary_rays, counts.primary_rays, memory_order_relaxed);
+            atomic_fetch_add_explicit(&q->shadow_rays, counts.shadow_rays, memory_order_relaxed);
             return NULL;
+        }
         int x0 = (tile % q->tiles_x) * RENDER_TILE_PX, y0 = (tile / q->tiles_x) * RENDER_TILE_PX;
         int x1 = x0 + RENDER_TILE_PX < cam->width_px ? x0 + RENDER_TILE_PX : cam->width_px;
         int y1 = y0 + RENDER_TILE_PX < cam->height_px ? y0 + RENDER_TILE_PX : cam->height_px;
-        render_tile(q->view, x0, y0, x1, y1, q->rgb);
+        render_tile(q->view, x0, y0, x1, y1, q->rgb, &counts);
     }
 }
 
 /* Most threads render_image starts: more than any machine we target has cores. */
 #define RENDER_MAX_THREADS 256
 
-void render_image(const render_view *v, int threads, float *rgb)
+void render_image(const render_view *v, int threads, float *rgb, render_counts *counts)
 {
     tile_queue q = {.view = v, .rgb = rgb};
     q.tiles_x = (v->camera.width_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX;
     q.tile_count = q.tiles_x * ((v->camera.height_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX);
     atomic_init(&q.next_tile, 0);
+    atomic_init(&q.primary_rays, 0);
+    atomic_init(&q.shadow_rays, 0);
     if (threads < 1)
         threads = 1;
     if (threads > RENDER_MAX_THREADS)
@@ -180,4 +189,8 @@ void render_image(const render_view *v, int threads, float *rgb)
     render_worker(&q);
     for (int i = 0; i < started; i++)
         pthread_join(ids[i], NULL);
+    if (counts) {
+        counts->primary_rays = atomic_load(&q.primary_rays);
+        counts->shadow_rays = atomic_load(&q.shadow_rays);
+    }
 }

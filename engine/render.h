@@ -17,6 +17,7 @@
 #define TESSERA_RENDER_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "camera.h"
 #include "err.h"
@@ -33,19 +34,27 @@ typedef struct render_view {
     bool shadows;               /* trace shadow rays (lights may also opt out) */
 } render_view;
 
+/* Rays traced, for benchmarks. */
+typedef struct render_counts {
+    uint64_t primary_rays;
+    uint64_t shadow_rays;
+} render_counts;
+
 /* Tile edge in pixels: 16 x 16 float RGB rows are 192 bytes, whole cache lines. */
 #define RENDER_TILE_PX 16
 
-/* Shade the ray's closest hit (or the background). */
-vec3 render_shade(const render_view *v, const ray *r);
+/* Shade the ray's closest hit (or the background); adds the shadow rays it
+ * traced to *shadow_rays. */
+vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays);
 
 /* Render pixels [x0, x1) x [y0, y1) into rgb (3 floats per pixel, the whole
  * image, row-major, top row first). */
-void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb);
+void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb, render_counts *counts);
 
 /* Render the whole image with `threads` threads (the caller's included)
  * pulling tiles from an atomic counter. Threads the system refuses are logged
- * and the image is finished by the others. */
-void render_image(const render_view *v, int threads, float *rgb);
+ * and the image is finished by the others. `counts` (may be NULL) receives
+ * the rays traced. */
+void render_image(const render_view *v, int threads, float *rgb, render_counts *counts);
 
 #endif

@@ -27,12 +27,12 @@ static const double pi_d = 3.14159265358979323846;
 static float *render_scene(const scene *s, camera_desc cam, int w, int h, int threads, bool shadows)
 {
     tess_error err = {{0}};
-    accel *a = accel_build(s, &err);
+    accel *a = accel_build(s, threads, &err);
     cr_assert(a, "accel_build: %s", err.msg);
     float *rgb = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(rgb);
     render_view v = {s, a, camera_basis_make(&cam, w, h), shadows};
-    render_image(&v, threads, rgb);
+    render_image(&v, threads, rgb, NULL);
     accel_destroy(a);
     return rgb;
 }

@@ -112,7 +112,7 @@ static bool job_prepare(job *j)
         return false;
     }
     double t1 = cli_now_s();
-    j->accel = accel_build(j->scene, &err);
+    j->accel = accel_build(j->scene, j->threads, &err);
     if (!j->accel) {
         cli_error("%s", err.msg);
         return false;
@@ -169,7 +169,7 @@ static int render_frames(job *j, int orbit_frames)
         camera_desc cam = orbit_frames > 0 ? orbit(j->camera, 6.2831853f * (float)f / (float)orbit_frames) : j->camera;
         render_view view = {j->scene, j->accel, camera_basis_make(&cam, j->width_px, j->height_px), j->shadows};
         double t0 = cli_now_s();
-        render_image(&view, j->threads, rgb);
+        render_image(&view, j->threads, rgb, NULL);
         render_s += cli_now_s() - t0;
         tess_error err = {{0}};
         if (!dump_frame_path(j->out, f, j->frames > 1, path, sizeof path, &err) ||

@@ -1,0 +1,97 @@
+#include "packet.h"
+
+#include <float.h>
+#include <math.h>
+
+#include "camera.h"
+
+void packet_reset(ray_packet *p, uint32_t count, uint32_t fact_flags)
+{
+    p->count = count;
+    p->active = packet_span_mask(0, count);
+    p->flags = fact_flags & (PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
+    for (uint32_t i = 0; i < count; i++) {
+        p->hit_t[i] = INFINITY;
+        p->hit_u[i] = p->hit_v[i] = 0.f;
+        p->prim_id[i] = p->geom_id[i] = RAY_INVALID_ID;
+    }
+}
+
+void packet_set_ray(ray_packet *p, uint32_t i, const ray *r)
+{
+    p->org_x[i] = r->org.x;
+    p->org_y[i] = r->org.y;
+    p->org_z[i] = r->org.z;
+    p->dir_x[i] = r->dir.x;
+    p->dir_y[i] = r->dir.y;
+    p->dir_z[i] = r->dir.z;
+    p->t_near[i] = r->t_near;
+    p->t_far[i] = r->t_far;
+}
+
+ray packet_get_ray(const ray_packet *p, uint32_t i)
+{
+    return (ray){v3(p->org_x[i], p->org_y[i], p->org_z[i]), v3(p->dir_x[i], p->dir_y[i], p->dir_z[i]), p->t_near[i],
+                 p->t_far[i]};
+}
+
+hit packet_get_hit(const ray_packet *p, uint32_t i)
+{
+    return (hit){.t = p->hit_t[i], .u = p->hit_u[i], .v = p->hit_v[i], .prim_id = p->prim_id[i],
+                 .geom_id = p->geom_id[i]};
+}
+
+void packet_detect_facts(ray_packet *p)
+{
+    uint32_t facts = PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED;
+    for (uint32_t i = 0; i < p->count; i++) {
+        if (p->org_x[i] != p->org_x[0] || p->org_y[i] != p->org_y[0] || p->org_z[i] != p->org_z[0])
+            facts &= ~(uint32_t)PACKET_COMMON_ORIGIN;
+        if (signbit(p->dir_x[i]) != signbit(p->dir_x[0]) || signbit(p->dir_y[i]) != signbit(p->dir_y[0]) ||
+            signbit(p->dir_z[i]) != signbit(p->dir_z[0]))
+            facts &= ~(uint32_t)PACKET_CONSTANT_SIGNS;
+        float len2 = p->dir_x[i] * p->dir_x[i] + p->dir_y[i] * p->dir_y[i] + p->dir_z[i] * p->dir_z[i];
+        if (fabsf(len2 - 1.f) > 4.f * FLT_EPSILON)
+            facts &= ~(uint32_t)PACKET_NORMALIZED;
+    }
+    p->flags = (p->flags & ~(uint32_t)(PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED)) | facts;
+}
+
+static float safe_reciprocal(float x) { return x != 0.f ? 1.f / x : copysignf(FLT_MAX, x); }
+
+void packet_derive_inv_dir(ray_packet *p)
+{
+    if (p->flags & PACKET_HAVE_INV_DIR)
+        return;
+    for (uint32_t i = 0; i < p->count; i++) {
+        p->inv_dir_x[i] = safe_reciprocal(p->dir_x[i]);
+        p->inv_dir_y[i] = safe_reciprocal(p->dir_y[i]);
+        p->inv_dir_z[i] = safe_reciprocal(p->dir_z[i]);
+    }
+    p->flags |= PACKET_HAVE_INV_DIR;
+}
+
+void packet_primary(ray_packet *p, const camera_basis *cam, int x0, int y0, int w, int h)
+{
+    packet_reset(p, (uint32_t)(w * h), PACKET_COMMON_ORIGIN | PACKET_NORMALIZED);
+    uint32_t i = 0;
+    for (int y = y0; y < y0 + h; y++)
+        for (int x = x0; x < x0 + w; x++, i++) {
+            vec3 d = v3_normalize(camera_pixel_direction(cam, x, y));
+            p->org_x[i] = cam->eye.x;
+            p->org_y[i] = cam->eye.y;
+            p->org_z[i] = cam->eye.z;
+            p->dir_x[i] = d.x;
+            p->dir_y[i] = d.y;
+            p->dir_z[i] = d.z;
+            p->t_near[i] = 0.f;
+            p->t_far[i] = FLT_MAX;
+        }
+    /* a tile's directions keep their signs unless it straddles an axis plane */
+    bool same_sign = true;
+    for (uint32_t k = 1; k < i && same_sign; k++)
+        same_sign = signbit(p->dir_x[k]) == signbit(p->dir_x[0]) && signbit(p->dir_y[k]) == signbit(p->dir_y[0]) &&
+                    signbit(p->dir_z[k]) == signbit(p->dir_z[0]);
+    if (same_sign)
+        p->flags |= PACKET_CONSTANT_SIGNS;
+}
