@@ -103,13 +103,33 @@ static vec3 shade_light(const render_view *v, const surface *sf, const light *l,
     return v3_mul(reflected, v3_scale(l->color, l->intensity * falloff));
 }
 
+/* The peer harness's shade: |cos| between the geometric normal and the ray,
+ * darkened to 20 % when the first light is occluded. */
+static vec3 shade_eyelight(const render_view *v, const surface *sf, const ray *r, uint64_t *shadow_rays)
+{
+    float grey = fabsf(v3_dot(sf->geometric_n, v3_normalize(r->dir)));
+    const scene *s = v->scene;
+    if (v->shadows && s->light_count > 0) {
+        const light *l = &s->lights[0];
+        vec3 to_light = l->kind == LIGHT_DIRECTIONAL ? l->direction : v3_sub(l->position, sf->position);
+        float t_far = l->kind == LIGHT_DIRECTIONAL ? FLT_MAX : 1.f;
+        ray shadow = {ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, t_far};
+        ++*shadow_rays;
+        if (accel_occluded(v->accel, &shadow))
+            grey *= 0.2f;
+    }
+    return v3(grey, grey, grey);
+}
+
 vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
 {
     const scene *s = v->scene;
     hit h;
     if (!accel_intersect(v->accel, r, &h))
-        return s->background;
+        return v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
     surface sf = describe_hit(s, r, &h);
+    if (v->shading == RENDER_SHADE_EYELIGHT)
+        return shade_eyelight(v, &sf, r, shadow_rays);
     vec3 to_viewer = v3_normalize(v3_scale(r->dir, -1.f));
     vec3 colour = v3_mul(v3_scale(s->ambient, sf.mat->ambient), sf.kd);
     for (uint32_t i = 0; i < s->light_count; i++)

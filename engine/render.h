@@ -27,11 +27,18 @@
 struct scene;
 struct accel;
 
+typedef enum render_shading {
+    RENDER_SHADE_PHONG,    /* the shading model above */
+    RENDER_SHADE_EYELIGHT, /* |dot(Ng, dir)| grey, as the Embree peer harness's shade image; with
+                              shadows, x 0.2 when the scene's first light is occluded */
+} render_shading;
+
 typedef struct render_view {
     const struct scene *scene;  /* read-only while rendering */
     const struct accel *accel;  /* built from scene */
     camera_basis camera;        /* includes the image size */
     bool shadows;               /* trace shadow rays (lights may also opt out) */
+    render_shading shading;
 } render_view;
 
 /* Rays traced, for benchmarks. */

@@ -21,5 +21,7 @@ double cli_now_s(void); /* monotonic seconds */
 
 int cli_render(int argc, char **argv); /* tessera render ... */
 int cli_run(int argc, char **argv);    /* tessera run ... */
+int cli_trace(int argc, char **argv);  /* tessera trace ... (cmd_trace.c) */
+int cli_bench(int argc, char **argv);  /* tessera bench ... (cmd_bench.c) */
 
 #endif

@@ -13,6 +13,8 @@ typedef struct command {
 static const command commands[] = {
     {"run", cli_run, "the main job: render the scene (headless: frames to out/) and report the frame rate"},
     {"render", cli_render, "render a scene headless and write image files"},
+    {"trace", cli_trace, "trace rays from a binary file and write their hits (for users and tests)"},
+    {"bench", cli_bench, "measure ray throughput, build time and memory (machine-readable lines)"},
 };
 
 static void usage(FILE *f)
@@ -38,6 +40,6 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);
-    cli_error("unknown command '%s' (expected one of: run, render; see 'tessera --help')", argv[1]);
+    cli_error("unknown command '%s' (expected one of: run, render, trace, bench; see 'tessera --help')", argv[1]);
     return 2;
 }
