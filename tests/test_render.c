@@ -31,7 +31,7 @@ static float *render_scene(const scene *s, camera_desc cam, int w, int h, int th
     cr_assert(a, "accel_build: %s", err.msg);
     float *rgb = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(rgb);
-    render_view v = {s, a, camera_basis_make(&cam, w, h), shadows};
+    render_view v = {s, a, camera_basis_make(&cam, w, h), shadows, RENDER_SHADE_PHONG};
     render_image(&v, threads, rgb, NULL);
     accel_destroy(a);
     return rgb;

@@ -167,7 +167,8 @@ static int render_frames(job *j, int orbit_frames)
     char path[4096], first[4096] = "";
     for (int f = 0; f < j->frames; f++) {
         camera_desc cam = orbit_frames > 0 ? orbit(j->camera, 6.2831853f * (float)f / (float)orbit_frames) : j->camera;
-        render_view view = {j->scene, j->accel, camera_basis_make(&cam, j->width_px, j->height_px), j->shadows};
+        render_view view = {j->scene, j->accel, camera_basis_make(&cam, j->width_px, j->height_px), j->shadows,
+                            RENDER_SHADE_PHONG};
         double t0 = cli_now_s();
         render_image(&view, j->threads, rgb, NULL);
         render_s += cli_now_s() - t0;
