@@ -17,7 +17,7 @@ ifeq ($(WERROR),1)
 WARN += -Werror
 endif
 CPPFLAGS := -D_POSIX_C_SOURCE=200809L -I. $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-CFLAGS := -std=c11 $(OPT) -g $(WARN) -pthread $(SAN)
+CFLAGS := -std=c11 $(OPT) -g $(WARN) -ffp-contract=off -pthread $(SAN)
 CXXFLAGS := -std=c++17 $(OPT) -g -Wall -Wextra $(if $(filter 1,$(WERROR)),-Werror) -pthread $(SAN)
 LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs $(TEST_PKGS) 2>/dev/null)
@@ -29,8 +29,16 @@ INPUT_SRC := $(wildcard input/*.c)
 CLI_SRC := $(wildcard tools/cli/*.c)
 TEST_SRC := $(wildcard tests/*.c)
 
+# traversal kernels: one source compiled per instruction set, picked at run time
+# (engine/kernels.c); no FMA anywhere, so every ISA gives bit-identical results
+ISA_OBJ := $(BUILD)/engine/isa/traverse_sse2.o $(BUILD)/engine/isa/traverse_avx2.o \
+           $(BUILD)/engine/isa/traverse_avx512.o
+ISA_FLAGS_sse2 := -DTESS_ISA_SSE2
+ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
+ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
+
 LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC)) \
-           $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX))
+           $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
@@ -46,6 +54,10 @@ deps:
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/engine/isa/traverse_%.o: engine/isa/traverse.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(ISA_FLAGS_$*) -MMD -MP -c $< -o $@
 
 $(BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)
@@ -82,16 +94,20 @@ tessera-asan: $(CLI_OBJ) $(LIB)
 
 # every header compiles on its own
 HEADERS := $(wildcard engine/*.h wall/*.h input/*.h tools/cli/*.h)
+# isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \
 	    echo "#include \"$$h\"" | $(CC) $(CPPFLAGS) -std=c11 $(WARN) -x c -fsyntax-only - || exit 1; \
 	done
 
-bench: deps
+bench:
+	@sh tools/deps.sh --bench
 	$(MAKE) tessera
 	sh tools/bench.sh
 
 clean:
 	rm -rf build build-asan tessera tessera-asan out
 
+# dependency files are only read, never remade (else make's built-in rules try)
+%.d: ;
 -include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

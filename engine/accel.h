@@ -37,7 +37,10 @@ void accel_intersect_packet(const accel *a, packet_range r);
  * (bits as in packet->active) that are occluded. */
 uint64_t accel_occluded_packet(const accel *a, packet_range r);
 
-/* Bytes of acceleration data (nodes, primitive order), not counting the scene. */
+/* Bytes of acceleration data (nodes, primitive blocks), not counting the scene. */
 size_t accel_bytes(const accel *a);
+
+/* The instruction set of the kernels in use ("sse2", "avx2", "avx512"). */
+const char *accel_isa_name(const accel *a);
 
 #endif

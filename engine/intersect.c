@@ -5,10 +5,6 @@
 #include <stdint.h>
 #include <string.h>
 
-/* gamma(n) = n u / (1 - n u) with u = 2^-24, the rounding-error bound of n
- * float operations (pbrt's notation). */
-#define GAMMA3 (3.f * 0x1p-24f / (1.f - 3.f * 0x1p-24f))
-#define IZE_FAR_SCALE (1.f + 2.f * GAMMA3)
 
 static float component(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
 
@@ -147,8 +143,8 @@ bool intersect_box(const ray *r, const ray_derived *d, const aabb *b, float *t_e
     float ty0 = (b->lo.y - r->org.y) * d->inv_dir.y, ty1 = (b->hi.y - r->org.y) * d->inv_dir.y;
     float tz0 = (b->lo.z - r->org.z) * d->inv_dir.z, tz1 = (b->hi.z - r->org.z) * d->inv_dir.z;
     float t_in = fmaxf(fmaxf(fminf(tx0, tx1), fminf(ty0, ty1)), fmaxf(fminf(tz0, tz1), r->t_near));
-    float t_out = fminf(fminf(fmaxf(tx0, tx1), fmaxf(ty0, ty1)), fmaxf(tz0, tz1)) * IZE_FAR_SCALE;
-    t_out = fminf(t_out, r->t_far);
+    float t_out = fminf(fminf(fmaxf(tx0, tx1), fmaxf(ty0, ty1)), fmaxf(tz0, tz1)) * INTERSECT_FAR_SCALE;
+    t_out = fminf(t_out, r->t_far * INTERSECT_FAR_SCALE);
     *t_entry = t_in;
     return t_in <= t_out;
 }

@@ -8,6 +8,14 @@
 #include "aabb.h"
 #include "ray.h"
 
+/* gamma(3) = 3u / (1 - 3u), u = 2^-24: the rounding bound of three float
+ * operations (pbrt's notation). Box exit distances are scaled by
+ * INTERSECT_FAR_SCALE (Ize 2013), and traversal culls a box only when its
+ * entry exceeds t_far * INTERSECT_FAR_SCALE, so a primitive at exactly t_far
+ * (a tie) is never culled and results do not depend on traversal order. */
+#define INTERSECT_GAMMA3 (3.f * 0x1p-24f / (1.f - 3.f * 0x1p-24f))
+#define INTERSECT_FAR_SCALE (1.f + 2.f * INTERSECT_GAMMA3)
+
 /* Watertight ray/triangle test: Woop, Benthin, Wald, "Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013. No ray passes between two triangles that
  * share an edge. On a hit with t in (r->t_near, r->t_far] writes t, u, v and

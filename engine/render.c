@@ -67,59 +67,82 @@ static surface describe_hit(const scene *s, const ray *r, const hit *h)
     return sf;
 }
 
-static vec3 shade_light(const render_view *v, const surface *sf, const light *l, vec3 to_viewer, uint64_t *shadow_rays)
+/* What one light does at one surface point, before its shadow ray is traced. */
+typedef struct light_sample {
+    vec3 to_light;        /* unit, towards the light */
+    float n_dot_l;        /* > 0 when the light can reach the point */
+    float falloff;        /* 1 for a directional light, 1/d^2 for a point light */
+    float shadow_t_far;   /* shadow ray length (unit direction) */
+    bool needs_shadow_ray;
+} light_sample;
+
+/* False when the light cannot reach the point at all (behind the surface, or
+ * a point light sitting on it). */
+static bool sample_light(const render_view *v, const surface *sf, const light *l, light_sample *ls)
 {
-    vec3 to_light;
-    float shadow_t_far, falloff = 1.f;
+    ls->falloff = 1.f;
     if (l->kind == LIGHT_DIRECTIONAL) {
-        to_light = l->direction;
-        shadow_t_far = FLT_MAX;
+        ls->to_light = l->direction;
+        ls->shadow_t_far = FLT_MAX;
     } else {
         vec3 d = v3_sub(l->position, sf->position);
         float dist2 = v3_dot(d, d);
         if (!(dist2 > 0.f))
-            return v3(0.f, 0.f, 0.f);
-        falloff = 1.f / dist2;
-        to_light = v3_scale(d, 1.f / sqrtf(dist2));
-        shadow_t_far = sqrtf(dist2);
+            return false;
+        ls->falloff = 1.f / dist2;
+        ls->to_light = v3_scale(d, 1.f / sqrtf(dist2));
+        ls->shadow_t_far = sqrtf(dist2);
     }
-    float n_dot_l = v3_dot(sf->shading_n, to_light);
+    ls->n_dot_l = v3_dot(sf->shading_n, ls->to_light);
     /* a light below the geometric surface cannot reach it, whatever the shading normal says */
-    if (n_dot_l <= 0.f || v3_dot(sf->geometric_n, to_light) <= 0.f)
-        return v3(0.f, 0.f, 0.f);
-    if (v->shadows && l->casts_shadows) {
-        ray shadow = {ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, shadow_t_far};
-        ++*shadow_rays;
-        if (accel_occluded(v->accel, &shadow))
-            return v3(0.f, 0.f, 0.f);
-    }
-    vec3 reflected = v3_scale(sf->kd, n_dot_l);
+    if (ls->n_dot_l <= 0.f || v3_dot(sf->geometric_n, ls->to_light) <= 0.f)
+        return false;
+    ls->needs_shadow_ray = v->shadows && l->casts_shadows;
+    return true;
+}
+
+static ray shadow_ray(const surface *sf, const light_sample *ls)
+{
+    return (ray){ray_offset_origin(sf->position, sf->geometric_n), ls->to_light, 0.f, ls->shadow_t_far};
+}
+
+/* Reflected light from an unshadowed light sample. */
+static vec3 light_contribution(const surface *sf, const light *l, const light_sample *ls, vec3 to_viewer)
+{
+    vec3 reflected = v3_scale(sf->kd, ls->n_dot_l);
     if (sf->mat->model == MATERIAL_PHONG) {
-        vec3 mirror = v3_sub(v3_scale(sf->shading_n, 2.f * n_dot_l), to_light);
+        vec3 mirror = v3_sub(v3_scale(sf->shading_n, 2.f * ls->n_dot_l), ls->to_light);
         float r_dot_v = v3_dot(mirror, to_viewer);
         if (r_dot_v > 0.f)
             reflected = v3_add(reflected, v3_scale(sf->mat->specular, powf(r_dot_v, sf->mat->shininess)));
     }
-    return v3_mul(reflected, v3_scale(l->color, l->intensity * falloff));
+    return v3_mul(reflected, v3_scale(l->color, l->intensity * ls->falloff));
 }
 
-/* The peer harness's shade: |cos| between the geometric normal and the ray,
- * darkened to 20 % when the first light is occluded. */
-static vec3 shade_eyelight(const render_view *v, const surface *sf, const ray *r, uint64_t *shadow_rays)
+/* Ambient term of the Phong model. */
+static vec3 ambient_term(const scene *s, const surface *sf)
 {
-    float grey = fabsf(v3_dot(sf->geometric_n, v3_normalize(r->dir)));
-    const scene *s = v->scene;
-    if (v->shadows && s->light_count > 0) {
-        const light *l = &s->lights[0];
-        vec3 to_light = l->kind == LIGHT_DIRECTIONAL ? l->direction : v3_sub(l->position, sf->position);
-        float t_far = l->kind == LIGHT_DIRECTIONAL ? FLT_MAX : 1.f;
-        ray shadow = {ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, t_far};
-        ++*shadow_rays;
-        if (accel_occluded(v->accel, &shadow))
-            grey *= 0.2f;
-    }
-    return v3(grey, grey, grey);
+    return v3_mul(v3_scale(s->ambient, sf->mat->ambient), sf->kd);
 }
+
+/* Eyelight (the peer harness's shade): |cos| between the geometric normal and the ray. */
+static float eyelight_grey(const surface *sf, const ray *r)
+{
+    return fabsf(v3_dot(sf->geometric_n, v3_normalize(r->dir)));
+}
+
+/* The eyelight shadow ray towards the first light (point lights: t_far 1 with
+ * the unnormalised direction to the light). */
+static ray eyelight_shadow_ray(const scene *s, const surface *sf)
+{
+    const light *l = &s->lights[0];
+    vec3 to_light = l->kind == LIGHT_DIRECTIONAL ? l->direction : v3_sub(l->position, sf->position);
+    float t_far = l->kind == LIGHT_DIRECTIONAL ? FLT_MAX : 1.f;
+    return (ray){ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, t_far};
+}
+
+/* Eyelight darkens to this fraction in shadow, as the peer harness's lit image. */
+#define EYELIGHT_SHADOW_FACTOR 0.2f
 
 vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
 {
@@ -128,27 +151,147 @@ vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
     if (!accel_intersect(v->accel, r, &h))
         return v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
     surface sf = describe_hit(s, r, &h);
-    if (v->shading == RENDER_SHADE_EYELIGHT)
-        return shade_eyelight(v, &sf, r, shadow_rays);
+    if (v->shading == RENDER_SHADE_EYELIGHT) {
+        float grey = eyelight_grey(&sf, r);
+        if (v->shadows && s->light_count > 0) {
+            ray shadow = eyelight_shadow_ray(s, &sf);
+            ++*shadow_rays;
+            if (accel_occluded(v->accel, &shadow))
+                grey *= EYELIGHT_SHADOW_FACTOR;
+        }
+        return v3(grey, grey, grey);
+    }
     vec3 to_viewer = v3_normalize(v3_scale(r->dir, -1.f));
-    vec3 colour = v3_mul(v3_scale(s->ambient, sf.mat->ambient), sf.kd);
-    for (uint32_t i = 0; i < s->light_count; i++)
-        colour = v3_add(colour, shade_light(v, &sf, &s->lights[i], to_viewer, shadow_rays));
+    vec3 colour = ambient_term(s, &sf);
+    for (uint32_t i = 0; i < s->light_count; i++) {
+        light_sample ls;
+        if (!sample_light(v, &sf, &s->lights[i], &ls))
+            continue;
+        if (ls.needs_shadow_ray) {
+            ray shadow = shadow_ray(&sf, &ls);
+            ++*shadow_rays;
+            if (accel_occluded(v->accel, &shadow))
+                continue;
+        }
+        colour = v3_add(colour, light_contribution(&sf, &s->lights[i], &ls, to_viewer));
+    }
     return colour;
 }
 
+/* Per-ray state of one packet while it is shaded. */
+typedef struct packet_shading {
+    surface sf[PACKET_MAX_RAYS];
+    vec3 colour[PACKET_MAX_RAYS];
+    vec3 to_viewer[PACKET_MAX_RAYS];
+    light_sample ls[PACKET_MAX_RAYS];
+    uint64_t hits; /* rays that hit something */
+} packet_shading;
+
+/* Shadow rays for the rays of `mask`, one packet; returns the occluded ones. */
+static uint64_t trace_shadows(const render_view *v, ray_packet *shadows, uint32_t count, uint64_t mask,
+                              uint32_t facts, const ray *rays, render_counts *counts)
+{
+    packet_reset(shadows, count, facts);
+    shadows->active = mask;
+    for (uint64_t m = mask; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        packet_set_ray(shadows, i, &rays[i]);
+    }
+    counts->shadow_rays += (uint64_t)__builtin_popcountll(mask);
+    return accel_occluded_packet(v->accel, packet_whole(shadows));
+}
+
+/* Trace and shade the primary packet p (rays [0, p->count)): the same
+ * results as render_shade on each ray, with every ray cast in packets. */
+static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadows, packet_shading *ps,
+                         render_counts *counts)
+{
+    const scene *s = v->scene;
+    ray shadow_rays[PACKET_MAX_RAYS];
+    accel_intersect_packet(v->accel, packet_whole(p));
+    counts->primary_rays += p->count;
+    ps->hits = 0;
+    for (uint32_t i = 0; i < p->count; i++) {
+        if (p->hit_t[i] == INFINITY) {
+            ps->colour[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
+            continue;
+        }
+        ps->hits |= 1ull << i;
+        ray r = packet_get_ray(p, i);
+        hit h = packet_get_hit(p, i);
+        ps->sf[i] = describe_hit(s, &r, &h);
+        if (v->shading == RENDER_SHADE_EYELIGHT) {
+            float grey = eyelight_grey(&ps->sf[i], &r);
+            ps->colour[i] = v3(grey, grey, grey);
+        } else {
+            ps->to_viewer[i] = v3_normalize(v3_scale(r.dir, -1.f));
+            ps->colour[i] = ambient_term(s, &ps->sf[i]);
+        }
+    }
+    if (!ps->hits)
+        return;
+    if (v->shading == RENDER_SHADE_EYELIGHT) {
+        if (!v->shadows || s->light_count == 0)
+            return;
+        for (uint64_t m = ps->hits; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            shadow_rays[i] = eyelight_shadow_ray(s, &ps->sf[i]);
+        }
+        uint32_t facts = s->lights[0].kind == LIGHT_DIRECTIONAL ? PACKET_CONSTANT_SIGNS : 0;
+        uint64_t dark = trace_shadows(v, shadows, p->count, ps->hits, facts, shadow_rays, counts);
+        for (uint64_t m = dark; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            ps->colour[i] = v3_scale(ps->colour[i], EYELIGHT_SHADOW_FACTOR);
+        }
+        return;
+    }
+    for (uint32_t l = 0; l < s->light_count; l++) {
+        const light *lt = &s->lights[l];
+        uint64_t lit = 0, need_ray = 0;
+        for (uint64_t m = ps->hits; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            if (!sample_light(v, &ps->sf[i], lt, &ps->ls[i]))
+                continue;
+            lit |= 1ull << i;
+            if (ps->ls[i].needs_shadow_ray) {
+                need_ray |= 1ull << i;
+                shadow_rays[i] = shadow_ray(&ps->sf[i], &ps->ls[i]);
+            }
+        }
+        if (need_ray) {
+            uint32_t facts = lt->kind == LIGHT_DIRECTIONAL ? PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED : 0;
+            lit &= ~trace_shadows(v, shadows, p->count, need_ray, facts, shadow_rays, counts);
+        }
+        for (uint64_t m = lit; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            ps->colour[i] = v3_add(ps->colour[i], light_contribution(&ps->sf[i], lt, &ps->ls[i], ps->to_viewer[i]));
+        }
+    }
+}
+
+/* Primary rays per packet: 8 x 8 pixels, so a packet covers a compact patch. */
+#define RENDER_PACKET_EDGE_PX 8
+
 void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb, render_counts *counts)
 {
+    /* per thread: two packets and the shading state, ~60 KB: too big for a worker's stack */
+    static _Thread_local ray_packet primary, shadows;
+    static _Thread_local packet_shading ps;
     const camera_basis *cam = &v->camera;
-    for (int y = y0; y < y1; y++)
-        for (int x = x0; x < x1; x++) {
-            ray r = {cam->eye, v3_normalize(camera_pixel_direction(cam, x, y)), 0.f, FLT_MAX};
-            vec3 c = render_shade(v, &r, &counts->shadow_rays);
-            counts->primary_rays++;
-            float *out = rgb + 3 * ((size_t)y * (size_t)cam->width_px + (size_t)x);
-            out[0] = c.x;
-            out[1] = c.y;
-            out[2] = c.z;
+    for (int py = y0; py < y1; py += RENDER_PACKET_EDGE_PX)
+        for (int px = x0; px < x1; px += RENDER_PACKET_EDGE_PX) {
+            int w = x1 - px < RENDER_PACKET_EDGE_PX ? x1 - px : RENDER_PACKET_EDGE_PX;
+            int h = y1 - py < RENDER_PACKET_EDGE_PX ? y1 - py : RENDER_PACKET_EDGE_PX;
+            packet_primary(&primary, cam, px, py, w, h);
+            shade_packet(v, &primary, &shadows, &ps, counts);
+            for (int j = 0; j < h; j++)
+                for (int i = 0; i < w; i++) {
+                    vec3 c = ps.colour[j * w + i];
+                    float *out = rgb + 3 * ((size_t)(py + j) * (size_t)cam->width_px + (size_t)(px + i));
+                    out[0] = c.x;
+                    out[1] = c.y;
+                    out[2] = c.z;
+                }
         }
 }
 

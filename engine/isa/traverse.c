@@ -1,0 +1,657 @@
+/* isa/traverse.c - wide-BVH traversal kernels, compiled once per instruction
+ * set (see isa/simd.h); engine/kernels.c picks one table at run time.
+ *
+ * Single rays: one ray against the 8 child boxes of a node at once (Ize's
+ * robust slab test), nearest child first, then 4 triangles at once with the
+ * watertight test of Woop, Benthin and Wald (JCGT 2013), evaluated in exactly
+ * the operation order of engine/intersect.c so results are bit-identical.
+ *
+ * Packets: up to 64 rays walk the tree together carrying a 64-bit mask of the
+ * rays that reach each node. For packets whose direction signs agree, a whole
+ * node is first culled by interval arithmetic over the packet's origins and
+ * inverse directions (Boulos et al., "Geometric and Arithmetic Culling Methods
+ * for Entire Ray Packets", 2006), one test per child for all rays; surviving
+ * children get exact per-ray masks, RAY_LANES rays per vector. Leaves test one
+ * triangle against RAY_LANES rays. When a packet has thinned out to a few rays
+ * (PACKET_SINGLE_RAY_MAX), those continue as single rays from that node.
+ *
+ * Ties: a hit replaces the current one when (t, geom_id, prim_id) is smaller in
+ * lexicographic order, so the result never depends on the order in which
+ * nodes and lanes are visited. */
+#include "engine/isa/simd.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdalign.h>
+#include <string.h>
+
+#include "engine/intersect.h"
+#include "engine/kernels.h"
+#include "engine/wbvh.h"
+
+/* A packet with at most this many rays left in a subtree continues as single
+ * rays: below it, per-ray node tests in lanes cost more than they share. */
+#define PACKET_SINGLE_RAY_MAX 2
+
+/* Stack references: inner node index, or leaf = LEAF bit | first block << 3 | blocks. */
+#define REF_LEAF 0x80000000u
+#define REF_BLOCKS_BITS 3u
+
+static inline uint32_t child_ref(const wbvh_node *n, int i)
+{
+    return n->leaf_blocks[i] ? REF_LEAF | (n->child[i] << REF_BLOCKS_BITS) | n->leaf_blocks[i] : n->child[i];
+}
+
+static inline float lane_float(uint32_t bits)
+{
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/* Does (t, geom, prim) beat the current hit? */
+static inline bool closer(float t, uint32_t geom, uint32_t prim, float best_t, uint32_t best_geom, uint32_t best_prim)
+{
+    return t < best_t || (t == best_t && (geom < best_geom || (geom == best_geom && prim < best_prim)));
+}
+
+/* ------------------------------------------------------------------------
+ * Single ray
+ * ------------------------------------------------------------------------ */
+
+/* Child boxes of n the ray enters before t_far (conservatively scaled); their
+ * entry distances go to dist[]. */
+static inline unsigned node_hit1(const wbvh_node *n, const ray *r, const ray_derived *d, float dist[WBVH_WIDTH])
+{
+    const bool neg_x = d->inv_dir.x < 0.f, neg_y = d->inv_dir.y < 0.f, neg_z = d->inv_dir.z < 0.f;
+    const float *near_x = neg_x ? n->hi_x : n->lo_x, *far_x = neg_x ? n->lo_x : n->hi_x;
+    const float *near_y = neg_y ? n->hi_y : n->lo_y, *far_y = neg_y ? n->lo_y : n->hi_y;
+    const float *near_z = neg_z ? n->hi_z : n->lo_z, *far_z = neg_z ? n->lo_z : n->hi_z;
+    const vn ox = vn_set1(r->org.x), oy = vn_set1(r->org.y), oz = vn_set1(r->org.z);
+    const vn ix = vn_set1(d->inv_dir.x), iy = vn_set1(d->inv_dir.y), iz = vn_set1(d->inv_dir.z);
+    const vn t_near = vn_set1(r->t_near), t_far = vn_set1(r->t_far * INTERSECT_FAR_SCALE);
+    const vn scale = vn_set1(INTERSECT_FAR_SCALE);
+    unsigned bits = 0;
+    for (int h = 0; h < WBVH_WIDTH; h += NODE_LANES) {
+        vn enter = vn_max(vn_max(vn_mul(vn_sub(vn_load(near_x + h), ox), ix),
+                                 vn_mul(vn_sub(vn_load(near_y + h), oy), iy)),
+                          vn_max(vn_mul(vn_sub(vn_load(near_z + h), oz), iz), t_near));
+        vn leave = vn_min(vn_mul(vn_min(vn_min(vn_mul(vn_sub(vn_load(far_x + h), ox), ix),
+                                               vn_mul(vn_sub(vn_load(far_y + h), oy), iy)),
+                                        vn_mul(vn_sub(vn_load(far_z + h), oz), iz)),
+                                 scale),
+                          t_far);
+        bits |= vn_le_bits(enter, leave) << h;
+        vn_store(dist + h, enter);
+    }
+    return bits & n->child_mask;
+}
+
+/* Record a hit if it beats the current one. */
+static inline bool offer1(ray *r, hit *h, float t, float u, float v, uint32_t geom_id, uint32_t prim)
+{
+    if (!closer(t, geom_id, prim, h->t, h->geom_id, h->prim_id))
+        return false;
+    *h = (hit){.t = t, .u = u, .v = v, .prim_id = prim, .geom_id = geom_id};
+    r->t_far = t;
+    return true;
+}
+
+static inline vec3 block_vertex(const float *x, const float *y, const float *z, int lane)
+{
+    return v3(x[lane], y[lane], z[lane]);
+}
+
+static inline unsigned valid_lanes(const uint32_t prim_id[WBVH_BLOCK])
+{
+    unsigned valid = 0;
+    for (int i = 0; i < WBVH_BLOCK; i++)
+        valid |= (unsigned)(prim_id[i] != RAY_INVALID_ID) << i;
+    return valid;
+}
+
+/* One ray against 4 triangles. Returns whether a hit was recorded (any: found). */
+static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
+{
+    const float *v0[3] = {b->v0x, b->v0y, b->v0z}, *v1[3] = {b->v1x, b->v1y, b->v1z}, *v2[3] = {b->v2x, b->v2y, b->v2z};
+    const float org[3] = {r->org.x, r->org.y, r->org.z};
+    const int kx = d->kx, ky = d->ky, kz = d->kz;
+    const v4 okx = v4_set1(org[kx]), oky = v4_set1(org[ky]), okz = v4_set1(org[kz]);
+    const v4 sx = v4_set1(d->shear_x), sy = v4_set1(d->shear_y), sz = v4_set1(d->shear_z);
+    const v4 az = v4_sub(v4_load(v0[kz]), okz), bz = v4_sub(v4_load(v1[kz]), okz), cz = v4_sub(v4_load(v2[kz]), okz);
+    const v4 ax = v4_sub(v4_sub(v4_load(v0[kx]), okx), v4_mul(sx, az));
+    const v4 ay = v4_sub(v4_sub(v4_load(v0[ky]), oky), v4_mul(sy, az));
+    const v4 bx = v4_sub(v4_sub(v4_load(v1[kx]), okx), v4_mul(sx, bz));
+    const v4 by = v4_sub(v4_sub(v4_load(v1[ky]), oky), v4_mul(sy, bz));
+    const v4 cx = v4_sub(v4_sub(v4_load(v2[kx]), okx), v4_mul(sx, cz));
+    const v4 cy = v4_sub(v4_sub(v4_load(v2[ky]), oky), v4_mul(sy, cz));
+    const v4 u = v4_sub(v4_mul(cx, by), v4_mul(cy, bx));
+    const v4 v = v4_sub(v4_mul(ax, cy), v4_mul(ay, cx));
+    const v4 w = v4_sub(v4_mul(bx, ay), v4_mul(by, ax));
+    const v4 zero = v4_set1(0.f);
+    const unsigned valid = valid_lanes(b->prim_id);
+    /* an edge in float: those lanes are decided by the scalar test, in double */
+    const unsigned on_edge = v4_bits(v4_or(v4_or(v4_eq(u, zero), v4_eq(v, zero)), v4_eq(w, zero))) & valid;
+    const v4 any_neg = v4_or(v4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
+    const v4 any_pos = v4_or(v4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
+    const v4 det = v4_add(v4_add(u, v), w);
+    const v4 tz = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))), v4_mul(w, v4_mul(sz, cz)));
+    const v4 det_neg = v4_lt(det, zero);
+    const v4 t_scaled = v4_neg_where(tz, det_neg), det_abs = v4_neg_where(det, det_neg);
+    const v4 t_near = v4_set1(r->t_near), t_far = v4_set1(r->t_far);
+    v4 ok = v4_andnot(v4_gt(t_scaled, v4_mul(t_near, det_abs)), v4_gt(t_scaled, v4_mul(t_far, det_abs)));
+    ok = v4_andnot(v4_andnot(ok, v4_and(any_neg, any_pos)), v4_eq(det, zero));
+    const v4 inv_det = v4_div(v4_set1(1.f), det);
+    const v4 t = v4_mul(tz, inv_det);
+    ok = v4_and(ok, v4_and(v4_gt(t, t_near), v4_le(t, t_far)));
+    unsigned hits = v4_bits(ok) & valid & ~on_edge;
+    if (!hits && !on_edge)
+        return false;
+    if (any && hits)
+        return true;
+    alignas(16) float t_lane[4], u_lane[4], v_lane[4];
+    _mm_store_ps(t_lane, t);
+    _mm_store_ps(u_lane, v4_mul(v, inv_det));
+    _mm_store_ps(v_lane, v4_mul(w, inv_det));
+    bool found = false;
+    for (int i = 0; i < WBVH_BLOCK; i++) {
+        if (hits >> i & 1u)
+            found |= offer1(r, h, t_lane[i], u_lane[i], v_lane[i], geom_id, b->prim_id[i]);
+        else if (on_edge >> i & 1u) {
+            float te, ue, ve;
+            if (intersect_triangle(r, d, block_vertex(b->v0x, b->v0y, b->v0z, i), block_vertex(b->v1x, b->v1y, b->v1z, i),
+                                   block_vertex(b->v2x, b->v2y, b->v2z, i), &te, &ue, &ve)) {
+                if (any)
+                    return true;
+                found |= offer1(r, h, te, ue, ve, geom_id, b->prim_id[i]);
+            }
+        }
+    }
+    return found;
+}
+
+/* One ray against up to 4 spheres (scalar: spheres are not the hot path yet). */
+static bool sphere_block1(const wbvh_sphere_block *b, uint32_t geom_id, ray *r, hit *h, bool any)
+{
+    bool found = false;
+    for (int i = 0; i < WBVH_BLOCK; i++) {
+        if (b->prim_id[i] == RAY_INVALID_ID)
+            continue;
+        float t;
+        if (intersect_sphere(r, v3(b->cx[i], b->cy[i], b->cz[i]), b->r[i], &t)) {
+            if (any)
+                return true;
+            found |= offer1(r, h, t, 0.f, 0.f, geom_id, b->prim_id[i]);
+        }
+    }
+    return found;
+}
+
+static bool leaf1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
+{
+    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    bool found = false;
+    for (uint32_t k = first; k < first + count; k++) {
+        bool hit_here = w->kind == WBVH_TRIANGLES
+                            ? tri_block1((const wbvh_tri_block *)w->blocks + k, geom_id, r, d, h, any)
+                            : sphere_block1((const wbvh_sphere_block *)w->blocks + k, geom_id, r, h, any);
+        if (hit_here && any)
+            return true;
+        found |= hit_here;
+    }
+    return found;
+}
+
+typedef struct stack_entry1 {
+    uint32_t ref;
+    float dist; /* entry distance of the box when pushed */
+} stack_entry1;
+
+/* Traverse the subtree at `ref` with one ray. */
+static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
+{
+    stack_entry1 stack[WBVH_STACK_SIZE];
+    int top = 0;
+    bool found = false;
+    for (;;) {
+        if (ref & REF_LEAF) {
+            if (leaf1(w, ref, geom_id, r, d, h, any)) {
+                if (any)
+                    return true;
+                found = true;
+            }
+        } else {
+            const wbvh_node *n = &w->nodes[ref];
+            alignas(32) float dist[WBVH_WIDTH];
+            unsigned bits = node_hit1(n, r, d, dist);
+            if (bits) {
+                int i = __builtin_ctz(bits);
+                bits &= bits - 1u;
+                if (!bits) { /* one child: no ordering needed */
+                    ref = child_ref(n, i);
+                    continue;
+                }
+                /* several: push all, sorted so the nearest ends on top, then pop it */
+                int base = top;
+                stack[top++] = (stack_entry1){child_ref(n, i), dist[i]};
+                while (bits) {
+                    i = __builtin_ctz(bits);
+                    bits &= bits - 1u;
+                    stack_entry1 e = {child_ref(n, i), dist[i]};
+                    int j = top++;
+                    while (j > base && stack[j - 1].dist < e.dist) {
+                        stack[j] = stack[j - 1];
+                        j--;
+                    }
+                    stack[j] = e;
+                }
+            }
+        }
+        const float cull = r->t_far * INTERSECT_FAR_SCALE;
+        do {
+            if (top == 0)
+                return found;
+            top--;
+        } while (stack[top].dist > cull);
+        ref = stack[top].ref;
+    }
+}
+
+static bool ISA_SUFFIX(intersect1)(const wbvh *w, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
+{
+    if (w->node_count == 0)
+        return false;
+    return traverse1(w, 0, geom_id, r, d, h, any);
+}
+
+/* ------------------------------------------------------------------------
+ * Packets
+ * ------------------------------------------------------------------------ */
+
+/* The 6 axis orders of the watertight test (kz, and kx/ky swapped by sign). */
+#define AXIS_ORDERS 6
+
+typedef struct packet_ctx {
+    ray_packet *p;
+    const wbvh *w;
+    uint32_t geom_id;
+    bool any;
+    uint64_t done;     /* any-hit: rays found occluded (no longer traced) */
+    uint64_t improved; /* closest-hit: rays whose hit changed */
+    /* watertight test setup, per ray (lanes beyond the packet's rays are 0) */
+    alignas(64) float shear_x[PACKET_MAX_RAYS];
+    alignas(64) float shear_y[PACKET_MAX_RAYS];
+    alignas(64) float shear_z[PACKET_MAX_RAYS];
+    uint64_t order_mask[AXIS_ORDERS]; /* rays using axis order k */
+    int order_axes[AXIS_ORDERS][3];   /* kx, ky, kz of order k */
+    int order_count;
+    /* interval culling: valid when every direction component has one sign */
+    bool interval;
+    float org_lo[3], org_hi[3];
+    float inv_lo[3], inv_hi[3];
+    float t_near_lo;
+} packet_ctx;
+
+static void setup_shear(packet_ctx *c, uint64_t mask)
+{
+    ray_packet *p = c->p;
+    memset(c->shear_x, 0, sizeof c->shear_x);
+    memset(c->shear_y, 0, sizeof c->shear_y);
+    memset(c->shear_z, 0, sizeof c->shear_z);
+    c->order_count = 0;
+    for (uint64_t m = mask; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        ray one = packet_get_ray(p, i);
+        ray_derived d = ray_derive(&one);
+        c->shear_x[i] = d.shear_x;
+        c->shear_y[i] = d.shear_y;
+        c->shear_z[i] = d.shear_z;
+        int k = 0;
+        while (k < c->order_count &&
+               !(c->order_axes[k][0] == d.kx && c->order_axes[k][1] == d.ky && c->order_axes[k][2] == d.kz))
+            k++;
+        if (k == c->order_count) {
+            c->order_axes[k][0] = d.kx, c->order_axes[k][1] = d.ky, c->order_axes[k][2] = d.kz;
+            c->order_mask[k] = 0;
+            c->order_count++;
+        }
+        c->order_mask[k] |= 1ull << i;
+    }
+}
+
+/* Smallest / largest of the lanes of `mask` in array v (plain compares: the
+ * libm fminf/fmaxf are calls, and no NaN reaches here). */
+static void lanes_range(const float *v, uint64_t mask, float *lo, float *hi)
+{
+    vr vlo = vr_set1(INFINITY), vhi = vr_set1(-INFINITY);
+    for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+        unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
+        if (!lanes)
+            continue;
+        vm m = vm_from_bits(lanes);
+        vr x = vr_load(v + g);
+        vlo = vr_min(vlo, vr_select(m, x, vr_set1(INFINITY)));
+        vhi = vr_max(vhi, vr_select(m, x, vr_set1(-INFINITY)));
+    }
+    alignas(64) float l[RAY_LANES], h[RAY_LANES];
+    vr_store(l, vlo);
+    vr_store(h, vhi);
+    *lo = l[0];
+    *hi = h[0];
+    for (int i = 1; i < RAY_LANES; i++) {
+        *lo = l[i] < *lo ? l[i] : *lo;
+        *hi = h[i] > *hi ? h[i] : *hi;
+    }
+}
+
+static void setup_interval(packet_ctx *c, uint64_t mask)
+{
+    ray_packet *p = c->p;
+    const float *org[3] = {p->org_x, p->org_y, p->org_z}, *inv[3] = {p->inv_dir_x, p->inv_dir_y, p->inv_dir_z};
+    float unused;
+    lanes_range(p->t_near, mask, &c->t_near_lo, &unused);
+    c->interval = true;
+    for (int a = 0; a < 3; a++) {
+        lanes_range(org[a], mask, &c->org_lo[a], &c->org_hi[a]);
+        lanes_range(inv[a], mask, &c->inv_lo[a], &c->inv_hi[a]);
+        if ((c->inv_lo[a] < 0.f) != (c->inv_hi[a] < 0.f))
+            c->interval = false; /* the inverse directions straddle 0: the interval is everything */
+    }
+}
+
+/* Range of (plane - org) * inv over the packet's origin and inverse-direction intervals. */
+static inline void interval_product(vn plane, float org_lo, float org_hi, float inv_lo, float inv_hi, vn *lo, vn *hi)
+{
+    vn d_lo = vn_sub(plane, vn_set1(org_hi)), d_hi = vn_sub(plane, vn_set1(org_lo));
+    vn i_lo = vn_set1(inv_lo), i_hi = vn_set1(inv_hi);
+    vn p0 = vn_mul(d_lo, i_lo), p1 = vn_mul(d_lo, i_hi), p2 = vn_mul(d_hi, i_lo), p3 = vn_mul(d_hi, i_hi);
+    *lo = vn_min(vn_min(p0, p1), vn_min(p2, p3));
+    *hi = vn_max(vn_max(p0, p1), vn_max(p2, p3));
+}
+
+/* Children that some ray of the packet may enter before t_far_hi (one test
+ * for all rays); lower bounds of their entry distances go to dist[]. */
+static unsigned node_interval(const packet_ctx *c, const wbvh_node *n, float t_far_hi, float dist[WBVH_WIDTH])
+{
+    const float *lo[3] = {n->lo_x, n->lo_y, n->lo_z}, *hi[3] = {n->hi_x, n->hi_y, n->hi_z};
+    unsigned bits = 0;
+    for (int h = 0; h < WBVH_WIDTH; h += NODE_LANES) {
+        vn enter = vn_set1(c->t_near_lo), leave = vn_set1(INFINITY);
+        for (int a = 0; a < 3; a++) {
+            bool neg = c->inv_lo[a] < 0.f;
+            vn near = vn_load((neg ? hi[a] : lo[a]) + h), far = vn_load((neg ? lo[a] : hi[a]) + h);
+            vn near_lo, near_hi, far_lo, far_hi;
+            interval_product(near, c->org_lo[a], c->org_hi[a], c->inv_lo[a], c->inv_hi[a], &near_lo, &near_hi);
+            interval_product(far, c->org_lo[a], c->org_hi[a], c->inv_lo[a], c->inv_hi[a], &far_lo, &far_hi);
+            enter = vn_max(enter, near_lo);
+            leave = vn_min(leave, far_hi);
+        }
+        leave = vn_min(vn_mul(leave, vn_set1(INTERSECT_FAR_SCALE)), vn_set1(t_far_hi * INTERSECT_FAR_SCALE));
+        bits |= vn_le_bits(enter, leave) << h;
+        vn_store(dist + h, enter);
+    }
+    return bits & n->child_mask;
+}
+
+/* Exact per-ray masks of the rays in `mask` that enter each child in `children`. */
+static void node_rays(const packet_ctx *c, const wbvh_node *n, unsigned children, uint64_t mask,
+                      uint64_t child_mask[WBVH_WIDTH])
+{
+    const ray_packet *p = c->p;
+    const vr scale = vr_set1(INTERSECT_FAR_SCALE);
+    for (int i = 0; i < WBVH_WIDTH; i++)
+        child_mask[i] = 0;
+    for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+        unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
+        if (!lanes)
+            continue;
+        const vr ox = vr_load(p->org_x + g), oy = vr_load(p->org_y + g), oz = vr_load(p->org_z + g);
+        const vr ix = vr_load(p->inv_dir_x + g), iy = vr_load(p->inv_dir_y + g), iz = vr_load(p->inv_dir_z + g);
+        const vr t_near = vr_load(p->t_near + g), t_far = vr_mul(vr_load(p->t_far + g), scale);
+        for (unsigned cm = children; cm; cm &= cm - 1u) {
+            int i = __builtin_ctz(cm);
+            vr tx0 = vr_mul(vr_sub(vr_set1(n->lo_x[i]), ox), ix), tx1 = vr_mul(vr_sub(vr_set1(n->hi_x[i]), ox), ix);
+            vr ty0 = vr_mul(vr_sub(vr_set1(n->lo_y[i]), oy), iy), ty1 = vr_mul(vr_sub(vr_set1(n->hi_y[i]), oy), iy);
+            vr tz0 = vr_mul(vr_sub(vr_set1(n->lo_z[i]), oz), iz), tz1 = vr_mul(vr_sub(vr_set1(n->hi_z[i]), oz), iz);
+            vr enter = vr_max(vr_max(vr_min(tx0, tx1), vr_min(ty0, ty1)), vr_max(vr_min(tz0, tz1), t_near));
+            vr leave = vr_min(vr_mul(vr_min(vr_min(vr_max(tx0, tx1), vr_max(ty0, ty1)), vr_max(tz0, tz1)), scale), t_far);
+            child_mask[i] |= (uint64_t)(vm_bits(vr_le(enter, leave)) & lanes) << g;
+        }
+    }
+}
+
+/* Write a hit into the packet if it beats the ray's current one. */
+static inline void offer_packet(packet_ctx *c, uint32_t i, float t, float u, float v, uint32_t prim)
+{
+    ray_packet *p = c->p;
+    if (!closer(t, c->geom_id, prim, p->hit_t[i], p->geom_id[i], p->prim_id[i]))
+        return;
+    p->hit_t[i] = t;
+    p->hit_u[i] = u;
+    p->hit_v[i] = v;
+    p->prim_id[i] = prim;
+    p->geom_id[i] = c->geom_id;
+    p->t_far[i] = t;
+    c->improved |= 1ull << i;
+}
+
+/* The rays of `mask` (all with axis order `axes`) against triangle `lane` of
+ * block b, RAY_LANES rays at a time, in the operation order of intersect_triangle. */
+static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, const int axes[3], uint64_t mask)
+{
+    ray_packet *p = c->p;
+    const float v0[3] = {b->v0x[lane], b->v0y[lane], b->v0z[lane]};
+    const float v1[3] = {b->v1x[lane], b->v1y[lane], b->v1z[lane]};
+    const float v2[3] = {b->v2x[lane], b->v2y[lane], b->v2z[lane]};
+    const float *org[3] = {p->org_x, p->org_y, p->org_z};
+    const int kx = axes[0], ky = axes[1], kz = axes[2];
+    const uint32_t prim = b->prim_id[lane];
+    const vr zero = vr_set1(0.f);
+    for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+        unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
+        if (!lanes)
+            continue;
+        const vr okx = vr_load(org[kx] + g), oky = vr_load(org[ky] + g), okz = vr_load(org[kz] + g);
+        const vr sx = vr_load(c->shear_x + g), sy = vr_load(c->shear_y + g), sz = vr_load(c->shear_z + g);
+        const vr az = vr_sub(vr_set1(v0[kz]), okz), bz = vr_sub(vr_set1(v1[kz]), okz),
+                 cz = vr_sub(vr_set1(v2[kz]), okz);
+        const vr ax = vr_sub(vr_sub(vr_set1(v0[kx]), okx), vr_mul(sx, az));
+        const vr ay = vr_sub(vr_sub(vr_set1(v0[ky]), oky), vr_mul(sy, az));
+        const vr bx = vr_sub(vr_sub(vr_set1(v1[kx]), okx), vr_mul(sx, bz));
+        const vr by = vr_sub(vr_sub(vr_set1(v1[ky]), oky), vr_mul(sy, bz));
+        const vr cx = vr_sub(vr_sub(vr_set1(v2[kx]), okx), vr_mul(sx, cz));
+        const vr cy = vr_sub(vr_sub(vr_set1(v2[ky]), oky), vr_mul(sy, cz));
+        const vr u = vr_sub(vr_mul(cx, by), vr_mul(cy, bx));
+        const vr v = vr_sub(vr_mul(ax, cy), vr_mul(ay, cx));
+        const vr w = vr_sub(vr_mul(bx, ay), vr_mul(by, ax));
+        const unsigned on_edge = vm_bits(vm_or(vm_or(vr_eq(u, zero), vr_eq(v, zero)), vr_eq(w, zero))) & lanes;
+        const vm any_neg = vm_or(vm_or(vr_lt(u, zero), vr_lt(v, zero)), vr_lt(w, zero));
+        const vm any_pos = vm_or(vm_or(vr_gt(u, zero), vr_gt(v, zero)), vr_gt(w, zero));
+        const vr det = vr_add(vr_add(u, v), w);
+        const vr tz = vr_add(vr_add(vr_mul(u, vr_mul(sz, az)), vr_mul(v, vr_mul(sz, bz))), vr_mul(w, vr_mul(sz, cz)));
+        const vm det_neg = vr_lt(det, zero);
+        const vr t_scaled = vr_neg_where(tz, det_neg), det_abs = vr_neg_where(det, det_neg);
+        const vr t_near = vr_load(p->t_near + g), t_far = vr_load(p->t_far + g);
+        vm ok = vm_andnot(vr_gt(t_scaled, vr_mul(t_near, det_abs)), vr_gt(t_scaled, vr_mul(t_far, det_abs)));
+        ok = vm_andnot(vm_andnot(ok, vm_and(any_neg, any_pos)), vr_eq(det, zero));
+        const vr inv_det = vr_div(vr_set1(1.f), det);
+        const vr t = vr_mul(tz, inv_det);
+        ok = vm_and(ok, vm_and(vr_gt(t, t_near), vr_le(t, t_far)));
+        unsigned hits = vm_bits(ok) & lanes & ~on_edge;
+        if (c->any) {
+            c->done |= (uint64_t)hits << g;
+        } else if (hits) {
+            const vr u_out = vr_mul(v, inv_det), v_out = vr_mul(w, inv_det);
+            const vr best_t = vr_load(p->hit_t + g);
+            /* strictly closer lanes in vector form; equal t (a tie) is settled per ray below */
+            const unsigned better = vm_bits(vr_lt(t, best_t)) & hits;
+            const unsigned ties = vm_bits(vr_eq(t, best_t)) & hits;
+            if (better) {
+                const vm upd = vm_from_bits(better);
+                vr_store(p->hit_t + g, vr_select(upd, t, best_t));
+                vr_store(p->t_far + g, vr_select(upd, t, vr_load(p->t_far + g)));
+                vr_store(p->hit_u + g, vr_select(upd, u_out, vr_load(p->hit_u + g)));
+                vr_store(p->hit_v + g, vr_select(upd, v_out, vr_load(p->hit_v + g)));
+                vr_store_ps_as_u32(p->prim_id + g,
+                                   vr_select(upd, vr_set1(lane_float(prim)), vr_load_u32_as_ps(p->prim_id + g)));
+                vr_store_ps_as_u32(p->geom_id + g, vr_select(upd, vr_set1(lane_float(c->geom_id)),
+                                                            vr_load_u32_as_ps(p->geom_id + g)));
+                c->improved |= (uint64_t)better << g;
+            }
+            if (ties) {
+                alignas(64) float t_lane[RAY_LANES], u_lane[RAY_LANES], v_lane[RAY_LANES];
+                vr_store(t_lane, t);
+                vr_store(u_lane, u_out);
+                vr_store(v_lane, v_out);
+                for (unsigned m = ties; m; m &= m - 1u) {
+                    int l = __builtin_ctz(m);
+                    offer_packet(c, g + (uint32_t)l, t_lane[l], u_lane[l], v_lane[l], prim);
+                }
+            }
+        }
+        /* rays that meet an edge exactly in float: the scalar test, in double */
+        for (unsigned m = on_edge; m; m &= m - 1u) {
+            uint32_t i = g + (uint32_t)__builtin_ctz(m);
+            ray one = packet_get_ray(p, i);
+            ray_derived d = ray_derive(&one);
+            float te, ue, ve;
+            if (intersect_triangle(&one, &d, v3(v0[0], v0[1], v0[2]), v3(v1[0], v1[1], v1[2]),
+                                   v3(v2[0], v2[1], v2[2]), &te, &ue, &ve)) {
+                if (c->any)
+                    c->done |= 1ull << i;
+                else
+                    offer_packet(c, i, te, ue, ve, prim);
+            }
+        }
+    }
+}
+
+/* Continue rays of `mask` one by one through the subtree at `ref`. */
+static void finish_single(packet_ctx *c, uint32_t ref, uint64_t mask)
+{
+    ray_packet *p = c->p;
+    for (uint64_t m = mask; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        ray one = packet_get_ray(p, i);
+        ray_derived d = ray_derive(&one);
+        hit h = packet_get_hit(p, i);
+        if (!traverse1(c->w, ref, c->geom_id, &one, &d, &h, c->any))
+            continue;
+        if (c->any) {
+            c->done |= 1ull << i;
+            continue;
+        }
+        p->hit_t[i] = h.t;
+        p->hit_u[i] = h.u;
+        p->hit_v[i] = h.v;
+        p->prim_id[i] = h.prim_id;
+        p->geom_id[i] = h.geom_id;
+        p->t_far[i] = one.t_far;
+        c->improved |= 1ull << i;
+    }
+}
+
+static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
+{
+    const wbvh *w = c->w;
+    if (w->kind != WBVH_TRIANGLES || __builtin_popcountll(mask) <= RAY_LANES / 2) {
+        /* few rays, or spheres: one ray at a time against 4 primitives */
+        finish_single(c, ref, mask);
+        return;
+    }
+    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    for (uint32_t k = first; k < first + count; k++) {
+        const wbvh_tri_block *b = (const wbvh_tri_block *)w->blocks + k;
+        for (int lane = 0; lane < WBVH_BLOCK; lane++) {
+            if (b->prim_id[lane] == RAY_INVALID_ID)
+                continue;
+            for (int o = 0; o < c->order_count; o++) {
+                uint64_t m = mask & c->order_mask[o] & ~c->done;
+                if (m)
+                    triangle_rays(c, b, lane, c->order_axes[o], m);
+            }
+        }
+    }
+}
+
+typedef struct stack_entry_packet {
+    uint32_t ref;
+    float dist;    /* a lower bound of the rays' entry distances, for order only */
+    uint64_t rays; /* rays that enter this child */
+} stack_entry_packet;
+
+static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ray_packet *p, uint64_t mask, bool any)
+{
+    if (w->node_count == 0 || !mask)
+        return 0;
+    packet_ctx c;
+    c.p = p;
+    c.w = w;
+    c.geom_id = geom_id;
+    c.any = any;
+    c.done = 0;
+    c.improved = 0;
+    if (__builtin_popcountll(mask) <= PACKET_SINGLE_RAY_MAX) {
+        finish_single(&c, 0, mask);
+        return any ? c.done : c.improved;
+    }
+    setup_shear(&c, mask);
+    setup_interval(&c, mask);
+
+    stack_entry_packet stack[WBVH_STACK_SIZE];
+    int top = 0;
+    uint32_t ref = 0;
+    uint64_t rays = mask;
+    for (;;) {
+        rays &= ~c.done;
+        if (rays) {
+            if (__builtin_popcountll(rays) <= PACKET_SINGLE_RAY_MAX) {
+                finish_single(&c, ref, rays);
+            } else if (ref & REF_LEAF) {
+                leaf_packet(&c, ref, rays);
+            } else {
+                const wbvh_node *n = &w->nodes[ref];
+                alignas(32) float dist[WBVH_WIDTH];
+                unsigned children = n->child_mask;
+                if (c.interval) {
+                    float t_far_lo, t_far_hi;
+                    lanes_range(p->t_far, rays, &t_far_lo, &t_far_hi);
+                    children = node_interval(&c, n, t_far_hi, dist);
+                } else {
+                    for (int i = 0; i < WBVH_WIDTH; i++)
+                        dist[i] = 0.f;
+                }
+                if (children) {
+                    uint64_t child_rays[WBVH_WIDTH];
+                    node_rays(&c, n, children, rays, child_rays);
+                    /* push children that some ray enters, farthest first */
+                    int base = top;
+                    for (unsigned cm = children; cm; cm &= cm - 1u) {
+                        int i = __builtin_ctz(cm);
+                        if (!child_rays[i])
+                            continue;
+                        stack_entry_packet e = {child_ref(n, i), dist[i], child_rays[i]};
+                        int j = top++;
+                        while (j > base && stack[j - 1].dist < e.dist) {
+                            stack[j] = stack[j - 1];
+                            j--;
+                        }
+                        stack[j] = e;
+                    }
+                }
+            }
+        }
+        if (top == 0)
+            break;
+        top--;
+        ref = stack[top].ref;
+        rays = stack[top].rays;
+    }
+    return any ? c.done : c.improved;
+}
+
+const kernel_table ISA_SUFFIX(kernel_table) = {
+    .isa_name = ISA_NAME,
+    .intersect1 = ISA_SUFFIX(intersect1),
+    .intersect_packet = ISA_SUFFIX(intersect_packet),
+};

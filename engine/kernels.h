@@ -1,0 +1,40 @@
+/* kernels.h - the traversal kernels of one instruction set, as a table
+ * resolved once and called once per ray or packet (never NULL entries).
+ *
+ * Each ISA's table comes from engine/isa/traverse.c compiled with that ISA's
+ * flags; kernels_select() picks the best one the CPU supports at run time
+ * (TESSERA_ISA=sse2|avx2|avx512 forces one, for tests and comparisons). All
+ * tables give bit-identical results. */
+#ifndef TESSERA_KERNELS_H
+#define TESSERA_KERNELS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "packet.h"
+#include "ray.h"
+#include "wbvh.h"
+
+typedef struct kernel_table {
+    const char *isa_name; /* "sse2", "avx2", "avx512" */
+    /* One ray against one geometry. Closest hit (any = false): improves *h by
+     * (t, geom_id, prim_id) order and shrinks r->t_far; any hit: stops at the
+     * first. Returns whether a hit was recorded. */
+    bool (*intersect1)(const wbvh *w, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any);
+    /* The rays of `mask` in p against one geometry (p's inverse directions must
+     * be derived). Closest hit: updates hit_* and t_far of rays that improve,
+     * returns the mask of those. Any hit: returns the mask of rays that hit
+     * (the caller stops tracing them). */
+    uint64_t (*intersect_packet)(const wbvh *w, uint32_t geom_id, ray_packet *p, uint64_t mask, bool any);
+} kernel_table;
+
+typedef enum kernel_isa { KERNEL_ISA_SSE2, KERNEL_ISA_AVX2, KERNEL_ISA_AVX512, KERNEL_ISA_COUNT } kernel_isa;
+
+/* The table for an ISA, or NULL when this CPU cannot run it. */
+const kernel_table *kernels_for(kernel_isa isa);
+/* The best table for this CPU, or the one TESSERA_ISA names (if the CPU runs it). */
+const kernel_table *kernels_select(void);
+
+extern const kernel_table kernel_table_sse2, kernel_table_avx2, kernel_table_avx512;
+
+#endif

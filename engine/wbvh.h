@@ -1,0 +1,76 @@
+/* wbvh.h - 8-wide BVH with SIMD-friendly nodes and 4-primitive leaf blocks.
+ *
+ * Built by collapsing the binary SAH BVH (bvh.h): each wide node takes up to 8
+ * descendants, always opening the child with the largest surface area next,
+ * so the wide tree keeps the binary tree's SAH quality. Child boxes are
+ * stored as structure of arrays, so one ray tests all 8 with one 8-lane
+ * compare sequence. Leaves are runs of blocks of 4 triangles (or spheres) in
+ * SoA layout, tested 4 at a time; unused lanes of a block are degenerate
+ * (all-zero triangle, zero-radius sphere at the origin) with prim id
+ * RAY_INVALID_ID and never report a hit. A tree whose binary root is a leaf
+ * gets a root node with that one leaf child, so traversal has no special case. */
+#ifndef TESSERA_WBVH_H
+#define TESSERA_WBVH_H
+
+#include <stdalign.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bvh.h"
+#include "err.h"
+
+#define WBVH_WIDTH 8
+#define WBVH_BLOCK 4
+/* Most blocks one leaf can hold: BVH_LEAF_MAX primitives in blocks of 4. */
+#define WBVH_MAX_LEAF_BLOCKS ((BVH_LEAF_MAX + WBVH_BLOCK - 1) / WBVH_BLOCK)
+/* Traversal stack entries: at most 7 siblings wait per level of the binary depth bound. */
+#define WBVH_STACK_SIZE (BVH_MAX_DEPTH * (WBVH_WIDTH - 1) + 1)
+
+typedef struct wbvh_node {
+    alignas(64) float lo_x[WBVH_WIDTH]; /* child boxes; empty slots are masked by child_mask */
+    float hi_x[WBVH_WIDTH];
+    float lo_y[WBVH_WIDTH];
+    float hi_y[WBVH_WIDTH];
+    float lo_z[WBVH_WIDTH];
+    float hi_z[WBVH_WIDTH];
+    uint32_t child[WBVH_WIDTH];      /* inner child: node index; leaf child: first block index */
+    uint8_t leaf_blocks[WBVH_WIDTH]; /* 0: inner child; n > 0: leaf of n consecutive blocks */
+    uint8_t child_mask;              /* bit i: slot i holds a child */
+    uint8_t pad[23];
+} wbvh_node; /* 256 bytes: four cache lines */
+
+/* Four triangles, vertices as SoA (lane i = triangle i of the block). */
+typedef struct wbvh_tri_block {
+    alignas(16) float v0x[WBVH_BLOCK], v0y[WBVH_BLOCK], v0z[WBVH_BLOCK];
+    float v1x[WBVH_BLOCK], v1y[WBVH_BLOCK], v1z[WBVH_BLOCK];
+    float v2x[WBVH_BLOCK], v2y[WBVH_BLOCK], v2z[WBVH_BLOCK];
+    uint32_t prim_id[WBVH_BLOCK]; /* triangle index in its mesh, RAY_INVALID_ID in unused lanes */
+} wbvh_tri_block;                 /* 160 bytes */
+
+/* Four spheres, SoA. */
+typedef struct wbvh_sphere_block {
+    alignas(16) float cx[WBVH_BLOCK], cy[WBVH_BLOCK], cz[WBVH_BLOCK], r[WBVH_BLOCK];
+    uint32_t prim_id[WBVH_BLOCK];
+} wbvh_sphere_block;
+
+typedef enum wbvh_kind { WBVH_TRIANGLES, WBVH_SPHERES } wbvh_kind;
+
+typedef struct wbvh {
+    wbvh_kind kind;
+    wbvh_node *nodes;   /* nodes[0] is the root; node_count 0 for an empty geometry */
+    uint32_t node_count;
+    void *blocks;       /* wbvh_tri_block or wbvh_sphere_block array, by kind */
+    uint32_t block_count;
+} wbvh;
+
+struct mesh;
+struct sphere_set;
+
+/* Build from a binary BVH over the mesh's triangles / the spheres. */
+bool wbvh_build_triangles(wbvh *out, const bvh *binary, const struct mesh *m, tess_error *err);
+bool wbvh_build_spheres(wbvh *out, const bvh *binary, const struct sphere_set *s, tess_error *err);
+void wbvh_finish(wbvh *w);
+size_t wbvh_bytes(const wbvh *w);
+
+#endif
