@@ -17,7 +17,7 @@ ifeq ($(WERROR),1)
 WARN += -Werror
 endif
 CPPFLAGS := -D_POSIX_C_SOURCE=200809L -I. $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-CFLAGS := -std=c11 $(OPT) -g $(WARN) -ffp-contract=off -pthread $(SAN)
+CFLAGS := -std=c11 $(OPT) -g $(WARN) -ffp-contract=off -fno-math-errno -pthread $(SAN)
 CXXFLAGS := -std=c++17 $(OPT) -g -Wall -Wextra $(if $(filter 1,$(WERROR)),-Werror) -pthread $(SAN)
 LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs $(TEST_PKGS) 2>/dev/null)

@@ -3,7 +3,9 @@
  * over the geometries' bounds for single rays. */
 #include "accel.h"
 
+#include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "bvh.h"
 #include "intersect.h"
@@ -16,38 +18,58 @@ struct accel {
     uint32_t geom_count;
     bvh top;                   /* over the geometries' bounds; prim ids are geometry ids */
     const kernel_table *kernels; /* resolved once at build */
+    float coord_abs_max;         /* largest |coordinate| of the scene bounds (cull slack) */
 };
 
-static bool build_geometry(wbvh *out, const aabb *boxes, uint32_t count, const mesh *m, const sphere_set *spheres,
-                           int threads, tess_error *err)
+static float abs_max(vec3 a)
+{
+    float x = fabsf(a.x), y = fabsf(a.y), z = fabsf(a.z);
+    float m = x > y ? x : y;
+    return m > z ? m : z;
+}
+
+static bool build_geometry(wbvh *out, const aabb *boxes, uint32_t count, const mesh *m, const uint32_t *prim_ids,
+                           const sphere_set *spheres, int threads, tess_error *err)
 {
     bvh binary;
-    (void)threads; /* the parallel binned build lands in bvh.c */
-    if (!bvh_build(&binary, boxes, count, err))
+    if (!bvh_build(&binary, boxes, count, threads, err))
         return false;
-    bool ok = m ? wbvh_build_triangles(out, &binary, m, err) : wbvh_build_spheres(out, &binary, spheres, err);
+    bool ok = m ? wbvh_build_triangles(out, &binary, m, prim_ids, err) : wbvh_build_spheres(out, &binary, spheres, err);
     bvh_finish(&binary);
     return ok;
 }
 
+static vec3 mesh_point(const mesh *m, uint32_t i)
+{
+    const float *p = m->positions + 3 * (size_t)i;
+    return v3(p[0], p[1], p[2]);
+}
+
+/* Triangles of zero area can never be hit: they are left out of the BVH. */
 static bool build_triangles(wbvh *out, const mesh *m, aabb *bounds, int threads, tess_error *err)
 {
     aabb *boxes = malloc(((size_t)m->triangle_count + 1) * sizeof *boxes);
-    if (!boxes)
+    uint32_t *prim_ids = malloc(((size_t)m->triangle_count + 1) * sizeof *prim_ids);
+    if (!boxes || !prim_ids) {
+        free(boxes);
+        free(prim_ids);
         return tess_error_set(err, "accel: out of memory for %u triangle bounds", m->triangle_count);
+    }
     *bounds = aabb_empty();
+    uint32_t kept = 0;
     for (uint32_t i = 0; i < m->triangle_count; i++) {
         const uint32_t *t = m->indices + 3 * (size_t)i;
-        aabb b = aabb_empty();
-        for (int k = 0; k < 3; k++) {
-            const float *p = m->positions + 3 * (size_t)t[k];
-            b = aabb_grow_point(b, v3(p[0], p[1], p[2]));
-        }
-        boxes[i] = b;
+        vec3 v0 = mesh_point(m, t[0]), v1 = mesh_point(m, t[1]), v2 = mesh_point(m, t[2]);
+        if (intersect_triangle_degenerate(v0, v1, v2))
+            continue;
+        aabb b = aabb_grow_point(aabb_grow_point(aabb_grow_point(aabb_empty(), v0), v1), v2);
+        boxes[kept] = b;
+        prim_ids[kept++] = i;
         *bounds = aabb_grow(*bounds, b);
     }
-    bool ok = build_geometry(out, boxes, m->triangle_count, m, NULL, threads, err);
+    bool ok = build_geometry(out, boxes, kept, m, prim_ids, NULL, threads, err);
     free(boxes);
+    free(prim_ids);
     return ok;
 }
 
@@ -63,7 +85,7 @@ static bool build_spheres(wbvh *out, const sphere_set *s, aabb *bounds, int thre
         boxes[i] = (aabb){v3_sub(c, r), v3_add(c, r)};
         *bounds = aabb_grow(*bounds, boxes[i]);
     }
-    bool ok = build_geometry(out, boxes, s->count, NULL, s, threads, err);
+    bool ok = build_geometry(out, boxes, s->count, NULL, NULL, s, threads, err);
     free(boxes);
     return ok;
 }
@@ -85,8 +107,10 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
     if (s->spheres.count > 0 &&
         !build_spheres(&a->geoms[s->mesh_count], &s->spheres, &geom_bounds[s->mesh_count], threads, err))
         goto fail;
-    if (!bvh_build(&a->top, geom_bounds, count, err))
+    if (!bvh_build(&a->top, geom_bounds, count, 1, err))
         goto fail;
+    for (uint32_t i = 0; i < count; i++)
+        a->coord_abs_max = fmaxf(a->coord_abs_max, fmaxf(abs_max(geom_bounds[i].lo), abs_max(geom_bounds[i].hi)));
     free(geom_bounds);
     return a;
 fail:
@@ -117,6 +141,18 @@ size_t accel_bytes(const accel *a)
 
 const char *accel_isa_name(const accel *a) { return a->kernels->isa_name; }
 
+bool accel_use_isa(accel *a, const char *isa_name)
+{
+    for (int i = 0; i < KERNEL_ISA_COUNT; i++) {
+        const kernel_table *t = kernels_for((kernel_isa)i);
+        if (t && strcmp(t->isa_name, isa_name) == 0) {
+            a->kernels = t;
+            return true;
+        }
+    }
+    return false;
+}
+
 /* Single ray through the top level, then each geometry's wide BVH. */
 static bool trace(const accel *a, ray *r, hit *h, bool any)
 {
@@ -124,6 +160,7 @@ static bool trace(const accel *a, ray *r, hit *h, bool any)
     if (b->node_count == 0 || ray_is_degenerate(r))
         return false;
     ray_derived d = ray_derive(r);
+    d.cull_slack = intersect_cull_slack(abs_max(r->org), abs_max(r->dir), a->coord_abs_max);
     uint32_t stack[BVH_MAX_DEPTH + 1];
     int top = 0;
     stack[top++] = 0;
@@ -164,18 +201,21 @@ bool accel_occluded(const accel *a, const ray *r)
     return trace(a, &local, &unused, true);
 }
 
-/* Active rays of the range that kernels may trace (degenerate rays miss). */
+/* Active rays of the range that kernels may trace: degenerate rays (see
+ * ray_is_degenerate) miss. Written over the arrays so it vectorises. */
 static uint64_t traceable(packet_range r)
 {
-    ray_packet *p = r.packet;
-    uint64_t mask = packet_range_mask(r);
-    for (uint64_t m = mask; m; m &= m - 1) {
-        uint32_t i = (uint32_t)__builtin_ctzll(m);
-        ray one = packet_get_ray(p, i);
-        if (ray_is_degenerate(&one))
-            mask &= ~(1ull << i);
+    const ray_packet *p = r.packet;
+    uint64_t bad = 0;
+    for (uint32_t i = r.begin; i < r.end; i++) {
+        /* x - x is 0 for finite x and NaN otherwise */
+        float finite = (p->org_x[i] - p->org_x[i]) + (p->org_y[i] - p->org_y[i]) + (p->org_z[i] - p->org_z[i]) +
+                       (p->dir_x[i] - p->dir_x[i]) + (p->dir_y[i] - p->dir_y[i]) + (p->dir_z[i] - p->dir_z[i]);
+        bool zero_dir = p->dir_x[i] == 0.f && p->dir_y[i] == 0.f && p->dir_z[i] == 0.f;
+        bool ok = finite == 0.f && !zero_dir && p->t_near[i] < p->t_far[i];
+        bad |= (uint64_t)!ok << i;
     }
-    return mask;
+    return packet_range_mask(r) & ~bad;
 }
 
 void accel_intersect_packet(const accel *a, packet_range r)

@@ -43,4 +43,9 @@ size_t accel_bytes(const accel *a);
 /* The instruction set of the kernels in use ("sse2", "avx2", "avx512"). */
 const char *accel_isa_name(const accel *a);
 
+/* Switch to the kernels of instruction set `isa_name`; false (kernels
+ * unchanged) when the name is unknown or this CPU cannot run them. Results
+ * are bit-identical for every instruction set. Not while rays are traced. */
+bool accel_use_isa(accel *a, const char *isa_name);
+
 #endif

@@ -1,9 +1,12 @@
 /* bvh.h - bounding volume hierarchy over primitive boxes, built with the binned
  * surface area heuristic (Wald, "On fast Construction of SAH-based Bounding
- * Volume Hierarchies", IEEE RT 2007), evaluating all three axes.
+ * Volume Hierarchies", IEEE RT 2007), evaluating all three axes, in parallel.
  *
  * The BVH knows boxes only; what a primitive is (triangle, sphere, a whole
- * geometry) is the caller's business, through prim_order. */
+ * geometry) is the caller's business, through prim_order.
+ *
+ * The result is a function of the input alone: any thread count gives the same
+ * bytes in nodes and prim_order (so images never depend on the thread count). */
 #ifndef TESSERA_BVH_H
 #define TESSERA_BVH_H
 
@@ -17,11 +20,14 @@
 typedef struct bvh_node {
     aabb bounds;     /* of everything below */
     uint32_t first;  /* leaf: first slot in prim_order; inner: left child (right = first + 1) */
-    uint32_t count;  /* leaf: primitives (>= 1); inner: 0 */
+    uint32_t count;  /* leaf: primitives (1 .. BVH_LEAF_MAX); inner: 0 */
 } bvh_node;          /* 32 bytes: two per cache line */
 
+/* Layout: nodes[0] is the root; an inner node's children are a pair allocated
+ * when the node is reached in a depth-first, left-first walk from the root, so
+ * a left subtree's nodes precede its right sibling's descendants. */
 typedef struct bvh {
-    bvh_node *nodes;      /* nodes[0] is the root; node_count of them */
+    bvh_node *nodes;      /* nodes[0] is the root; node_count of them (<= 2 * prim_count - 1) */
     uint32_t node_count;
     uint32_t *prim_order; /* prim_count primitive ids in leaf order */
     uint32_t prim_count;
@@ -32,11 +38,22 @@ typedef struct bvh {
  * which adds at most 32 levels for 2^32 primitives): traversal stacks use it. */
 #define BVH_MAX_DEPTH 96
 
-/* Build over `count` primitive boxes. `prim_bounds` is read only during the
- * build. An empty input gives an empty BVH (node_count 0). */
-bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, tess_error *err);
+/* Leaves hold at most this many primitives: two 4-wide SIMD leaf tests. */
+#define BVH_LEAF_MAX 8
+
+/* Build over `count` primitive boxes with `threads` threads, the caller's
+ * included (< 1 counts as 1; small inputs use one). `prim_bounds` is read only
+ * during the build; boxes may be degenerate (zero size) or empty. An empty
+ * input gives an empty BVH (node_count 0). */
+bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, tess_error *err);
 void bvh_finish(bvh *b); /* frees arrays; the struct itself is the caller's */
 
 size_t bvh_bytes(const bvh *b);
+
+/* The builder's own SAH cost model evaluated on the tree: the sum over nodes of
+ * (area / root area) x (traversal cost for an inner node, intersection cost per
+ * started block of 4 primitives for a leaf). Lower is better; 0 when empty.
+ * Evaluated in node order, so equal trees give equal bits. */
+double bvh_sah_cost(const bvh *b);
 
 #endif

@@ -8,14 +8,16 @@
 
 static float component(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
 
-/* 1/x, but +-FLT_MAX for a zero x (signed like the zero): then (plane - org) * inv
- * is 0, not NaN, for an origin on a slab plane, and a huge finite number otherwise. */
+/* 1/x, but +-FLT_MAX for a zero x (signed like the zero), so no product is NaN;
+ * box tests treat zero components by containment (ray_derived.zero_axes). */
 static float safe_reciprocal(float x) { return x != 0.f ? 1.f / x : copysignf(FLT_MAX, x); }
 
 ray_derived ray_derive(const ray *r)
 {
     ray_derived d;
     d.inv_dir = v3(safe_reciprocal(r->dir.x), safe_reciprocal(r->dir.y), safe_reciprocal(r->dir.z));
+    d.zero_axes = (r->dir.x == 0.f ? 1u : 0u) | (r->dir.y == 0.f ? 2u : 0u) | (r->dir.z == 0.f ? 4u : 0u);
+    d.cull_slack = 0.f;
     float ax = fabsf(r->dir.x), ay = fabsf(r->dir.y), az = fabsf(r->dir.z);
     d.kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
     d.kx = (d.kz + 1) % 3;
@@ -32,72 +34,125 @@ ray_derived ray_derive(const ray *r)
     return d;
 }
 
-static int32_t float_bits(float f)
+/* gamma(n) = n u / (1 - n u), u = 2^-24 */
+static float gamma_n(int n) { return (float)n * 0x1p-24f / (1.f - (float)n * 0x1p-24f); }
+
+vec3 ray_offset_origin(surface_point sp, vec3 n)
 {
-    int32_t i;
-    memcpy(&i, &f, sizeof i);
-    return i;
+    float d = fabsf(n.x) * sp.error.x + fabsf(n.y) * sp.error.y + fabsf(n.z) * sp.error.z;
+    vec3 offset = v3_scale(n, d);
+    vec3 po = v3_add(sp.p, offset);
+    /* the addition rounds too: step one more float away along the offset */
+    po.x = offset.x > 0.f ? nextafterf(po.x, INFINITY) : offset.x < 0.f ? nextafterf(po.x, -INFINITY) : po.x;
+    po.y = offset.y > 0.f ? nextafterf(po.y, INFINITY) : offset.y < 0.f ? nextafterf(po.y, -INFINITY) : po.y;
+    po.z = offset.z > 0.f ? nextafterf(po.z, INFINITY) : offset.z < 0.f ? nextafterf(po.z, -INFINITY) : po.z;
+    return po;
 }
 
-static float bits_float(int32_t i)
+static float max3f(float a, float b, float c)
 {
-    float f;
-    memcpy(&f, &i, sizeof f);
-    return f;
+    float m = a > b ? a : b;
+    return m > c ? m : c;
 }
 
-/* Constants of Waechter & Binder's method: near the origin (|p| < 1/32) a fixed
- * offset of 1/65536 along n; elsewhere n scaled by 256 ulps, added in the
- * integer representation so the step grows with |p|. */
-#define OFFSET_ORIGIN_BAND (1.f / 32.f)
-#define OFFSET_FLOAT_SCALE (1.f / 65536.f)
-#define OFFSET_INT_SCALE 256.f
+static float max_abs3(vec3 a) { return max3f(fabsf(a.x), fabsf(a.y), fabsf(a.z)); }
 
-static float offset_component(float p, float n)
+/* The allowance is the same in every component: the intersection test mixes
+ * coordinates (through the shear), so a point exact in one coordinate (on an
+ * axis-aligned plane) still needs the allowance of the others. */
+surface_point surface_point_triangle(vec3 v0, vec3 v1, vec3 v2, float u, float v)
 {
-    int32_t step = (int32_t)(OFFSET_INT_SCALE * n);
-    float stepped = bits_float(float_bits(p) + (p < 0.f ? -step : step));
-    return fabsf(p) < OFFSET_ORIGIN_BAND ? p + OFFSET_FLOAT_SCALE * n : stepped;
+    float b0 = 1.f - u - v;
+    surface_point sp;
+    sp.p = v3_add(v3_scale(v0, b0), v3_add(v3_scale(v1, u), v3_scale(v2, v)));
+    float e = gamma_n(SURFACE_ERROR_ULPS) * (max3f(max_abs3(v0), max_abs3(v1), max_abs3(v2)) + max_abs3(sp.p));
+    sp.error = v3(e, e, e);
+    return sp;
 }
 
-vec3 ray_offset_origin(vec3 p, vec3 n)
+surface_point surface_point_sphere(vec3 org, vec3 dir, float t, vec3 centre, float radius, vec3 *normal)
 {
-    n = v3_normalize(n);
-    return v3(offset_component(p.x, n.x), offset_component(p.y, n.y), offset_component(p.z, n.z));
+    vec3 rel = v3_sub(v3_add(org, v3_scale(dir, t)), centre);
+    float len = v3_length(rel);
+    vec3 n = len > 0.f ? v3_scale(rel, 1.f / len) : v3(0.f, 1.f, 0.f);
+    surface_point sp;
+    sp.p = v3_add(centre, v3_scale(n, radius));
+    float e = gamma_n(SURFACE_ERROR_ULPS) * (max_abs3(centre) + radius);
+    sp.error = v3(e, e, e);
+    *normal = n;
+    return sp;
+}
+
+bool intersect_triangle_degenerate(vec3 v0, vec3 v1, vec3 v2)
+{
+    /* edge vectors and their cross product in double: exact for the usual
+     * float inputs (differences of floats and products of such differences
+     * fit in 53 bits unless the coordinates span very different exponents) */
+    double e1x = (double)v1.x - v0.x, e1y = (double)v1.y - v0.y, e1z = (double)v1.z - v0.z;
+    double e2x = (double)v2.x - v0.x, e2y = (double)v2.y - v0.y, e2z = (double)v2.z - v0.z;
+    return e1y * e2z - e1z * e2y == 0.0 && e1z * e2x - e1x * e2z == 0.0 && e1x * e2y - e1y * e2x == 0.0;
+}
+
+/* The watertight test in double, from the original float coordinates: for
+ * the rays and triangles float cannot decide. Same conventions as below. */
+static bool triangle_in_double(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, vec3 v2, float *t_out,
+                               float *u_out, float *v_out)
+{
+    const double org[3] = {r->org.x, r->org.y, r->org.z}, dir[3] = {r->dir.x, r->dir.y, r->dir.z};
+    const double p0[3] = {v0.x, v0.y, v0.z}, p1[3] = {v1.x, v1.y, v1.z}, p2[3] = {v2.x, v2.y, v2.z};
+    const int kx = d->kx, ky = d->ky, kz = d->kz;
+    const double sx = dir[kx] / dir[kz], sy = dir[ky] / dir[kz], sz = 1.0 / dir[kz];
+    const double az = p0[kz] - org[kz], bz = p1[kz] - org[kz], cz = p2[kz] - org[kz];
+    const double ax = (p0[kx] - org[kx]) - sx * az, ay = (p0[ky] - org[ky]) - sy * az;
+    const double bx = (p1[kx] - org[kx]) - sx * bz, by = (p1[ky] - org[ky]) - sy * bz;
+    const double cx = (p2[kx] - org[kx]) - sx * cz, cy = (p2[ky] - org[ky]) - sy * cz;
+    const double u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0))
+        return false;
+    const double det = u + v + w;
+    if (det == 0.0)
+        return false;
+    const double t = sz * (u * az + v * bz + w * cz) / det;
+    const float tf = (float)t;
+    if (!(tf > r->t_near) || !(tf <= r->t_far))
+        return false;
+    *t_out = tf;
+    *u_out = (float)(v / det);
+    *v_out = (float)(w / det);
+    return true;
 }
 
 bool intersect_triangle(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, vec3 v2, float *t_out, float *u_out,
                         float *v_out)
 {
+    if (intersect_triangle_degenerate(v0, v1, v2))
+        return false; /* zero area: never hit (the kernels leave such triangles out of the BVH) */
     vec3 a = v3_sub(v0, r->org), b = v3_sub(v1, r->org), c = v3_sub(v2, r->org);
-    float az = component(a, d->kz), bz = component(b, d->kz), cz = component(c, d->kz);
-    float ax = component(a, d->kx) - d->shear_x * az, ay = component(a, d->ky) - d->shear_y * az;
-    float bx = component(b, d->kx) - d->shear_x * bz, by = component(b, d->ky) - d->shear_y * bz;
-    float cx = component(c, d->kx) - d->shear_x * cz, cy = component(c, d->ky) - d->shear_y * cz;
+    float akx = component(a, d->kx), aky = component(a, d->ky), az = component(a, d->kz);
+    float bkx = component(b, d->kx), bky = component(b, d->ky), bz = component(b, d->kz);
+    float ckx = component(c, d->kx), cky = component(c, d->ky), cz = component(c, d->kz);
+    float ax = akx - d->shear_x * az, ay = aky - d->shear_y * az;
+    float bx = bkx - d->shear_x * bz, by = bky - d->shear_y * bz;
+    float cx = ckx - d->shear_x * cz, cy = cky - d->shear_y * cz;
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
-    if (u == 0.f || v == 0.f || w == 0.f) {
-        /* on an edge in float: decide in double, which is exact for these
-         * products of floats, so both triangles sharing the edge agree */
-        u = (float)((double)cx * by - (double)cy * bx);
-        v = (float)((double)ax * cy - (double)ay * cx);
-        w = (float)((double)bx * ay - (double)by * ax);
-    }
+    /* L1 sizes of the vertices relative to the origin, summed in the kernels' order */
+    float ma = (fabsf(akx) + fabsf(aky)) + fabsf(az), mb = (fabsf(bkx) + fabsf(bky)) + fabsf(bz),
+          mc = (fabsf(ckx) + fabsf(cky)) + fabsf(cz);
+    if (fabsf(u) <= INTERSECT_EDGE_TOL * (mb * mc) || fabsf(v) <= INTERSECT_EDGE_TOL * (mc * ma) ||
+        fabsf(w) <= INTERSECT_EDGE_TOL * (ma * mb))
+        return triangle_in_double(r, d, v0, v1, v2, t_out, u_out, v_out);
     if ((u < 0.f || v < 0.f || w < 0.f) && (u > 0.f || v > 0.f || w > 0.f))
         return false;
-    float det = u + v + w;
-    if (det == 0.f)
-        return false; /* ray in the triangle's plane, or a degenerate triangle */
+    float det = u + v + w; /* the signs agree and none is 0, so det is not 0 */
     float tz = u * (d->shear_z * az) + v * (d->shear_z * bz) + w * (d->shear_z * cz);
-    float sign = det < 0.f ? -1.f : 1.f;
-    float t_scaled = tz * sign, det_abs = det * sign;
-    if (!(t_scaled > r->t_near * det_abs) || t_scaled > r->t_far * det_abs)
-        return false;
     float inv_det = 1.f / det;
     float t = tz * inv_det;
-    /* the scaled comparison can round differently from the division: the
-     * interval contract is on t itself */
+    /* the interval test is on the computed t itself, not on tz against
+     * t_far * det as in the paper: that product rounds, and could reject a
+     * primitive at exactly the current t_far, making ties depend on the order
+     * in which primitives are tested */
     if (!(t > r->t_near) || !(t <= r->t_far))
         return false;
     *t_out = t;
@@ -139,12 +194,21 @@ bool intersect_sphere(const ray *r, vec3 centre, float radius, float *t_out)
 
 bool intersect_box(const ray *r, const ray_derived *d, const aabb *b, float *t_entry)
 {
-    float tx0 = (b->lo.x - r->org.x) * d->inv_dir.x, tx1 = (b->hi.x - r->org.x) * d->inv_dir.x;
-    float ty0 = (b->lo.y - r->org.y) * d->inv_dir.y, ty1 = (b->hi.y - r->org.y) * d->inv_dir.y;
-    float tz0 = (b->lo.z - r->org.z) * d->inv_dir.z, tz1 = (b->hi.z - r->org.z) * d->inv_dir.z;
-    float t_in = fmaxf(fmaxf(fminf(tx0, tx1), fminf(ty0, ty1)), fmaxf(fminf(tz0, tz1), r->t_near));
-    float t_out = fminf(fminf(fmaxf(tx0, tx1), fmaxf(ty0, ty1)), fmaxf(tz0, tz1)) * INTERSECT_FAR_SCALE;
-    t_out = fminf(t_out, r->t_far * INTERSECT_FAR_SCALE);
+    const float org[3] = {r->org.x, r->org.y, r->org.z}, inv[3] = {d->inv_dir.x, d->inv_dir.y, d->inv_dir.z};
+    const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+    float t_in = r->t_near, t_out = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (d->zero_axes >> a & 1u) {
+            /* parallel to the slab: inside it (boundary included) or never */
+            if (!(lo[a] <= org[a] && org[a] <= hi[a]))
+                return false;
+            continue;
+        }
+        float t0 = (lo[a] - org[a]) * inv[a], t1 = (hi[a] - org[a]) * inv[a];
+        t_in = fmaxf(t_in, fminf(t0, t1));
+        t_out = fminf(t_out, fmaxf(t0, t1));
+    }
+    t_out = fminf(t_out * INTERSECT_FAR_SCALE, r->t_far * INTERSECT_CULL_SCALE + d->cull_slack);
     *t_entry = t_in;
     return t_in <= t_out;
 }

@@ -16,6 +16,36 @@
 #define INTERSECT_GAMMA3 (3.f * 0x1p-24f / (1.f - 3.f * 0x1p-24f))
 #define INTERSECT_FAR_SCALE (1.f + 2.f * INTERSECT_GAMMA3)
 
+/* Traversal skips a box only when its entry distance exceeds the closest hit's
+ * t by a margin that covers the rounding of both: the hit's t may lie a few
+ * ulps below the exact value and the box entry a few above, and a primitive at
+ * the same computed t (a tie, decided by id) must still be found whatever the
+ * visiting order. The margin is relative (INTERSECT_CULL_SCALE) plus an
+ * absolute slack from the magnitude of the coordinates involved, 2^-19 (8
+ * ulps) of them, in units of the ray's t (intersect_cull_slack). */
+#define INTERSECT_CULL_SCALE (1.f + 0x1p-19f)
+#define INTERSECT_CULL_ULPS 0x1p-19f
+
+static inline float intersect_cull_slack(float org_abs_max, float dir_abs_max, float coord_abs_max)
+{
+    return (org_abs_max + coord_abs_max) * INTERSECT_CULL_ULPS / dir_abs_max;
+}
+
+/* The float edge functions of the watertight test carry rounding from the
+ * vertex differences, the shear and the products: at most about 20 u Mb Mc for
+ * the edge of vertices b, c, where M is the L1 norm of a vertex relative to the
+ * ray origin and u = 2^-24. When an edge function is not larger than
+ * INTERSECT_EDGE_TOL Mb Mc (32 u, with margin), its sign is not certain and the
+ * whole test is redone in double from the original coordinates. The decision
+ * depends on the edge and the ray alone, so two triangles sharing an edge
+ * always decide it alike (watertightness), and slivers and grazing rays get
+ * double precision exactly where float cannot answer. */
+#define INTERSECT_EDGE_TOL 0x1p-19f
+
+/* True when the triangle has exactly zero area (collinear or coincident
+ * vertices): it can never be hit. */
+bool intersect_triangle_degenerate(vec3 v0, vec3 v1, vec3 v2);
+
 /* Watertight ray/triangle test: Woop, Benthin, Wald, "Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013. No ray passes between two triangles that
  * share an edge. On a hit with t in (r->t_near, r->t_far] writes t, u, v and

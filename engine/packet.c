@@ -63,7 +63,7 @@ void packet_derive_inv_dir(ray_packet *p)
 {
     if (p->flags & PACKET_HAVE_INV_DIR)
         return;
-    for (uint32_t i = 0; i < p->count; i++) {
+    for (uint32_t i = 0; i < PACKET_MAX_RAYS; i++) { /* all lanes: a branch-free loop vectorises */
         p->inv_dir_x[i] = safe_reciprocal(p->dir_x[i]);
         p->inv_dir_y[i] = safe_reciprocal(p->dir_y[i]);
         p->inv_dir_z[i] = safe_reciprocal(p->dir_z[i]);
@@ -74,19 +74,28 @@ void packet_derive_inv_dir(ray_packet *p)
 void packet_primary(ray_packet *p, const camera_basis *cam, int x0, int y0, int w, int h)
 {
     packet_reset(p, (uint32_t)(w * h), PACKET_COMMON_ORIGIN | PACKET_NORMALIZED);
+    /* the same arithmetic as camera_pixel_direction + v3_normalize, written
+     * over the SoA arrays so the compiler can vectorise it */
     uint32_t i = 0;
-    for (int y = y0; y < y0 + h; y++)
+    for (int y = y0; y < y0 + h; y++) {
+        float sy = 1.f - 2.f * ((float)y + 0.5f) / (float)cam->height_px;
         for (int x = x0; x < x0 + w; x++, i++) {
-            vec3 d = v3_normalize(camera_pixel_direction(cam, x, y));
+            float sx = 2.f * ((float)x + 0.5f) / (float)cam->width_px - 1.f;
+            float dx = cam->forward.x + (cam->right.x * sx + cam->up.x * sy);
+            float dy = cam->forward.y + (cam->right.y * sx + cam->up.y * sy);
+            float dz = cam->forward.z + (cam->right.z * sx + cam->up.z * sy);
+            float len = sqrtf(dx * dx + dy * dy + dz * dz);
+            float inv = len > 0.f ? 1.f / len : 1.f;
+            p->dir_x[i] = len > 0.f ? dx * inv : dx;
+            p->dir_y[i] = len > 0.f ? dy * inv : dy;
+            p->dir_z[i] = len > 0.f ? dz * inv : dz;
             p->org_x[i] = cam->eye.x;
             p->org_y[i] = cam->eye.y;
             p->org_z[i] = cam->eye.z;
-            p->dir_x[i] = d.x;
-            p->dir_y[i] = d.y;
-            p->dir_z[i] = d.z;
             p->t_near[i] = 0.f;
             p->t_far[i] = FLT_MAX;
         }
+    }
     /* a tile's directions keep their signs unless it straddles an axis plane */
     bool same_sign = true;
     for (uint32_t k = 1; k < i && same_sign; k++)

@@ -43,17 +43,50 @@ static inline bool ray_is_degenerate(const ray *r)
 
 /* Values derived once per ray and used by every node and triangle test. */
 typedef struct ray_derived {
-    vec3 inv_dir;     /* 1/dir, with +-FLT_MAX for a zero component (see accel.c) */
+    vec3 inv_dir;     /* 1/dir, with +-FLT_MAX for a zero component */
+    unsigned zero_axes; /* bit a: dir component a is zero; box tests then use containment
+                           lo <= org <= hi on that axis instead of slab distances */
     int kx, ky, kz;   /* watertight test: kz = axis of largest |dir|, kx, ky the others */
     float shear_x, shear_y, shear_z; /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
+    float cull_slack; /* absolute margin on t_far when culling boxes (intersect_cull_slack); 0 from
+                         ray_derive, set by traversal for the geometry at hand */
 } ray_derived;
 
 ray_derived ray_derive(const ray *r);
 
-/* Offset a surface point along its geometric normal (pointing to the side the
- * new ray leaves from) far enough that a ray starting there cannot re-hit the
- * surface through rounding, at any scale: Waechter & Binder, "A Fast and
- * Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6. */
-vec3 ray_offset_origin(vec3 p, vec3 n);
+/* A surface point and the uncertainty a ray leaving it must clear,
+ * componentwise: the rounding of the point itself and of the intersection
+ * test that a ray from it makes against the same surface. */
+typedef struct surface_point {
+    vec3 p;
+    vec3 error; /* >= 0 */
+} surface_point;
+
+/* Where a ray leaving a surface point must start so that it cannot re-hit the
+ * surface through rounding, at any scale and with no per-scene epsilon: move
+ * the point along the unit normal n (pointing to the side the ray leaves to)
+ * by the error projected on n, then one more ulp away in each component (the
+ * shape of pbrt-v4's OffsetRayOrigin, Pharr, Jakob, Humphreys, "Physically
+ * Based Rendering" 4th ed., 6.8.6). */
+vec3 ray_offset_origin(surface_point sp, vec3 n);
+
+/* Error allowance, in units of u = 2^-24 of the magnitudes involved: 7 for
+ * the barycentric interpolation (pbrt-v4 6.8.5) and the rest for the
+ * watertight test of a ray leaving the point, whose t error is a few roundings
+ * of the vertex coordinates relative to the ray origin (the vertices' and the
+ * point's magnitudes) divided by the same sine of the angle to the surface as
+ * the distance to cover, so the allowance holds at every angle. */
+#define SURFACE_ERROR_ULPS 32
+
+/* The point of a triangle at barycentrics (u, v), P = (1-u-v) v0 + u v1 + v v2,
+ * with error gamma(SURFACE_ERROR_ULPS) (max_i |v_i| + |P|) (max norms), the
+ * same in every component. */
+surface_point surface_point_triangle(vec3 v0, vec3 v1, vec3 v2, float u, float v);
+
+/* The point of a sphere hit at org + t dir, projected back onto the sphere,
+ * with error gamma(SURFACE_ERROR_ULPS) (|centre| + radius) (max norm) in
+ * every component;
+ * *normal gets the unit outward normal. */
+surface_point surface_point_sphere(vec3 org, vec3 dir, float t, vec3 centre, float radius, vec3 *normal);
 
 #endif

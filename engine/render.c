@@ -13,6 +13,7 @@
 /* What shading needs to know about a hit. */
 typedef struct surface {
     vec3 position;       /* world */
+    vec3 position_error; /* componentwise rounding bound of position (ray.h surface_point) */
     vec3 geometric_n;    /* unit, facing the incoming ray */
     vec3 shading_n;      /* unit, same hemisphere as geometric_n */
     vec3 kd;             /* diffuse reflectance */
@@ -31,7 +32,15 @@ static vec3 interpolate(const float *array, const uint32_t *idx, float u, float 
     return v3_add(v3_scale(a, 1.f - u - v), v3_add(v3_scale(b, u), v3_scale(c, v)));
 }
 
-static surface describe_hit(const scene *s, const ray *r, const hit *h)
+/* Eyelight without shadow rays looks at normals only. */
+static bool needs_position(const render_view *v)
+{
+    return v->shading != RENDER_SHADE_EYELIGHT || (v->shadows && v->scene->light_count > 0);
+}
+
+/* Describe the hit surface; the position (and its error bound) only when
+ * `need_position`, i.e. when shading will cast a shadow ray or light a point. */
+static surface describe_hit(const scene *s, const ray *r, const hit *h, bool need_position)
 {
     surface sf;
     if (h->geom_id < s->mesh_count) {
@@ -40,8 +49,12 @@ static surface describe_hit(const scene *s, const ray *r, const hit *h)
         const uint32_t *idx = m->indices + 3 * (size_t)h->prim_id;
         vec3 v0 = mesh_vertex(m->positions, idx[0]), v1 = mesh_vertex(m->positions, idx[1]),
              v2 = mesh_vertex(m->positions, idx[2]);
-        /* from barycentrics rather than org + t dir: accurate to the surface */
-        sf.position = interpolate(m->positions, idx, h->u, h->v);
+        /* from barycentrics rather than org + t dir: on the surface, with a known error */
+        if (need_position) {
+            surface_point sp = surface_point_triangle(v0, v1, v2, h->u, h->v);
+            sf.position = sp.p;
+            sf.position_error = sp.error;
+        }
         sf.geometric_n = v3_normalize(v3_cross(v3_sub(v1, v0), v3_sub(v2, v0)));
         sf.shading_n = m->normals ? v3_normalize(interpolate(m->normals, idx, h->u, h->v)) : sf.geometric_n;
         uint32_t mat_id = sm->material_id;
@@ -52,9 +65,9 @@ static surface describe_hit(const scene *s, const ray *r, const hit *h)
     } else {
         const sphere_set *sp = &s->spheres;
         vec3 c = v3(sp->center_x[h->prim_id], sp->center_y[h->prim_id], sp->center_z[h->prim_id]);
-        sf.position = v3_add(r->org, v3_scale(r->dir, h->t));
-        sf.geometric_n = v3_scale(v3_sub(sf.position, c), 1.f / sp->radius[h->prim_id]);
-        sf.geometric_n = v3_normalize(sf.geometric_n);
+        surface_point pt = surface_point_sphere(r->org, r->dir, h->t, c, sp->radius[h->prim_id], &sf.geometric_n);
+        sf.position = pt.p;
+        sf.position_error = pt.error;
         sf.shading_n = sf.geometric_n;
         sf.mat = &s->materials[sp->material_id[h->prim_id]];
         sf.kd = sf.mat->diffuse;
@@ -103,7 +116,8 @@ static bool sample_light(const render_view *v, const surface *sf, const light *l
 
 static ray shadow_ray(const surface *sf, const light_sample *ls)
 {
-    return (ray){ray_offset_origin(sf->position, sf->geometric_n), ls->to_light, 0.f, ls->shadow_t_far};
+    return (ray){ray_offset_origin((surface_point){sf->position, sf->position_error}, sf->geometric_n), ls->to_light,
+                 0.f, ls->shadow_t_far};
 }
 
 /* Reflected light from an unshadowed light sample. */
@@ -138,7 +152,8 @@ static ray eyelight_shadow_ray(const scene *s, const surface *sf)
     const light *l = &s->lights[0];
     vec3 to_light = l->kind == LIGHT_DIRECTIONAL ? l->direction : v3_sub(l->position, sf->position);
     float t_far = l->kind == LIGHT_DIRECTIONAL ? FLT_MAX : 1.f;
-    return (ray){ray_offset_origin(sf->position, sf->geometric_n), to_light, 0.f, t_far};
+    return (ray){ray_offset_origin((surface_point){sf->position, sf->position_error}, sf->geometric_n), to_light, 0.f,
+                 t_far};
 }
 
 /* Eyelight darkens to this fraction in shadow, as the peer harness's lit image. */
@@ -150,7 +165,7 @@ vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
     hit h;
     if (!accel_intersect(v->accel, r, &h))
         return v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
-    surface sf = describe_hit(s, r, &h);
+    surface sf = describe_hit(s, r, &h, needs_position(v));
     if (v->shading == RENDER_SHADE_EYELIGHT) {
         float grey = eyelight_grey(&sf, r);
         if (v->shadows && s->light_count > 0) {
@@ -211,6 +226,7 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
     accel_intersect_packet(v->accel, packet_whole(p));
     counts->primary_rays += p->count;
     ps->hits = 0;
+    const bool need_position = needs_position(v);
     for (uint32_t i = 0; i < p->count; i++) {
         if (p->hit_t[i] == INFINITY) {
             ps->colour[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
@@ -219,7 +235,7 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
         ps->hits |= 1ull << i;
         ray r = packet_get_ray(p, i);
         hit h = packet_get_hit(p, i);
-        ps->sf[i] = describe_hit(s, &r, &h);
+        ps->sf[i] = describe_hit(s, &r, &h, need_position);
         if (v->shading == RENDER_SHADE_EYELIGHT) {
             float grey = eyelight_grey(&ps->sf[i], &r);
             ps->colour[i] = v3(grey, grey, grey);

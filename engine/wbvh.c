@@ -1,5 +1,6 @@
 #include "wbvh.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -47,6 +48,7 @@ typedef struct collapse {
     size_t block_bytes;
     fill_lane_fn fill;
     const void *source;
+    const uint32_t *prim_ids; /* binary primitive -> source primitive, or NULL for identity */
 } collapse;
 
 static void init_block(collapse *c, uint32_t index)
@@ -68,7 +70,10 @@ static uint32_t emit_leaf(collapse *c, const bvh_node *leaf, uint8_t *block_coun
         init_block(c, first + b);
         char *block = (char *)c->out->blocks + (size_t)(first + b) * c->block_bytes;
         for (uint32_t lane = 0; lane < WBVH_BLOCK && b * WBVH_BLOCK + lane < leaf->count; lane++)
-            c->fill(block, (int)lane, c->binary->prim_order[leaf->first + b * WBVH_BLOCK + lane], c->source);
+        {
+            uint32_t prim = c->binary->prim_order[leaf->first + b * WBVH_BLOCK + lane];
+            c->fill(block, (int)lane, c->prim_ids ? c->prim_ids[prim] : prim, c->source);
+        }
     }
     c->out->block_count += blocks;
     *block_count = (uint8_t)blocks;
@@ -127,6 +132,11 @@ static bool run_collapse(collapse *c, tess_error *err)
         free(todo_wide);
         return tess_error_set(err, "wbvh: out of memory for %zu nodes", max_nodes);
     }
+    const aabb root = binary->nodes[0].bounds;
+    out->coord_abs_max = 0.f;
+    const float extremes[6] = {root.lo.x, root.lo.y, root.lo.z, root.hi.x, root.hi.y, root.hi.z};
+    for (int k = 0; k < 6; k++)
+        out->coord_abs_max = fabsf(extremes[k]) > out->coord_abs_max ? fabsf(extremes[k]) : out->coord_abs_max;
     size_t todo = 0;
     out->node_count = 1;
     todo_binary[todo] = 0;
@@ -163,11 +173,11 @@ static bool run_collapse(collapse *c, tess_error *err)
 }
 
 static bool build(wbvh *out, wbvh_kind kind, const bvh *binary, size_t block_bytes, fill_lane_fn fill,
-                  const void *source, tess_error *err)
+                  const void *source, const uint32_t *prim_ids, tess_error *err)
 {
     memset(out, 0, sizeof *out);
     out->kind = kind;
-    collapse c = {binary, out, block_bytes, fill, source};
+    collapse c = {binary, out, block_bytes, fill, source, prim_ids};
     if (!run_collapse(&c, err)) {
         wbvh_finish(out);
         return false;
@@ -175,14 +185,14 @@ static bool build(wbvh *out, wbvh_kind kind, const bvh *binary, size_t block_byt
     return true;
 }
 
-bool wbvh_build_triangles(wbvh *out, const bvh *binary, const mesh *m, tess_error *err)
+bool wbvh_build_triangles(wbvh *out, const bvh *binary, const mesh *m, const uint32_t *prim_ids, tess_error *err)
 {
-    return build(out, WBVH_TRIANGLES, binary, sizeof(wbvh_tri_block), fill_triangle, m, err);
+    return build(out, WBVH_TRIANGLES, binary, sizeof(wbvh_tri_block), fill_triangle, m, prim_ids, err);
 }
 
 bool wbvh_build_spheres(wbvh *out, const bvh *binary, const sphere_set *s, tess_error *err)
 {
-    return build(out, WBVH_SPHERES, binary, sizeof(wbvh_sphere_block), fill_sphere, s, err);
+    return build(out, WBVH_SPHERES, binary, sizeof(wbvh_sphere_block), fill_sphere, s, NULL, err);
 }
 
 void wbvh_finish(wbvh *w)

@@ -62,13 +62,17 @@ typedef struct wbvh {
     uint32_t node_count;
     void *blocks;       /* wbvh_tri_block or wbvh_sphere_block array, by kind */
     uint32_t block_count;
+    float coord_abs_max; /* largest |coordinate| of the bounds: scales the cull slack */
 } wbvh;
 
 struct mesh;
 struct sphere_set;
 
-/* Build from a binary BVH over the mesh's triangles / the spheres. */
-bool wbvh_build_triangles(wbvh *out, const bvh *binary, const struct mesh *m, tess_error *err);
+/* Build from a binary BVH over the mesh's triangles / the spheres. The
+ * binary BVH's primitive i is triangle prim_ids[i] of the mesh (prim_ids NULL:
+ * triangle i), so triangles that can never be hit may be left out. */
+bool wbvh_build_triangles(wbvh *out, const bvh *binary, const struct mesh *m, const uint32_t *prim_ids,
+                          tess_error *err);
 bool wbvh_build_spheres(wbvh *out, const bvh *binary, const struct sphere_set *s, tess_error *err);
 void wbvh_finish(wbvh *w);
 size_t wbvh_bytes(const wbvh *w);

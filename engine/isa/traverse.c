@@ -60,31 +60,69 @@ static inline bool closer(float t, uint32_t geom, uint32_t prim, float best_t, u
  * ------------------------------------------------------------------------ */
 
 /* Child boxes of n the ray enters before t_far (conservatively scaled); their
- * entry distances go to dist[]. */
+ * entry distances go to dist[]. An axis the ray is parallel to (zero
+ * direction component) constrains by containment, boundary included. */
 static inline unsigned node_hit1(const wbvh_node *n, const ray *r, const ray_derived *d, float dist[WBVH_WIDTH])
 {
-    const bool neg_x = d->inv_dir.x < 0.f, neg_y = d->inv_dir.y < 0.f, neg_z = d->inv_dir.z < 0.f;
-    const float *near_x = neg_x ? n->hi_x : n->lo_x, *far_x = neg_x ? n->lo_x : n->hi_x;
-    const float *near_y = neg_y ? n->hi_y : n->lo_y, *far_y = neg_y ? n->lo_y : n->hi_y;
-    const float *near_z = neg_z ? n->hi_z : n->lo_z, *far_z = neg_z ? n->lo_z : n->hi_z;
-    const vn ox = vn_set1(r->org.x), oy = vn_set1(r->org.y), oz = vn_set1(r->org.z);
-    const vn ix = vn_set1(d->inv_dir.x), iy = vn_set1(d->inv_dir.y), iz = vn_set1(d->inv_dir.z);
-    const vn t_near = vn_set1(r->t_near), t_far = vn_set1(r->t_far * INTERSECT_FAR_SCALE);
+    const float *lo[3] = {n->lo_x, n->lo_y, n->lo_z}, *hi[3] = {n->hi_x, n->hi_y, n->hi_z};
+    const float org[3] = {r->org.x, r->org.y, r->org.z}, inv[3] = {d->inv_dir.x, d->inv_dir.y, d->inv_dir.z};
     const vn scale = vn_set1(INTERSECT_FAR_SCALE);
     unsigned bits = 0;
+    if (d->zero_axes == 0) { /* the common case: three slabs */
+        const bool neg_x = inv[0] < 0.f, neg_y = inv[1] < 0.f, neg_z = inv[2] < 0.f;
+        const float *near_x = neg_x ? n->hi_x : n->lo_x, *far_x = neg_x ? n->lo_x : n->hi_x;
+        const float *near_y = neg_y ? n->hi_y : n->lo_y, *far_y = neg_y ? n->lo_y : n->hi_y;
+        const float *near_z = neg_z ? n->hi_z : n->lo_z, *far_z = neg_z ? n->lo_z : n->hi_z;
+        const vn ox = vn_set1(org[0]), oy = vn_set1(org[1]), oz = vn_set1(org[2]);
+        const vn ix = vn_set1(inv[0]), iy = vn_set1(inv[1]), iz = vn_set1(inv[2]);
+        const vn t_near = vn_set1(r->t_near), t_far = vn_set1(r->t_far * INTERSECT_CULL_SCALE + d->cull_slack);
+        for (int h = 0; h < WBVH_WIDTH; h += NODE_LANES) {
+            vn enter = vn_max(vn_max(vn_mul(vn_sub(vn_load(near_x + h), ox), ix),
+                                     vn_mul(vn_sub(vn_load(near_y + h), oy), iy)),
+                              vn_max(vn_mul(vn_sub(vn_load(near_z + h), oz), iz), t_near));
+            vn leave = vn_min(vn_mul(vn_min(vn_min(vn_mul(vn_sub(vn_load(far_x + h), ox), ix),
+                                                   vn_mul(vn_sub(vn_load(far_y + h), oy), iy)),
+                                            vn_mul(vn_sub(vn_load(far_z + h), oz), iz)),
+                                     scale),
+                              t_far);
+            bits |= vn_le_bits(enter, leave) << h;
+            vn_store(dist + h, enter);
+        }
+        return bits & n->child_mask;
+    }
     for (int h = 0; h < WBVH_WIDTH; h += NODE_LANES) {
-        vn enter = vn_max(vn_max(vn_mul(vn_sub(vn_load(near_x + h), ox), ix),
-                                 vn_mul(vn_sub(vn_load(near_y + h), oy), iy)),
-                          vn_max(vn_mul(vn_sub(vn_load(near_z + h), oz), iz), t_near));
-        vn leave = vn_min(vn_mul(vn_min(vn_min(vn_mul(vn_sub(vn_load(far_x + h), ox), ix),
-                                               vn_mul(vn_sub(vn_load(far_y + h), oy), iy)),
-                                        vn_mul(vn_sub(vn_load(far_z + h), oz), iz)),
-                                 scale),
-                          t_far);
-        bits |= vn_le_bits(enter, leave) << h;
+        vn enter = vn_set1(r->t_near), leave = vn_set1(INFINITY);
+        unsigned inside = (1u << NODE_LANES) - 1u;
+        for (int a = 0; a < 3; a++) {
+            vn o = vn_set1(org[a]);
+            vn l = vn_load(lo[a] + h), u = vn_load(hi[a] + h);
+            if (d->zero_axes >> a & 1u) {
+                inside &= vn_le_bits(l, o) & vn_le_bits(o, u);
+                continue;
+            }
+            vn i = vn_set1(inv[a]);
+            vn t0 = vn_mul(vn_sub(l, o), i), t1 = vn_mul(vn_sub(u, o), i);
+            enter = vn_max(enter, vn_min(t0, t1));
+            leave = vn_min(leave, vn_max(t0, t1));
+        }
+        leave = vn_min(vn_mul(leave, scale), vn_set1(r->t_far * INTERSECT_CULL_SCALE + d->cull_slack));
+        bits |= (vn_le_bits(enter, leave) & inside) << h;
         vn_store(dist + h, enter);
     }
     return bits & n->child_mask;
+}
+
+/* Absolute cull margin of ray r for the geometry of w (intersect.h). */
+static inline float max3_abs(vec3 a)
+{
+    float x = fabsf(a.x), y = fabsf(a.y), z = fabsf(a.z);
+    float m = x > y ? x : y;
+    return m > z ? m : z;
+}
+
+static inline float ray_cull_slack(const ray *r, const wbvh *w)
+{
+    return intersect_cull_slack(max3_abs(r->org), max3_abs(r->dir), w->coord_abs_max);
 }
 
 /* Record a hit if it beats the current one. */
@@ -119,31 +157,34 @@ static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const 
     const v4 okx = v4_set1(org[kx]), oky = v4_set1(org[ky]), okz = v4_set1(org[kz]);
     const v4 sx = v4_set1(d->shear_x), sy = v4_set1(d->shear_y), sz = v4_set1(d->shear_z);
     const v4 az = v4_sub(v4_load(v0[kz]), okz), bz = v4_sub(v4_load(v1[kz]), okz), cz = v4_sub(v4_load(v2[kz]), okz);
-    const v4 ax = v4_sub(v4_sub(v4_load(v0[kx]), okx), v4_mul(sx, az));
-    const v4 ay = v4_sub(v4_sub(v4_load(v0[ky]), oky), v4_mul(sy, az));
-    const v4 bx = v4_sub(v4_sub(v4_load(v1[kx]), okx), v4_mul(sx, bz));
-    const v4 by = v4_sub(v4_sub(v4_load(v1[ky]), oky), v4_mul(sy, bz));
-    const v4 cx = v4_sub(v4_sub(v4_load(v2[kx]), okx), v4_mul(sx, cz));
-    const v4 cy = v4_sub(v4_sub(v4_load(v2[ky]), oky), v4_mul(sy, cz));
+    const v4 akx = v4_sub(v4_load(v0[kx]), okx), aky = v4_sub(v4_load(v0[ky]), oky);
+    const v4 bkx = v4_sub(v4_load(v1[kx]), okx), bky = v4_sub(v4_load(v1[ky]), oky);
+    const v4 ckx = v4_sub(v4_load(v2[kx]), okx), cky = v4_sub(v4_load(v2[ky]), oky);
+    const v4 ax = v4_sub(akx, v4_mul(sx, az)), ay = v4_sub(aky, v4_mul(sy, az));
+    const v4 bx = v4_sub(bkx, v4_mul(sx, bz)), by = v4_sub(bky, v4_mul(sy, bz));
+    const v4 cx = v4_sub(ckx, v4_mul(sx, cz)), cy = v4_sub(cky, v4_mul(sy, cz));
     const v4 u = v4_sub(v4_mul(cx, by), v4_mul(cy, bx));
     const v4 v = v4_sub(v4_mul(ax, cy), v4_mul(ay, cx));
     const v4 w = v4_sub(v4_mul(bx, ay), v4_mul(by, ax));
-    const v4 zero = v4_set1(0.f);
+    const v4 zero = v4_set1(0.f), tol = v4_set1(INTERSECT_EDGE_TOL);
+    const v4 ma = v4_add(v4_add(v4_abs(akx), v4_abs(aky)), v4_abs(az));
+    const v4 mb = v4_add(v4_add(v4_abs(bkx), v4_abs(bky)), v4_abs(bz));
+    const v4 mc = v4_add(v4_add(v4_abs(ckx), v4_abs(cky)), v4_abs(cz));
     const unsigned valid = valid_lanes(b->prim_id);
-    /* an edge in float: those lanes are decided by the scalar test, in double */
-    const unsigned on_edge = v4_bits(v4_or(v4_or(v4_eq(u, zero), v4_eq(v, zero)), v4_eq(w, zero))) & valid;
+    /* an edge sign float cannot vouch for: those lanes are decided by the scalar test, in double */
+    const unsigned on_edge = v4_bits(v4_or(v4_or(v4_le(v4_abs(u), v4_mul(tol, v4_mul(mb, mc))),
+                                                 v4_le(v4_abs(v), v4_mul(tol, v4_mul(mc, ma)))),
+                                           v4_le(v4_abs(w), v4_mul(tol, v4_mul(ma, mb))))) &
+                             valid;
     const v4 any_neg = v4_or(v4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
     const v4 any_pos = v4_or(v4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
     const v4 det = v4_add(v4_add(u, v), w);
     const v4 tz = v4_add(v4_add(v4_mul(u, v4_mul(sz, az)), v4_mul(v, v4_mul(sz, bz))), v4_mul(w, v4_mul(sz, cz)));
-    const v4 det_neg = v4_lt(det, zero);
-    const v4 t_scaled = v4_neg_where(tz, det_neg), det_abs = v4_neg_where(det, det_neg);
     const v4 t_near = v4_set1(r->t_near), t_far = v4_set1(r->t_far);
-    v4 ok = v4_andnot(v4_gt(t_scaled, v4_mul(t_near, det_abs)), v4_gt(t_scaled, v4_mul(t_far, det_abs)));
-    ok = v4_andnot(v4_andnot(ok, v4_and(any_neg, any_pos)), v4_eq(det, zero));
     const v4 inv_det = v4_div(v4_set1(1.f), det);
     const v4 t = v4_mul(tz, inv_det);
-    ok = v4_and(ok, v4_and(v4_gt(t, t_near), v4_le(t, t_far)));
+    v4 ok = v4_andnot(v4_and(v4_gt(t, t_near), v4_le(t, t_far)), v4_and(any_neg, any_pos));
+    ok = v4_andnot(ok, v4_eq(det, zero));
     unsigned hits = v4_bits(ok) & valid & ~on_edge;
     if (!hits && !on_edge)
         return false;
@@ -208,8 +249,11 @@ typedef struct stack_entry1 {
 } stack_entry1;
 
 /* Traverse the subtree at `ref` with one ray. */
-static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
+static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d_in, hit *h, bool any)
 {
+    ray_derived d_local = *d_in;
+    const ray_derived *d = &d_local;
+    d_local.cull_slack = ray_cull_slack(r, w);
     stack_entry1 stack[WBVH_STACK_SIZE];
     int top = 0;
     bool found = false;
@@ -247,7 +291,7 @@ static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, con
                 }
             }
         }
-        const float cull = r->t_far * INTERSECT_FAR_SCALE;
+        const float cull = r->t_far * INTERSECT_CULL_SCALE + d->cull_slack;
         do {
             if (top == 0)
                 return found;
@@ -285,6 +329,12 @@ typedef struct packet_ctx {
     uint64_t order_mask[AXIS_ORDERS]; /* rays using axis order k */
     int order_axes[AXIS_ORDERS][3];   /* kx, ky, kz of order k */
     int order_count;
+    bool shear_ready;   /* the fields above are set up (lazily, at the first packet leaf) */
+    uint64_t shear_rays; /* the rays they were set up for */
+    alignas(64) float slack[PACKET_MAX_RAYS]; /* per-ray cull slack for this geometry */
+    float slack_hi;                           /* the largest of them */
+    /* axes along which some ray of the packet has a zero direction component */
+    unsigned zero_axes;
     /* interval culling: valid when every direction component has one sign */
     bool interval;
     float org_lo[3], org_hi[3];
@@ -346,16 +396,59 @@ static void lanes_range(const float *v, uint64_t mask, float *lo, float *hi)
 
 static void setup_interval(packet_ctx *c, uint64_t mask)
 {
-    ray_packet *p = c->p;
-    const float *org[3] = {p->org_x, p->org_y, p->org_z}, *inv[3] = {p->inv_dir_x, p->inv_dir_y, p->inv_dir_z};
-    float unused;
-    lanes_range(p->t_near, mask, &c->t_near_lo, &unused);
+    const ray_packet *p = c->p;
+    const float *src[7] = {p->t_near, p->org_x, p->org_y, p->org_z, p->inv_dir_x, p->inv_dir_y, p->inv_dir_z};
+    /* one pass over the rays for all seven ranges */
+    vr lo[7], hi[7];
+    for (int k = 0; k < 7; k++) {
+        lo[k] = vr_set1(INFINITY);
+        hi[k] = vr_set1(-INFINITY);
+    }
+    for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+        unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
+        if (!lanes)
+            continue;
+        vm m = vm_from_bits(lanes);
+        for (int k = 0; k < 7; k++) {
+            vr x = vr_load(src[k] + g);
+            lo[k] = vr_min(lo[k], vr_select(m, x, vr_set1(INFINITY)));
+            hi[k] = vr_max(hi[k], vr_select(m, x, vr_set1(-INFINITY)));
+        }
+    }
+    float range_lo[7], range_hi[7];
+    for (int k = 0; k < 7; k++) {
+        alignas(64) float l[RAY_LANES], h[RAY_LANES];
+        vr_store(l, lo[k]);
+        vr_store(h, hi[k]);
+        range_lo[k] = l[0];
+        range_hi[k] = h[0];
+        for (int i = 1; i < RAY_LANES; i++) {
+            range_lo[k] = l[i] < range_lo[k] ? l[i] : range_lo[k];
+            range_hi[k] = h[i] > range_hi[k] ? h[i] : range_hi[k];
+        }
+    }
+    c->t_near_lo = range_lo[0];
     c->interval = true;
+    c->zero_axes = 0;
     for (int a = 0; a < 3; a++) {
-        lanes_range(org[a], mask, &c->org_lo[a], &c->org_hi[a]);
-        lanes_range(inv[a], mask, &c->inv_lo[a], &c->inv_hi[a]);
+        c->org_lo[a] = range_lo[1 + a], c->org_hi[a] = range_hi[1 + a];
+        c->inv_lo[a] = range_lo[4 + a], c->inv_hi[a] = range_hi[4 + a];
         if ((c->inv_lo[a] < 0.f) != (c->inv_hi[a] < 0.f))
             c->interval = false; /* the inverse directions straddle 0: the interval is everything */
+        /* +-FLT_MAX stands for a zero component: that axis is tested by containment */
+        if (c->inv_lo[a] == -FLT_MAX || c->inv_hi[a] == FLT_MAX)
+            c->zero_axes |= 1u << a;
+    }
+}
+
+static void setup_slack(packet_ctx *c, uint64_t mask)
+{
+    const ray_packet *p = c->p;
+    c->slack_hi = 0.f;
+    for (uint32_t i = 0; i < PACKET_MAX_RAYS; i++) {
+        ray one = {v3(p->org_x[i], p->org_y[i], p->org_z[i]), v3(p->dir_x[i], p->dir_y[i], p->dir_z[i]), 0.f, 0.f};
+        c->slack[i] = mask >> i & 1u ? ray_cull_slack(&one, c->w) : 0.f;
+        c->slack_hi = c->slack[i] > c->slack_hi ? c->slack[i] : c->slack_hi;
     }
 }
 
@@ -378,6 +471,8 @@ static unsigned node_interval(const packet_ctx *c, const wbvh_node *n, float t_f
     for (int h = 0; h < WBVH_WIDTH; h += NODE_LANES) {
         vn enter = vn_set1(c->t_near_lo), leave = vn_set1(INFINITY);
         for (int a = 0; a < 3; a++) {
+            if (c->zero_axes >> a & 1u)
+                continue; /* no bound from an axis some ray runs parallel to */
             bool neg = c->inv_lo[a] < 0.f;
             vn near = vn_load((neg ? hi[a] : lo[a]) + h), far = vn_load((neg ? lo[a] : hi[a]) + h);
             vn near_lo, near_hi, far_lo, far_hi;
@@ -386,7 +481,7 @@ static unsigned node_interval(const packet_ctx *c, const wbvh_node *n, float t_f
             enter = vn_max(enter, near_lo);
             leave = vn_min(leave, far_hi);
         }
-        leave = vn_min(vn_mul(leave, vn_set1(INTERSECT_FAR_SCALE)), vn_set1(t_far_hi * INTERSECT_FAR_SCALE));
+        leave = vn_min(vn_mul(leave, vn_set1(INTERSECT_FAR_SCALE)), vn_set1(t_far_hi * INTERSECT_CULL_SCALE + c->slack_hi));
         bits |= vn_le_bits(enter, leave) << h;
         vn_store(dist + h, enter);
     }
@@ -399,23 +494,44 @@ static void node_rays(const packet_ctx *c, const wbvh_node *n, unsigned children
 {
     const ray_packet *p = c->p;
     const vr scale = vr_set1(INTERSECT_FAR_SCALE);
+    const float *org[3] = {p->org_x, p->org_y, p->org_z}, *inv[3] = {p->inv_dir_x, p->inv_dir_y, p->inv_dir_z};
+    const float *dir[3] = {p->dir_x, p->dir_y, p->dir_z};
+    const float *lo[3] = {n->lo_x, n->lo_y, n->lo_z}, *hi[3] = {n->hi_x, n->hi_y, n->hi_z};
     for (int i = 0; i < WBVH_WIDTH; i++)
         child_mask[i] = 0;
     for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
         unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
         if (!lanes)
             continue;
-        const vr ox = vr_load(p->org_x + g), oy = vr_load(p->org_y + g), oz = vr_load(p->org_z + g);
-        const vr ix = vr_load(p->inv_dir_x + g), iy = vr_load(p->inv_dir_y + g), iz = vr_load(p->inv_dir_z + g);
-        const vr t_near = vr_load(p->t_near + g), t_far = vr_mul(vr_load(p->t_far + g), scale);
+        vr o[3], iv[3];
+        vm parallel[3]; /* lanes whose direction is zero on the axis: containment instead */
+        for (int a = 0; a < 3; a++) {
+            o[a] = vr_load(org[a] + g);
+            iv[a] = vr_load(inv[a] + g);
+            if (c->zero_axes >> a & 1u)
+                parallel[a] = vr_eq(vr_load(dir[a] + g), vr_set1(0.f));
+        }
+        const vr t_near = vr_load(p->t_near + g);
+        const vr t_far = vr_add(vr_mul(vr_load(p->t_far + g), vr_set1(INTERSECT_CULL_SCALE)), vr_load(c->slack + g));
         for (unsigned cm = children; cm; cm &= cm - 1u) {
             int i = __builtin_ctz(cm);
-            vr tx0 = vr_mul(vr_sub(vr_set1(n->lo_x[i]), ox), ix), tx1 = vr_mul(vr_sub(vr_set1(n->hi_x[i]), ox), ix);
-            vr ty0 = vr_mul(vr_sub(vr_set1(n->lo_y[i]), oy), iy), ty1 = vr_mul(vr_sub(vr_set1(n->hi_y[i]), oy), iy);
-            vr tz0 = vr_mul(vr_sub(vr_set1(n->lo_z[i]), oz), iz), tz1 = vr_mul(vr_sub(vr_set1(n->hi_z[i]), oz), iz);
-            vr enter = vr_max(vr_max(vr_min(tx0, tx1), vr_min(ty0, ty1)), vr_max(vr_min(tz0, tz1), t_near));
-            vr leave = vr_min(vr_mul(vr_min(vr_min(vr_max(tx0, tx1), vr_max(ty0, ty1)), vr_max(tz0, tz1)), scale), t_far);
-            child_mask[i] |= (uint64_t)(vm_bits(vr_le(enter, leave)) & lanes) << g;
+            vr enter = t_near, leave = vr_set1(INFINITY);
+            unsigned inside = lanes;
+            for (int a = 0; a < 3; a++) {
+                vr l = vr_set1(lo[a][i]), u = vr_set1(hi[a][i]);
+                vr t0 = vr_mul(vr_sub(l, o[a]), iv[a]), t1 = vr_mul(vr_sub(u, o[a]), iv[a]);
+                vr t_min = vr_min(t0, t1), t_max = vr_max(t0, t1);
+                if (c->zero_axes >> a & 1u) {
+                    vm contained = vm_and(vr_le(l, o[a]), vr_le(o[a], u));
+                    inside &= ~(vm_bits(parallel[a]) & ~vm_bits(contained));
+                    t_min = vr_select(parallel[a], vr_set1(-INFINITY), t_min);
+                    t_max = vr_select(parallel[a], vr_set1(INFINITY), t_max);
+                }
+                enter = vr_max(enter, t_min);
+                leave = vr_min(leave, t_max);
+            }
+            leave = vr_min(vr_mul(leave, scale), t_far);
+            child_mask[i] |= (uint64_t)(vm_bits(vr_le(enter, leave)) & inside) << g;
         }
     }
 }
@@ -455,28 +571,32 @@ static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, cons
         const vr sx = vr_load(c->shear_x + g), sy = vr_load(c->shear_y + g), sz = vr_load(c->shear_z + g);
         const vr az = vr_sub(vr_set1(v0[kz]), okz), bz = vr_sub(vr_set1(v1[kz]), okz),
                  cz = vr_sub(vr_set1(v2[kz]), okz);
-        const vr ax = vr_sub(vr_sub(vr_set1(v0[kx]), okx), vr_mul(sx, az));
-        const vr ay = vr_sub(vr_sub(vr_set1(v0[ky]), oky), vr_mul(sy, az));
-        const vr bx = vr_sub(vr_sub(vr_set1(v1[kx]), okx), vr_mul(sx, bz));
-        const vr by = vr_sub(vr_sub(vr_set1(v1[ky]), oky), vr_mul(sy, bz));
-        const vr cx = vr_sub(vr_sub(vr_set1(v2[kx]), okx), vr_mul(sx, cz));
-        const vr cy = vr_sub(vr_sub(vr_set1(v2[ky]), oky), vr_mul(sy, cz));
+        const vr akx = vr_sub(vr_set1(v0[kx]), okx), aky = vr_sub(vr_set1(v0[ky]), oky);
+        const vr bkx = vr_sub(vr_set1(v1[kx]), okx), bky = vr_sub(vr_set1(v1[ky]), oky);
+        const vr ckx = vr_sub(vr_set1(v2[kx]), okx), cky = vr_sub(vr_set1(v2[ky]), oky);
+        const vr ax = vr_sub(akx, vr_mul(sx, az)), ay = vr_sub(aky, vr_mul(sy, az));
+        const vr bx = vr_sub(bkx, vr_mul(sx, bz)), by = vr_sub(bky, vr_mul(sy, bz));
+        const vr cx = vr_sub(ckx, vr_mul(sx, cz)), cy = vr_sub(cky, vr_mul(sy, cz));
         const vr u = vr_sub(vr_mul(cx, by), vr_mul(cy, bx));
         const vr v = vr_sub(vr_mul(ax, cy), vr_mul(ay, cx));
         const vr w = vr_sub(vr_mul(bx, ay), vr_mul(by, ax));
-        const unsigned on_edge = vm_bits(vm_or(vm_or(vr_eq(u, zero), vr_eq(v, zero)), vr_eq(w, zero))) & lanes;
+        const vr tol = vr_set1(INTERSECT_EDGE_TOL);
+        const vr ma = vr_add(vr_add(vr_abs(akx), vr_abs(aky)), vr_abs(az));
+        const vr mb = vr_add(vr_add(vr_abs(bkx), vr_abs(bky)), vr_abs(bz));
+        const vr mc = vr_add(vr_add(vr_abs(ckx), vr_abs(cky)), vr_abs(cz));
+        const unsigned on_edge = vm_bits(vm_or(vm_or(vr_le(vr_abs(u), vr_mul(tol, vr_mul(mb, mc))),
+                                                     vr_le(vr_abs(v), vr_mul(tol, vr_mul(mc, ma)))),
+                                               vr_le(vr_abs(w), vr_mul(tol, vr_mul(ma, mb))))) &
+                                 lanes;
         const vm any_neg = vm_or(vm_or(vr_lt(u, zero), vr_lt(v, zero)), vr_lt(w, zero));
         const vm any_pos = vm_or(vm_or(vr_gt(u, zero), vr_gt(v, zero)), vr_gt(w, zero));
         const vr det = vr_add(vr_add(u, v), w);
         const vr tz = vr_add(vr_add(vr_mul(u, vr_mul(sz, az)), vr_mul(v, vr_mul(sz, bz))), vr_mul(w, vr_mul(sz, cz)));
-        const vm det_neg = vr_lt(det, zero);
-        const vr t_scaled = vr_neg_where(tz, det_neg), det_abs = vr_neg_where(det, det_neg);
         const vr t_near = vr_load(p->t_near + g), t_far = vr_load(p->t_far + g);
-        vm ok = vm_andnot(vr_gt(t_scaled, vr_mul(t_near, det_abs)), vr_gt(t_scaled, vr_mul(t_far, det_abs)));
-        ok = vm_andnot(vm_andnot(ok, vm_and(any_neg, any_pos)), vr_eq(det, zero));
         const vr inv_det = vr_div(vr_set1(1.f), det);
         const vr t = vr_mul(tz, inv_det);
-        ok = vm_and(ok, vm_and(vr_gt(t, t_near), vr_le(t, t_far)));
+        vm ok = vm_andnot(vm_and(vr_gt(t, t_near), vr_le(t, t_far)), vm_and(any_neg, any_pos));
+        ok = vm_andnot(ok, vr_eq(det, zero));
         unsigned hits = vm_bits(ok) & lanes & ~on_edge;
         if (c->any) {
             c->done |= (uint64_t)hits << g;
@@ -559,6 +679,10 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         finish_single(c, ref, mask);
         return;
     }
+    if (!c->shear_ready) { /* most packets never get here: set up on first use */
+        setup_shear(c, c->shear_rays);
+        c->shear_ready = true;
+    }
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
     for (uint32_t k = first; k < first + count; k++) {
         const wbvh_tri_block *b = (const wbvh_tri_block *)w->blocks + k;
@@ -595,8 +719,13 @@ static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ra
         finish_single(&c, 0, mask);
         return any ? c.done : c.improved;
     }
-    setup_shear(&c, mask);
+    c.shear_ready = false;
+    c.shear_rays = mask;
     setup_interval(&c, mask);
+    setup_slack(&c, mask);
+    /* largest t_far of the packet, for interval culling; recomputed only after hits shrank some */
+    float t_far_hi = INFINITY;
+    uint64_t improved_seen = ~0ull;
 
     stack_entry_packet stack[WBVH_STACK_SIZE];
     int top = 0;
@@ -614,8 +743,11 @@ static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ra
                 alignas(32) float dist[WBVH_WIDTH];
                 unsigned children = n->child_mask;
                 if (c.interval) {
-                    float t_far_lo, t_far_hi;
-                    lanes_range(p->t_far, rays, &t_far_lo, &t_far_hi);
+                    if (improved_seen != c.improved) {
+                        float t_far_lo;
+                        lanes_range(p->t_far, mask, &t_far_lo, &t_far_hi);
+                        improved_seen = c.improved;
+                    }
                     children = node_interval(&c, n, t_far_hi, dist);
                 } else {
                     for (int i = 0; i < WBVH_WIDTH; i++)

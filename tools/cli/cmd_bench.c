@@ -1,10 +1,434 @@
-/* cmd_bench.c - placeholder until the bench command lands in this session (being written now). */
+/* cmd_bench.c - `tessera bench`: ray throughput, build time and memory of one
+ * scene, printed as one machine-readable BENCH line.
+ *
+ * The measurement follows the Embree peer harness (../shared/tools/peer) so
+ * that the two compare run for run: the same camera rule for a bare mesh, the
+ * same eyelight shade (|dot(Ng, dir)|, one shadow ray per hit with --shadows),
+ * untimed warm-up frames first, and cpu_other, the CPU that other programs
+ * took during the timed frames, so that a noisy run can be rejected. Unlike
+ * the peer, which reports rays / total time, each timed frame is timed on its
+ * own and the BENCH line gives medians over the frames. */
+#include <errno.h>
+#include <libgen.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "cli.h"
+#include "engine/accel.h"
+#include "engine/render.h"
+#include "engine/scene.h"
+#include "wall/dump.h"
+
+/* Defaults: the size, frames and warm-up of the peer's 1920x1080 runs. */
+#define BENCH_DEFAULT_WIDTH_PX 1920
+#define BENCH_DEFAULT_HEIGHT_PX 1080
+#define BENCH_DEFAULT_FRAMES 5
+#define BENCH_DEFAULT_WARMUP 1
+#define BENCH_MAX_FRAMES 100000
+
+typedef struct bench_options {
+    const char *scene_path; /* NULL: the built-in default scene */
+    int width_px, height_px;
+    int threads;            /* build and render threads */
+    int frames;             /* timed frames, >= 1 */
+    int warmup;             /* untimed frames rendered first, >= 0 */
+    bool shadows;           /* one shadow ray per hit toward the scene's first light */
+    bool have_camera;       /* --camera given */
+    camera_desc camera;
+    const char *out;        /* image file for the last frame, or NULL */
+} bench_options;
+
+/* One timed frame. */
+typedef struct frame_sample {
+    double seconds;         /* wall time of render_image alone */
+    uint64_t primary_rays, shadow_rays;
+} frame_sample;
+
+static void bench_usage(FILE *f)
+{
+    fputs("usage: tessera bench [options]\n"
+          "Measure ray throughput, BVH build time and memory of one scene and print one\n"
+          "machine-readable line on stdout (key=value fields, described below). The scene is\n"
+          "shaded as the Embree peer harness shades it (../shared/tools/peer, its --out-shade\n"
+          "image): grey |dot(Ng, dir)| at hits, 0 at misses; with --shadows one shadow ray per\n"
+          "hit toward the scene's first light (a mesh file's: direction 0.4,1,0.3), x 0.2 when\n"
+          "occluded. Status lines (scene size, the camera in embree_bench's syntax) go to stderr.\n"
+          "\n"
+          "options:\n"
+          "  --scene FILE     JSON scene or mesh file (.ply, .obj, ...); a mesh file (or a scene\n"
+          "                   without a camera) is framed by the peer's rule, as 'tessera render'\n"
+          "                   does; 'default' or no --scene: the built-in scene\n"
+          "  --size WxH       image size in pixels (default 1920x1080)\n"
+          "  --threads N      BVH build and render threads (default: the number of CPUs)\n"
+          "  --frames N       timed frames, each timed on its own (default 5)\n"
+          "  --warmup N       untimed frames rendered first (default 1)\n"
+          "  --shadows        trace a shadow ray per hit (default: primary rays only)\n"
+          "  --camera ex,ey,ez,lx,ly,lz,ux,uy,uz,fov\n"
+          "                   eye, look-at point, up vector, vertical field of view in degrees\n"
+          "  --out FILE       write the last timed frame's image: .pfm is grey float written as\n"
+          "                   embree_bench writes it, to compare value by value with its\n"
+          "                   --out-shade image (or, with --shadows, its --out-lit image without\n"
+          "                   --ao); any other extension goes through the dump backend (.exr:\n"
+          "                   linear float RGB, .png: 8-bit sRGB)\n"
+          "\n"
+          "output: one line, fields in this order:\n"
+          "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 triangles=N\n"
+          "        spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
+          "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
+          "        cpu_other=\n"
+          "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
+          "                   '%' in it are written as %XX so that fields split on spaces\n"
+          "  triangles        triangles over all meshes; spheres: spheres in the scene\n"
+          "  load_s           seconds to load the scene file (or create the built-in scene)\n"
+          "  build_s          seconds of accel_build with --threads threads (wall clock)\n"
+          "  prim_mrays       median over the timed frames of (primary rays of the frame /\n"
+          "                   seconds of the frame) / 1e6; primary rays = W x H per frame\n"
+          "  total_mrays      the same for primary + shadow rays (= prim_mrays without --shadows)\n"
+          "  frame_ms_*       median, fastest and slowest timed frame, milliseconds; a frame is\n"
+          "                   one render_image call (thread start, all tiles, thread join)\n"
+          "  hit_rate         fraction of the last frame's pixels that are > 0, i.e. primary rays\n"
+          "                   that hit (a hit seen exactly edge-on shades 0 and counts as a miss)\n"
+          "  bytes_per_tri    (mesh_bytes + accel_bytes) / triangles, 0 when there are none\n"
+          "  mesh_bytes       sum of mesh_bytes() over the meshes: positions and indices, plus\n"
+          "                   normals, colours and per-triangle materials when the mesh has them\n"
+          "                   (counts, not capacities); spheres and the scene struct not counted\n"
+          "  accel_bytes      accel_bytes(): all BVH nodes and primitive order arrays (including\n"
+          "                   a sphere set's BVH), not the scene\n"
+          "  cpu_other        CPUs' worth of time other programs used during the timed frames:\n"
+          "                   (busy CPU seconds of the machine from /proc/stat - this process's\n"
+          "                   getrusage) / wall seconds, as embree_bench computes it; 0 = quiet,\n"
+          "                   -1 = /proc/stat unreadable. Reject runs above ~0.05.\n"
+          "Exit status: 0, or 2 for a command-line error, 1 for any other error (one line on stderr).\n",
+          f);
+}
+
+static int online_cpus(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : n > 256 ? 256 : (int)n;
+}
+
+/* Returns false when the command should stop: after --help (*exit_code 0) or
+ * a bad option (*exit_code 2). */
+static bool parse_options(int argc, char **argv, bench_options *o, int *exit_code)
+{
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *val;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            bench_usage(stdout);
+            *exit_code = 0;
+            return false;
+        } else if (!strcmp(a, "--scene")) {
+            if (!(val = cli_option_value(argc, argv, &i)))
+                goto bad;
+            o->scene_path = strcmp(val, "default") ? val : NULL;
+        } else if (!strcmp(a, "--size")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_size(a, val, &o->width_px, &o->height_px))
+                goto bad;
+        } else if (!strcmp(a, "--threads")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 256, &o->threads))
+                goto bad;
+        } else if (!strcmp(a, "--frames")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, BENCH_MAX_FRAMES, &o->frames))
+                goto bad;
+        } else if (!strcmp(a, "--warmup")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 0, BENCH_MAX_FRAMES, &o->warmup))
+                goto bad;
+        } else if (!strcmp(a, "--camera")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_camera(a, val, &o->camera))
+                goto bad;
+            o->have_camera = true;
+        } else if (!strcmp(a, "--out")) {
+            if (!(val = cli_option_value(argc, argv, &i)))
+                goto bad;
+            o->out = val;
+        } else if (!strcmp(a, "--shadows")) {
+            o->shadows = true;
+        } else {
+            cli_error("unknown option '%s' (see 'tessera bench --help')", a);
+            goto bad;
+        }
+    }
+    return true;
+bad:
+    *exit_code = 2;
+    return false;
+}
+
+/* Fail before the (long) run when the output directory is missing or read-only. */
+static bool output_dir_ok(const char *path)
+{
+    char copy[4096];
+    if (snprintf(copy, sizeof copy, "%s", path) >= (int)sizeof copy) {
+        cli_error("--out: path too long: %.64s...", path);
+        return false;
+    }
+    const char *dir = dirname(copy);
+    struct stat st;
+    if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        cli_error("%s: cannot write: '%s' is not an existing directory", path, dir);
+        return false;
+    }
+    if (access(dir, W_OK) != 0) {
+        cli_error("%s: cannot write: directory '%s' is not writable: %s", path, dir, strerror(errno));
+        return false;
+    }
+    return true;
+}
+
+/* Busy CPU seconds of the whole machine since boot: user + nice + system +
+ * irq + softirq + steal from the first line of /proc/stat (guest time is
+ * already inside user); -1 when unreadable. */
+static double machine_busy_s(void)
+{
+    FILE *f = fopen("/proc/stat", "r");
+    if (!f)
+        return -1.0;
+    unsigned long long v[8] = {0};
+    int n = fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
+                   &v[7]);
+    fclose(f);
+    long ticks_per_s = sysconf(_SC_CLK_TCK);
+    if (n < 8 || ticks_per_s <= 0)
+        return -1.0;
+    return (double)(v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / (double)ticks_per_s;
+}
+
+/* CPU seconds of this process, all threads (exited ones included). */
+static double own_cpu_s(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0)
+        return 0.0;
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
+           1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median of n > 0 values; sorts them in place. */
+static double median_of(double *values, int n)
+{
+    qsort(values, (size_t)n, sizeof *values, compare_doubles);
+    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+/* The scene path for a space-separated line: whitespace and '%' as %XX. */
+static void print_field_path(FILE *f, const char *path)
+{
+    for (const unsigned char *p = (const unsigned char *)path; *p; p++) {
+        if (*p <= ' ' || *p == '%' || *p == 0x7f)
+            fprintf(f, "%%%02X", *p);
+        else
+            fputc(*p, f);
+    }
+}
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && !strcasecmp(s + n - k, suffix);
+}
+
+/* Write channel 0 of the image as a grey PFM the way embree_bench does (rows
+ * bottom to top, native float order, scale sign giving the byte order), so
+ * the two images compare value by value. */
+static bool write_pfm_grey(const char *path, int width_px, int height_px, const float *rgb)
+{
+    const uint16_t probe = 1;
+    bool little_endian = *(const uint8_t *)&probe == 1;
+    FILE *f = fopen(path, "wb");
+    if (!f) {
+        cli_error("%s: cannot write: %s", path, strerror(errno));
+        return false;
+    }
+    float *row = malloc((size_t)width_px * sizeof *row);
+    bool have_row = row != NULL;
+    bool ok = have_row && fprintf(f, "Pf\n%d %d\n%s\n", width_px, height_px, little_endian ? "-1.0" : "1.0") > 0;
+    for (int y = height_px - 1; ok && y >= 0; y--) {
+        const float *src = rgb + 3 * (size_t)y * (size_t)width_px;
+        for (int x = 0; x < width_px; x++)
+            row[x] = src[3 * x];
+        ok = fwrite(row, sizeof *row, (size_t)width_px, f) == (size_t)width_px;
+    }
+    free(row);
+    if (fclose(f) != 0)
+        ok = false;
+    if (!ok)
+        cli_error("%s: cannot write: %s", path, have_row ? strerror(errno) : "out of memory");
+    return ok;
+}
+
+/* Load the scene, build its accel (timed) and choose the camera as 'tessera
+ * render' does. On failure prints the error and returns false; *s and *a hold
+ * whatever was made, for the caller to destroy. */
+static bool prepare(bench_options *o, scene **s, accel **a, double *load_s, double *build_s)
+{
+    tess_error err = {{0}};
+    const char *name = o->scene_path ? o->scene_path : "default scene";
+    double t0 = cli_now_s();
+    *s = o->scene_path ? scene_load(o->scene_path, &err) : scene_create_default(&err);
+    if (!*s) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    double t1 = cli_now_s();
+    *a = accel_build(*s, o->threads, &err);
+    if (!*a) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    double t2 = cli_now_s();
+    *load_s = t1 - t0;
+    *build_s = t2 - t1;
+    if (!o->have_camera) {
+        vec3 lo, hi;
+        if ((*s)->has_camera)
+            o->camera = (*s)->camera;
+        else if (scene_bounds(*s, &lo, &hi))
+            o->camera = camera_frame_bounds(lo, hi, CAMERA_DEFAULT_VIEW_DIR, CAMERA_DEFAULT_FOV_DEG, o->width_px,
+                                            o->height_px);
+        else {
+            cli_error("%s: the scene has no geometry to measure", name);
+            return false;
+        }
+    }
+    if (!camera_validate(&o->camera, &err)) {
+        cli_error("%s: %s", name, err.msg);
+        return false;
+    }
+    fprintf(stderr, "tessera: scene %s: %zu triangles, %u spheres, %u lights; loaded in %.3f s, BVH built in %.3f s\n",
+            name, scene_triangle_count(*s), (*s)->spheres.count, (*s)->light_count, *load_s, *build_s);
+    const camera_desc *c = &o->camera;
+    fprintf(stderr, "tessera: camera --eye %g,%g,%g --lookat %g,%g,%g --up %g,%g,%g --fov %g\n", c->eye.x, c->eye.y,
+            c->eye.z, c->look_at.x, c->look_at.y, c->look_at.z, c->up.x, c->up.y, c->up.z, c->fov_deg);
+    return true;
+}
+
+/* Render the warm-up and timed frames; fills samples[0..frames) and
+ * *cpu_other. The image of the last frame stays in rgb. */
+static void measure(const bench_options *o, const render_view *view, float *rgb, frame_sample *samples,
+                    double *cpu_other)
+{
+    for (int f = 0; f < o->warmup; f++)
+        render_image(view, o->threads, rgb, NULL);
+    double busy0 = machine_busy_s(), own0 = own_cpu_s(), wall0 = cli_now_s();
+    for (int f = 0; f < o->frames; f++) {
+        render_counts counts = {0, 0};
+        double t0 = cli_now_s();
+        render_image(view, o->threads, rgb, &counts);
+        samples[f].seconds = cli_now_s() - t0;
+        samples[f].primary_rays = counts.primary_rays;
+        samples[f].shadow_rays = counts.shadow_rays;
+    }
+    double busy1 = machine_busy_s(), own1 = own_cpu_s(), wall1 = cli_now_s();
+    if (busy0 < 0.0 || busy1 < 0.0 || !(wall1 > wall0))
+        *cpu_other = -1.0;
+    else {
+        double other = ((busy1 - busy0) - (own1 - own0)) / (wall1 - wall0);
+        *cpu_other = other > 0.0 ? other : 0.0;
+    }
+}
+
+static void print_result(const bench_options *o, const scene *s, const accel *a, double load_s, double build_s,
+                         const frame_sample *samples, const float *rgb, double cpu_other, double *scratch)
+{
+    int n = o->frames;
+    double prim_mrays, total_mrays, ms_median, ms_min = samples[0].seconds, ms_max = samples[0].seconds;
+    for (int f = 0; f < n; f++) {
+        double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
+        scratch[f] = 1e-6 * (double)samples[f].primary_rays / sec;
+        ms_min = samples[f].seconds < ms_min ? samples[f].seconds : ms_min;
+        ms_max = samples[f].seconds > ms_max ? samples[f].seconds : ms_max;
+    }
+    prim_mrays = median_of(scratch, n);
+    for (int f = 0; f < n; f++) {
+        double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
+        scratch[f] = 1e-6 * (double)(samples[f].primary_rays + samples[f].shadow_rays) / sec;
+    }
+    total_mrays = median_of(scratch, n);
+    for (int f = 0; f < n; f++)
+        scratch[f] = samples[f].seconds;
+    ms_median = median_of(scratch, n);
+
+    size_t pixels = (size_t)o->width_px * (size_t)o->height_px, lit = 0;
+    for (size_t i = 0; i < pixels; i++)
+        lit += rgb[3 * i] > 0.f;
+
+    size_t triangles = scene_triangle_count(s), mesh_total = 0, accel_total = accel_bytes(a);
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        mesh_total += mesh_bytes(s->meshes[i].mesh);
+    double bytes_per_tri = triangles ? (double)(mesh_total + accel_total) / (double)triangles : 0.0;
+
+    printf("BENCH scene=");
+    print_field_path(stdout, o->scene_path ? o->scene_path : "default");
+    printf(" size=%dx%d threads=%d frames=%d warmup=%d shadows=%d triangles=%zu spheres=%u load_s=%.3f build_s=%.3f"
+           " prim_mrays=%.3f total_mrays=%.3f frame_ms_median=%.2f frame_ms_min=%.2f frame_ms_max=%.2f"
+           " hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f\n",
+           o->width_px, o->height_px, o->threads, o->frames, o->warmup, o->shadows ? 1 : 0, triangles,
+           s->spheres.count, load_s, build_s, prim_mrays, total_mrays, 1e3 * ms_median, 1e3 * ms_min, 1e3 * ms_max,
+           (double)lit / (double)pixels, bytes_per_tri, mesh_total, accel_total, cpu_other);
+    fflush(stdout);
+}
 
 int cli_bench(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    cli_error("'bench' is not built yet");
-    return 1;
+    bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
+                       .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP};
+    int code = 0;
+    if (!parse_options(argc, argv, &o, &code))
+        return code;
+    if (o.out && !output_dir_ok(o.out))
+        return 1;
+
+    scene *s = NULL;
+    accel *a = NULL;
+    float *rgb = NULL;
+    frame_sample *samples = NULL;
+    double *scratch = NULL;
+    double load_s = 0.0, build_s = 0.0, cpu_other = -1.0;
+    code = 1;
+    if (!prepare(&o, &s, &a, &load_s, &build_s))
+        goto done;
+    size_t pixels = (size_t)o.width_px * (size_t)o.height_px;
+    rgb = malloc(pixels * 3 * sizeof *rgb);
+    samples = calloc((size_t)o.frames, sizeof *samples);
+    scratch = calloc((size_t)o.frames, sizeof *scratch);
+    if (!rgb || !samples || !scratch) {
+        cli_error("out of memory for a %dx%d image and %d frames", o.width_px, o.height_px, o.frames);
+        goto done;
+    }
+    render_view view = {s, a, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
+                        RENDER_SHADE_EYELIGHT};
+    measure(&o, &view, rgb, samples, &cpu_other);
+    print_result(&o, s, a, load_s, build_s, samples, rgb, cpu_other, scratch);
+    if (o.out) {
+        tess_error err = {{0}};
+        if (has_suffix(o.out, ".pfm")) {
+            if (!write_pfm_grey(o.out, o.width_px, o.height_px, rgb))
+                goto done;
+        } else if (!dump_write_rgb(o.out, o.width_px, o.height_px, rgb, &err)) {
+            cli_error("%s", err.msg);
+            goto done;
+        }
+        fprintf(stderr, "tessera: wrote %s\n", o.out);
+    }
+    code = 0;
+done:
+    free(scratch);
+    free(samples);
+    free(rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+    return code;
 }

@@ -1,0 +1,316 @@
+/* test_bench_cli.c - `tessera bench` end to end: the BENCH line has every
+ * field, and the fields agree with the scene and with each other; bad options
+ * give one error line and no BENCH line. Speeds are never asserted (only that
+ * they are positive): the suite runs on shared, noisy machines.
+ * Runs ../tessera (or $TESSERA_BIN) from the tests/ directory. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "engine/mesh.h"
+#include "engine/scene.h"
+#include "wall/dump.h"
+
+/* Seconds one bench command may take before the test counts it as a hang. */
+#define BENCH_TIMEOUT_S 60
+#define OUTPUT_BYTES 16384
+
+static char tmp_dir[256];
+
+/* Every field of the BENCH line, in the documented order. */
+static const char *const bench_fields[] = {
+    "scene",           "size",         "threads",      "frames",        "warmup",     "shadows",     "triangles",
+    "spheres",         "load_s",       "build_s",      "prim_mrays",    "total_mrays", "frame_ms_median",
+    "frame_ms_min",    "frame_ms_max", "hit_rate",     "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
+};
+#define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
+
+static void make_tmp_dir(void)
+{
+    snprintf(tmp_dir, sizeof tmp_dir, "/tmp/tessera-bench-XXXXXX");
+    cr_assert(mkdtemp(tmp_dir), "mkdtemp");
+}
+
+static void remove_tmp_dir(void)
+{
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "could not remove %s\n", tmp_dir);
+}
+
+static const char *tessera_bin(void)
+{
+    const char *bin = getenv("TESSERA_BIN");
+    return bin ? bin : "../tessera";
+}
+
+static void read_text(const char *path, char *out, size_t out_bytes)
+{
+    FILE *f = fopen(path, "rb");
+    size_t n = f ? fread(out, 1, out_bytes - 1, f) : 0;
+    out[n] = '\0';
+    if (f)
+        fclose(f);
+}
+
+/* Run `tessera bench ARGS` (every %s in ARGS is the temp dir) with stdout and
+ * stderr kept apart; returns the exit status (128+signal when killed). */
+static int run_bench(char *out, char *err, const char *args_fmt)
+{
+    char args[2048], cmd[4096], out_path[512], err_path[512];
+    snprintf(args, sizeof args, args_fmt, tmp_dir, tmp_dir, tmp_dir, tmp_dir);
+    snprintf(out_path, sizeof out_path, "%s/bench.out", tmp_dir);
+    snprintf(err_path, sizeof err_path, "%s/bench.err", tmp_dir);
+    snprintf(cmd, sizeof cmd, "timeout %d %s bench %s > '%s' 2> '%s'", BENCH_TIMEOUT_S, tessera_bin(), args, out_path,
+             err_path);
+    int status = system(cmd);
+    read_text(out_path, out, OUTPUT_BYTES);
+    read_text(err_path, err, OUTPUT_BYTES);
+    if (WIFSIGNALED(status))
+        return 128 + WTERMSIG(status);
+    return WEXITSTATUS(status);
+}
+
+static int count_lines(const char *text)
+{
+    int n = 0;
+    for (const char *p = text; *p; p++)
+        n += *p == '\n';
+    return n;
+}
+
+/* The text after " key=" in a BENCH line, up to the next space, or NULL. */
+static const char *field_text(const char *line, const char *key, char *buf, size_t buf_bytes)
+{
+    char needle[64];
+    snprintf(needle, sizeof needle, " %s=", key);
+    const char *p = strstr(line, needle);
+    if (!p)
+        return NULL;
+    p += strlen(needle);
+    size_t n = strcspn(p, " \n");
+    if (n >= buf_bytes)
+        n = buf_bytes - 1;
+    memcpy(buf, p, n);
+    buf[n] = '\0';
+    return buf;
+}
+
+/* A numeric field; fails the test when it is missing or not a number. */
+static double field(const char *line, const char *key)
+{
+    char buf[256];
+    const char *text = field_text(line, key, buf, sizeof buf);
+    cr_assert(text, "BENCH line lacks %s=: %s", key, line);
+    char *end;
+    double v = strtod(text, &end);
+    cr_assert(end != text && *end == '\0' && isfinite(v), "%s=%s is not a number", key, text);
+    return v;
+}
+
+/* Run a bench that must succeed; checks the shape of its output and leaves
+ * the BENCH line in `line`. */
+static void run_ok(const char *args_fmt, char *line)
+{
+    char err[OUTPUT_BYTES];
+    int code = run_bench(line, err, args_fmt);
+    cr_assert_eq(code, 0, "bench %s: exit %d: %s", args_fmt, code, err);
+    cr_assert_eq(count_lines(line), 1, "bench %s: stdout should be one line: %s", args_fmt, line);
+    cr_assert(!strncmp(line, "BENCH scene=", 12), "bench %s: not a BENCH line: %s", args_fmt, line);
+    /* every field present, in the documented order */
+    const char *at = line;
+    for (size_t i = 0; i < BENCH_FIELD_COUNT; i++) {
+        char needle[64];
+        snprintf(needle, sizeof needle, " %s=", bench_fields[i]);
+        const char *p = strstr(at, needle);
+        cr_assert(p, "field %s missing or out of order: %s", bench_fields[i], line);
+        at = p + 1;
+    }
+}
+
+/* What holds for any successful run. */
+static void check_consistent(const char *line)
+{
+    double prim = field(line, "prim_mrays"), total = field(line, "total_mrays");
+    cr_expect(prim > 0.0, "prim_mrays %g", prim);
+    cr_expect(total >= prim, "total_mrays %g < prim_mrays %g", total, prim);
+    double median = field(line, "frame_ms_median"), lo = field(line, "frame_ms_min"), hi = field(line, "frame_ms_max");
+    cr_expect(lo > 0.0 && lo <= median && median <= hi, "frame ms min %g median %g max %g", lo, median, hi);
+    cr_expect(field(line, "load_s") >= 0.0 && field(line, "build_s") >= 0.0);
+    double hit_rate = field(line, "hit_rate");
+    cr_expect(hit_rate > 0.0 && hit_rate <= 1.0, "hit_rate %g", hit_rate);
+    double tris = field(line, "triangles"), mesh_b = field(line, "mesh_bytes"), accel_b = field(line, "accel_bytes");
+    double per_tri = field(line, "bytes_per_tri");
+    cr_expect(mesh_b > 0.0 && accel_b > 0.0, "mesh_bytes %g accel_bytes %g", mesh_b, accel_b);
+    cr_expect(per_tri > 0.0, "bytes_per_tri %g", per_tri);
+    cr_expect(fabs(per_tri - (mesh_b + accel_b) / tris) <= 0.051, "bytes_per_tri %g, expected (%g + %g) / %g",
+              per_tri, mesh_b, accel_b, tris);
+    double other = field(line, "cpu_other");
+    cr_expect(other >= 0.0 || other == -1.0, "cpu_other %g", other);
+}
+
+/* An ascii PLY octahedron: 6 vertices, 8 triangles, closed (so shadow rays
+ * from its lit side are traced and some hit it). */
+static void write_octahedron(const char *name)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", tmp_dir, name);
+    FILE *f = fopen(path, "wb");
+    cr_assert(f, "cannot write %s", path);
+    fputs("ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+          "element face 8\nproperty list uchar int vertex_indices\nend_header\n"
+          "1 0 0\n-1 0 0\n0 1 0\n0 -1 0\n0 0 1\n0 0 -1\n"
+          "3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n",
+          f);
+    fclose(f);
+}
+
+/* Expect a clean failure: the exit code, one error line naming each needle,
+ * no BENCH line. */
+static void expect_error(int want_code, const char *args_fmt, const char *const *needles)
+{
+    char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
+    int code = run_bench(out, err, args_fmt);
+    cr_expect_eq(code, want_code, "bench %s: exit %d, expected %d: %s", args_fmt, code, want_code, err);
+    cr_expect_eq(count_lines(err), 1, "bench %s: stderr should be one line: %s", args_fmt, err);
+    cr_expect(!strncmp(err, "tessera: error: ", 16), "bench %s: %s", args_fmt, err);
+    cr_expect(!strstr(out, "BENCH"), "bench %s printed a result: %s", args_fmt, out);
+    for (const char *const *n = needles; *n; n++)
+        cr_expect(strstr(err, *n), "bench %s: message lacks '%s': %s", args_fmt, *n, err);
+}
+
+#define EXPECT_ERROR(code, args, ...) expect_error(code, args, (const char *const[]){__VA_ARGS__, NULL})
+
+TestSuite(bench_cli, .init = make_tmp_dir, .fini = remove_tmp_dir, .timeout = 240);
+
+Test(bench_cli, help_documents_options_and_every_field)
+{
+    char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
+    cr_assert_eq(run_bench(out, err, "--help"), 0, "%s", err);
+    const char *options[] = {"--scene",   "--size",    "--threads", "--frames",
+                             "--warmup",  "--shadows", "--camera",  "--out"};
+    for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
+        cr_expect(strstr(out, options[i]), "bench --help lacks %s", options[i]);
+    for (size_t i = 0; i < BENCH_FIELD_COUNT; i++) {
+        char needle[64];
+        snprintf(needle, sizeof needle, "%s=", bench_fields[i]);
+        cr_expect(strstr(out, needle), "bench --help lacks the field %s", bench_fields[i]);
+    }
+}
+
+Test(bench_cli, default_scene)
+{
+    char line[OUTPUT_BYTES], buf[256];
+    run_ok("--size 64x36 --threads 2 --frames 3", line);
+    check_consistent(line);
+    cr_expect_str_eq(field_text(line, "scene", buf, sizeof buf), "default");
+    cr_expect_str_eq(field_text(line, "size", buf, sizeof buf), "64x36");
+    cr_expect_eq(field(line, "threads"), 2);
+    cr_expect_eq(field(line, "frames"), 3);
+    cr_expect_eq(field(line, "warmup"), 1);
+    cr_expect_eq(field(line, "shadows"), 0);
+    cr_expect_eq(field(line, "total_mrays"), field(line, "prim_mrays"), "no shadow rays, yet total != primary");
+
+    tess_error err = {{0}};
+    scene *s = scene_create_default(&err);
+    cr_assert(s, "%s", err.msg);
+    size_t mesh_b = 0;
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        mesh_b += mesh_bytes(s->meshes[i].mesh);
+    cr_expect_eq(field(line, "triangles"), (double)scene_triangle_count(s));
+    cr_expect_eq(field(line, "spheres"), (double)s->spheres.count);
+    cr_expect_eq(field(line, "mesh_bytes"), (double)mesh_b);
+    scene_destroy(s);
+}
+
+Test(bench_cli, mesh_file_primary_and_shadows)
+{
+    char line[OUTPUT_BYTES], path[512];
+    write_octahedron("octa.ply");
+    run_ok("--scene %s/octa.ply --size 48x32 --threads 1 --frames 2 --warmup 0", line);
+    check_consistent(line);
+    cr_expect_eq(field(line, "triangles"), 8);
+    cr_expect_eq(field(line, "spheres"), 0);
+    cr_expect_eq(field(line, "warmup"), 0);
+    double hit_rate = field(line, "hit_rate");
+    cr_expect(hit_rate < 1.0, "the framed octahedron cannot fill the image: hit_rate %g", hit_rate);
+
+    snprintf(path, sizeof path, "%s/octa.ply", tmp_dir);
+    tess_error err = {{0}};
+    mesh *m = mesh_load(path, &err);
+    cr_assert(m, "%s", err.msg);
+    cr_expect_eq(field(line, "mesh_bytes"), (double)mesh_bytes(m));
+    mesh_destroy(m);
+
+    char shadow_line[OUTPUT_BYTES];
+    run_ok("--scene %s/octa.ply --size 48x32 --threads 2 --frames 2 --shadows", shadow_line);
+    check_consistent(shadow_line);
+    cr_expect_eq(field(shadow_line, "shadows"), 1);
+    cr_expect(field(shadow_line, "total_mrays") > field(shadow_line, "prim_mrays"), "%s", shadow_line);
+    cr_expect_eq(field(shadow_line, "hit_rate"), hit_rate, "shadows changed which pixels hit: %s", shadow_line);
+}
+
+Test(bench_cli, out_writes_the_last_frame)
+{
+    char line[OUTPUT_BYTES], path[512];
+    write_octahedron("octa.ply");
+    run_ok("--scene %s/octa.ply --size 40x30 --threads 1 --frames 1 --out %s/shade.pfm", line);
+    snprintf(path, sizeof path, "%s/shade.pfm", tmp_dir);
+    FILE *f = fopen(path, "rb");
+    cr_assert(f, "no %s", path);
+    char magic[3] = {0};
+    int w = 0, h = 0;
+    double scale = 0.0;
+    cr_assert_eq(fscanf(f, "%2s %d %d %lf", magic, &w, &h, &scale), 4);
+    cr_expect_str_eq(magic, "Pf");
+    cr_expect(w == 40 && h == 30 && scale == -1.0, "PFM header %d %d %g", w, h, scale);
+    fgetc(f); /* the newline after the scale */
+    float grey[40 * 30];
+    cr_assert_eq(fread(grey, sizeof grey[0], 40 * 30, f), 40 * 30, "PFM too short");
+    fclose(f);
+    int hits = 0;
+    for (int i = 0; i < 40 * 30; i++) {
+        cr_assert(grey[i] >= 0.f && grey[i] <= 1.f, "pixel %d = %g", i, grey[i]);
+        hits += grey[i] > 0.f;
+    }
+    cr_expect_eq(hits, (int)lround(field(line, "hit_rate") * 40 * 30), "hit_rate disagrees with the image");
+
+    run_ok("--scene %s/octa.ply --size 40x30 --threads 1 --frames 1 --out %s/shade.png", line);
+    snprintf(path, sizeof path, "%s/shade.png", tmp_dir);
+    uint8_t *rgb;
+    tess_error err = {{0}};
+    cr_assert(dump_read_rgb8(path, &w, &h, &rgb, &err), "%s", err.msg);
+    cr_expect(w == 40 && h == 30);
+    free(rgb);
+}
+
+Test(bench_cli, scene_path_with_space_stays_one_field)
+{
+    char line[OUTPUT_BYTES], buf[512];
+    write_octahedron("two words.ply");
+    run_ok("--scene '%s/two words.ply' --size 16x16 --threads 1 --frames 1", line);
+    const char *scene_field = field_text(line, "scene", buf, sizeof buf);
+    cr_expect(scene_field && strstr(scene_field, "two%20words.ply"), "scene=%s",
+              scene_field ? scene_field : "(missing)");
+    cr_expect_eq(field(line, "triangles"), 8);
+}
+
+Test(bench_cli, bad_options_give_one_line)
+{
+    EXPECT_ERROR(2, "--bogus", "unknown option", "--bogus");
+    EXPECT_ERROR(2, "--frames 0", "--frames", "from 1");
+    EXPECT_ERROR(2, "--warmup -1", "--warmup", "from 0");
+    EXPECT_ERROR(2, "--threads zero", "--threads", "whole number");
+    EXPECT_ERROR(2, "--size 640", "--size", "WIDTHxHEIGHT");
+    EXPECT_ERROR(2, "--camera 1,2,3", "--camera");
+    EXPECT_ERROR(2, "--scene", "--scene", "needs a value");
+    EXPECT_ERROR(2, "--no-shadows", "unknown option");
+    EXPECT_ERROR(1, "--scene %s/missing.ply --size 16x16", "missing.ply");
+    EXPECT_ERROR(1, "--size 16x16 --out %s/no/such/dir/x.pfm", "no/such/dir", "directory");
+}
