@@ -66,12 +66,11 @@
 #define BVH_SWAP_GRAIN 16384u
 /* Refs per chunk of parallel binning and bounds passes: a few tens of microseconds. */
 #define BVH_SCAN_GRAIN 16384u
-/* Inputs smaller than this build on the caller alone: starting threads costs more
- * than it saves (about 30 us each against ~15 ns per primitive per level). */
-#define BVH_PARALLEL_BUILD_MIN 16384u
 /* A node is split by all threads together only above this size (and above the
- * subtree task size): smaller ones are cheaper to hand to one thread. */
-#define BVH_PARALLEL_NODE_MIN 32768u
+ * subtree task size); an input no larger builds on the caller alone. A node this
+ * size takes ~0.2 ms on one thread, a parallel loop a few microseconds, and
+ * starting a thread tens of microseconds. */
+#define BVH_PARALLEL_NODE_MIN 8192u
 /* Subtree tasks per thread the top phase aims for, so largest-first scheduling
  * balances to within a few percent. */
 #define BVH_TASKS_PER_THREAD 8u
@@ -1014,7 +1013,7 @@ bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, t
     memset(out, 0, sizeof *out);
     if (count == 0)
         return true;
-    if (threads < 1 || count < BVH_PARALLEL_BUILD_MIN)
+    if (threads < 1 || count <= BVH_PARALLEL_NODE_MIN)
         threads = 1;
     builder B = {0};
     B.threads = threads > 1 ? parallel_pool_create(threads) : NULL; /* NULL: serial build */

@@ -137,11 +137,13 @@ bool intersect_triangle(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, ve
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
-    /* L1 sizes of the vertices relative to the origin, summed in the kernels' order */
+    /* L1 sizes of the vertices relative to the origin (m, which bounds the
+     * shear's rounding) and after the shear (p), in the kernels' order */
     float ma = (fabsf(akx) + fabsf(aky)) + fabsf(az), mb = (fabsf(bkx) + fabsf(bky)) + fabsf(bz),
           mc = (fabsf(ckx) + fabsf(cky)) + fabsf(cz);
-    if (fabsf(u) <= INTERSECT_EDGE_TOL * (mb * mc) || fabsf(v) <= INTERSECT_EDGE_TOL * (mc * ma) ||
-        fabsf(w) <= INTERSECT_EDGE_TOL * (ma * mb))
+    float pa = fabsf(ax) + fabsf(ay), pb = fabsf(bx) + fabsf(by), pc = fabsf(cx) + fabsf(cy);
+    if (fabsf(u) <= INTERSECT_EDGE_TOL * (mc * pb + mb * pc) || fabsf(v) <= INTERSECT_EDGE_TOL * (ma * pc + mc * pa) ||
+        fabsf(w) <= INTERSECT_EDGE_TOL * (mb * pa + ma * pb))
         return triangle_in_double(r, d, v0, v1, v2, t_out, u_out, v_out);
     if ((u < 0.f || v < 0.f || w < 0.f) && (u > 0.f || v > 0.f || w > 0.f))
         return false;

@@ -32,14 +32,16 @@ static inline float intersect_cull_slack(float org_abs_max, float dir_abs_max, f
 }
 
 /* The float edge functions of the watertight test carry rounding from the
- * vertex differences, the shear and the products: at most about 20 u Mb Mc for
- * the edge of vertices b, c, where M is the L1 norm of a vertex relative to the
- * ray origin and u = 2^-24. When an edge function is not larger than
- * INTERSECT_EDGE_TOL Mb Mc (32 u, with margin), its sign is not certain and the
- * whole test is redone in double from the original coordinates. The decision
- * depends on the edge and the ray alone, so two triangles sharing an edge
- * always decide it alike (watertightness), and slivers and grazing rays get
- * double precision exactly where float cannot answer. */
+ * vertex differences, the shear and the products. For the edge of vertices b,
+ * c it is below about 8 u (Mc Pb + Mb Pc) with u = 2^-24, M the L1 norm of a
+ * vertex relative to the ray origin (which bounds the shear's rounding) and P
+ * the L1 norm of its two sheared coordinates. When an edge function is not
+ * larger than INTERSECT_EDGE_TOL (Mc Pb + Mb Pc) (32 u, with margin), its sign
+ * is not certain and the whole test is redone in double from the original
+ * coordinates. The decision depends on the edge and the ray alone, so two
+ * triangles sharing an edge always decide it alike (watertightness), and
+ * slivers and grazing rays get double precision exactly where float cannot
+ * answer. */
 #define INTERSECT_EDGE_TOL 0x1p-19f
 
 /* True when the triangle has exactly zero area (collinear or coincident

@@ -172,10 +172,13 @@ static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const 
     const v4 mc = v4_add(v4_add(v4_abs(ckx), v4_abs(cky)), v4_abs(cz));
     const unsigned valid = valid_lanes(b->prim_id);
     /* an edge sign float cannot vouch for: those lanes are decided by the scalar test, in double */
-    const unsigned on_edge = v4_bits(v4_or(v4_or(v4_le(v4_abs(u), v4_mul(tol, v4_mul(mb, mc))),
-                                                 v4_le(v4_abs(v), v4_mul(tol, v4_mul(mc, ma)))),
-                                           v4_le(v4_abs(w), v4_mul(tol, v4_mul(ma, mb))))) &
-                             valid;
+    const v4 pa = v4_add(v4_abs(ax), v4_abs(ay)), pb = v4_add(v4_abs(bx), v4_abs(by));
+    const v4 pc = v4_add(v4_abs(cx), v4_abs(cy));
+    const unsigned on_edge =
+        v4_bits(v4_or(v4_or(v4_le(v4_abs(u), v4_mul(tol, v4_add(v4_mul(mc, pb), v4_mul(mb, pc)))),
+                            v4_le(v4_abs(v), v4_mul(tol, v4_add(v4_mul(ma, pc), v4_mul(mc, pa))))),
+                      v4_le(v4_abs(w), v4_mul(tol, v4_add(v4_mul(mb, pa), v4_mul(ma, pb)))))) &
+        valid;
     const v4 any_neg = v4_or(v4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
     const v4 any_pos = v4_or(v4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
     const v4 det = v4_add(v4_add(u, v), w);
@@ -584,10 +587,13 @@ static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, cons
         const vr ma = vr_add(vr_add(vr_abs(akx), vr_abs(aky)), vr_abs(az));
         const vr mb = vr_add(vr_add(vr_abs(bkx), vr_abs(bky)), vr_abs(bz));
         const vr mc = vr_add(vr_add(vr_abs(ckx), vr_abs(cky)), vr_abs(cz));
-        const unsigned on_edge = vm_bits(vm_or(vm_or(vr_le(vr_abs(u), vr_mul(tol, vr_mul(mb, mc))),
-                                                     vr_le(vr_abs(v), vr_mul(tol, vr_mul(mc, ma)))),
-                                               vr_le(vr_abs(w), vr_mul(tol, vr_mul(ma, mb))))) &
-                                 lanes;
+        const vr pa = vr_add(vr_abs(ax), vr_abs(ay)), pb = vr_add(vr_abs(bx), vr_abs(by));
+        const vr pc = vr_add(vr_abs(cx), vr_abs(cy));
+        const unsigned on_edge =
+            vm_bits(vm_or(vm_or(vr_le(vr_abs(u), vr_mul(tol, vr_add(vr_mul(mc, pb), vr_mul(mb, pc)))),
+                                vr_le(vr_abs(v), vr_mul(tol, vr_add(vr_mul(ma, pc), vr_mul(mc, pa))))),
+                          vr_le(vr_abs(w), vr_mul(tol, vr_add(vr_mul(mb, pa), vr_mul(ma, pb)))))) &
+            lanes;
         const vm any_neg = vm_or(vm_or(vr_lt(u, zero), vr_lt(v, zero)), vr_lt(w, zero));
         const vm any_pos = vm_or(vm_or(vr_gt(u, zero), vr_gt(v, zero)), vr_gt(w, zero));
         const vr det = vr_add(vr_add(u, v), w);
