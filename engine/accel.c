@@ -220,6 +220,8 @@ static uint64_t traceable(packet_range r)
 
 void accel_intersect_packet(const accel *a, packet_range r)
 {
+    /* hits change: what was derived from them is stale */
+    r.packet->flags &= ~(uint32_t)(PACKET_HAVE_HIT_POSITION | PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL);
     uint64_t mask = traceable(r);
     if (!mask)
         return;

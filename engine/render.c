@@ -193,14 +193,57 @@ vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
     return colour;
 }
 
-/* Per-ray state of one packet while it is shaded. */
+/* Per-ray shading state of one packet beyond what the packet itself holds
+ * (hit positions and normals live in the packet's derived arrays). */
 typedef struct packet_shading {
-    surface sf[PACKET_MAX_RAYS];
+    vec3 kd[PACKET_MAX_RAYS];             /* diffuse reflectance at the hit */
+    const material *mat[PACKET_MAX_RAYS]; /* material at the hit */
+    vec3 position_error[PACKET_MAX_RAYS]; /* rounding allowance of pos_* (ray.h surface_point) */
     vec3 colour[PACKET_MAX_RAYS];
     vec3 to_viewer[PACKET_MAX_RAYS];
     light_sample ls[PACKET_MAX_RAYS];
     uint64_t hits; /* rays that hit something */
 } packet_shading;
+
+/* The packet's derived hit values for the rays in `hits`: geometric and
+ * shading normals always, positions when `need_position`; each computed at
+ * most once per traced packet (the PACKET_HAVE_ flags, which tracing clears). */
+static void packet_derive_hit_surfaces(const scene *s, ray_packet *p, packet_shading *ps, bool need_position)
+{
+    const uint32_t have = PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL |
+                          (need_position ? PACKET_HAVE_HIT_POSITION : 0u);
+    if ((p->flags & have) == have)
+        return;
+    for (uint64_t m = ps->hits; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        ray r = packet_get_ray(p, i);
+        hit h = packet_get_hit(p, i);
+        surface sf = describe_hit(s, &r, &h, need_position);
+        p->ng_x[i] = sf.geometric_n.x, p->ng_y[i] = sf.geometric_n.y, p->ng_z[i] = sf.geometric_n.z;
+        p->ns_x[i] = sf.shading_n.x, p->ns_y[i] = sf.shading_n.y, p->ns_z[i] = sf.shading_n.z;
+        if (need_position) {
+            p->pos_x[i] = sf.position.x, p->pos_y[i] = sf.position.y, p->pos_z[i] = sf.position.z;
+            ps->position_error[i] = sf.position_error;
+        }
+        p->material_id[i] = (uint32_t)(sf.mat - s->materials);
+        ps->mat[i] = sf.mat;
+        ps->kd[i] = sf.kd;
+    }
+    p->flags |= have;
+}
+
+/* Ray i's surface, gathered from the packet's derived arrays. */
+static surface lane_surface(const ray_packet *p, const packet_shading *ps, uint32_t i)
+{
+    surface sf;
+    sf.position = v3(p->pos_x[i], p->pos_y[i], p->pos_z[i]);
+    sf.position_error = ps->position_error[i];
+    sf.geometric_n = v3(p->ng_x[i], p->ng_y[i], p->ng_z[i]);
+    sf.shading_n = v3(p->ns_x[i], p->ns_y[i], p->ns_z[i]);
+    sf.kd = ps->kd[i];
+    sf.mat = ps->mat[i];
+    return sf;
+}
 
 /* Shadow rays for the rays of `mask`, one packet; returns the occluded ones. */
 static uint64_t trace_shadows(const render_view *v, ray_packet *shadows, uint32_t count, uint64_t mask,
@@ -226,32 +269,33 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
     accel_intersect_packet(v->accel, packet_whole(p));
     counts->primary_rays += p->count;
     ps->hits = 0;
-    const bool need_position = needs_position(v);
-    for (uint32_t i = 0; i < p->count; i++) {
-        if (p->hit_t[i] == INFINITY) {
+    for (uint32_t i = 0; i < p->count; i++)
+        if (p->hit_t[i] != INFINITY)
+            ps->hits |= 1ull << i;
+        else
             ps->colour[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
-            continue;
-        }
-        ps->hits |= 1ull << i;
+    if (!ps->hits)
+        return;
+    packet_derive_hit_surfaces(s, p, ps, needs_position(v));
+    for (uint64_t m = ps->hits; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray r = packet_get_ray(p, i);
-        hit h = packet_get_hit(p, i);
-        ps->sf[i] = describe_hit(s, &r, &h, need_position);
+        surface sf = lane_surface(p, ps, i);
         if (v->shading == RENDER_SHADE_EYELIGHT) {
-            float grey = eyelight_grey(&ps->sf[i], &r);
+            float grey = eyelight_grey(&sf, &r);
             ps->colour[i] = v3(grey, grey, grey);
         } else {
             ps->to_viewer[i] = v3_normalize(v3_scale(r.dir, -1.f));
-            ps->colour[i] = ambient_term(s, &ps->sf[i]);
+            ps->colour[i] = ambient_term(s, &sf);
         }
     }
-    if (!ps->hits)
-        return;
     if (v->shading == RENDER_SHADE_EYELIGHT) {
         if (!v->shadows || s->light_count == 0)
             return;
         for (uint64_t m = ps->hits; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
-            shadow_rays[i] = eyelight_shadow_ray(s, &ps->sf[i]);
+            surface sf = lane_surface(p, ps, i);
+            shadow_rays[i] = eyelight_shadow_ray(s, &sf);
         }
         uint32_t facts = s->lights[0].kind == LIGHT_DIRECTIONAL ? PACKET_CONSTANT_SIGNS : 0;
         uint64_t dark = trace_shadows(v, shadows, p->count, ps->hits, facts, shadow_rays, counts);
@@ -266,12 +310,13 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
         uint64_t lit = 0, need_ray = 0;
         for (uint64_t m = ps->hits; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
-            if (!sample_light(v, &ps->sf[i], lt, &ps->ls[i]))
+            surface sf = lane_surface(p, ps, i);
+            if (!sample_light(v, &sf, lt, &ps->ls[i]))
                 continue;
             lit |= 1ull << i;
             if (ps->ls[i].needs_shadow_ray) {
                 need_ray |= 1ull << i;
-                shadow_rays[i] = shadow_ray(&ps->sf[i], &ps->ls[i]);
+                shadow_rays[i] = shadow_ray(&sf, &ps->ls[i]);
             }
         }
         if (need_ray) {
@@ -280,7 +325,8 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
         }
         for (uint64_t m = lit; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
-            ps->colour[i] = v3_add(ps->colour[i], light_contribution(&ps->sf[i], lt, &ps->ls[i], ps->to_viewer[i]));
+            surface sf = lane_surface(p, ps, i);
+            ps->colour[i] = v3_add(ps->colour[i], light_contribution(&sf, lt, &ps->ls[i], ps->to_viewer[i]));
         }
     }
 }

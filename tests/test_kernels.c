@@ -244,3 +244,60 @@ Test(kernels, unknown_isa_is_refused)
     accel_destroy(a);
     scene_destroy(s);
 }
+
+Test(kernels, packet_facts_and_derived_flags)
+{
+    static ray_packet p;
+    camera_desc c = {v3(0.f, 0.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    camera_basis b = camera_basis_make(&c, 64, 64);
+    packet_primary(&p, &b, 0, 0, 8, 8); /* top-left tile: every direction has -x, +y, -z */
+    cr_expect_eq(p.count, 64u);
+    cr_expect_eq(p.active, ~0ull);
+    cr_expect(p.flags & PACKET_COMMON_ORIGIN);
+    cr_expect(p.flags & PACKET_NORMALIZED);
+    cr_expect(p.flags & PACKET_CONSTANT_SIGNS);
+    packet_primary(&p, &b, 28, 28, 8, 8); /* straddles the optical axis: signs differ */
+    cr_expect(!(p.flags & PACKET_CONSTANT_SIGNS));
+    uint32_t facts = p.flags;
+    packet_detect_facts(&p);
+    cr_expect_eq(p.flags, facts, "detection agrees with what the generator knew");
+    /* derived inverse directions: computed once, zero components as +-FLT_MAX */
+    packet_reset(&p, 2, 0);
+    ray r0 = {v3(0.f, 0.f, 0.f), v3(0.f, -0.f, 2.f), 0.f, 1.f}, r1 = {v3(1.f, 0.f, 0.f), v3(4.f, 1.f, -1.f), 0.f, 1.f};
+    packet_set_ray(&p, 0, &r0);
+    packet_set_ray(&p, 1, &r1);
+    packet_detect_facts(&p);
+    cr_expect(!(p.flags & PACKET_COMMON_ORIGIN));
+    packet_derive_inv_dir(&p);
+    cr_expect(p.flags & PACKET_HAVE_INV_DIR);
+    cr_expect_eq(p.inv_dir_x[0], FLT_MAX);
+    cr_expect_eq(p.inv_dir_y[0], -FLT_MAX);
+    cr_expect_eq(p.inv_dir_z[0], 0.5f);
+    cr_expect_eq(p.inv_dir_x[1], 0.25f);
+    p.inv_dir_x[1] = 7.f; /* a second call must not recompute */
+    packet_derive_inv_dir(&p);
+    cr_expect_eq(p.inv_dir_x[1], 7.f);
+    /* tracing invalidates values derived from hits */
+    p.flags |= PACKET_HAVE_HIT_POSITION | PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL;
+    rng_state = 3;
+    scene *s = make_scene();
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a);
+    packet_derive_inv_dir(&p);
+    p.inv_dir_x[1] = 0.25f;
+    accel_intersect_packet(a, packet_whole(&p));
+    cr_expect(!(p.flags & (PACKET_HAVE_HIT_POSITION | PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL)));
+    /* a sub-packet touches only its range */
+    packet_reset(&p, 64, 0);
+    for (uint32_t i = 0; i < 64; i++) {
+        ray r = random_ray((int)i);
+        packet_set_ray(&p, i, &r);
+    }
+    accel_intersect_packet(a, (packet_range){&p, 16, 32});
+    for (uint32_t i = 0; i < 64; i++)
+        if (i < 16 || i >= 32)
+            cr_expect_eq(p.prim_id[i], RAY_INVALID_ID, "ray %u outside the range was traced", i);
+    accel_destroy(a);
+    scene_destroy(s);
+}
