@@ -201,28 +201,11 @@ bool accel_occluded(const accel *a, const ray *r)
     return trace(a, &local, &unused, true);
 }
 
-/* Active rays of the range that kernels may trace: degenerate rays (see
- * ray_is_degenerate) miss. Written over the arrays so it vectorises. */
-static uint64_t traceable(packet_range r)
-{
-    const ray_packet *p = r.packet;
-    uint64_t bad = 0;
-    for (uint32_t i = r.begin; i < r.end; i++) {
-        /* x - x is 0 for finite x and NaN otherwise */
-        float finite = (p->org_x[i] - p->org_x[i]) + (p->org_y[i] - p->org_y[i]) + (p->org_z[i] - p->org_z[i]) +
-                       (p->dir_x[i] - p->dir_x[i]) + (p->dir_y[i] - p->dir_y[i]) + (p->dir_z[i] - p->dir_z[i]);
-        bool zero_dir = p->dir_x[i] == 0.f && p->dir_y[i] == 0.f && p->dir_z[i] == 0.f;
-        bool ok = finite == 0.f && !zero_dir && p->t_near[i] < p->t_far[i];
-        bad |= (uint64_t)!ok << i;
-    }
-    return packet_range_mask(r) & ~bad;
-}
-
 void accel_intersect_packet(const accel *a, packet_range r)
 {
     /* hits change: what was derived from them is stale */
     r.packet->flags &= ~(uint32_t)(PACKET_HAVE_HIT_POSITION | PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL);
-    uint64_t mask = traceable(r);
+    uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r));
     if (!mask)
         return;
     packet_derive_inv_dir(r.packet);
@@ -232,7 +215,7 @@ void accel_intersect_packet(const accel *a, packet_range r)
 
 uint64_t accel_occluded_packet(const accel *a, packet_range r)
 {
-    uint64_t mask = traceable(r), occluded = 0;
+    uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r)), occluded = 0;
     if (!mask)
         return 0;
     packet_derive_inv_dir(r.packet);

@@ -37,15 +37,42 @@ ray_derived ray_derive(const ray *r)
 /* gamma(n) = n u / (1 - n u), u = 2^-24 */
 static float gamma_n(int n) { return (float)n * 0x1p-24f / (1.f - (float)n * 0x1p-24f); }
 
+static int32_t float_bits(float f)
+{
+    int32_t i;
+    memcpy(&i, &f, sizeof i);
+    return i;
+}
+
+static float bits_float(int32_t i)
+{
+    float f;
+    memcpy(&f, &i, sizeof f);
+    return f;
+}
+
+/* The next float after x in the direction of `towards`' sign (x unchanged for
+ * towards == 0); nextafterf without the library call, for finite x. */
+static float step_away(float x, float towards)
+{
+    if (towards == 0.f)
+        return x;
+    if (x == 0.f)
+        return towards > 0.f ? 0x1p-149f : -0x1p-149f;
+    int32_t bits = float_bits(x);
+    bool up_in_magnitude = (x > 0.f) == (towards > 0.f);
+    return bits_float(up_in_magnitude ? bits + 1 : bits - 1);
+}
+
 vec3 ray_offset_origin(surface_point sp, vec3 n)
 {
     float d = fabsf(n.x) * sp.error.x + fabsf(n.y) * sp.error.y + fabsf(n.z) * sp.error.z;
     vec3 offset = v3_scale(n, d);
     vec3 po = v3_add(sp.p, offset);
     /* the addition rounds too: step one more float away along the offset */
-    po.x = offset.x > 0.f ? nextafterf(po.x, INFINITY) : offset.x < 0.f ? nextafterf(po.x, -INFINITY) : po.x;
-    po.y = offset.y > 0.f ? nextafterf(po.y, INFINITY) : offset.y < 0.f ? nextafterf(po.y, -INFINITY) : po.y;
-    po.z = offset.z > 0.f ? nextafterf(po.z, INFINITY) : offset.z < 0.f ? nextafterf(po.z, -INFINITY) : po.z;
+    po.x = step_away(po.x, offset.x);
+    po.y = step_away(po.y, offset.y);
+    po.z = step_away(po.z, offset.z);
     return po;
 }
 

@@ -1,5 +1,6 @@
 #include "kernels.h"
 
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -46,4 +47,15 @@ const kernel_table *kernels_select(void)
         if (cpu_runs((kernel_isa)i))
             return tables[i];
     return tables[KERNEL_ISA_SSE2];
+}
+
+static const kernel_table *default_table; /* written once under default_once */
+static pthread_once_t default_once = PTHREAD_ONCE_INIT;
+
+static void resolve_default(void) { default_table = kernels_select(); }
+
+const kernel_table *kernels_default(void)
+{
+    pthread_once(&default_once, resolve_default);
+    return default_table;
 }

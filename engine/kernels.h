@@ -15,6 +15,8 @@
 #include "ray.h"
 #include "wbvh.h"
 
+struct camera_basis;
+
 typedef struct kernel_table {
     const char *isa_name; /* "sse2", "avx2", "avx512" */
     /* One ray against one geometry. Closest hit (any = false): improves *h by
@@ -26,6 +28,11 @@ typedef struct kernel_table {
      * returns the mask of those. Any hit: returns the mask of rays that hit
      * (the caller stops tracing them). */
     uint64_t (*intersect_packet)(const wbvh *w, uint32_t geom_id, ray_packet *p, uint64_t mask, bool any);
+    /* The rays of `mask` that may be traced (not ray_is_degenerate). */
+    uint64_t (*traceable)(const ray_packet *p, uint64_t mask);
+    /* Directions of packet_primary's rays [0, w*h): the arithmetic of
+     * camera_pixel_direction + v3_normalize, lane by lane. */
+    void (*primary_directions)(ray_packet *p, const struct camera_basis *cam, int x0, int y0, int w, int h);
 } kernel_table;
 
 typedef enum kernel_isa { KERNEL_ISA_SSE2, KERNEL_ISA_AVX2, KERNEL_ISA_AVX512, KERNEL_ISA_COUNT } kernel_isa;
@@ -34,6 +41,8 @@ typedef enum kernel_isa { KERNEL_ISA_SSE2, KERNEL_ISA_AVX2, KERNEL_ISA_AVX512, K
 const kernel_table *kernels_for(kernel_isa isa);
 /* The best table for this CPU, or the one TESSERA_ISA names (if the CPU runs it). */
 const kernel_table *kernels_select(void);
+/* kernels_select(), resolved once per process (thread-safe). */
+const kernel_table *kernels_default(void);
 
 extern const kernel_table kernel_table_sse2, kernel_table_avx2, kernel_table_avx512;
 

@@ -4,6 +4,7 @@
 #include <math.h>
 
 #include "camera.h"
+#include "kernels.h"
 
 void packet_reset(ray_packet *p, uint32_t count, uint32_t fact_flags)
 {
@@ -74,31 +75,18 @@ void packet_derive_inv_dir(ray_packet *p)
 void packet_primary(ray_packet *p, const camera_basis *cam, int x0, int y0, int w, int h)
 {
     packet_reset(p, (uint32_t)(w * h), PACKET_COMMON_ORIGIN | PACKET_NORMALIZED);
-    /* the same arithmetic as camera_pixel_direction + v3_normalize, written
-     * over the SoA arrays so the compiler can vectorise it */
-    uint32_t i = 0;
-    for (int y = y0; y < y0 + h; y++) {
-        float sy = 1.f - 2.f * ((float)y + 0.5f) / (float)cam->height_px;
-        for (int x = x0; x < x0 + w; x++, i++) {
-            float sx = 2.f * ((float)x + 0.5f) / (float)cam->width_px - 1.f;
-            float dx = cam->forward.x + (cam->right.x * sx + cam->up.x * sy);
-            float dy = cam->forward.y + (cam->right.y * sx + cam->up.y * sy);
-            float dz = cam->forward.z + (cam->right.z * sx + cam->up.z * sy);
-            float len = sqrtf(dx * dx + dy * dy + dz * dz);
-            float inv = len > 0.f ? 1.f / len : 1.f;
-            p->dir_x[i] = len > 0.f ? dx * inv : dx;
-            p->dir_y[i] = len > 0.f ? dy * inv : dy;
-            p->dir_z[i] = len > 0.f ? dz * inv : dz;
-            p->org_x[i] = cam->eye.x;
-            p->org_y[i] = cam->eye.y;
-            p->org_z[i] = cam->eye.z;
-            p->t_near[i] = 0.f;
-            p->t_far[i] = FLT_MAX;
-        }
+    kernels_default()->primary_directions(p, cam, x0, y0, w, h);
+    const uint32_t count = (uint32_t)(w * h);
+    for (uint32_t i = 0; i < count; i++) {
+        p->org_x[i] = cam->eye.x;
+        p->org_y[i] = cam->eye.y;
+        p->org_z[i] = cam->eye.z;
+        p->t_near[i] = 0.f;
+        p->t_far[i] = FLT_MAX;
     }
     /* a tile's directions keep their signs unless it straddles an axis plane */
     bool same_sign = true;
-    for (uint32_t k = 1; k < i && same_sign; k++)
+    for (uint32_t k = 1; k < count && same_sign; k++)
         same_sign = signbit(p->dir_x[k]) == signbit(p->dir_x[0]) && signbit(p->dir_y[k]) == signbit(p->dir_y[0]) &&
                     signbit(p->dir_z[k]) == signbit(p->dir_z[0]);
     if (same_sign)

@@ -301,3 +301,28 @@ Test(kernels, packet_facts_and_derived_flags)
     accel_destroy(a);
     scene_destroy(s);
 }
+
+Test(kernels, primary_directions_match_the_camera_bit_for_bit)
+{
+    camera_desc c = {v3(1.5f, 2.f, 7.f), v3(-0.3f, 0.1f, 0.2f), v3(0.1f, 1.f, 0.f), 47.f};
+    camera_basis b = camera_basis_make(&c, 83, 61); /* odd sizes: partial tiles at the edges */
+    static ray_packet p;
+    long differ = 0;
+    for (int isa = 0; isa < KERNEL_ISA_COUNT; isa++) {
+        const kernel_table *k = kernels_for((kernel_isa)isa);
+        if (!k)
+            continue;
+        for (int y = 0; y < 61; y += 8)
+            for (int x = 0; x < 83; x += 8) {
+                int w = 83 - x < 8 ? 83 - x : 8, h = 61 - y < 8 ? 61 - y : 8;
+                packet_reset(&p, (uint32_t)(w * h), 0);
+                k->primary_directions(&p, &b, x, y, w, h);
+                for (int i = 0; i < w * h; i++) {
+                    vec3 want = v3_normalize(camera_pixel_direction(&b, x + i % w, y + i / w));
+                    vec3 got = v3(p.dir_x[i], p.dir_y[i], p.dir_z[i]);
+                    differ += memcmp(&want, &got, sizeof want) != 0;
+                }
+            }
+    }
+    cr_expect_eq(differ, 0, "%ld primary directions differ from the scalar camera", differ);
+}

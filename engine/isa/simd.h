@@ -88,6 +88,7 @@ static inline vr vr_mul(vr a, vr b) { return _mm512_mul_ps(a, b); }
 static inline vr vr_div(vr a, vr b) { return _mm512_div_ps(a, b); }
 static inline vr vr_min(vr a, vr b) { return _mm512_min_ps(a, b); }
 static inline vr vr_max(vr a, vr b) { return _mm512_max_ps(a, b); }
+static inline vr vr_sqrt(vr a) { return _mm512_sqrt_ps(a); }
 static inline vm vr_lt(vr a, vr b) { return _mm512_cmp_ps_mask(a, b, _CMP_LT_OQ); }
 static inline vm vr_le(vr a, vr b) { return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ); }
 static inline vm vr_gt(vr a, vr b) { return _mm512_cmp_ps_mask(a, b, _CMP_GT_OQ); }
@@ -114,6 +115,7 @@ static inline vr vr_mul(vr a, vr b) { return _mm256_mul_ps(a, b); }
 static inline vr vr_div(vr a, vr b) { return _mm256_div_ps(a, b); }
 static inline vr vr_min(vr a, vr b) { return _mm256_min_ps(a, b); }
 static inline vr vr_max(vr a, vr b) { return _mm256_max_ps(a, b); }
+static inline vr vr_sqrt(vr a) { return _mm256_sqrt_ps(a); }
 static inline vm vr_lt(vr a, vr b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
 static inline vm vr_le(vr a, vr b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
 static inline vm vr_gt(vr a, vr b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
@@ -145,6 +147,7 @@ static inline vr vr_mul(vr a, vr b) { return _mm_mul_ps(a, b); }
 static inline vr vr_div(vr a, vr b) { return _mm_div_ps(a, b); }
 static inline vr vr_min(vr a, vr b) { return _mm_min_ps(a, b); }
 static inline vr vr_max(vr a, vr b) { return _mm_max_ps(a, b); }
+static inline vr vr_sqrt(vr a) { return _mm_sqrt_ps(a); }
 static inline vm vr_lt(vr a, vr b) { return _mm_cmplt_ps(a, b); }
 static inline vm vr_le(vr a, vr b) { return _mm_cmple_ps(a, b); }
 static inline vm vr_gt(vr a, vr b) { return _mm_cmpgt_ps(a, b); }

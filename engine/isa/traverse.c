@@ -25,6 +25,7 @@
 #include <stdalign.h>
 #include <string.h>
 
+#include "engine/camera.h"
 #include "engine/intersect.h"
 #include "engine/kernels.h"
 #include "engine/wbvh.h"
@@ -329,6 +330,7 @@ typedef struct packet_ctx {
     alignas(64) float shear_x[PACKET_MAX_RAYS];
     alignas(64) float shear_y[PACKET_MAX_RAYS];
     alignas(64) float shear_z[PACKET_MAX_RAYS];
+    ray_derived derived[PACKET_MAX_RAYS]; /* ray_derive of each ray, for single-ray continuation */
     uint64_t order_mask[AXIS_ORDERS]; /* rays using axis order k */
     int order_axes[AXIS_ORDERS][3];   /* kx, ky, kz of order k */
     int order_count;
@@ -356,6 +358,7 @@ static void setup_shear(packet_ctx *c, uint64_t mask)
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray one = packet_get_ray(p, i);
         ray_derived d = ray_derive(&one);
+        c->derived[i] = d;
         c->shear_x[i] = d.shear_x;
         c->shear_y[i] = d.shear_y;
         c->shear_z[i] = d.shear_z;
@@ -652,16 +655,26 @@ static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, cons
     }
 }
 
+/* Per-ray watertight setup, made on first use: most packets never reach a
+ * leaf or a single-ray continuation. */
+static inline void ensure_shear(packet_ctx *c)
+{
+    if (!c->shear_ready) {
+        setup_shear(c, c->shear_rays);
+        c->shear_ready = true;
+    }
+}
+
 /* Continue rays of `mask` one by one through the subtree at `ref`. */
 static void finish_single(packet_ctx *c, uint32_t ref, uint64_t mask)
 {
     ray_packet *p = c->p;
+    ensure_shear(c);
     for (uint64_t m = mask; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray one = packet_get_ray(p, i);
-        ray_derived d = ray_derive(&one);
         hit h = packet_get_hit(p, i);
-        if (!traverse1(c->w, ref, c->geom_id, &one, &d, &h, c->any))
+        if (!traverse1(c->w, ref, c->geom_id, &one, &c->derived[i], &h, c->any))
             continue;
         if (c->any) {
             c->done |= 1ull << i;
@@ -685,10 +698,7 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         finish_single(c, ref, mask);
         return;
     }
-    if (!c->shear_ready) { /* most packets never get here: set up on first use */
-        setup_shear(c, c->shear_rays);
-        c->shear_ready = true;
-    }
+    ensure_shear(c);
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
     for (uint32_t k = first; k < first + count; k++) {
         const wbvh_tri_block *b = (const wbvh_tri_block *)w->blocks + k;
@@ -721,6 +731,8 @@ static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ra
     c.any = any;
     c.done = 0;
     c.improved = 0;
+    c.shear_ready = false;
+    c.shear_rays = mask;
     if (__builtin_popcountll(mask) <= PACKET_SINGLE_RAY_MAX) {
         finish_single(&c, 0, mask);
         return any ? c.done : c.improved;
@@ -788,8 +800,60 @@ static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ra
     return any ? c.done : c.improved;
 }
 
+/* ------------------------------------------------------------------------
+ * Packet setup
+ * ------------------------------------------------------------------------ */
+
+static uint64_t ISA_SUFFIX(traceable)(const ray_packet *p, uint64_t mask)
+{
+    const vr zero = vr_set1(0.f);
+    uint64_t ok_bits = 0;
+    for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+        unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
+        if (!lanes)
+            continue;
+        const vr ox = vr_load(p->org_x + g), oy = vr_load(p->org_y + g), oz = vr_load(p->org_z + g);
+        const vr dx = vr_load(p->dir_x + g), dy = vr_load(p->dir_y + g), dz = vr_load(p->dir_z + g);
+        /* x - x is 0 for finite x and NaN otherwise */
+        vr finite = vr_add(vr_add(vr_add(vr_sub(ox, ox), vr_sub(oy, oy)), vr_add(vr_sub(oz, oz), vr_sub(dx, dx))),
+                           vr_add(vr_sub(dy, dy), vr_sub(dz, dz)));
+        vm zero_dir = vm_and(vm_and(vr_eq(dx, zero), vr_eq(dy, zero)), vr_eq(dz, zero));
+        vm ok = vm_andnot(vm_and(vr_eq(finite, zero), vr_lt(vr_load(p->t_near + g), vr_load(p->t_far + g))), zero_dir);
+        ok_bits |= (uint64_t)(vm_bits(ok) & lanes) << g;
+    }
+    return ok_bits;
+}
+
+static void ISA_SUFFIX(primary_directions)(ray_packet *p, const camera_basis *cam, int x0, int y0, int w, int h)
+{
+    alignas(64) float px[PACKET_MAX_RAYS], py[PACKET_MAX_RAYS];
+    const int count = w * h;
+    for (int i = 0; i < PACKET_MAX_RAYS; i++) {
+        px[i] = (float)(x0 + (i < count ? i % w : 0));
+        py[i] = (float)(y0 + (i < count ? i / w : 0));
+    }
+    const vr half = vr_set1(0.5f), two = vr_set1(2.f), one = vr_set1(1.f), zero = vr_set1(0.f);
+    const vr width = vr_set1((float)cam->width_px), height = vr_set1((float)cam->height_px);
+    for (int g = 0; g < count; g += RAY_LANES) {
+        /* the operation order of camera_pixel_direction and v3_normalize */
+        vr sx = vr_sub(vr_div(vr_mul(two, vr_add(vr_load(px + g), half)), width), one);
+        vr sy = vr_sub(one, vr_div(vr_mul(two, vr_add(vr_load(py + g), half)), height));
+        vr dx = vr_add(vr_set1(cam->forward.x), vr_add(vr_mul(vr_set1(cam->right.x), sx), vr_mul(vr_set1(cam->up.x), sy)));
+        vr dy = vr_add(vr_set1(cam->forward.y), vr_add(vr_mul(vr_set1(cam->right.y), sx), vr_mul(vr_set1(cam->up.y), sy)));
+        vr dz = vr_add(vr_set1(cam->forward.z), vr_add(vr_mul(vr_set1(cam->right.z), sx), vr_mul(vr_set1(cam->up.z), sy)));
+        vr len = vr_sqrt(vr_add(vr_add(vr_mul(dx, dx), vr_mul(dy, dy)), vr_mul(dz, dz)));
+        vm positive = vr_gt(len, zero);
+        vr inv = vr_div(one, vr_select(positive, len, one));
+        vr_store(p->dir_x + g, vr_select(positive, vr_mul(dx, inv), dx));
+        vr_store(p->dir_y + g, vr_select(positive, vr_mul(dy, inv), dy));
+        vr_store(p->dir_z + g, vr_select(positive, vr_mul(dz, inv), dz));
+    }
+}
+
 const kernel_table ISA_SUFFIX(kernel_table) = {
     .isa_name = ISA_NAME,
     .intersect1 = ISA_SUFFIX(intersect1),
     .intersect_packet = ISA_SUFFIX(intersect_packet),
+    .traceable = ISA_SUFFIX(traceable),
+    .primary_directions = ISA_SUFFIX(primary_directions),
 };
