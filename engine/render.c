@@ -214,6 +214,22 @@ static void packet_derive_hit_surfaces(const scene *s, ray_packet *p, packet_sha
                           (need_position ? PACKET_HAVE_HIT_POSITION : 0u);
     if ((p->flags & have) == have)
         return;
+    /* the hit triangles of a large mesh are cache misses: ask for all of them
+     * (indices, then vertices) before reading any, so the waits overlap */
+    for (uint64_t m = ps->hits; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        if (p->geom_id[i] < s->mesh_count)
+            __builtin_prefetch(s->meshes[p->geom_id[i]].mesh->indices + 3 * (size_t)p->prim_id[i]);
+    }
+    for (uint64_t m = ps->hits; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        if (p->geom_id[i] >= s->mesh_count)
+            continue;
+        const mesh *mh = s->meshes[p->geom_id[i]].mesh;
+        const uint32_t *idx = mh->indices + 3 * (size_t)p->prim_id[i];
+        for (int k = 0; k < 3; k++)
+            __builtin_prefetch(mh->positions + 3 * (size_t)idx[k]);
+    }
     for (uint64_t m = ps->hits; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray r = packet_get_ray(p, i);
