@@ -10,6 +10,7 @@
 #include "bvh.h"
 #include "intersect.h"
 #include "kernels.h"
+#include "parallel.h"
 #include "scene.h"
 #include "wbvh.h"
 
@@ -45,6 +46,29 @@ static vec3 mesh_point(const mesh *m, uint32_t i)
     return v3(p[0], p[1], p[2]);
 }
 
+/* Shared by the threads computing triangle boxes. */
+typedef struct box_job {
+    const mesh *m;
+    aabb *boxes;        /* per triangle; empty for one of zero area */
+} box_job;
+
+static void triangle_boxes(void *ctx, size_t begin, size_t end, int worker)
+{
+    (void)worker;
+    box_job *job = ctx;
+    const mesh *m = job->m;
+    for (size_t i = begin; i < end; i++) {
+        const uint32_t *t = m->indices + 3 * i;
+        vec3 v0 = mesh_point(m, t[0]), v1 = mesh_point(m, t[1]), v2 = mesh_point(m, t[2]);
+        job->boxes[i] = intersect_triangle_degenerate(v0, v1, v2)
+                            ? aabb_empty()
+                            : aabb_grow_point(aabb_grow_point(aabb_grow_point(aabb_empty(), v0), v1), v2);
+    }
+}
+
+/* Triangles per parallel chunk of box computation. */
+#define ACCEL_BOX_GRAIN 16384
+
 /* Triangles of zero area can never be hit: they are left out of the BVH. */
 static bool build_triangles(wbvh *out, const mesh *m, aabb *bounds, int threads, tess_error *err)
 {
@@ -55,17 +79,17 @@ static bool build_triangles(wbvh *out, const mesh *m, aabb *bounds, int threads,
         free(prim_ids);
         return tess_error_set(err, "accel: out of memory for %u triangle bounds", m->triangle_count);
     }
+    box_job job = {m, boxes};
+    parallel_for(threads, m->triangle_count, ACCEL_BOX_GRAIN, triangle_boxes, &job);
+    /* compact (in order, so the result does not depend on the thread count) */
     *bounds = aabb_empty();
     uint32_t kept = 0;
     for (uint32_t i = 0; i < m->triangle_count; i++) {
-        const uint32_t *t = m->indices + 3 * (size_t)i;
-        vec3 v0 = mesh_point(m, t[0]), v1 = mesh_point(m, t[1]), v2 = mesh_point(m, t[2]);
-        if (intersect_triangle_degenerate(v0, v1, v2))
+        if (aabb_is_empty(boxes[i]))
             continue;
-        aabb b = aabb_grow_point(aabb_grow_point(aabb_grow_point(aabb_empty(), v0), v1), v2);
-        boxes[kept] = b;
+        *bounds = aabb_grow(*bounds, boxes[i]);
+        boxes[kept] = boxes[i];
         prim_ids[kept++] = i;
-        *bounds = aabb_grow(*bounds, b);
     }
     bool ok = build_geometry(out, boxes, kept, m, prim_ids, NULL, threads, err);
     free(boxes);
@@ -107,6 +131,9 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
     if (s->spheres.count > 0 &&
         !build_spheres(&a->geoms[s->mesh_count], &s->spheres, &geom_bounds[s->mesh_count], threads, err))
         goto fail;
+    for (uint32_t i = 0; i < count; i++)
+        if (aabb_is_empty(geom_bounds[i])) /* nothing to hit: a point box keeps the top level finite */
+            geom_bounds[i] = (aabb){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f)};
     if (!bvh_build(&a->top, geom_bounds, count, 1, err))
         goto fail;
     for (uint32_t i = 0; i < count; i++)
