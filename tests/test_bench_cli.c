@@ -24,9 +24,9 @@ static char tmp_dir[256];
 
 /* Every field of the BENCH line, in the documented order. */
 static const char *const bench_fields[] = {
-    "scene",           "size",         "threads",      "frames",        "warmup",     "shadows",     "triangles",
-    "spheres",         "load_s",       "build_s",      "prim_mrays",    "total_mrays", "frame_ms_median",
-    "frame_ms_min",    "frame_ms_max", "hit_rate",     "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
+    "scene",        "size",         "threads",  "frames",        "warmup",     "shadows",     "isa",
+    "triangles",    "spheres",      "load_s",   "build_s",       "prim_mrays", "total_mrays", "frame_ms_median",
+    "frame_ms_min", "frame_ms_max", "hit_rate", "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
 };
 #define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
 
@@ -193,8 +193,8 @@ Test(bench_cli, help_documents_options_and_every_field)
 {
     char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
     cr_assert_eq(run_bench(out, err, "--help"), 0, "%s", err);
-    const char *options[] = {"--scene",   "--size",    "--threads", "--frames",
-                             "--warmup",  "--shadows", "--camera",  "--out"};
+    const char *options[] = {"--scene",  "--size",    "--threads", "--frames", "--warmup",
+                             "--shadows", "--camera", "--isa",     "--out"};
     for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
         cr_expect(strstr(out, options[i]), "bench --help lacks %s", options[i]);
     for (size_t i = 0; i < BENCH_FIELD_COUNT; i++) {
@@ -216,6 +216,9 @@ Test(bench_cli, default_scene)
     cr_expect_eq(field(line, "warmup"), 1);
     cr_expect_eq(field(line, "shadows"), 0);
     cr_expect_eq(field(line, "total_mrays"), field(line, "prim_mrays"), "no shadow rays, yet total != primary");
+    const char *isa = field_text(line, "isa", buf, sizeof buf);
+    cr_expect(isa && (!strcmp(isa, "sse2") || !strcmp(isa, "avx2") || !strcmp(isa, "avx512")), "isa=%s",
+              isa ? isa : "(missing)");
 
     tess_error err = {{0}};
     scene *s = scene_create_default(&err);
@@ -301,6 +304,13 @@ Test(bench_cli, scene_path_with_space_stays_one_field)
     cr_expect_eq(field(line, "triangles"), 8);
 }
 
+Test(bench_cli, isa_option_picks_the_kernels)
+{
+    char line[OUTPUT_BYTES], buf[64];
+    run_ok("--size 32x18 --threads 1 --frames 1 --isa sse2", line); /* every x86-64 CPU runs SSE2 */
+    cr_expect_str_eq(field_text(line, "isa", buf, sizeof buf), "sse2");
+}
+
 Test(bench_cli, bad_options_give_one_line)
 {
     EXPECT_ERROR(2, "--bogus", "unknown option", "--bogus");
@@ -311,6 +321,7 @@ Test(bench_cli, bad_options_give_one_line)
     EXPECT_ERROR(2, "--camera 1,2,3", "--camera");
     EXPECT_ERROR(2, "--scene", "--scene", "needs a value");
     EXPECT_ERROR(2, "--no-shadows", "unknown option");
+    EXPECT_ERROR(2, "--isa neon", "--isa", "neon");
     EXPECT_ERROR(1, "--scene %s/missing.ply --size 16x16", "missing.ply");
     EXPECT_ERROR(1, "--size 16x16 --out %s/no/such/dir/x.pfm", "no/such/dir", "directory");
 }

@@ -10,17 +10,19 @@
 # programs used more than 0.05 CPU (cpu_other, which both programs measure from
 # /proc/stat) is logged as noisy and repeated, up to 4 attempts. Only clean
 # runs enter the medians (a configuration with none falls back to its noisy
-# runs, marked). Every attempt is logged to $TMPDIR/tessera-bench/run.XXXXXX/runs.log.
+# runs, marked). Every attempt is logged to $TMPDIR/tessera-bench/run.XXXXXX/runs.log;
 # ./tessera is copied there first, so a rebuild during the run does not change
 # what is measured.
 #
 # The Embree harness is built from ../shared/tools/peer in $TMPDIR/tessera-peer,
 # outside the repository (it needs libembree-dev: `sh tools/deps.sh --bench`).
 #
-# Usage (from anywhere, after `make tessera`):
-#   sh tools/bench.sh                  BENCH_ROUNDS rounds (default 3), 5 frames per run
-#   BENCH_QUICK=1 sh tools/bench.sh    smoke run: 1 round, 2 frames per run
-# Environment: BENCH_ROUNDS, BENCH_QUICK, TMPDIR, TESSERA_SHARED (default ../shared).
+# Usage (after `make tessera`; `make bench` does both):
+#   sh tools/bench.sh                  BENCH_ROUNDS rounds (default 3), BENCH_FRAMES (20) frames per run
+#   BENCH_QUICK=1 sh tools/bench.sh    smoke run: 1 round, 2 frames per run (cpu_other is coarse then)
+#   sh tools/bench.sh --summarize DIR  rewrite BENCHMARKS.md from an earlier run's DIR (its runs.log)
+# Environment: BENCH_ROUNDS, BENCH_FRAMES, BENCH_QUICK, BENCH_MAX_WAIT (seconds of waiting for
+# quiet per whole run, default 600), TMPDIR, TESSERA_SHARED (default ../shared).
 set -eu
 
 cd "$(dirname "$0")/.."
@@ -35,66 +37,36 @@ SIZE=1920x1080
 THREADS="1 2"
 MAX_ATTEMPTS=4
 NOISE_LIMIT=0.05 # CPUs other programs may use during a run's timed frames
+# Total seconds a run may spend waiting for quiet seconds: on a busy machine the
+# waits, not the measurements, would otherwise set the runtime.
+WAIT_BUDGET_S=${BENCH_MAX_WAIT:-600}
 
 ROUNDS=${BENCH_ROUNDS:-3}
-FRAMES=5 # as the peer's own 1920x1080 runs (RESULTS.md)
-if [ "${BENCH_QUICK:-0}" = 1 ]; then
+# Timed frames per run: enough that the timed part of a fast run lasts about a
+# second, since cpu_other comes from /proc/stat's 1/100 s ticks (with 5 frames
+# of 30 ms, one tick is already 0.07 CPU of "noise").
+FRAMES=${BENCH_FRAMES:-20}
+QUICK=${BENCH_QUICK:-0}
+if [ "$QUICK" = 1 ]; then
     ROUNDS=1
     FRAMES=2
 fi
-case $ROUNDS in
-'' | *[!0-9]* | 0)
-    echo "bench: BENCH_ROUNDS must be a whole number >= 1, got '$ROUNDS'" >&2
-    exit 2
-    ;;
-esac
 
-if [ ! -d "$SHARED/data" ]; then
-    echo "bench: $SHARED/data not found (the shared meshes live beside the repository); nothing to measure" >&2
-    exit 0
-fi
-if [ ! -x ./tessera ]; then
-    echo "bench: ./tessera not found; build it first (make tessera, or make bench)" >&2
-    exit 1
-fi
-if [ ! -f "$PEER_SRC/embree_bench.c" ] || [ ! -f "$PEER_SRC/Makefile" ]; then
-    echo "bench: the Embree peer harness is missing ($PEER_SRC/embree_bench.c, Makefile)" >&2
-    exit 1
-fi
-
-start_s=$(date +%s)
-mkdir -p "$TMP/tessera-bench" "$PEER_DIR"
-WORK=$(mktemp -d "$TMP/tessera-bench/run.XXXXXX")
-LOG=$WORK/runs.log
-: > "$LOG"
-# the binary measured: a snapshot, since others may rebuild ./tessera meanwhile
-cp ./tessera "$WORK/tessera"
-TESSERA=$WORK/tessera
-revision=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
-if [ -n "$(git status --porcelain --untracked-files=no 2>/dev/null)" ]; then
-    revision="$revision plus uncommitted changes"
-fi
-
-# ---- the peer harness, built outside the repository
-# (copies replace the previous ones: the shared files are read-only)
-rm -f "$PEER_DIR/Makefile" "$PEER_DIR/embree_bench.c"
-cp "$PEER_SRC/Makefile" "$PEER_SRC/embree_bench.c" "$PEER_DIR/"
-# the sub-make must not inherit `make bench`'s variables (CFLAGS=..., WERROR=1)
-if ! env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s -C "$PEER_DIR" embree_bench > "$WORK/peer_build.log" 2>&1; then
-    echo "bench: building the Embree harness in $PEER_DIR failed" \
-        "(is libembree-dev installed? sh tools/deps.sh --bench):" >&2
-    cat "$WORK/peer_build.log" >&2
-    exit 1
-fi
-EMBREE=$PEER_DIR/embree_bench
-
-# ---- quiet machine, noisy runs
-busy_ticks() { awk '/^cpu /{print $2+$3+$4+$7+$8+$9}' /proc/stat; }
-TICKS_PER_S=$(getconf CLK_TCK 2>/dev/null || echo 100)
-QUIET_TICKS=$((TICKS_PER_S * 4 / 100)) # < 0.04 CPU over one second
 now_ms() { echo $(($(date +%s%N) / 1000000)); }
-WAIT_MS=0 RUN_MS=0 REJECTED_MS=0 # time waiting for quiet, in runs, in runs then rejected
-wait_quiet() { # up to 60 s for a quiet second, as run_bench.sh does
+min_s() { echo "$(($1 / 60)) min $(($1 % 60)) s"; }
+busy_ticks() { awk '/^cpu /{print $2+$3+$4+$7+$8+$9}' /proc/stat; }
+
+# wait_quiet: up to 60 s for a second with < 0.04 CPU used, as run_bench.sh does,
+# while the run's waiting budget lasts
+wait_quiet() {
+    if [ $((WAIT_MS / 1000)) -ge "$WAIT_BUDGET_S" ]; then
+        if [ "$WAIT_BUDGET_SPENT" = 0 ]; then
+            echo "bench: $WAIT_BUDGET_S s of waiting for quiet used up; from now on runs start at once" \
+                "(noisy ones are still rejected)" >&2
+            WAIT_BUDGET_SPENT=1
+        fi
+        return 0
+    fi
     w0=$(now_ms)
     i=0
     while [ $i -lt 60 ]; do
@@ -128,7 +100,7 @@ run() {
         fi
         if [ "$run_engine" = tessera ]; then
             line=$(grep '^BENCH ' "$WORK/run.out" | tail -n 1)
-        else # the RESULT line, plus Embree's memory and hit rate from its report
+        else # the RESULT line, plus Embree's memory, hit rate and version from its report
             line="$(grep '^RESULT ' "$WORK/run.out" | tail -n 1)"
             line="$line $(sed -n 's/^build .* embree mem \([0-9.]*\) MiB.*/mem_mib=\1/p' "$WORK/run.out")"
             line="$line $(sed -n 's/^rays .*(hit rate \([0-9.]*\)).*/hit_rate=\1/p' "$WORK/run.out")"
@@ -158,45 +130,140 @@ run() {
     done
 }
 
-# ---- the matrix; rounds outermost so that each configuration's repeats spread over the run
-found=""
-for m in $MESHES; do
-    if [ -f "$DATA/$m" ]; then found="$found $m"; else echo "bench: $DATA/$m not found; skipped" >&2; fi
-done
-if [ -z "$found" ]; then
-    echo "bench: no meshes in $DATA; nothing to measure" >&2
-    exit 0
-fi
-echo "bench: $ROUNDS round(s), $FRAMES frames per run, meshes:$found; log: $LOG" >&2
-r=1
-while [ $r -le "$ROUNDS" ]; do
-    echo "bench: round $r of $ROUNDS" >&2
-    for m in $found; do
-        f=$DATA/$m
-        for t in $THREADS; do
-            for mode in single p8 p16; do
-                run primary tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
-                    --frames $FRAMES
-                run primary embree "$m" "$t" "$mode" "$EMBREE" -r $SIZE -f $FRAMES -t "$t" -m "$mode" "$f"
-            done
-            for mode in p8 p16; do
-                run shadows tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
-                    --frames $FRAMES --shadows
-                run shadows embree "$m" "$t" "$mode" "$EMBREE" -r $SIZE -f $FRAMES -t "$t" -m "$mode" --shadows "$f"
+# meta NAME...: the variables as shell assignments, for --summarize
+meta() {
+    for name in "$@"; do
+        value=""
+        eval "value=\${$name}"
+        printf "%s='%s'\n" "$name" "$(printf '%s' "$value" | sed "s/'/'\\\\''/g")"
+    done
+}
+
+# measure: build the peer, run the matrix into $WORK/runs.log, record $WORK/meta
+measure() {
+    for v in "BENCH_ROUNDS=$ROUNDS" "BENCH_FRAMES=$FRAMES" "BENCH_MAX_WAIT=$WAIT_BUDGET_S"; do
+        case ${v#*=} in
+        '' | *[!0-9]*)
+            echo "bench: ${v%%=*} must be a whole number, got '${v#*=}'" >&2
+            exit 2
+            ;;
+        0)
+            [ "${v%%=*}" = BENCH_MAX_WAIT ] && continue
+            echo "bench: ${v%%=*} must be a whole number >= 1, got '${v#*=}'" >&2
+            exit 2
+            ;;
+        esac
+    done
+    if [ ! -d "$SHARED/data" ]; then
+        echo "bench: $SHARED/data not found (the shared meshes live beside the repository); nothing to measure" >&2
+        exit 0
+    fi
+    found=""
+    for m in $MESHES; do
+        if [ -f "$DATA/$m" ]; then found="$found $m"; else echo "bench: $DATA/$m not found; skipped" >&2; fi
+    done
+    if [ -z "$found" ]; then
+        echo "bench: no meshes in $DATA; nothing to measure" >&2
+        exit 0
+    fi
+    if [ ! -x ./tessera ]; then
+        echo "bench: ./tessera not found; build it first (make tessera, or make bench)" >&2
+        exit 1
+    fi
+    if [ ! -f "$PEER_SRC/embree_bench.c" ] || [ ! -f "$PEER_SRC/Makefile" ]; then
+        echo "bench: the Embree peer harness is missing ($PEER_SRC/embree_bench.c, Makefile)" >&2
+        exit 1
+    fi
+
+    start_s=$(date +%s)
+    run_date=$(date -u '+%Y-%m-%d %H:%M UTC')
+    mkdir -p "$TMP/tessera-bench" "$PEER_DIR"
+    WORK=$(mktemp -d "$TMP/tessera-bench/run.XXXXXX")
+    LOG=$WORK/runs.log
+    : > "$LOG"
+    # the binary measured: a snapshot, since others may rebuild ./tessera meanwhile
+    cp ./tessera "$WORK/tessera"
+    TESSERA=$WORK/tessera
+    revision=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+    if [ -n "$(git status --porcelain --untracked-files=no 2>/dev/null)" ]; then
+        revision="$revision plus uncommitted changes"
+    fi
+
+    # the peer harness, built outside the repository (copies replace the
+    # previous ones: the shared files are read-only); the sub-make must not
+    # inherit `make bench`'s variables (CFLAGS=..., WERROR=1)
+    rm -f "$PEER_DIR/Makefile" "$PEER_DIR/embree_bench.c"
+    cp "$PEER_SRC/Makefile" "$PEER_SRC/embree_bench.c" "$PEER_DIR/"
+    if ! env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s -C "$PEER_DIR" embree_bench > "$WORK/peer_build.log" 2>&1
+    then
+        echo "bench: building the Embree harness in $PEER_DIR failed" \
+            "(is libembree-dev installed? sh tools/deps.sh --bench):" >&2
+        cat "$WORK/peer_build.log" >&2
+        exit 1
+    fi
+    EMBREE=$PEER_DIR/embree_bench
+
+    TICKS_PER_S=$(getconf CLK_TCK 2>/dev/null || echo 100)
+    QUIET_TICKS=$((TICKS_PER_S * 4 / 100))
+    WAIT_MS=0 RUN_MS=0 REJECTED_MS=0 # waiting for quiet, in runs, in runs then rejected
+    WAIT_BUDGET_SPENT=0
+
+    # rounds outermost, so that each configuration's repeats spread over the run
+    echo "bench: $ROUNDS round(s), $FRAMES frames per run, meshes:$found; log: $LOG" >&2
+    r=1
+    while [ $r -le "$ROUNDS" ]; do
+        echo "bench: round $r of $ROUNDS" >&2
+        for m in $found; do
+            f=$DATA/$m
+            for t in $THREADS; do
+                for mode in single p8 p16; do
+                    run primary tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
+                        --frames "$FRAMES"
+                    run primary embree "$m" "$t" "$mode" "$EMBREE" -r $SIZE -f "$FRAMES" -t "$t" -m "$mode" "$f"
+                done
+                for mode in p8 p16; do
+                    run shadows tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
+                        --frames "$FRAMES" --shadows
+                    run shadows embree "$m" "$t" "$mode" "$EMBREE" -r $SIZE -f "$FRAMES" -t "$t" -m "$mode" \
+                        --shadows "$f"
+                done
             done
         done
+        r=$((r + 1))
     done
-    r=$((r + 1))
-done
-end_s=$(date +%s)
+    total_s=$(($(date +%s) - start_s))
+
+    cpu_model=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
+    cpu_flags=$(lscpu 2>/dev/null | sed -n 's/^Flags: *//p' | head -n 1)
+    simd=""
+    for flag in sse4_2 avx2 fma avx512f; do
+        case " $cpu_flags " in *" $flag "*) simd="$simd $flag" ;; esac
+    done
+    cpus=$(nproc)
+    kernel=$(uname -r)
+    cc_version=$(cc --version 2>/dev/null | head -n 1)
+    meta ROUNDS FRAMES QUICK SIZE DATA PEER_SRC PEER_DIR EMBREE TESSERA NOISE_LIMIT MAX_ATTEMPTS WAIT_BUDGET_S \
+        WAIT_BUDGET_SPENT run_date total_s WAIT_MS RUN_MS REJECTED_MS revision cpus cpu_model simd kernel \
+        cc_version > "$WORK/meta"
+}
+
+if [ "${1:-}" = --summarize ]; then
+    if [ ! -f "${2:-}/meta" ] || [ ! -f "${2:-}/runs.log" ]; then
+        echo "bench: --summarize needs the directory of an earlier run (with meta and runs.log)" >&2
+        exit 2
+    fi
+    WORK=$2
+elif [ $# -gt 0 ]; then
+    echo "bench: unknown argument '$1' (usage: sh tools/bench.sh [--summarize DIR])" >&2
+    exit 2
+else
+    measure
+fi
+LOG=$WORK/runs.log
+# shellcheck disable=SC1091 # written by measure
+. "$WORK/meta"
 
 # ---- BENCHMARKS.md
-cpu_model=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
-cpu_flags=$(lscpu 2>/dev/null | sed -n 's/^Flags: *//p' | head -n 1)
-simd=""
-for flag in sse4_2 avx2 fma avx512f; do
-    case " $cpu_flags " in *" $flag "*) simd="$simd $flag" ;; esac
-done
 cat > "$WORK/summary.awk" << 'EOF'
 # Reads runs.log; prints the result sections of BENCHMARKS.md.
 function median(a, n,    i, j, v, b) { # a[1..n]; sorted copy in b
@@ -225,6 +292,7 @@ function gn(g,    i, n) { n = 0; for (i = 1; i <= cnt[g]; i++) if (run_ok[g, i])
 function mark(g) { return noisy_only[g] ? "†" : "" }
 function fmt(v, d) { return v == "" ? "–" : sprintf("%." d "f", v) }
 function ratio(a, b) { return a == "" || b == "" || b == 0 ? "–" : sprintf("%.2f", a / b) }
+function num(x) { return x == "" ? "" : x + 0 } # fields are strings: compare them as numbers
 
 BEGIN { FS = "\t" }
 {
@@ -239,16 +307,16 @@ BEGIN { FS = "\t" }
     for (k = 2; k <= nf; k++) { p = index(kv[k], "="); if (p) r[substr(kv[k], 1, p - 1)] = substr(kv[k], p + 1) }
     if (status != "clean") rej_other[rejected] = r["cpu_other"] + 0
     if (engine == "tessera") {
-        val[g, i, "prim"] = r["prim_mrays"]; val[g, i, "total"] = r["total_mrays"]
-        val[g, i, "build"] = r["build_s"]; val[g, i, "bpt"] = r["bytes_per_tri"]
-        val[g, i, "hit"] = r["hit_rate"]; tris[mesh] = r["triangles"]
+        val[g, i, "prim"] = num(r["prim_mrays"]); val[g, i, "total"] = num(r["total_mrays"])
+        val[g, i, "build"] = num(r["build_s"]); val[g, i, "bpt"] = num(r["bytes_per_tri"])
+        val[g, i, "hit"] = num(r["hit_rate"]); tris[mesh] = r["triangles"]
         if (r["isa"] != "") isa = r["isa"]
     } else { # per-run figure from the median frame, as tessera's (see BENCHMARKS.md)
         split(r["res"], wh, "x")
         prim = wh[1] * wh[2] / (r["median_ms"] * 1000)
         val[g, i, "prim"] = prim
         val[g, i, "total"] = r["prim_mrays"] > 0 ? prim * r["total_mrays"] / r["prim_mrays"] : prim
-        val[g, i, "build"] = r["build_s"]; val[g, i, "hit"] = r["hit_rate"]
+        val[g, i, "build"] = num(r["build_s"]); val[g, i, "hit"] = num(r["hit_rate"])
         val[g, i, "bpt"] = r["tris"] > 0 ? r["mem_mib"] * 1048576 / r["tris"] : ""
         tris[mesh] = r["tris"]; if (r["embree_version"] != "") embree_version = r["embree_version"]
     }
@@ -342,10 +410,7 @@ met=${met_kv#met=}
 rows=${rows_kv#rows=}
 isa=${isa_kv#isa=}
 embree_version=${embree_kv#embree=}
-[ "$isa" = - ] && isa="not reported (the BENCH line has no isa= field yet)"
-total_s=$((end_s - start_s))
-min_s() { echo "$(($1 / 60)) min $(($1 % 60)) s"; }
-gcc_version=$(cc --version 2>/dev/null | head -n 1)
+[ "$isa" = - ] && isa="not reported (the BENCH line has no isa= field)"
 
 {
     echo "# Benchmarks: tessera against Embree"
@@ -355,14 +420,16 @@ gcc_version=$(cc --version 2>/dev/null | head -n 1)
     echo "least as fast as the best of Embree's single-ray and 8- and 16-wide packet modes on the same"
     echo "machine. In this run $met of $rows rows meet it."
     echo
-    echo "- date: $(date -u '+%Y-%m-%d %H:%M UTC'); $ROUNDS round(s), $FRAMES timed frames per run$(
-        [ "${BENCH_QUICK:-0}" = 1 ] && echo ' (BENCH_QUICK=1 smoke run)')"
-    echo "- the whole run took $(min_s $total_s): $(min_s $((RUN_MS / 1000))) in the measured programs (of which"
-    echo "  $(min_s $((REJECTED_MS / 1000))) in runs then rejected as noisy), $(min_s $((WAIT_MS / 1000))) waiting for quiet seconds"
-    echo "- machine: $(nproc) CPUs, ${cpu_model:-unknown CPU} (lscpu), SIMD flags:${simd:- none of sse4_2/avx2/avx512f};"
-    echo "  kernel $(uname -r)"
-    echo "- tessera: revision $revision; ISA $isa; built by \`make tessera\`"
-    echo "  ($gcc_version, -O2, generic x86-64)"
+    echo "- date: $run_date; $ROUNDS round(s), $FRAMES timed frames per run$(
+        [ "$QUICK" = 1 ] && echo ' (BENCH_QUICK=1 smoke run)')"
+    echo "- the whole run took $(min_s "$total_s"): $(min_s $((RUN_MS / 1000))) in the measured programs"
+    echo "  (of which $(min_s $((REJECTED_MS / 1000))) in runs then rejected as noisy),"
+    echo "  $(min_s $((WAIT_MS / 1000))) waiting for quiet seconds$(
+        [ "${WAIT_BUDGET_SPENT:-0}" = 1 ] && echo " (the budget of $WAIT_BUDGET_S s ran out: later runs started at once)")"
+    echo "- machine: $cpus CPUs, ${cpu_model:-unknown CPU} (lscpu), SIMD flags:${simd:- none of sse4_2/avx2/avx512f};"
+    echo "  kernel $kernel"
+    echo "- tessera: revision $revision; kernels ISA $isa; built by \`make tessera\`"
+    echo "  ($cc_version, -O2, generic x86-64)"
     echo "- Embree $embree_version (Debian libembree-dev), through \`embree_bench\` from \`$PEER_SRC\`,"
     echo "  built in \`$PEER_DIR\` with its own Makefile (\`cc -O3 -march=native\`)"
     echo
@@ -397,12 +464,13 @@ gcc_version=$(cc --version 2>/dev/null | head -n 1)
     echo "- **Noise**: before each run the driver waits for a second in which the machine used < 0.04"
     echo "  CPU; a run during which other programs used more than $NOISE_LIMIT CPU (\`cpu_other\`, from"
     echo "  /proc/stat minus the program's own CPU time) is rejected and repeated, up to $MAX_ATTEMPTS attempts."
+    echo "  Waiting for quiet seconds is capped at ${WAIT_BUDGET_S:-600} s per whole run (BENCH_MAX_WAIT)."
     echo
     echo "## Results"
     echo
     cat "$WORK/tables.md"
     echo "Every attempt, with its command and result line, was logged to \`$LOG\` (not kept in the"
-    echo "repository)."
+    echo "repository; \`sh tools/bench.sh --summarize $WORK\` rewrites this file from it)."
 } > "$WORK/BENCHMARKS.md"
 mv "$WORK/BENCHMARKS.md" "$OUT"
-echo "bench: wrote $OUT ($met of $rows rows at ratio >= 1.0; $(min_s $total_s))" >&2
+echo "bench: wrote $OUT ($met of $rows rows at ratio >= 1.0; $(min_s "$total_s"))" >&2

@@ -25,7 +25,8 @@
 #include "engine/scene.h"
 #include "wall/dump.h"
 
-/* Defaults: the size, frames and warm-up of the peer's 1920x1080 runs. */
+/* Defaults: the size, frames and warm-up of the peer's 1920x1080 runs
+ * (tools/bench.sh asks for more frames, see there). */
 #define BENCH_DEFAULT_WIDTH_PX 1920
 #define BENCH_DEFAULT_HEIGHT_PX 1080
 #define BENCH_DEFAULT_FRAMES 5
@@ -42,6 +43,7 @@ typedef struct bench_options {
     bool have_camera;       /* --camera given */
     camera_desc camera;
     const char *out;        /* image file for the last frame, or NULL */
+    const char *isa;        /* kernels to use ("sse2", "avx2", "avx512"), or NULL: the engine's choice */
 } bench_options;
 
 /* One timed frame. */
@@ -71,6 +73,8 @@ static void bench_usage(FILE *f)
           "  --shadows        trace a shadow ray per hit (default: primary rays only)\n"
           "  --camera ex,ey,ez,lx,ly,lz,ux,uy,uz,fov\n"
           "                   eye, look-at point, up vector, vertical field of view in degrees\n"
+          "  --isa NAME       traversal kernels: sse2, avx2 or avx512 (default: the best this CPU\n"
+          "                   runs, or the environment's TESSERA_ISA)\n"
           "  --out FILE       write the last timed frame's image: .pfm is grey float written as\n"
           "                   embree_bench writes it, to compare value by value with its\n"
           "                   --out-shade image (or, with --shadows, its --out-lit image without\n"
@@ -78,12 +82,13 @@ static void bench_usage(FILE *f)
           "                   linear float RGB, .png: 8-bit sRGB)\n"
           "\n"
           "output: one line, fields in this order:\n"
-          "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 triangles=N\n"
-          "        spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
+          "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 isa=NAME\n"
+          "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
           "                   '%' in it are written as %XX so that fields split on spaces\n"
+          "  isa              the instruction set of the traversal kernels that ran\n"
           "  triangles        triangles over all meshes; spheres: spheres in the scene\n"
           "  load_s           seconds to load the scene file (or create the built-in scene)\n"
           "  build_s          seconds of accel_build with --threads threads (wall clock)\n"
@@ -91,19 +96,21 @@ static void bench_usage(FILE *f)
           "                   seconds of the frame) / 1e6; primary rays = W x H per frame\n"
           "  total_mrays      the same for primary + shadow rays (= prim_mrays without --shadows)\n"
           "  frame_ms_*       median, fastest and slowest timed frame, milliseconds; a frame is\n"
-          "                   one render_image call (thread start, all tiles, thread join)\n"
+          "                   one render_image call, from the call to its return\n"
           "  hit_rate         fraction of the last frame's pixels that are > 0, i.e. primary rays\n"
           "                   that hit (a hit seen exactly edge-on shades 0 and counts as a miss)\n"
           "  bytes_per_tri    (mesh_bytes + accel_bytes) / triangles, 0 when there are none\n"
           "  mesh_bytes       sum of mesh_bytes() over the meshes: positions and indices, plus\n"
           "                   normals, colours and per-triangle materials when the mesh has them\n"
           "                   (counts, not capacities); spheres and the scene struct not counted\n"
-          "  accel_bytes      accel_bytes(): all BVH nodes and primitive order arrays (including\n"
-          "                   a sphere set's BVH), not the scene\n"
+          "  accel_bytes      accel_bytes(): the acceleration structure of every geometry and the\n"
+          "                   top level (nodes, primitive blocks), not the scene\n"
           "  cpu_other        CPUs' worth of time other programs used during the timed frames:\n"
           "                   (busy CPU seconds of the machine from /proc/stat - this process's\n"
           "                   getrusage) / wall seconds, as embree_bench computes it; 0 = quiet,\n"
-          "                   -1 = /proc/stat unreadable. Reject runs above ~0.05.\n"
+          "                   -1 = /proc/stat unreadable. Reject runs above ~0.05. /proc/stat counts in\n"
+          "                   ticks (1/100 s), so the figure is only meaningful when the timed frames\n"
+          "                   take about a second or more\n"
           "Exit status: 0, or 2 for a command-line error, 1 for any other error (one line on stderr).\n",
           f);
 }
@@ -148,6 +155,14 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             if (!(val = cli_option_value(argc, argv, &i)))
                 goto bad;
             o->out = val;
+        } else if (!strcmp(a, "--isa")) {
+            if (!(val = cli_option_value(argc, argv, &i)))
+                goto bad;
+            if (strcmp(val, "sse2") && strcmp(val, "avx2") && strcmp(val, "avx512")) {
+                cli_error("--isa: expected sse2, avx2 or avx512, got '%s'", val);
+                goto bad;
+            }
+            o->isa = val;
         } else if (!strcmp(a, "--shadows")) {
             o->shadows = true;
         } else {
@@ -289,6 +304,10 @@ static bool prepare(bench_options *o, scene **s, accel **a, double *load_s, doub
         return false;
     }
     double t2 = cli_now_s();
+    if (o->isa && !accel_use_isa(*a, o->isa)) {
+        cli_error("--isa: this CPU cannot run the %s kernels", o->isa);
+        return false;
+    }
     *load_s = t1 - t0;
     *build_s = t2 - t1;
     if (!o->have_camera) {
@@ -361,9 +380,9 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
         scratch[f] = samples[f].seconds;
     ms_median = median_of(scratch, n);
 
-    size_t pixels = (size_t)o->width_px * (size_t)o->height_px, lit = 0;
+    size_t pixels = (size_t)o->width_px * (size_t)o->height_px, hit_pixels = 0;
     for (size_t i = 0; i < pixels; i++)
-        lit += rgb[3 * i] > 0.f;
+        hit_pixels += rgb[3 * i] > 0.f;
 
     size_t triangles = scene_triangle_count(s), mesh_total = 0, accel_total = accel_bytes(a);
     for (uint32_t i = 0; i < s->mesh_count; i++)
@@ -372,12 +391,13 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
 
     printf("BENCH scene=");
     print_field_path(stdout, o->scene_path ? o->scene_path : "default");
-    printf(" size=%dx%d threads=%d frames=%d warmup=%d shadows=%d triangles=%zu spheres=%u load_s=%.3f build_s=%.3f"
-           " prim_mrays=%.3f total_mrays=%.3f frame_ms_median=%.2f frame_ms_min=%.2f frame_ms_max=%.2f"
-           " hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f\n",
-           o->width_px, o->height_px, o->threads, o->frames, o->warmup, o->shadows ? 1 : 0, triangles,
-           s->spheres.count, load_s, build_s, prim_mrays, total_mrays, 1e3 * ms_median, 1e3 * ms_min, 1e3 * ms_max,
-           (double)lit / (double)pixels, bytes_per_tri, mesh_total, accel_total, cpu_other);
+    printf(" size=%dx%d threads=%d frames=%d warmup=%d shadows=%d isa=%s", o->width_px, o->height_px, o->threads,
+           o->frames, o->warmup, o->shadows ? 1 : 0, accel_isa_name(a));
+    printf(" triangles=%zu spheres=%u load_s=%.3f build_s=%.3f", triangles, s->spheres.count, load_s, build_s);
+    printf(" prim_mrays=%.3f total_mrays=%.3f frame_ms_median=%.2f frame_ms_min=%.2f frame_ms_max=%.2f", prim_mrays,
+           total_mrays, 1e3 * ms_median, 1e3 * ms_min, 1e3 * ms_max);
+    printf(" hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f\n",
+           (double)hit_pixels / (double)pixels, bytes_per_tri, mesh_total, accel_total, cpu_other);
     fflush(stdout);
 }
 
