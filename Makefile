@@ -87,7 +87,7 @@ test: deps
 test-asan: deps
 	$(MAKE) BUILD=build-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
 	    build-asan/tessera_tests tessera-asan
-	cd tests && TESSERA_BIN=../tessera-asan ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
+	cd tests && TESSERA_BIN=../tessera-asan ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
 
 tessera-asan: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)

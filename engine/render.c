@@ -292,6 +292,7 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
             ps->colour[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
     if (!ps->hits)
         return;
+    counts->primary_hits += (uint64_t)__builtin_popcountll(ps->hits);
     packet_derive_hit_surfaces(s, p, ps, needs_position(v));
     for (uint64_t m = ps->hits; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
@@ -379,18 +380,19 @@ typedef struct tile_queue {
     float *rgb;
     int tiles_x, tile_count;
     atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
-    atomic_uint_fast64_t primary_rays, shadow_rays; /* totals, added once per thread */
+    atomic_uint_fast64_t primary_rays, primary_hits, shadow_rays; /* totals, added once per thread */
 } tile_queue;
 
 static void *render_worker(void *arg)
 {
     tile_queue *q = arg;
     const camera_basis *cam = &q->view->camera;
-    render_counts counts = {0, 0}; /* this thread's, folded in once at the end */
+    render_counts counts = {0, 0, 0}; /* this thread's, folded in once at the end */
     for (;;) {
         int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
         if (tile >= q->tile_count) {
             atomic_fetch_add_explicit(&q->primary_rays, counts.primary_rays, memory_order_relaxed);
+            atomic_fetch_add_explicit(&q->primary_hits, counts.primary_hits, memory_order_relaxed);
             atomic_fetch_add_explicit(&q->shadow_rays, counts.shadow_rays, memory_order_relaxed);
             return NULL;
         }
@@ -411,6 +413,7 @@ void render_image(const render_view *v, int threads, float *rgb, render_counts *
     q.tile_count = q.tiles_x * ((v->camera.height_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX);
     atomic_init(&q.next_tile, 0);
     atomic_init(&q.primary_rays, 0);
+    atomic_init(&q.primary_hits, 0);
     atomic_init(&q.shadow_rays, 0);
     if (threads < 1)
         threads = 1;
@@ -432,6 +435,7 @@ void render_image(const render_view *v, int threads, float *rgb, render_counts *
         pthread_join(ids[i], NULL);
     if (counts) {
         counts->primary_rays = atomic_load(&q.primary_rays);
+        counts->primary_hits = atomic_load(&q.primary_hits);
         counts->shadow_rays = atomic_load(&q.shadow_rays);
     }
 }

@@ -44,6 +44,7 @@ typedef struct render_view {
 /* Rays traced, for benchmarks. */
 typedef struct render_counts {
     uint64_t primary_rays;
+    uint64_t primary_hits; /* primary rays that hit something */
     uint64_t shadow_rays;
 } render_counts;
 

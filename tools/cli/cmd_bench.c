@@ -50,6 +50,7 @@ typedef struct bench_options {
 typedef struct frame_sample {
     double seconds;         /* wall time of render_image alone */
     uint64_t primary_rays, shadow_rays;
+    uint64_t primary_hits; /* primary rays that hit something */
 } frame_sample;
 
 static void bench_usage(FILE *f)
@@ -97,8 +98,7 @@ static void bench_usage(FILE *f)
           "  total_mrays      the same for primary + shadow rays (= prim_mrays without --shadows)\n"
           "  frame_ms_*       median, fastest and slowest timed frame, milliseconds; a frame is\n"
           "                   one render_image call, from the call to its return\n"
-          "  hit_rate         fraction of the last frame's pixels that are > 0, i.e. primary rays\n"
-          "                   that hit (a hit seen exactly edge-on shades 0 and counts as a miss)\n"
+          "  hit_rate         fraction of the last frame's primary rays that hit something\n"
           "  bytes_per_tri    (mesh_bytes + accel_bytes) / triangles, 0 when there are none\n"
           "  mesh_bytes       sum of mesh_bytes() over the meshes: positions and indices, plus\n"
           "                   normals, colours and per-triangle materials when the mesh has them\n"
@@ -343,12 +343,13 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
         render_image(view, o->threads, rgb, NULL);
     double busy0 = machine_busy_s(), own0 = own_cpu_s(), wall0 = cli_now_s();
     for (int f = 0; f < o->frames; f++) {
-        render_counts counts = {0, 0};
+        render_counts counts = {0, 0, 0};
         double t0 = cli_now_s();
         render_image(view, o->threads, rgb, &counts);
         samples[f].seconds = cli_now_s() - t0;
         samples[f].primary_rays = counts.primary_rays;
         samples[f].shadow_rays = counts.shadow_rays;
+        samples[f].primary_hits = counts.primary_hits;
     }
     double busy1 = machine_busy_s(), own1 = own_cpu_s(), wall1 = cli_now_s();
     if (busy0 < 0.0 || busy1 < 0.0 || !(wall1 > wall0))
@@ -360,7 +361,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
 }
 
 static void print_result(const bench_options *o, const scene *s, const accel *a, double load_s, double build_s,
-                         const frame_sample *samples, const float *rgb, double cpu_other, double *scratch)
+                         const frame_sample *samples, double cpu_other, double *scratch)
 {
     int n = o->frames;
     double prim_mrays, total_mrays, ms_median, ms_min = samples[0].seconds, ms_max = samples[0].seconds;
@@ -380,9 +381,8 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
         scratch[f] = samples[f].seconds;
     ms_median = median_of(scratch, n);
 
-    size_t pixels = (size_t)o->width_px * (size_t)o->height_px, hit_pixels = 0;
-    for (size_t i = 0; i < pixels; i++)
-        hit_pixels += rgb[3 * i] > 0.f;
+    const frame_sample *last = &samples[n - 1];
+    double hit_rate = last->primary_rays ? (double)last->primary_hits / (double)last->primary_rays : 0.0;
 
     size_t triangles = scene_triangle_count(s), mesh_total = 0, accel_total = accel_bytes(a);
     for (uint32_t i = 0; i < s->mesh_count; i++)
@@ -397,7 +397,7 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
     printf(" prim_mrays=%.3f total_mrays=%.3f frame_ms_median=%.2f frame_ms_min=%.2f frame_ms_max=%.2f", prim_mrays,
            total_mrays, 1e3 * ms_median, 1e3 * ms_min, 1e3 * ms_max);
     printf(" hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f\n",
-           (double)hit_pixels / (double)pixels, bytes_per_tri, mesh_total, accel_total, cpu_other);
+           hit_rate, bytes_per_tri, mesh_total, accel_total, cpu_other);
     fflush(stdout);
 }
 
@@ -431,7 +431,7 @@ int cli_bench(int argc, char **argv)
     render_view view = {s, a, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
                         RENDER_SHADE_EYELIGHT};
     measure(&o, &view, rgb, samples, &cpu_other);
-    print_result(&o, s, a, load_s, build_s, samples, rgb, cpu_other, scratch);
+    print_result(&o, s, a, load_s, build_s, samples, cpu_other, scratch);
     if (o.out) {
         tess_error err = {{0}};
         if (has_suffix(o.out, ".pfm")) {
