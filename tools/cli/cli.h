@@ -19,6 +19,26 @@ const char *cli_option_value(int argc, char **argv, int *i);
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 double cli_now_s(void); /* monotonic seconds */
 
+struct scene;
+struct accel;
+
+/* A loaded scene and its acceleration structure, as every command needs. */
+typedef struct cli_scene {
+    const char *name;      /* the path, or "(built-in default)", for messages */
+    struct scene *scene;   /* owned */
+    struct accel *accel;   /* owned */
+    double load_s, build_s;
+} cli_scene;
+
+/* Load `scene_path` (NULL: the built-in scene) and build its accel with
+ * `threads` threads; report sizes and times on stderr. On failure prints the
+ * error and returns false (cli_scene_finish still frees what was made). */
+bool cli_scene_prepare(const char *scene_path, int threads, cli_scene *out);
+/* The camera: `given` (may be NULL), else the scene's, else the bounds framed
+ * by the peer harness's rule for a W x H image; validated. */
+bool cli_scene_camera(const cli_scene *cs, const camera_desc *given, int width_px, int height_px, camera_desc *out);
+void cli_scene_finish(cli_scene *cs);
+
 int cli_render(int argc, char **argv); /* tessera render ... */
 int cli_run(int argc, char **argv);    /* tessera run ... */
 int cli_trace(int argc, char **argv);  /* tessera trace ... (cmd_trace.c) */

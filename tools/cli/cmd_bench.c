@@ -284,55 +284,25 @@ static bool write_pfm_grey(const char *path, int width_px, int height_px, const 
     return ok;
 }
 
-/* Load the scene, build its accel (timed) and choose the camera as 'tessera
- * render' does. On failure prints the error and returns false; *s and *a hold
- * whatever was made, for the caller to destroy. */
-static bool prepare(bench_options *o, scene **s, accel **a, double *load_s, double *build_s)
+/* Load the scene, build its accel (timed), switch kernels if asked, and
+ * choose the camera as 'tessera render' does; print the camera in
+ * embree_bench's syntax. On failure prints the error and returns false. */
+static bool prepare(bench_options *o, cli_scene *cs)
 {
-    tess_error err = {{0}};
-    const char *name = o->scene_path ? o->scene_path : "default scene";
-    double t0 = cli_now_s();
-    *s = o->scene_path ? scene_load(o->scene_path, &err) : scene_create_default(&err);
-    if (!*s) {
-        cli_error("%s", err.msg);
+    if (!cli_scene_prepare(o->scene_path, o->threads, cs))
         return false;
-    }
-    double t1 = cli_now_s();
-    *a = accel_build(*s, o->threads, &err);
-    if (!*a) {
-        cli_error("%s", err.msg);
-        return false;
-    }
-    double t2 = cli_now_s();
-    if (o->isa && !accel_use_isa(*a, o->isa)) {
+    if (o->isa && !accel_use_isa(cs->accel, o->isa)) {
         cli_error("--isa: this CPU cannot run the %s kernels", o->isa);
         return false;
     }
-    *load_s = t1 - t0;
-    *build_s = t2 - t1;
-    if (!o->have_camera) {
-        vec3 lo, hi;
-        if ((*s)->has_camera)
-            o->camera = (*s)->camera;
-        else if (scene_bounds(*s, &lo, &hi))
-            o->camera = camera_frame_bounds(lo, hi, CAMERA_DEFAULT_VIEW_DIR, CAMERA_DEFAULT_FOV_DEG, o->width_px,
-                                            o->height_px);
-        else {
-            cli_error("%s: the scene has no geometry to measure", name);
-            return false;
-        }
-    }
-    if (!camera_validate(&o->camera, &err)) {
-        cli_error("%s: %s", name, err.msg);
+    if (!cli_scene_camera(cs, o->have_camera ? &o->camera : NULL, o->width_px, o->height_px, &o->camera))
         return false;
-    }
-    fprintf(stderr, "tessera: scene %s: %zu triangles, %u spheres, %u lights; loaded in %.3f s, BVH built in %.3f s\n",
-            name, scene_triangle_count(*s), (*s)->spheres.count, (*s)->light_count, *load_s, *build_s);
     const camera_desc *c = &o->camera;
     fprintf(stderr, "tessera: camera --eye %g,%g,%g --lookat %g,%g,%g --up %g,%g,%g --fov %g\n", c->eye.x, c->eye.y,
             c->eye.z, c->look_at.x, c->look_at.y, c->look_at.z, c->up.x, c->up.y, c->up.z, c->fov_deg);
     return true;
 }
+
 
 /* Render the warm-up and timed frames; fills samples[0..frames) and
  * *cpu_other. The image of the last frame stays in rgb. */
@@ -411,14 +381,13 @@ int cli_bench(int argc, char **argv)
     if (o.out && !output_dir_ok(o.out))
         return 1;
 
-    scene *s = NULL;
-    accel *a = NULL;
+    cli_scene cs = {0};
     float *rgb = NULL;
     frame_sample *samples = NULL;
     double *scratch = NULL;
-    double load_s = 0.0, build_s = 0.0, cpu_other = -1.0;
+    double cpu_other = -1.0;
     code = 1;
-    if (!prepare(&o, &s, &a, &load_s, &build_s))
+    if (!prepare(&o, &cs))
         goto done;
     size_t pixels = (size_t)o.width_px * (size_t)o.height_px;
     rgb = malloc(pixels * 3 * sizeof *rgb);
@@ -428,10 +397,10 @@ int cli_bench(int argc, char **argv)
         cli_error("out of memory for a %dx%d image and %d frames", o.width_px, o.height_px, o.frames);
         goto done;
     }
-    render_view view = {s, a, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
+    render_view view = {cs.scene, cs.accel, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
                         RENDER_SHADE_EYELIGHT};
     measure(&o, &view, rgb, samples, &cpu_other);
-    print_result(&o, s, a, load_s, build_s, samples, cpu_other, scratch);
+    print_result(&o, cs.scene, cs.accel, cs.load_s, cs.build_s, samples, cpu_other, scratch);
     if (o.out) {
         tess_error err = {{0}};
         if (has_suffix(o.out, ".pfm")) {
@@ -448,7 +417,6 @@ done:
     free(scratch);
     free(samples);
     free(rgb);
-    accel_destroy(a);
-    scene_destroy(s);
+    cli_scene_finish(&cs);
     return code;
 }

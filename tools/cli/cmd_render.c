@@ -26,8 +26,7 @@ typedef struct job {
     bool have_camera;       /* --camera given */
     camera_desc camera;
     const char *out;        /* output file or frame pattern */
-    scene *scene;           /* loaded by job_prepare */
-    accel *accel;
+    cli_scene loaded;       /* by job_prepare */
 } job;
 
 static int default_threads(void)
@@ -104,45 +103,11 @@ static bool check_output_dir(const char *path)
 
 static bool job_prepare(job *j)
 {
-    tess_error err = {{0}};
-    double t0 = cli_now_s();
-    j->scene = j->scene_path ? scene_load(j->scene_path, &err) : scene_create_default(&err);
-    if (!j->scene) {
-        cli_error("%s", err.msg);
-        return false;
-    }
-    double t1 = cli_now_s();
-    j->accel = accel_build(j->scene, j->threads, &err);
-    if (!j->accel) {
-        cli_error("%s", err.msg);
-        return false;
-    }
-    double t2 = cli_now_s();
-    fprintf(stderr, "tessera: scene %s: %zu triangles, %u spheres, %u lights; loaded in %.3f s, BVH built in %.3f s\n",
-            j->scene_path ? j->scene_path : "(built-in default)", scene_triangle_count(j->scene),
-            j->scene->spheres.count, j->scene->light_count, t1 - t0, t2 - t1);
-    if (!j->have_camera) {
-        if (j->scene->has_camera)
-            j->camera = j->scene->camera;
-        else {
-            vec3 lo, hi;
-            scene_bounds(j->scene, &lo, &hi);
-            j->camera = camera_frame_bounds(lo, hi, CAMERA_DEFAULT_VIEW_DIR, CAMERA_DEFAULT_FOV_DEG, j->width_px,
-                                            j->height_px);
-        }
-    }
-    if (!camera_validate(&j->camera, &err)) {
-        cli_error("%s: %s", j->scene_path ? j->scene_path : "default scene", err.msg);
-        return false;
-    }
-    return true;
+    return cli_scene_prepare(j->scene_path, j->threads, &j->loaded) &&
+           cli_scene_camera(&j->loaded, j->have_camera ? &j->camera : NULL, j->width_px, j->height_px, &j->camera);
 }
 
-static void job_finish(job *j)
-{
-    accel_destroy(j->accel);
-    scene_destroy(j->scene);
-}
+static void job_finish(job *j) { cli_scene_finish(&j->loaded); }
 
 /* Rotate the camera's eye about the vertical axis through look_at. */
 static camera_desc orbit(camera_desc c, float angle_rad)
@@ -167,7 +132,7 @@ static int render_frames(job *j, int orbit_frames)
     char path[4096], first[4096] = "";
     for (int f = 0; f < j->frames; f++) {
         camera_desc cam = orbit_frames > 0 ? orbit(j->camera, 6.2831853f * (float)f / (float)orbit_frames) : j->camera;
-        render_view view = {j->scene, j->accel, camera_basis_make(&cam, j->width_px, j->height_px), j->shadows,
+        render_view view = {j->loaded.scene, j->loaded.accel, camera_basis_make(&cam, j->width_px, j->height_px), j->shadows,
                             RENDER_SHADE_PHONG};
         double t0 = cli_now_s();
         render_image(&view, j->threads, rgb, NULL);

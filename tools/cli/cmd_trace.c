@@ -385,21 +385,14 @@ int cli_trace(int argc, char **argv)
         fclose(rays);
         return 1;
     }
-    tess_error err = {{0}};
-    double t0 = cli_now_s();
-    scene *s = o.scene_path ? scene_load(o.scene_path, &err) : scene_create_default(&err);
-    accel *a = s ? accel_build(s, o.threads, &err) : NULL;
-    if (!a) {
-        cli_error("%s", err.msg);
-        accel_destroy(a);
-        scene_destroy(s);
+    cli_scene cs;
+    if (!cli_scene_prepare(o.scene_path, o.threads, &cs)) {
+        cli_scene_finish(&cs);
         fclose(rays);
         return 1;
     }
+    accel *a = cs.accel;
     double t1 = cli_now_s();
-    fprintf(stderr, "tessera: scene %s: %zu triangles, %u spheres; loaded and BVH built in %.3f s (%s kernels)\n",
-            o.scene_path ? o.scene_path : "(built-in default)", scene_triangle_count(s), s->spheres.count, t1 - t0,
-            accel_isa_name(a));
     uint64_t ray_count = 0, hit_count = 0;
     FILE *hits = fopen(o.hits_path, "wb");
     if (!hits) {
@@ -423,7 +416,6 @@ int cli_trace(int argc, char **argv)
                o.occluded ? "occluded" : "hit", o.threads, o.threads == 1 ? "" : "s", t2 - t1,
                t2 > t1 ? (double)ray_count / (t2 - t1) * 1e-6 : 0.0, o.hits_path);
     fclose(rays);
-    accel_destroy(a);
-    scene_destroy(s);
+    cli_scene_finish(&cs);
     return code;
 }
