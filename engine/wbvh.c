@@ -4,15 +4,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "memory.h"
 #include "mesh.h"
 #include "ray.h"
 #include "scene.h"
 
-static void *alloc_aligned(size_t bytes)
-{
-    size_t rounded = (bytes + 63) & ~(size_t)63;
-    return aligned_alloc(64, rounded ? rounded : 64);
-}
 
 /* Fills one block lane from a primitive; the block was zeroed, so unused
  * lanes stay degenerate. */
@@ -123,8 +119,8 @@ static bool run_collapse(collapse *c, tess_error *err)
         return true;
     size_t max_nodes = binary->node_count; /* one wide node per binary inner node at most (+1 for a leaf root) */
     size_t max_blocks = binary->prim_count;
-    out->nodes = alloc_aligned(max_nodes * sizeof(wbvh_node));
-    out->blocks = alloc_aligned(max_blocks * c->block_bytes);
+    out->nodes = memory_alloc_large(max_nodes * sizeof(wbvh_node));
+    out->blocks = memory_alloc_large(max_blocks * c->block_bytes);
     /* work list: (binary node, wide node) pairs still to fill; at most one per wide node */
     uint32_t *todo_binary = malloc(max_nodes * sizeof(uint32_t)), *todo_wide = malloc(max_nodes * sizeof(uint32_t));
     if (!out->nodes || !out->blocks || !todo_binary || !todo_wide) {
