@@ -294,3 +294,43 @@ Test(render, example_scenes_match_references)
         scene_destroy(s);
     }
 }
+
+/* The packet renderer claims the results of render_shade on each ray alone:
+ * check it bit for bit, both shading models, with shadows and point lights. */
+Test(render, packets_shade_exactly_like_single_rays)
+{
+    tess_error err = {{0}};
+    scene *s = scene_create_default(&err);
+    cr_assert(s, "%s", err.msg);
+    accel *a = accel_build(s, 2, &err);
+    cr_assert(a, "%s", err.msg);
+    const int w = 97, h = 53;
+    float *rgb = calloc((size_t)w * h * 3, sizeof(float));
+    cr_assert(rgb);
+    const render_shading models[] = {RENDER_SHADE_PHONG, RENDER_SHADE_EYELIGHT};
+    for (size_t k = 0; k < 2; k++) {
+        render_view v = {s, a, camera_basis_make(&s->camera, w, h), true, models[k]};
+        render_counts counts = {0, 0, 0};
+        render_image(&v, 2, rgb, &counts);
+        long differ = 0;
+        uint64_t shadow_rays = 0, hits = 0;
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++) {
+                ray r = {v.camera.eye, v3_normalize(camera_pixel_direction(&v.camera, x, y)), 0.f, FLT_MAX};
+                hit hh;
+                hits += accel_intersect(a, &r, &hh);
+                vec3 c = render_shade(&v, &r, &shadow_rays);
+                const float *got = rgb + 3 * ((size_t)y * w + x);
+                differ += memcmp(&c.x, &got[0], sizeof(float)) || memcmp(&c.y, &got[1], sizeof(float)) ||
+                          memcmp(&c.z, &got[2], sizeof(float));
+            }
+        cr_expect_eq(differ, 0, "shading model %zu: %ld pixels differ from render_shade", k, differ);
+        cr_expect_eq(counts.primary_rays, (uint64_t)w * h);
+        cr_expect_eq(counts.primary_hits, hits);
+        cr_expect_eq(counts.shadow_rays, shadow_rays, "shadow rays: packets %llu, single %llu",
+                     (unsigned long long)counts.shadow_rays, (unsigned long long)shadow_rays);
+    }
+    free(rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}

@@ -45,10 +45,6 @@ static inline v4 v4_gt(v4 a, v4 b) { return _mm_cmpgt_ps(a, b); }
 static inline v4 v4_eq(v4 a, v4 b) { return _mm_cmpeq_ps(a, b); }
 static inline unsigned v4_bits(v4 m) { return (unsigned)_mm_movemask_ps(m); }
 static inline v4 v4_abs(v4 a) { return _mm_andnot_ps(_mm_set1_ps(-0.f), a); }
-static inline v4 v4_neg_where(v4 a, v4 m) /* -a in lanes of m (exact: flips the sign bit) */
-{
-    return _mm_xor_ps(a, _mm_and_ps(m, _mm_set1_ps(-0.f)));
-}
 
 /* ---- node lanes: 8 children per node --------------------------------- */
 #if defined(TESS_ISA_SSE2)
@@ -99,7 +95,6 @@ static inline vm vm_andnot(vm a, vm b) { return (vm)(a & ~b); }
 static inline unsigned vm_bits(vm m) { return (unsigned)m; }
 static inline vm vm_from_bits(unsigned bits) { return (vm)bits; }
 static inline vr vr_select(vm m, vr a, vr b) { return _mm512_mask_blend_ps(m, b, a); }
-static inline vr vr_neg_where(vr a, vm m) { return _mm512_mask_xor_ps(a, m, a, _mm512_set1_ps(-0.f)); }
 static inline vr vr_abs(vr a) { return _mm512_andnot_ps(_mm512_set1_ps(-0.f), a); }
 static inline vr vr_load_u32_as_ps(const uint32_t *p) { return _mm512_castsi512_ps(_mm512_load_si512(p)); }
 static inline void vr_store_ps_as_u32(uint32_t *p, vr a) { _mm512_store_si512(p, _mm512_castps_si512(a)); }
@@ -131,7 +126,6 @@ static inline vm vm_from_bits(unsigned bits)
     return _mm256_castsi256_ps(_mm256_cmpeq_epi32(b, lane_bit));
 }
 static inline vr vr_select(vm m, vr a, vr b) { return _mm256_blendv_ps(b, a, m); }
-static inline vr vr_neg_where(vr a, vm m) { return _mm256_xor_ps(a, _mm256_and_ps(m, _mm256_set1_ps(-0.f))); }
 static inline vr vr_abs(vr a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.f), a); }
 static inline vr vr_load_u32_as_ps(const uint32_t *p) { return _mm256_load_ps((const float *)(const void *)p); }
 static inline void vr_store_ps_as_u32(uint32_t *p, vr a) { _mm256_store_ps((float *)(void *)p, a); }
@@ -163,7 +157,6 @@ static inline vm vm_from_bits(unsigned bits)
     return _mm_castsi128_ps(_mm_cmpeq_epi32(b, lane_bit));
 }
 static inline vr vr_select(vm m, vr a, vr b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
-static inline vr vr_neg_where(vr a, vm m) { return _mm_xor_ps(a, _mm_and_ps(m, _mm_set1_ps(-0.f))); }
 static inline vr vr_abs(vr a) { return _mm_andnot_ps(_mm_set1_ps(-0.f), a); }
 static inline vr vr_load_u32_as_ps(const uint32_t *p) { return _mm_load_ps((const float *)(const void *)p); }
 static inline void vr_store_ps_as_u32(uint32_t *p, vr a) { _mm_store_ps((float *)(void *)p, a); }
