@@ -70,7 +70,9 @@ $(LIB): $(LIB_OBJ)
 tessera: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
-$(TEST_BIN): $(TEST_OBJ) $(LIB) tessera
+# (the suite runs ./tessera too: `make test` builds it; the ASan build makes its own tessera-asan
+# and must never overwrite ./tessera)
+$(TEST_BIN): $(TEST_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 
 # the main job on the built-in default scene (headless: frames to out/)
@@ -80,7 +82,7 @@ run: deps
 
 # the whole suite; Criterion prints the summary line last
 test: deps
-	$(MAKE) $(TEST_BIN) check-headers
+	$(MAKE) $(TEST_BIN) tessera check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
