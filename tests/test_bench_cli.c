@@ -14,6 +14,7 @@
 
 #include "engine/mesh.h"
 #include "engine/scene.h"
+#include "support.h"
 #include "wall/dump.h"
 
 /* Seconds one bench command may take before the test counts it as a hang. */
@@ -30,11 +31,7 @@ static const char *const bench_fields[] = {
 };
 #define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
 
-static void make_tmp_dir(void)
-{
-    snprintf(tmp_dir, sizeof tmp_dir, "/tmp/tessera-bench-XXXXXX");
-    cr_assert(mkdtemp(tmp_dir), "mkdtemp");
-}
+static void make_tmp_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "bench"); }
 
 static void remove_tmp_dir(void)
 {
@@ -44,20 +41,6 @@ static void remove_tmp_dir(void)
         fprintf(stderr, "could not remove %s\n", tmp_dir);
 }
 
-static const char *tessera_bin(void)
-{
-    const char *bin = getenv("TESSERA_BIN");
-    return bin ? bin : "../tessera";
-}
-
-static void read_text(const char *path, char *out, size_t out_bytes)
-{
-    FILE *f = fopen(path, "rb");
-    size_t n = f ? fread(out, 1, out_bytes - 1, f) : 0;
-    out[n] = '\0';
-    if (f)
-        fclose(f);
-}
 
 /* Run `tessera bench ARGS` (every %s in ARGS is the temp dir) with stdout and
  * stderr kept apart; returns the exit status (128+signal when killed). */
@@ -67,14 +50,12 @@ static int run_bench(char *out, char *err, const char *args_fmt)
     snprintf(args, sizeof args, args_fmt, tmp_dir, tmp_dir, tmp_dir, tmp_dir);
     snprintf(out_path, sizeof out_path, "%s/bench.out", tmp_dir);
     snprintf(err_path, sizeof err_path, "%s/bench.err", tmp_dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s bench %s > '%s' 2> '%s'", BENCH_TIMEOUT_S, tessera_bin(), args, out_path,
-             err_path);
-    int status = system(cmd);
-    read_text(out_path, out, OUTPUT_BYTES);
-    read_text(err_path, err, OUTPUT_BYTES);
-    if (WIFSIGNALED(status))
-        return 128 + WTERMSIG(status);
-    return WEXITSTATUS(status);
+    snprintf(cmd, sizeof cmd, "timeout %d %s bench %s > '%s' 2> '%s'", BENCH_TIMEOUT_S, support_tessera_bin(), args,
+             out_path, err_path);
+    int code = support_run(cmd);
+    support_read_text(out_path, out, OUTPUT_BYTES);
+    support_read_text(err_path, err, OUTPUT_BYTES);
+    return code;
 }
 
 static int count_lines(const char *text)

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "support.h"
 #include "wall/dump.h"
 
 /* Seconds any single command may take before the test counts it as a hang. */
@@ -16,17 +17,7 @@
 
 static char tmp_dir[256];
 
-static void make_tmp_dir(void)
-{
-    snprintf(tmp_dir, sizeof tmp_dir, "/tmp/tessera-cli-XXXXXX");
-    cr_assert(mkdtemp(tmp_dir), "mkdtemp");
-}
-
-static const char *tessera_bin(void)
-{
-    const char *bin = getenv("TESSERA_BIN");
-    return bin ? bin : "../tessera";
-}
+static void make_tmp_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "cli"); }
 
 static void write_text(const char *name, const char *text)
 {
@@ -47,16 +38,10 @@ static int run_tessera(char *out, size_t out_bytes, const char *args_fmt)
     const char *dirs[8] = {tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir};
     snprintf(args, sizeof args, args_fmt, dirs[0], dirs[1], dirs[2], dirs[3], dirs[4], dirs[5], dirs[6], dirs[7]);
     snprintf(log_path, sizeof log_path, "%s/cli.log", tmp_dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s %s > %s 2>&1", CLI_TIMEOUT_S, tessera_bin(), args, log_path);
-    int status = system(cmd);
-    FILE *f = fopen(log_path, "rb");
-    size_t n = f ? fread(out, 1, out_bytes - 1, f) : 0;
-    out[n] = '\0';
-    if (f)
-        fclose(f);
-    if (WIFSIGNALED(status))
-        return 128 + WTERMSIG(status);
-    return WEXITSTATUS(status);
+    snprintf(cmd, sizeof cmd, "timeout %d %s %s > %s 2>&1", CLI_TIMEOUT_S, support_tessera_bin(), args, log_path);
+    int code = support_run(cmd);
+    support_read_text(log_path, out, out_bytes);
+    return code;
 }
 
 /* Expect failure with a message containing every needle (NULL-terminated). */

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "engine/accel.h"
+#include "support.h"
 #include "engine/scene.h"
 
 /* Seconds one run of the binary may take before it counts as a hang. */
@@ -26,17 +27,7 @@
 
 static char tmp_dir[256]; /* this test's mkdtemp directory */
 
-static void make_dir(void)
-{
-    snprintf(tmp_dir, sizeof tmp_dir, "/tmp/tessera-trace-XXXXXX");
-    cr_assert(mkdtemp(tmp_dir), "mkdtemp");
-}
-
-static const char *binary(void)
-{
-    const char *bin = getenv("TESSERA_BIN");
-    return bin ? bin : "../tessera";
-}
+static void make_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "trace"); }
 
 static void path_in_dir(char *out, size_t size, const char *name) { snprintf(out, size, "%s/%s", tmp_dir, name); }
 
@@ -55,16 +46,11 @@ static int run_trace(char *log, size_t log_size, const char *args)
     }
     expanded[n] = '\0';
     path_in_dir(log_path, sizeof log_path, "trace.log");
-    snprintf(cmd, sizeof cmd, "timeout %d %s trace %s > %s 2>&1", TRACE_TIMEOUT_S, binary(), expanded, log_path);
-    int status = system(cmd);
-    FILE *f = fopen(log_path, "rb");
-    size_t got = f ? fread(log, 1, log_size - 1, f) : 0;
-    log[got] = '\0';
-    if (f)
-        fclose(f);
-    if (WIFSIGNALED(status))
-        return 128 + WTERMSIG(status);
-    return WEXITSTATUS(status);
+    snprintf(cmd, sizeof cmd, "timeout %d %s trace %s > %s 2>&1", TRACE_TIMEOUT_S, support_tessera_bin(), expanded,
+             log_path);
+    int code = support_run(cmd);
+    support_read_text(log_path, log, log_size);
+    return code;
 }
 
 static void write_bytes(const char *name, const void *data, size_t size)
