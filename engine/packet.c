@@ -92,3 +92,72 @@ void packet_primary(ray_packet *p, const camera_basis *cam, int x0, int y0, int 
     if (same_sign)
         p->flags |= PACKET_CONSTANT_SIGNS;
 }
+
+/* camera.h's screen mapping for continuous pixel coordinates, with the
+ * divisions by the image size hoisted into two scales. */
+typedef struct screen_map {
+    float x_scale, y_scale; /* 2 / W, 2 / H */
+    vec3 forward, right, up;
+} screen_map;
+
+static screen_map screen_map_make(const camera_basis *cam)
+{
+    return (screen_map){2.f / (float)cam->width_px, 2.f / (float)cam->height_px, cam->forward, cam->right, cam->up};
+}
+
+/* Unit direction through pixel position (px, py): camera_pixel_direction's
+ * sum order, then v3_normalize's arithmetic: x * (1 / len), and a zero or
+ * NaN length leaves the vector as it is (selected, not branched on). */
+static inline void screen_direction(const screen_map *m, float px, float py, float *dx, float *dy, float *dz)
+{
+    float sx = px * m->x_scale - 1.f;
+    float sy = 1.f - py * m->y_scale;
+    float x = m->forward.x + (m->right.x * sx + m->up.x * sy);
+    float y = m->forward.y + (m->right.y * sx + m->up.y * sy);
+    float z = m->forward.z + (m->right.z * sx + m->up.z * sy);
+    float len = sqrtf(x * x + y * y + z * z);
+    float inv = 1.f / len;
+    float ux = x * inv, uy = y * inv, uz = z * inv;
+    bool scale = len > 0.f;
+    *dx = scale ? ux : x;
+    *dy = scale ? uy : y;
+    *dz = scale ? uz : z;
+}
+
+/* True when each direction component has one sign bit over rays [0, count). */
+static bool directions_keep_signs(const ray_packet *p, uint32_t count)
+{
+    uint32_t any_negative = 0, all_negative = 7u;
+    for (uint32_t i = 0; i < count; i++) {
+        uint32_t negative = (uint32_t)(signbit(p->dir_x[i]) != 0) | (uint32_t)(signbit(p->dir_y[i]) != 0) << 1 |
+                            (uint32_t)(signbit(p->dir_z[i]) != 0) << 2;
+        any_negative |= negative;
+        all_negative &= negative;
+    }
+    return any_negative == all_negative;
+}
+
+void packet_primary_at(ray_packet *p, const camera_basis *cam, const float *px, const float *py, uint32_t count)
+{
+    packet_reset(p, count, PACKET_COMMON_ORIGIN | PACKET_NORMALIZED);
+    const screen_map m = screen_map_make(cam);
+    const vec3 eye = cam->eye;
+    for (uint32_t i = 0; i < count; i++) {
+        screen_direction(&m, px[i], py[i], &p->dir_x[i], &p->dir_y[i], &p->dir_z[i]);
+        p->org_x[i] = eye.x;
+        p->org_y[i] = eye.y;
+        p->org_z[i] = eye.z;
+        p->t_near[i] = 0.f;
+        p->t_far[i] = FLT_MAX;
+    }
+    if (directions_keep_signs(p, count))
+        p->flags |= PACKET_CONSTANT_SIGNS;
+}
+
+ray packet_primary_ray_at(const camera_basis *cam, float px, float py)
+{
+    const screen_map m = screen_map_make(cam);
+    ray r = {cam->eye, v3(0.f, 0.f, 0.f), 0.f, FLT_MAX};
+    screen_direction(&m, px, py, &r.dir.x, &r.dir.y, &r.dir.z);
+    return r;
+}

@@ -112,4 +112,20 @@ void packet_derive_inv_dir(ray_packet *p);
 struct camera_basis;
 void packet_primary(ray_packet *p, const struct camera_basis *cam, int x0, int y0, int w, int h);
 
+/* Primary rays through continuous pixel positions: ray i (i < count <= 64)
+ * goes through (px[i], py[i]), where pixel x spans [x, x + 1) and its centre
+ * is x + 0.5, with camera.h's mapping written as
+ *   sx = px * (2 / W) - 1,  sy = 1 - py * (2 / H)
+ * (the scales computed once per call: no division per ray but the
+ * normalisation's; at pixel centres a direction can differ from
+ * packet_primary's by an ulp). Unit directions (v3_normalize's arithmetic),
+ * common origin, t in (0, FLT_MAX]; PACKET_CONSTANT_SIGNS is set exactly when
+ * it holds. */
+void packet_primary_at(ray_packet *p, const struct camera_basis *cam, const float *px, const float *py,
+                       uint32_t count);
+
+/* The ray packet_primary_at puts in a packet for the position (px, py), bit
+ * for bit (for single-ray code and tests). */
+ray packet_primary_ray_at(const struct camera_basis *cam, float px, float py);
+
 #endif

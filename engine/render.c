@@ -3,6 +3,7 @@
 #include <float.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdalign.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 
@@ -351,32 +352,85 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
 /* Primary rays per packet: 8 x 8 pixels, so a packet covers a compact patch. */
 #define RENDER_PACKET_EDGE_PX 8
 
+/* Per thread: two packets and the shading state, ~60 KB: too big for a
+ * worker's stack. Used by one block at a time. */
+static _Thread_local struct render_scratch {
+    ray_packet primary, shadows;
+    packet_shading ps;
+} scratch;
+
+/* Store the colours of a w x h block (row-major) at pixel (px, py) of the image. */
+static void store_block(const camera_basis *cam, int px, int py, int w, int h, const vec3 *colour, float *rgb)
+{
+    for (int j = 0; j < h; j++)
+        for (int i = 0; i < w; i++) {
+            vec3 c = colour[j * w + i];
+            float *out = rgb + 3 * ((size_t)(py + j) * (size_t)cam->width_px + (size_t)(px + i));
+            out[0] = c.x;
+            out[1] = c.y;
+            out[2] = c.z;
+        }
+}
+
 void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb, render_counts *counts)
 {
-    /* per thread: two packets and the shading state, ~60 KB: too big for a worker's stack */
-    static _Thread_local ray_packet primary, shadows;
-    static _Thread_local packet_shading ps;
     const camera_basis *cam = &v->camera;
     for (int py = y0; py < y1; py += RENDER_PACKET_EDGE_PX)
         for (int px = x0; px < x1; px += RENDER_PACKET_EDGE_PX) {
             int w = x1 - px < RENDER_PACKET_EDGE_PX ? x1 - px : RENDER_PACKET_EDGE_PX;
             int h = y1 - py < RENDER_PACKET_EDGE_PX ? y1 - py : RENDER_PACKET_EDGE_PX;
-            packet_primary(&primary, cam, px, py, w, h);
-            shade_packet(v, &primary, &shadows, &ps, counts);
-            for (int j = 0; j < h; j++)
-                for (int i = 0; i < w; i++) {
-                    vec3 c = ps.colour[j * w + i];
-                    float *out = rgb + 3 * ((size_t)(py + j) * (size_t)cam->width_px + (size_t)(px + i));
-                    out[0] = c.x;
-                    out[1] = c.y;
-                    out[2] = c.z;
-                }
+            packet_primary(&scratch.primary, cam, px, py, w, h);
+            shade_packet(v, &scratch.primary, &scratch.shadows, &scratch.ps, counts);
+            store_block(cam, px, py, w, h, scratch.ps.colour, rgb);
+        }
+}
+
+/* One w x h block at (x0, y0) (w, h <= 8) with a jittered sampler: one packet
+ * per stratum (i, j) holding that stratum's sample of every pixel of the
+ * block (neighbouring rays, so packets stay coherent), k^2 packets in all.
+ * Colours are summed per pixel in stratum row-major order, then divided by
+ * k^2: sampler.h's pixel value, independent of how the image is cut up. */
+static void render_block_jittered(const render_view *v, const pixel_sampler *s, int x0, int y0, int w, int h,
+                                  float *rgb, render_counts *counts)
+{
+    alignas(64) float sample_x[PACKET_MAX_RAYS], sample_y[PACKET_MAX_RAYS];
+    vec3 sum[PACKET_MAX_RAYS];
+    const int k = s->k, n = w * h;
+    for (int r = 0; r < n; r++)
+        sum[r] = v3(0.f, 0.f, 0.f);
+    for (int j = 0; j < k; j++)
+        for (int i = 0; i < k; i++) {
+            pixel_sampler_block_positions(s, x0, y0, w, h, i, j, sample_x, sample_y);
+            packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)n);
+            shade_packet(v, &scratch.primary, &scratch.shadows, &scratch.ps, counts);
+            for (int r = 0; r < n; r++)
+                sum[r] = v3_add(sum[r], scratch.ps.colour[r]);
+        }
+    const float samples = (float)(k * k);
+    for (int r = 0; r < n; r++)
+        sum[r] = v3(sum[r].x / samples, sum[r].y / samples, sum[r].z / samples);
+    store_block(&v->camera, x0, y0, w, h, sum, rgb);
+}
+
+void render_tile_sampled(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                         render_counts *counts)
+{
+    if (s->kind != PIXEL_SAMPLER_JITTERED) {
+        render_tile(v, x0, y0, x1, y1, rgb, counts);
+        return;
+    }
+    for (int py = y0; py < y1; py += RENDER_PACKET_EDGE_PX)
+        for (int px = x0; px < x1; px += RENDER_PACKET_EDGE_PX) {
+            int w = x1 - px < RENDER_PACKET_EDGE_PX ? x1 - px : RENDER_PACKET_EDGE_PX;
+            int h = y1 - py < RENDER_PACKET_EDGE_PX ? y1 - py : RENDER_PACKET_EDGE_PX;
+            render_block_jittered(v, s, px, py, w, h, rgb, counts);
         }
 }
 
 /* Shared by the threads of one render_image call. */
 typedef struct tile_queue {
     const render_view *view;
+    const pixel_sampler *sampler;
     float *rgb;
     int tiles_x, tile_count;
     atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
@@ -399,7 +453,7 @@ static void *render_worker(void *arg)
         int x0 = (tile % q->tiles_x) * RENDER_TILE_PX, y0 = (tile / q->tiles_x) * RENDER_TILE_PX;
         int x1 = x0 + RENDER_TILE_PX < cam->width_px ? x0 + RENDER_TILE_PX : cam->width_px;
         int y1 = y0 + RENDER_TILE_PX < cam->height_px ? y0 + RENDER_TILE_PX : cam->height_px;
-        render_tile(q->view, x0, y0, x1, y1, q->rgb, &counts);
+        render_tile_sampled(q->view, q->sampler, x0, y0, x1, y1, q->rgb, &counts);
     }
 }
 
@@ -408,7 +462,14 @@ static void *render_worker(void *arg)
 
 void render_image(const render_view *v, int threads, float *rgb, render_counts *counts)
 {
-    tile_queue q = {.view = v, .rgb = rgb};
+    const pixel_sampler single = pixel_sampler_single();
+    render_image_sampled(v, &single, threads, rgb, counts);
+}
+
+void render_image_sampled(const render_view *v, const pixel_sampler *s, int threads, float *rgb,
+                          render_counts *counts)
+{
+    tile_queue q = {.view = v, .sampler = s, .rgb = rgb};
     q.tiles_x = (v->camera.width_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX;
     q.tile_count = q.tiles_x * ((v->camera.height_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX);
     atomic_init(&q.next_tile, 0);

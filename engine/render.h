@@ -22,6 +22,7 @@
 #include "camera.h"
 #include "err.h"
 #include "ray.h"
+#include "sampler.h"
 #include "vec3.h"
 
 struct scene;
@@ -59,10 +60,22 @@ vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays);
  * image, row-major, top row first). */
 void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb, render_counts *counts);
 
+/* Render pixels [x0, x1) x [y0, y1) with a pixel sampler (sampler.h; must be
+ * valid): single gives exactly render_tile's result; jittered traces k^2
+ * packets per 8 x 8 block, one per stratum, and stores each pixel's mean
+ * colour. Pixel values do not depend on how the image is split into tiles.
+ * `counts` receives every ray traced (k^2 primary rays per pixel). */
+void render_tile_sampled(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                         render_counts *counts);
+
 /* Render the whole image with `threads` threads (the caller's included)
  * pulling tiles from an atomic counter. Threads the system refuses are logged
  * and the image is finished by the others. `counts` (may be NULL) receives
  * the rays traced. */
 void render_image(const render_view *v, int threads, float *rgb, render_counts *counts);
+
+/* render_image with a pixel sampler (render_tile_sampled for each tile). */
+void render_image_sampled(const render_view *v, const pixel_sampler *s, int threads, float *rgb,
+                          render_counts *counts);
 
 #endif
