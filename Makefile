@@ -44,7 +44,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan bench clean check-headers
+.PHONY: all deps run test test-asan test-tsan bench clean check-headers
 
 all: tessera
 
@@ -91,6 +91,18 @@ test-asan: deps
 	    build-asan/tessera_tests tessera-asan
 	cd tests && TESSERA_BIN=../tessera-asan ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
 
+# the threaded tests under ThreadSanitizer; any report fails the run. Criterion
+# cannot start under TSan (its issue #274), so these files are compiled against
+# tests/tsan/criterion/criterion.h, a stand-in that runs the same Test() bodies.
+TSAN_TESTS := tests/test_pipeline.c
+TSAN_BIN := build-tsan/tessera_tsan_tests
+test-tsan: deps
+	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)
+	cd tests && TSAN_OPTIONS="halt_on_error=1 exitcode=66 second_deadlock_stack=1" ../$(TSAN_BIN)
+
+build-tsan/tessera_tsan_tests: $(TSAN_TESTS) $(LIB)
+	$(CC) -Itests/tsan $(CPPFLAGS) $(CFLAGS) -o $@ $(TSAN_TESTS) $(LIB) $(LDLIBS) -lstdc++
+
 tessera-asan: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
@@ -108,7 +120,7 @@ bench:
 	sh tools/bench.sh
 
 clean:
-	rm -rf build build-asan tessera tessera-asan out
+	rm -rf build build-asan build-tsan tessera tessera-asan out
 
 # dependency files are only read, never remade (else make's built-in rules try)
 %.d: ;

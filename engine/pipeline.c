@@ -1,0 +1,961 @@
+/* pipeline.c - the frame loop, the frame barrier, transactions and the tiled
+ * image traverser. See pipeline.h for the model; the comments here say which
+ * lock or which stage guards each field. */
+#include "pipeline.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "log.h"
+
+/* A queued callback with its own copy of the arguments. */
+typedef struct queued_call {
+    pipeline_fn fn;
+    const char *name;
+    uint64_t due_frame; /* one-shots: the frame it runs at; transactions: 0 */
+    size_t args_bytes;
+    union {
+        max_align_t align;
+        unsigned char bytes[PIPELINE_ARGS_MAX];
+    } args;
+} queued_call;
+
+typedef struct serial_callback {
+    const char *name;
+    pipeline_serial_fn fn;
+    void *ctx;
+} serial_callback;
+
+typedef struct parallel_callback {
+    const char *name;
+    pipeline_parallel_fn fn;
+    void *ctx;
+} parallel_callback;
+
+typedef struct termination_callback {
+    const char *name;
+    pipeline_termination_fn fn;
+    void *ctx;
+} termination_callback;
+
+enum { BUFFER_COUNT = 3 };
+
+typedef struct frame_buffer {
+    float *rgb;       /* width * height * 3 */
+    frame_image meta; /* what is (being) rendered into rgb */
+} frame_buffer;
+
+typedef struct pipe_channel {
+    /* live state: changed only in the serial section (or before run) */
+    camera_desc camera;
+    uint64_t camera_serial;
+    /* fixed after pipeline_add_channel */
+    int width_px, height_px;
+    image_display *display;
+    int tiles_x, tiles_y;
+    uint32_t *tile_order; /* tiles_x * tiles_y tile indices (y * tiles_x + x) in hand-out order */
+    uint32_t tile_base;   /* index of this channel's first tile in the frame's tile sequence */
+    frame_buffer buffers[BUFFER_COUNT];
+    /* buffer states (indices into buffers): changed only by the serial section */
+    int pending, queued, on_screen;
+    bool queued_valid; /* buffers[queued] holds a finished frame not yet displayed */
+    /* frozen for the frame being rendered: written by the serial section, read by render threads */
+    render_view view;
+} pipe_channel;
+
+/* What every thread does in the current loop step; written only by the
+ * serial section, read by all threads after the barrier releases them. */
+typedef struct loop_step {
+    frame_info info;
+    bool render;           /* render frame info.frame */
+    bool display;          /* thread 0 shows the queued buffers first */
+    bool animate_parallel; /* parallel animation callbacks, then the animation barrier */
+    bool exit;             /* leave the loop */
+} loop_step;
+
+typedef struct render_thread {
+    pipeline *p;
+    int id;              /* 0 is the thread that called pipeline_run */
+    pthread_t handle;    /* valid while `joinable` */
+    bool joinable;       /* serial section / run only */
+    uint64_t start_generation; /* a new thread waits until the frame barrier passes this generation */
+    render_counts counts; /* rays of the current frame; written by this thread in the render
+                             stage, read and cleared by the serial section */
+} render_thread;
+
+/* A barrier whose last arriving thread runs a function before releasing the
+ * others. Guarded by `lock`: arrived, generation, participants. */
+typedef struct barrier {
+    pthread_mutex_t lock;
+    pthread_cond_t released;
+    int participants;
+    int arrived;
+    uint64_t generation;
+} barrier;
+
+struct pipeline {
+    pipeline_config cfg;
+
+    /* channels: the array is fixed once run starts */
+    pipe_channel channels[PIPELINE_MAX_CHANNELS];
+    int channel_count;
+    uint32_t tile_total; /* tiles of all channels per frame */
+
+    /* transaction queue (ring) and one-shots: guarded by queue_lock */
+    pthread_mutex_t queue_lock;
+    queued_call *queue;   /* PIPELINE_QUEUE_MAX slots */
+    size_t queue_head, queue_count;
+    queued_call *oneshots; /* PIPELINE_QUEUE_MAX slots, unordered; due frames ascend within a frame's run */
+    size_t oneshot_count;
+    bool closed;   /* no more transactions: run has returned */
+    bool refusing; /* the last call was refused (logging only the first of a run) */
+
+    /* callbacks: changed only in the serial section or before run */
+    serial_callback serial_anim[PIPELINE_MAX_CALLBACKS];
+    int serial_anim_count;
+    parallel_callback parallel_anim[PIPELINE_MAX_CALLBACKS];
+    int parallel_anim_count;
+    termination_callback terminations[PIPELINE_MAX_CALLBACKS];
+    int termination_count;
+
+    /* live render state other than cameras: serial section only */
+    int threads_wanted;
+    bool shadows;
+
+    /* the loop */
+    barrier frame_barrier, anim_barrier;
+    loop_step step;
+    render_thread threads[PIPELINE_MAX_THREADS];
+    int thread_count;      /* threads in the loop this step: serial section only */
+    atomic_uint next_tile; /* the load balancer: next index into the frame's tile sequence */
+    atomic_bool stop_requested;
+    atomic_bool running;
+    bool ran;              /* pipeline_run was called: its thread only */
+    bool exit_after_step;  /* the current step is the last: serial section only */
+    uint64_t next_frame;   /* serial section only */
+    double start_s, last_serial_s;
+    queued_call *oneshot_scratch; /* serial section only: due one-shots being run */
+
+    /* display stage: written by thread 0 in the display stage, read by the serial section */
+    double display_stage_s; /* duration of the last display stage */
+    bool display_failed;
+    tess_error display_error;
+
+    /* statistics: guarded by stats_lock */
+    pthread_mutex_t stats_lock;
+    pipeline_stats stats;
+};
+
+/* The pipeline whose serial section this thread is running, if any. */
+static _Thread_local const pipeline *tls_serial_owner;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---------------------------------------------------------------- barrier */
+
+static void barrier_init(barrier *b)
+{
+    pthread_mutex_init(&b->lock, NULL);
+    pthread_cond_init(&b->released, NULL);
+    b->participants = 1;
+    b->arrived = 0;
+    b->generation = 0;
+}
+
+static void barrier_destroy(barrier *b)
+{
+    pthread_cond_destroy(&b->released);
+    pthread_mutex_destroy(&b->lock);
+}
+
+/* Wait until all participants have arrived. The last one runs `serial(p)`
+ * (if not NULL) while the others wait; serial returns the participants of the
+ * next use (-1 keeps them), set before anyone is released. */
+static void barrier_wait(barrier *b, pipeline *p, int (*serial)(pipeline *p))
+{
+    pthread_mutex_lock(&b->lock);
+    uint64_t generation = b->generation;
+    if (++b->arrived == b->participants) {
+        pthread_mutex_unlock(&b->lock);
+        /* every participant is inside the wait below: nobody else runs */
+        int participants = serial ? serial(p) : -1;
+        pthread_mutex_lock(&b->lock);
+        if (participants > 0)
+            b->participants = participants;
+        b->arrived = 0;
+        b->generation++;
+        pthread_cond_broadcast(&b->released);
+    } else {
+        while (b->generation == generation)
+            pthread_cond_wait(&b->released, &b->lock);
+    }
+    pthread_mutex_unlock(&b->lock);
+}
+
+/* Participants of a barrier nobody is waiting at (between steps). */
+static void barrier_set_participants(barrier *b, int participants)
+{
+    pthread_mutex_lock(&b->lock);
+    b->participants = participants;
+    pthread_mutex_unlock(&b->lock);
+}
+
+/* ---------------------------------------------------------------- config */
+
+pipeline_config pipeline_config_default(const struct scene *s, const struct accel *a)
+{
+    pipeline_config c;
+    memset(&c, 0, sizeof c);
+    c.scene = s;
+    c.accel = a;
+    c.threads = 1;
+    c.time_mode = PIPELINE_TIME_REAL;
+    c.rate_hz = 30.0;
+    c.max_frames = 0;
+    c.tile_px = RENDER_TILE_PX;
+    c.order = TILE_ORDER_ROWS;
+    c.order_seed = 1;
+    c.sampler = pixel_sampler_single();
+    c.shading = RENDER_SHADE_PHONG;
+    c.shadows = true;
+    return c;
+}
+
+bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
+{
+    if (!cfg->scene || !cfg->accel)
+        return tess_error_set(err, "pipeline: no scene or acceleration structure");
+    if (cfg->threads < 1 || cfg->threads > PIPELINE_MAX_THREADS)
+        return tess_error_set(err, "pipeline: threads: %d is not in 1..%d", cfg->threads, PIPELINE_MAX_THREADS);
+    if (cfg->time_mode != PIPELINE_TIME_REAL && cfg->time_mode != PIPELINE_TIME_FIXED_RATE)
+        return tess_error_set(err, "pipeline: unknown time mode %d", (int)cfg->time_mode);
+    if (cfg->time_mode == PIPELINE_TIME_FIXED_RATE && !(cfg->rate_hz > 0.0 && isfinite(cfg->rate_hz)))
+        return tess_error_set(err, "pipeline: rate_hz: %g is not a positive frame rate", cfg->rate_hz);
+    if (cfg->tile_px < PIPELINE_TILE_PX_MIN || cfg->tile_px > PIPELINE_TILE_PX_MAX)
+        return tess_error_set(err, "pipeline: tile_px: %d is not in %d..%d", cfg->tile_px, PIPELINE_TILE_PX_MIN,
+                              PIPELINE_TILE_PX_MAX);
+    if ((unsigned)cfg->order >= TILE_ORDER_COUNT)
+        return tess_error_set(err, "pipeline: unknown tile order %d", (int)cfg->order);
+    if (!pixel_sampler_validate(&cfg->sampler, err)) {
+        tess_error_prefix(err, "pipeline: sampler: ");
+        return false;
+    }
+    return true;
+}
+
+pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
+{
+    if (!pipeline_config_validate(cfg, err))
+        return NULL;
+    pipeline *p = calloc(1, sizeof *p);
+    queued_call *queue = malloc(PIPELINE_QUEUE_MAX * sizeof *queue);
+    queued_call *oneshots = malloc(PIPELINE_QUEUE_MAX * sizeof *oneshots);
+    queued_call *scratch = malloc(PIPELINE_QUEUE_MAX * sizeof *scratch);
+    if (!p || !queue || !oneshots || !scratch) {
+        free(p);
+        free(queue);
+        free(oneshots);
+        free(scratch);
+        tess_error_set(err, "pipeline: out of memory");
+        return NULL;
+    }
+    p->cfg = *cfg;
+    p->queue = queue;
+    p->oneshots = oneshots;
+    p->oneshot_scratch = scratch;
+    p->threads_wanted = cfg->threads;
+    p->shadows = cfg->shadows;
+    pthread_mutex_init(&p->queue_lock, NULL);
+    pthread_mutex_init(&p->stats_lock, NULL);
+    barrier_init(&p->frame_barrier);
+    barrier_init(&p->anim_barrier);
+    atomic_init(&p->next_tile, 0);
+    atomic_init(&p->stop_requested, false);
+    atomic_init(&p->running, false);
+    p->thread_count = 1;
+    for (int i = 0; i < PIPELINE_MAX_THREADS; i++) {
+        p->threads[i].p = p;
+        p->threads[i].id = i;
+    }
+    return p;
+}
+
+static void channel_free(pipe_channel *c)
+{
+    for (int b = 0; b < BUFFER_COUNT; b++)
+        free(c->buffers[b].rgb);
+    free(c->tile_order);
+    image_display_destroy(c->display);
+}
+
+int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, int height_px, image_display *display,
+                         tess_error *err)
+{
+    bool ok = true;
+    if (p->ran || atomic_load(&p->running))
+        ok = tess_error_set(err, "pipeline: channels can only be added before the pipeline runs");
+    else if (p->channel_count == PIPELINE_MAX_CHANNELS)
+        ok = tess_error_set(err, "pipeline: more than %d channels", PIPELINE_MAX_CHANNELS);
+    else if (width_px < 1 || height_px < 1 || width_px > 65536 || height_px > 65536)
+        ok = tess_error_set(err, "pipeline: channel %d: image size %dx%d is not in 1x1..65536x65536",
+                            p->channel_count, width_px, height_px);
+    else if (!display)
+        ok = tess_error_set(err, "pipeline: channel %d has no display", p->channel_count);
+    else if (!camera_validate(camera, err)) {
+        tess_error_prefix(err, "pipeline: channel %d: ", p->channel_count);
+        ok = false;
+    }
+    if (!ok) {
+        image_display_destroy(display);
+        return -1;
+    }
+    pipe_channel *c = &p->channels[p->channel_count];
+    memset(c, 0, sizeof *c);
+    c->camera = *camera;
+    c->width_px = width_px;
+    c->height_px = height_px;
+    c->display = display;
+    c->tiles_x = (width_px + p->cfg.tile_px - 1) / p->cfg.tile_px;
+    c->tiles_y = (height_px + p->cfg.tile_px - 1) / p->cfg.tile_px;
+    size_t tiles = (size_t)c->tiles_x * (size_t)c->tiles_y;
+    size_t floats = (size_t)width_px * (size_t)height_px * 3;
+    c->tile_order = malloc(tiles * sizeof *c->tile_order);
+    for (int b = 0; b < BUFFER_COUNT; b++)
+        c->buffers[b].rgb = calloc(floats, sizeof(float));
+    bool have_memory = c->tile_order != NULL;
+    for (int b = 0; b < BUFFER_COUNT; b++)
+        have_memory = have_memory && c->buffers[b].rgb != NULL;
+    if (!have_memory || p->tile_total + tiles > UINT32_MAX / 2) {
+        channel_free(c);
+        memset(c, 0, sizeof *c);
+        tess_error_set(err, "pipeline: channel %d: out of memory for %dx%d frame buffers", p->channel_count,
+                       width_px, height_px);
+        return -1;
+    }
+    tile_order_fill(p->cfg.order, c->tiles_x, c->tiles_y, p->cfg.order_seed, c->tile_order);
+    c->tile_base = p->tile_total;
+    p->tile_total += (uint32_t)tiles;
+    c->pending = 0;
+    c->queued = 1;
+    c->on_screen = 2;
+    return p->channel_count++;
+}
+
+/* ---------------------------------------------------------------- queueing */
+
+static bool queue_call(pipeline *p, bool oneshot, uint64_t frame, const char *name, pipeline_fn fn,
+                       const void *args, size_t args_bytes)
+{
+    if (!fn) {
+        log_error("pipeline: transaction '%s' has no function", name ? name : "?");
+        return false;
+    }
+    if (args_bytes > PIPELINE_ARGS_MAX) {
+        log_error("pipeline: transaction '%s': %zu bytes of arguments (at most %d are copied)", name, args_bytes,
+                  PIPELINE_ARGS_MAX);
+        pthread_mutex_lock(&p->stats_lock);
+        p->stats.transactions_rejected++;
+        pthread_mutex_unlock(&p->stats_lock);
+        return false;
+    }
+    pthread_mutex_lock(&p->queue_lock);
+    const char *refusal = NULL;
+    queued_call *slot = NULL;
+    if (p->closed)
+        refusal = "the pipeline has stopped";
+    else if (!oneshot && p->queue_count == PIPELINE_QUEUE_MAX)
+        refusal = "the transaction queue is full";
+    else if (oneshot && p->oneshot_count == PIPELINE_QUEUE_MAX)
+        refusal = "too many one-shot callbacks are waiting";
+    else if (oneshot)
+        slot = &p->oneshots[p->oneshot_count++];
+    else
+        slot = &p->queue[(p->queue_head + p->queue_count++) % PIPELINE_QUEUE_MAX];
+    if (slot) {
+        slot->fn = fn;
+        slot->name = name ? name : "(unnamed)";
+        slot->due_frame = frame;
+        slot->args_bytes = args_bytes;
+        if (args_bytes)
+            memcpy(slot->args.bytes, args, args_bytes);
+    }
+    /* log the first refusal of a run of them, not every retry of a flooding producer */
+    bool first_refusal = refusal && !p->refusing;
+    p->refusing = refusal != NULL;
+    pthread_mutex_unlock(&p->queue_lock);
+    if (refusal) {
+        if (first_refusal)
+            log_warn("pipeline: transaction '%s' refused: %s (further refusals are only counted until one is "
+                     "accepted)",
+                     name ? name : "(unnamed)", refusal);
+        pthread_mutex_lock(&p->stats_lock);
+        p->stats.transactions_rejected++;
+        pthread_mutex_unlock(&p->stats_lock);
+        return false;
+    }
+    return true;
+}
+
+bool pipeline_transaction(pipeline *p, const char *name, pipeline_fn fn, const void *args, size_t args_bytes)
+{
+    return queue_call(p, false, 0, name, fn, args, args_bytes);
+}
+
+bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_fn fn, const void *args,
+                       size_t args_bytes)
+{
+    return queue_call(p, true, frame, name, fn, args, args_bytes);
+}
+
+void pipeline_stop(pipeline *p) { atomic_store(&p->stop_requested, true); }
+
+typedef struct camera_args {
+    int channel;
+    camera_desc camera;
+} camera_args;
+
+static void apply_camera(pipeline *p, void *args)
+{
+    camera_args *a = args;
+    pipeline_set_camera(p, a->channel, &a->camera);
+}
+
+bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err)
+{
+    if (channel < 0 || channel >= p->channel_count)
+        return tess_error_set(err, "pipeline: no channel %d (there are %d)", channel, p->channel_count);
+    if (!camera_validate(camera, err))
+        return false;
+    camera_args a = {channel, *camera};
+    if (!pipeline_transaction(p, "camera", apply_camera, &a, sizeof a))
+        return tess_error_set(err, "pipeline: camera transaction refused (queue full or pipeline stopped)");
+    return true;
+}
+
+static void apply_threads(pipeline *p, void *args)
+{
+    int n;
+    memcpy(&n, args, sizeof n);
+    pipeline_set_threads(p, n);
+}
+
+bool pipeline_queue_threads(pipeline *p, int threads)
+{
+    if (threads < 1 || threads > PIPELINE_MAX_THREADS) {
+        log_error("pipeline: thread count %d is not in 1..%d", threads, PIPELINE_MAX_THREADS);
+        return false;
+    }
+    return pipeline_transaction(p, "threads", apply_threads, &threads, sizeof threads);
+}
+
+/* ---------------------------------------------------------------- state */
+
+bool pipeline_in_serial_section(const pipeline *p) { return tls_serial_owner == p; }
+
+/* State may change here: in the serial section, or while no loop runs. */
+static bool may_change_state(const pipeline *p, const char *what)
+{
+    if (tls_serial_owner == p || !atomic_load(&p->running))
+        return true;
+    log_error("pipeline: %s outside a transaction or serial callback: refused (state changes only at the "
+              "frame barrier)",
+              what);
+    return false;
+}
+
+bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera)
+{
+    if (!may_change_state(p, "camera change"))
+        return false;
+    tess_error err = {{0}};
+    if (channel < 0 || channel >= p->channel_count) {
+        log_error("pipeline: camera change for channel %d: there are %d channels", channel, p->channel_count);
+        return false;
+    }
+    if (!camera_validate(camera, &err)) {
+        log_error("pipeline: camera change for channel %d refused: %s", channel, err.msg);
+        return false;
+    }
+    p->channels[channel].camera = *camera;
+    p->channels[channel].camera_serial++;
+    return true;
+}
+
+bool pipeline_set_threads(pipeline *p, int threads)
+{
+    if (!may_change_state(p, "thread-count change"))
+        return false;
+    if (threads < 1 || threads > PIPELINE_MAX_THREADS) {
+        log_error("pipeline: thread count %d is not in 1..%d", threads, PIPELINE_MAX_THREADS);
+        return false;
+    }
+    p->threads_wanted = threads;
+    return true;
+}
+
+bool pipeline_set_shadows(pipeline *p, bool shadows)
+{
+    if (!may_change_state(p, "shadow setting"))
+        return false;
+    p->shadows = shadows;
+    return true;
+}
+
+camera_desc pipeline_camera(const pipeline *p, int channel)
+{
+    if (channel < 0 || channel >= p->channel_count)
+        return p->channels[0].camera;
+    return p->channels[channel].camera;
+}
+
+uint64_t pipeline_camera_serial(const pipeline *p, int channel)
+{
+    if (channel < 0 || channel >= p->channel_count)
+        return 0;
+    return p->channels[channel].camera_serial;
+}
+
+int pipeline_channel_count(const pipeline *p) { return p->channel_count; }
+uint64_t pipeline_frame(const pipeline *p) { return p->step.info.frame; }
+int pipeline_threads(const pipeline *p) { return p->step.info.threads > 0 ? p->step.info.threads : p->thread_count; }
+
+pipeline_stats pipeline_get_stats(pipeline *p)
+{
+    pthread_mutex_lock(&p->stats_lock);
+    pipeline_stats s = p->stats;
+    pthread_mutex_unlock(&p->stats_lock);
+    return s;
+}
+
+/* ---------------------------------------------------------------- callbacks */
+
+static bool may_register(const pipeline *p, const char *what, int count)
+{
+    if (!may_change_state(p, what))
+        return false;
+    if (count >= PIPELINE_MAX_CALLBACKS) {
+        log_error("pipeline: %s: more than %d registered", what, PIPELINE_MAX_CALLBACKS);
+        return false;
+    }
+    return true;
+}
+
+bool pipeline_add_serial_animation(pipeline *p, const char *name, pipeline_serial_fn fn, void *ctx)
+{
+    if (!fn || !may_register(p, "serial animation callback", p->serial_anim_count))
+        return false;
+    p->serial_anim[p->serial_anim_count++] = (serial_callback){name ? name : "(unnamed)", fn, ctx};
+    return true;
+}
+
+bool pipeline_add_parallel_animation(pipeline *p, const char *name, pipeline_parallel_fn fn, void *ctx)
+{
+    if (!fn || !may_register(p, "parallel animation callback", p->parallel_anim_count))
+        return false;
+    p->parallel_anim[p->parallel_anim_count++] = (parallel_callback){name ? name : "(unnamed)", fn, ctx};
+    return true;
+}
+
+bool pipeline_add_termination(pipeline *p, const char *name, pipeline_termination_fn fn, void *ctx)
+{
+    if (!fn || !may_register(p, "termination callback", p->termination_count))
+        return false;
+    p->terminations[p->termination_count++] = (termination_callback){name ? name : "(unnamed)", fn, ctx};
+    return true;
+}
+
+bool pipeline_remove_animation(pipeline *p, void *fn, void *ctx)
+{
+    if (!may_change_state(p, "animation callback removal"))
+        return false;
+    for (int i = 0; i < p->serial_anim_count; i++)
+        if ((void *)p->serial_anim[i].fn == fn && p->serial_anim[i].ctx == ctx) {
+            memmove(&p->serial_anim[i], &p->serial_anim[i + 1],
+                    (size_t)(p->serial_anim_count - i - 1) * sizeof p->serial_anim[0]);
+            p->serial_anim_count--;
+            return true;
+        }
+    for (int i = 0; i < p->parallel_anim_count; i++)
+        if ((void *)p->parallel_anim[i].fn == fn && p->parallel_anim[i].ctx == ctx) {
+            memmove(&p->parallel_anim[i], &p->parallel_anim[i + 1],
+                    (size_t)(p->parallel_anim_count - i - 1) * sizeof p->parallel_anim[0]);
+            p->parallel_anim_count--;
+            return true;
+        }
+    return false;
+}
+
+/* ---------------------------------------------------------------- serial section */
+
+/* Time one serial callback against the budget. */
+static void note_duration(pipeline *p, const char *kind, const char *name, double t0)
+{
+    double took = now_s() - t0;
+    if (took <= PIPELINE_CALLBACK_BUDGET_S)
+        return;
+    log_warn("pipeline: %s '%s' took %.1f ms at the frame barrier (budget %.1f ms): every render thread waited",
+             kind, name, 1e3 * took, 1e3 * PIPELINE_CALLBACK_BUDGET_S);
+    pthread_mutex_lock(&p->stats_lock);
+    p->stats.slow_callbacks++;
+    pthread_mutex_unlock(&p->stats_lock);
+}
+
+/* Run the transactions queued before this point, in FIFO order. They run
+ * outside queue_lock (they may queue more); the slots stay counted in the
+ * queue until they are done, so producers cannot reuse them. */
+static void run_transactions(pipeline *p)
+{
+    pthread_mutex_lock(&p->queue_lock);
+    size_t head = p->queue_head, count = p->queue_count;
+    pthread_mutex_unlock(&p->queue_lock);
+    for (size_t i = 0; i < count; i++) {
+        queued_call *c = &p->queue[(head + i) % PIPELINE_QUEUE_MAX];
+        double t0 = now_s();
+        c->fn(p, c->args.bytes);
+        note_duration(p, "transaction", c->name, t0);
+    }
+    pthread_mutex_lock(&p->queue_lock);
+    p->queue_head = (head + count) % PIPELINE_QUEUE_MAX;
+    p->queue_count -= count;
+    pthread_mutex_unlock(&p->queue_lock);
+    pthread_mutex_lock(&p->stats_lock);
+    p->stats.transactions_applied += count;
+    pthread_mutex_unlock(&p->stats_lock);
+}
+
+/* Run the one-shots due at `frame` (or earlier), in the order they were queued. */
+static void run_oneshots(pipeline *p, uint64_t frame)
+{
+    size_t due = 0;
+    pthread_mutex_lock(&p->queue_lock);
+    size_t kept = 0;
+    for (size_t i = 0; i < p->oneshot_count; i++) {
+        if (p->oneshots[i].due_frame <= frame)
+            p->oneshot_scratch[due++] = p->oneshots[i];
+        else
+            p->oneshots[kept++] = p->oneshots[i];
+    }
+    p->oneshot_count = kept;
+    pthread_mutex_unlock(&p->queue_lock);
+    for (size_t i = 0; i < due; i++) {
+        queued_call *c = &p->oneshot_scratch[i];
+        double t0 = now_s();
+        c->fn(p, c->args.bytes);
+        note_duration(p, "one-shot callback", c->name, t0);
+    }
+}
+
+static void run_serial_animation(pipeline *p)
+{
+    /* a callback may remove itself: iterate over a copy */
+    serial_callback cbs[PIPELINE_MAX_CALLBACKS];
+    int n = p->serial_anim_count;
+    memcpy(cbs, p->serial_anim, (size_t)n * sizeof cbs[0]);
+    for (int i = 0; i < n; i++) {
+        double t0 = now_s();
+        cbs[i].fn(p, cbs[i].ctx, &p->step.info);
+        note_duration(p, "serial animation", cbs[i].name, t0);
+    }
+}
+
+static void *thread_main(void *arg);
+
+/* Join threads that left the loop at an earlier barrier. */
+static void join_departed(pipeline *p, int keep_below)
+{
+    for (int i = (keep_below > 1 ? keep_below : 1); i < PIPELINE_MAX_THREADS; i++)
+        if (p->threads[i].joinable) {
+            pthread_join(p->threads[i].handle, NULL);
+            p->threads[i].joinable = false;
+        }
+}
+
+/* Apply threads_wanted: start threads that join this step, or let the
+ * highest-numbered ones leave after the barrier. Returns the new count. */
+static int change_thread_count(pipeline *p)
+{
+    int want = p->threads_wanted, have = p->thread_count;
+    if (want == have)
+        return have;
+    if (want > have) {
+        for (int id = have; id < want; id++) {
+            render_thread *t = &p->threads[id];
+            if (t->joinable) { /* left at an earlier barrier: finish that first */
+                pthread_join(t->handle, NULL);
+                t->joinable = false;
+            }
+            memset(&t->counts, 0, sizeof t->counts);
+            /* it must not arrive at the frame barrier before the barrier that started it releases */
+            pthread_mutex_lock(&p->frame_barrier.lock);
+            t->start_generation = p->frame_barrier.generation;
+            pthread_mutex_unlock(&p->frame_barrier.lock);
+            int rc = pthread_create(&t->handle, NULL, thread_main, t);
+            if (rc != 0) {
+                log_warn("pipeline: could start only %d of %d render threads: %s", id, want, strerror(rc));
+                want = id;
+                p->threads_wanted = id;
+                break;
+            }
+            t->joinable = true;
+        }
+    }
+    if (want != have) {
+        pthread_mutex_lock(&p->stats_lock);
+        p->stats.thread_changes++;
+        pthread_mutex_unlock(&p->stats_lock);
+        log_debug("pipeline: %d -> %d render threads from frame %llu", have, want,
+                  (unsigned long long)p->step.info.frame);
+    }
+    p->thread_count = want;
+    return want;
+}
+
+/* Fold in what the previous step did: rays, frames, buffer rotation. */
+static void finish_previous_step(pipeline *p)
+{
+    const loop_step *prev = &p->step;
+    render_counts sum = {0, 0, 0};
+    for (int i = 0; i < PIPELINE_MAX_THREADS; i++) {
+        render_counts *c = &p->threads[i].counts;
+        sum.primary_rays += c->primary_rays;
+        sum.primary_hits += c->primary_hits;
+        sum.shadow_rays += c->shadow_rays;
+        memset(c, 0, sizeof *c);
+    }
+    pthread_mutex_lock(&p->stats_lock);
+    p->stats.rays.primary_rays += sum.primary_rays;
+    p->stats.rays.primary_hits += sum.primary_hits;
+    p->stats.rays.shadow_rays += sum.shadow_rays;
+    if (prev->render)
+        p->stats.frames_rendered++;
+    if (prev->display && !p->display_failed)
+        p->stats.frames_displayed++;
+    if (prev->display)
+        p->stats.display_s += p->display_stage_s;
+    pthread_mutex_unlock(&p->stats_lock);
+    for (int i = 0; i < p->channel_count; i++) {
+        pipe_channel *c = &p->channels[i];
+        if (prev->display)
+            c->queued_valid = false;
+        if (prev->render) { /* on screen <- queued, queued <- pending, pending <- old on screen */
+            int old_on_screen = c->on_screen;
+            c->on_screen = c->queued;
+            c->queued = c->pending;
+            c->pending = old_on_screen;
+            c->queued_valid = true;
+        }
+    }
+}
+
+/* Freeze each channel's camera and options for the frame about to render. */
+static void freeze_frame(pipeline *p)
+{
+    for (int i = 0; i < p->channel_count; i++) {
+        pipe_channel *c = &p->channels[i];
+        c->view = (render_view){p->cfg.scene, p->cfg.accel, camera_basis_make(&c->camera, c->width_px, c->height_px),
+                                p->shadows, p->cfg.shading};
+        frame_buffer *b = &c->buffers[c->pending];
+        b->meta = (frame_image){b->rgb, c->width_px, c->height_px, p->step.info.frame, p->step.info.time_s, i,
+                                c->camera, c->camera_serial};
+    }
+    atomic_store_explicit(&p->next_tile, 0, memory_order_relaxed);
+}
+
+/* The serial section of the frame barrier; returns the threads of the next step. */
+static int serial_section(pipeline *p)
+{
+    tls_serial_owner = p;
+    join_departed(p, p->thread_count);
+    finish_previous_step(p);
+    loop_step *s = &p->step;
+    if (p->exit_after_step) {
+        s->render = s->display = s->animate_parallel = false;
+        s->exit = true;
+        tls_serial_owner = NULL;
+        return -1;
+    }
+    double now = now_s();
+    uint64_t frame = p->next_frame;
+    s->info.frame = frame;
+    s->info.last_frame_s = frame == 0 ? 0.0 : now - p->last_serial_s;
+    p->last_serial_s = now;
+    if (frame == 0)
+        p->start_s = now;
+    s->info.time_s = p->cfg.time_mode == PIPELINE_TIME_FIXED_RATE ? (double)frame / p->cfg.rate_hz : now - p->start_s;
+    s->info.threads = p->thread_count;
+    /* a frame that will not render gets no callbacks (a stop asked for by one
+     * of this barrier's transactions is seen after them) */
+    bool stop = atomic_load(&p->stop_requested) || p->display_failed ||
+                (p->cfg.max_frames > 0 && frame >= p->cfg.max_frames);
+    if (!stop) {
+        run_transactions(p);
+        run_oneshots(p, frame);
+        run_serial_animation(p);
+        stop = atomic_load(&p->stop_requested);
+    }
+    bool any_queued = false;
+    for (int i = 0; i < p->channel_count; i++)
+        any_queued = any_queued || p->channels[i].queued_valid;
+    s->display = any_queued && !p->display_failed;
+    if (stop) {
+        s->render = s->animate_parallel = false;
+        p->exit_after_step = true;
+        s->exit = !s->display; /* nothing left to show: leave now */
+        tls_serial_owner = NULL;
+        return -1;
+    }
+    int threads = change_thread_count(p);
+    s->info.threads = threads;
+    s->render = true;
+    s->exit = false;
+    s->animate_parallel = p->parallel_anim_count > 0;
+    if (s->animate_parallel)
+        barrier_set_participants(&p->anim_barrier, threads);
+    freeze_frame(p);
+    p->next_frame = frame + 1;
+    tls_serial_owner = NULL;
+    return threads;
+}
+
+/* ---------------------------------------------------------------- the stages */
+
+static void display_stage(pipeline *p)
+{
+    double t0 = now_s();
+    for (int i = 0; i < p->channel_count && !p->display_failed; i++) {
+        pipe_channel *c = &p->channels[i];
+        if (!c->queued_valid)
+            continue;
+        tess_error err = {{0}};
+        if (!c->display->ops->show(c->display, &c->buffers[c->queued].meta, &err)) {
+            if (!tess_error_is_set(&err))
+                tess_error_set(&err, "display '%s' failed without a reason", c->display->ops->name);
+            p->display_error = err;
+            p->display_failed = true;
+        }
+    }
+    p->display_stage_s = now_s() - t0;
+}
+
+/* The image traverser "tiled": one atomic counter over the tiles of every
+ * channel, in each channel's tile order. */
+static void render_stage(pipeline *p, render_thread *t)
+{
+    const int tile_px = p->cfg.tile_px;
+    const uint32_t total = p->tile_total;
+    for (;;) {
+        uint32_t g = atomic_fetch_add_explicit(&p->next_tile, 1, memory_order_relaxed);
+        if (g >= total)
+            return;
+        int ci = 0;
+        while (ci + 1 < p->channel_count && g >= p->channels[ci + 1].tile_base)
+            ci++;
+        pipe_channel *c = &p->channels[ci];
+        uint32_t tile = c->tile_order[g - c->tile_base];
+        int x0 = (int)(tile % (uint32_t)c->tiles_x) * tile_px, y0 = (int)(tile / (uint32_t)c->tiles_x) * tile_px;
+        int x1 = x0 + tile_px < c->width_px ? x0 + tile_px : c->width_px;
+        int y1 = y0 + tile_px < c->height_px ? y0 + tile_px : c->height_px;
+        render_tile_sampled(&c->view, &p->cfg.sampler, x0, y0, x1, y1, c->buffers[c->pending].rgb, &t->counts);
+    }
+}
+
+/* Steps 2-4 of the current loop step, then the next frame barrier. Returns
+ * when this thread leaves the loop. */
+static void frame_loop(render_thread *t)
+{
+    pipeline *p = t->p;
+    for (;;) {
+        const loop_step *s = &p->step;
+        if (s->exit || t->id >= s->info.threads)
+            return;
+        if (s->animate_parallel) {
+            for (int i = 0; i < p->parallel_anim_count; i++)
+                p->parallel_anim[i].fn(p, p->parallel_anim[i].ctx, &s->info, t->id, s->info.threads);
+            barrier_wait(&p->anim_barrier, p, NULL);
+        }
+        if (t->id == 0 && s->display)
+            display_stage(p);
+        if (s->render)
+            render_stage(p, t);
+        barrier_wait(&p->frame_barrier, p, serial_section);
+    }
+}
+
+/* A thread started in a serial section: it joins the step that section prepares. */
+static void *thread_main(void *arg)
+{
+    render_thread *t = arg;
+    barrier *b = &t->p->frame_barrier;
+    pthread_mutex_lock(&b->lock);
+    while (b->generation == t->start_generation)
+        pthread_cond_wait(&b->released, &b->lock);
+    pthread_mutex_unlock(&b->lock);
+    frame_loop(t);
+    return NULL;
+}
+
+bool pipeline_run(pipeline *p, tess_error *err)
+{
+    if (tls_serial_owner == p) {
+        log_error("pipeline_run: called from inside the pipeline (a transaction or serial callback): refused");
+        return tess_error_set(err, "pipeline_run: called from inside the pipeline");
+    }
+    if (p->ran)
+        return tess_error_set(err, "pipeline_run: the pipeline has already run");
+    if (p->channel_count == 0)
+        return tess_error_set(err, "pipeline: no channels to render");
+    p->ran = true;
+    atomic_store(&p->running, true);
+    double t0 = now_s();
+    /* the first barrier has this thread alone: its serial section starts the others */
+    p->thread_count = 1;
+    barrier_set_participants(&p->frame_barrier, 1);
+    barrier_wait(&p->frame_barrier, p, serial_section);
+    frame_loop(&p->threads[0]);
+    join_departed(p, 1);
+    double run_s = now_s() - t0;
+    pthread_mutex_lock(&p->queue_lock);
+    p->closed = true;
+    pthread_mutex_unlock(&p->queue_lock);
+    for (int i = 0; i < p->termination_count; i++)
+        p->terminations[i].fn(p, p->terminations[i].ctx);
+    atomic_store(&p->running, false);
+    pthread_mutex_lock(&p->stats_lock);
+    p->stats.run_s = run_s;
+    pthread_mutex_unlock(&p->stats_lock);
+    if (p->display_failed)
+        return tess_error_set(err, "%s", p->display_error.msg);
+    return true;
+}
+
+void pipeline_destroy(pipeline *p)
+{
+    if (!p)
+        return;
+    if (tls_serial_owner == p || atomic_load(&p->running)) {
+        log_error("pipeline_destroy: the pipeline is running; refused (stop it and let pipeline_run return)");
+        return;
+    }
+    for (int i = 0; i < p->channel_count; i++)
+        channel_free(&p->channels[i]);
+    barrier_destroy(&p->frame_barrier);
+    barrier_destroy(&p->anim_barrier);
+    pthread_mutex_destroy(&p->queue_lock);
+    pthread_mutex_destroy(&p->stats_lock);
+    free(p->queue);
+    free(p->oneshots);
+    free(p->oneshot_scratch);
+    free(p);
+}

@@ -1,0 +1,215 @@
+/* pipeline.h - the parallel rendering pipeline (Manta's architecture): N
+ * render threads run a frame loop, meet only at the frame barrier, and every
+ * change of renderer state is a transaction run at that barrier.
+ *
+ * FRAME LOOP. Step f of the loop, on every render thread:
+ *   1. frame barrier. The last thread to arrive runs the serial section while
+ *      the others wait: buffers rotate (below), frame f's time is set, queued
+ *      transactions run in FIFO order, then one-shot callbacks due at frame f,
+ *      then serial animation callbacks; the thread count may change; each
+ *      channel's camera is frozen for frame f; the tile counter is reset.
+ *   2. parallel animation callbacks (inherently balanced work), each called on
+ *      every thread with (thread, threads). Only when some are registered, a
+ *      second barrier follows, because rendering reads what they write; a
+ *      pipeline without them pays nothing.
+ *   3. thread 0 hands frame f-1 of every channel to its display (imbalanced
+ *      work) and then joins step 4.
+ *   4. rendering of frame f (dynamically balanced): threads take tiles from
+ *      one atomic counter over the tiles of every channel until none is left.
+ * So the display of frame f-1 overlaps the rendering of frame f.
+ *
+ * BUFFERS. Each channel has three frame buffers, each in one state:
+ *   PENDING   being rendered (frame f); written by render threads in step 4;
+ *   QUEUED    finished (frame f-1), waiting for / being handed to the display;
+ *             read by the display thread in step 3;
+ *   ON SCREEN handed to the display before (frame f-2); nobody writes it, so
+ *             a display may keep showing it (scan-out) until it is replaced.
+ * The serial section rotates them: on screen <- queued, queued <- pending,
+ * pending <- old on screen. Only the serial section changes states, so a
+ * buffer's owner never changes while anybody touches it.
+ *
+ * TRANSACTIONS. Any thread may queue a transaction: a callback plus a copy of
+ * up to PIPELINE_ARGS_MAX bytes of arguments. The serial section runs them in
+ * the order they were queued (one FIFO; the order between two queueing threads
+ * is the order their pipeline_transaction calls took the queue lock). While it
+ * runs, no render thread touches renderer state, so a transaction may change
+ * anything: cameras, render options, thread count, callbacks.
+ * A transaction (and any serial callback) MUST NOT
+ *   - block: no waiting on locks other threads hold across frames, on I/O that
+ *     may stall, on frames (it runs inside the frame the others wait for);
+ *   - take long: every render thread waits for it. Each callback is timed;
+ *     one over PIPELINE_CALLBACK_BUDGET_S is logged with its name and counted
+ *     (pipeline_stats.slow_callbacks);
+ *   - keep pointers to its argument copy after returning (the slot is reused);
+ *   - call pipeline_run or pipeline_destroy (refused: they return an error).
+ * Enforced: argument size and queue length (pipeline_transaction returns
+ * false), the state setters below run only inside the serial section (called
+ * anywhere else they log an error and return false), the time budget (logged
+ * and counted), no re-entry of pipeline_run. Transactions queued while the
+ * serial section runs (by a transaction) run at the next frame's barrier, so
+ * one barrier always ends.
+ *
+ * TIME. PIPELINE_TIME_REAL: frame f's time is the monotonic clock at its
+ * serial section minus the time at the first one. PIPELINE_TIME_FIXED_RATE:
+ * frame f's time is f / rate_hz exactly, whatever the speed, so output is
+ * reproducible. Either way frames render as fast as the threads allow.
+ *
+ * DETERMINISM. A pixel's value depends on the scene, the channel's camera,
+ * the sampler and the renderer only: never on the thread count, the tile size
+ * or the tile order. */
+#ifndef TESSERA_PIPELINE_H
+#define TESSERA_PIPELINE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "camera.h"
+#include "display.h"
+#include "err.h"
+#include "render.h"
+#include "sampler.h"
+#include "tile_order.h"
+
+struct scene;
+struct accel;
+
+#define PIPELINE_MAX_THREADS 256
+#define PIPELINE_MAX_CHANNELS 16
+#define PIPELINE_ARGS_MAX 256            /* bytes of transaction arguments copied */
+#define PIPELINE_QUEUE_MAX 4096          /* transactions waiting at once */
+#define PIPELINE_CALLBACK_BUDGET_S 0.002 /* a transaction or serial callback taking longer is logged */
+#define PIPELINE_MAX_CALLBACKS 64        /* animation + termination callbacks of each kind */
+#define PIPELINE_TILE_PX_MIN 4
+#define PIPELINE_TILE_PX_MAX 256
+
+typedef struct pipeline pipeline;
+
+typedef enum pipeline_time_mode {
+    PIPELINE_TIME_REAL,
+    PIPELINE_TIME_FIXED_RATE,
+} pipeline_time_mode;
+
+/* What stays fixed for a pipeline's life (components chosen by name are
+ * resolved into this by the caller; see tools/cli). */
+typedef struct pipeline_config {
+    const struct scene *scene; /* read-only while the pipeline exists */
+    const struct accel *accel; /* built from scene */
+    int threads;               /* initial render threads, the caller's included; 1..PIPELINE_MAX_THREADS */
+    pipeline_time_mode time_mode;
+    double rate_hz;            /* FIXED_RATE: frames per second of pipeline time, > 0 */
+    uint64_t max_frames;       /* frames to render and display, then stop; 0: until pipeline_stop */
+    /* image traverser "tiled": square tiles handed out by one atomic counter */
+    int tile_px;               /* PIPELINE_TILE_PX_MIN..MAX */
+    tile_order order;
+    uint32_t order_seed;       /* for TILE_ORDER_SHUFFLE */
+    pixel_sampler sampler;
+    /* renderer "raytracer" (RENDER_SHADE_PHONG) or "eyelight" */
+    render_shading shading;
+    bool shadows;
+} pipeline_config;
+
+/* Defaults: 1 thread, real time (rate 30 for FIXED_RATE), no frame limit,
+ * 16-pixel tiles in row order, single sample, Phong with shadows. */
+pipeline_config pipeline_config_default(const struct scene *s, const struct accel *a);
+
+/* Check a config; false with err naming the field and the problem. */
+bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err);
+
+pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err);
+
+/* Add a viewpoint: a camera, an image size and the display its frames go to
+ * (owned by the pipeline from now on, destroyed with it, also on failure).
+ * Only before pipeline_run. Returns the channel index, or -1 with err. */
+int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, int height_px, image_display *display,
+                         tess_error *err);
+
+/* Run the frame loop on the calling thread (render thread 0) and the others
+ * it starts, until max_frames frames have been displayed, pipeline_stop, or a
+ * display fails (then false with its error). The last rendered frame is
+ * always displayed before returning. Runs once per pipeline. */
+bool pipeline_run(pipeline *p, tess_error *err);
+
+/* Stop all threads (if running, wait first: pipeline_stop + run's return). */
+void pipeline_destroy(pipeline *p);
+
+/* ---- transactions and callbacks: any thread, any time (before run too) ---- */
+
+/* Arguments arrive as a pointer to the pipeline's copy, aligned for any type. */
+typedef void (*pipeline_fn)(pipeline *p, void *args);
+
+/* Queue fn(p, copy of args) for the next barrier. `name` (a string literal:
+ * kept, not copied) names it in logs. False, with a logged reason, when
+ * args_bytes > PIPELINE_ARGS_MAX, the queue is full, or the pipeline has
+ * stopped. */
+bool pipeline_transaction(pipeline *p, const char *name, pipeline_fn fn, const void *args, size_t args_bytes);
+
+/* Queue fn to run once in the serial section of frame `frame`, after that
+ * barrier's transactions and before serial animation; if that frame has
+ * already started, at the next barrier. Same limits as pipeline_transaction. */
+bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_fn fn, const void *args,
+                       size_t args_bytes);
+
+/* Ask the loop to stop: the frame being rendered is finished and displayed,
+ * then run returns. Any thread; an atomic flag, not a transaction. */
+void pipeline_stop(pipeline *p);
+
+/* A camera change for a channel, as a transaction (what input and camera
+ * paths send). The camera is validated here: false with err if invalid. */
+bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err);
+
+/* A thread-count change as a transaction (threads join or leave at the barrier). */
+bool pipeline_queue_threads(pipeline *p, int threads);
+
+/* ---- per-frame information given to callbacks ---- */
+typedef struct frame_info {
+    uint64_t frame;        /* the frame about to be rendered */
+    double time_s;         /* its time */
+    double last_frame_s;   /* wall-clock duration of the previous loop step (0 for frame 0) */
+    int threads;           /* render threads for this frame */
+} frame_info;
+
+/* Serial animation: once per frame in the serial section, after transactions. */
+typedef void (*pipeline_serial_fn)(pipeline *p, void *ctx, const frame_info *fi);
+/* Parallel animation: once per frame on every render thread, after the barrier. */
+typedef void (*pipeline_parallel_fn)(pipeline *p, void *ctx, const frame_info *fi, int thread, int threads);
+/* Termination: once, on the thread that called pipeline_run, after the loop ends. */
+typedef void (*pipeline_termination_fn)(pipeline *p, void *ctx);
+
+/* Register callbacks: before pipeline_run, or inside the serial section (a
+ * transaction or a serial callback). They take effect from the next frame
+ * they can; the same (fn, ctx) pair is removed with pipeline_remove_animation.
+ * False when PIPELINE_MAX_CALLBACKS are registered or called elsewhere. */
+bool pipeline_add_serial_animation(pipeline *p, const char *name, pipeline_serial_fn fn, void *ctx);
+bool pipeline_add_parallel_animation(pipeline *p, const char *name, pipeline_parallel_fn fn, void *ctx);
+bool pipeline_remove_animation(pipeline *p, void *fn, void *ctx);
+bool pipeline_add_termination(pipeline *p, const char *name, pipeline_termination_fn fn, void *ctx);
+
+/* ---- state: read anywhere the state cannot change under you (serial
+ * section, or before/after run); set only inside the serial section ---- */
+bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera);
+bool pipeline_set_threads(pipeline *p, int threads);
+bool pipeline_set_shadows(pipeline *p, bool shadows);
+camera_desc pipeline_camera(const pipeline *p, int channel);
+uint64_t pipeline_camera_serial(const pipeline *p, int channel); /* changes so far */
+int pipeline_channel_count(const pipeline *p);
+/* The frame the current serial section prepares (serial section only). */
+uint64_t pipeline_frame(const pipeline *p);
+int pipeline_threads(const pipeline *p);
+/* True on a thread inside p's serial section. */
+bool pipeline_in_serial_section(const pipeline *p);
+
+typedef struct pipeline_stats {
+    uint64_t frames_rendered, frames_displayed;
+    uint64_t transactions_applied, transactions_rejected;
+    uint64_t slow_callbacks;        /* over PIPELINE_CALLBACK_BUDGET_S */
+    uint64_t thread_changes;        /* applied thread-count changes */
+    render_counts rays;             /* over all frames */
+    double display_s;               /* thread 0's time in display stages */
+    double run_s;                   /* pipeline_run's wall time */
+} pipeline_stats;
+
+/* Counters so far (exact after run returns; may lag while running). */
+pipeline_stats pipeline_get_stats(pipeline *p);
+
+#endif

@@ -1,0 +1,36 @@
+/* display.h (wall) - the image displays the pipeline can hand frames to,
+ * chosen by name: "null" (drops frames: benchmarks of rendering alone),
+ * "convert" (encodes to 8-bit sRGB like scan-out, then drops) and "dump" (writes each frame through the dump backend, wall/dump.h). DRM/KMS
+ * comes with the wall issue. */
+#ifndef TESSERA_WALL_DISPLAY_H
+#define TESSERA_WALL_DISPLAY_H
+
+#include <stdbool.h>
+
+#include "engine/display.h"
+#include "engine/err.h"
+
+/* Names display_create knows, for messages. */
+#define DISPLAY_NAMES "null, convert, dump"
+
+/* A display that only counts frames. */
+image_display *display_null_create(void);
+
+/* A display that converts each frame to 8-bit sRGB XRGB8888, as a scan-out
+ * display must, into a buffer of its own, and drops it (benchmarks). */
+image_display *display_convert_create(void);
+
+/* A display that writes frame N of the pipeline to `pattern` with N as the
+ * frame number (dump_frame_path rules: "####" or "%04d"; a pattern without
+ * either gets _NNNN when `sequence`, else is one file rewritten each frame).
+ * The pattern is copied. NULL with err when the pattern is invalid. */
+image_display *display_dump_create(const char *pattern, bool sequence, tess_error *err);
+
+/* By name: "null", "convert", or "dump" with `dump_pattern`. NULL with err naming the
+ * unknown name. */
+image_display *display_create(const char *name, const char *dump_pattern, bool sequence, tess_error *err);
+
+/* Frames a display has shown (any kind created here). */
+unsigned long display_frames_shown(const image_display *d);
+
+#endif
