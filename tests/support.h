@@ -42,4 +42,19 @@ static inline void support_read_text(const char *path, char *out, size_t out_byt
         fclose(f);
 }
 
+/* Run `tessera ARGS` with a time limit; every %s in args_fmt (up to 8) is
+ * `dir`, where the combined output is captured (dir/cli.log) and copied to
+ * `out`. Returns the exit status (124 from timeout: a hang; 128+signal). */
+static inline int support_tessera(const char *dir, int timeout_s, char *out, size_t out_bytes, const char *args_fmt)
+{
+    char args[2048], cmd[4096], log_path[512];
+    const char *d = dir;
+    snprintf(args, sizeof args, args_fmt, d, d, d, d, d, d, d, d);
+    snprintf(log_path, sizeof log_path, "%s/cli.log", dir);
+    snprintf(cmd, sizeof cmd, "timeout %d %s %s > %s 2>&1", timeout_s, support_tessera_bin(), args, log_path);
+    int code = support_run(cmd);
+    support_read_text(log_path, out, out_bytes);
+    return code;
+}
+
 #endif

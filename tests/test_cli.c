@@ -29,19 +29,10 @@ static void write_text(const char *name, const char *text)
     fclose(f);
 }
 
-/* Run `tessera ARGS` (ARGS may use %s for the temp dir, several times) and
- * return its exit status (128+signal when killed); output goes to `out`. */
+/* Run `tessera ARGS` (every %s in ARGS is the temp dir); output goes to `out`. */
 static int run_tessera(char *out, size_t out_bytes, const char *args_fmt)
 {
-    char args[2048], cmd[4096], log_path[512];
-    /* every %s in args_fmt is the temp dir */
-    const char *dirs[8] = {tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir, tmp_dir};
-    snprintf(args, sizeof args, args_fmt, dirs[0], dirs[1], dirs[2], dirs[3], dirs[4], dirs[5], dirs[6], dirs[7]);
-    snprintf(log_path, sizeof log_path, "%s/cli.log", tmp_dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s %s > %s 2>&1", CLI_TIMEOUT_S, support_tessera_bin(), args, log_path);
-    int code = support_run(cmd);
-    support_read_text(log_path, out, out_bytes);
-    return code;
+    return support_tessera(tmp_dir, CLI_TIMEOUT_S, out, out_bytes, args_fmt);
 }
 
 /* Expect failure with a message containing every needle (NULL-terminated). */

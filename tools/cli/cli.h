@@ -43,5 +43,6 @@ int cli_render(int argc, char **argv); /* tessera render ... */
 int cli_run(int argc, char **argv);    /* tessera run ... */
 int cli_trace(int argc, char **argv);  /* tessera trace ... (cmd_trace.c) */
 int cli_bench(int argc, char **argv);  /* tessera bench ... (cmd_bench.c) */
+int cli_bench_path(int argc, char **argv); /* tessera bench --path / --scaling (cmd_bench_path.c) */
 
 #endif

@@ -76,6 +76,7 @@ static void bench_usage(FILE *f)
           "                   eye, look-at point, up vector, vertical field of view in degrees\n"
           "  --isa NAME       traversal kernels: sse2, avx2 or avx512 (default: the best this CPU\n"
           "                   runs, or the environment's TESSERA_ISA)\n"
+          "  --path FILE, --scaling  the pipeline benchmarks: see 'tessera bench --scaling --help'\n"
           "  --out FILE       write the last timed frame's image: .pfm is grey float written as\n"
           "                   embree_bench writes it, to compare value by value with its\n"
           "                   --out-shade image (or, with --shadows, its --out-lit image without\n"
@@ -373,6 +374,10 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
 
 int cli_bench(int argc, char **argv)
 {
+    /* the pipeline benchmarks have their own options (cmd_bench_path.c) */
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--path") || !strcmp(argv[i], "--scaling"))
+            return cli_bench_path(argc, argv);
     bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
                        .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP};
     int code = 0;

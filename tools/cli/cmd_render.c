@@ -1,9 +1,10 @@
 /* cmd_render.c - `tessera render` (headless frames of one camera) and
- * `tessera run` (the main job: with no DRM output it renders an orbit of the
- * scene through the dump backend into out/). */
+ * `tessera run` (the main job: with no DRM output it runs the pipeline with
+ * the dump display into out/, the camera orbiting or following a path). Both
+ * run the parallel pipeline (engine/pipeline.h) with components chosen by
+ * name (pipeline_cli.h). */
 #include <errno.h>
 #include <libgen.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,62 +13,35 @@
 
 #include "cli.h"
 #include "engine/accel.h"
-#include "engine/render.h"
 #include "engine/scene.h"
+#include "pipeline_cli.h"
 #include "wall/dump.h"
 
-/* What both commands share once options are parsed. */
-typedef struct job {
-    const char *scene_path; /* NULL: the built-in default scene */
-    int width_px, height_px;
-    int threads;
-    int frames;
-    bool shadows;
-    bool have_camera;       /* --camera given */
-    camera_desc camera;
-    const char *out;        /* output file or frame pattern */
-    cli_scene loaded;       /* by job_prepare */
-} job;
-
-static int default_threads(void)
+/* Parse the options both commands take (after loading --config). Returns
+ * false when the command should stop: after --help (*exit_code 0) or a bad
+ * option (*exit_code 2). */
+static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const char **scene_path,
+                          void (*usage)(FILE *), int *exit_code)
 {
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n < 1 ? 1 : n > 256 ? 256 : (int)n;
-}
-
-/* Parse the options both commands take. Returns false when the command should
- * stop: after --help (*exit_code 0) or a bad option (*exit_code 2). */
-static bool parse_common(int argc, char **argv, job *j, void (*usage)(FILE *), int *exit_code)
-{
+    const char *config = cli_pipeline_find_config(argc, argv);
+    if (config && !cli_pipeline_config_load(config, s))
+        goto bad;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val;
+        bool handled;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             usage(stdout);
             *exit_code = 0;
             return false;
-        } else if (!strcmp(a, "--scene")) {
+        }
+        if (!cli_pipeline_option(argc, argv, &i, s, &handled))
+            goto bad;
+        if (handled)
+            continue;
+        if (!strcmp(a, "--scene")) {
             if (!(val = cli_option_value(argc, argv, &i)))
                 goto bad;
-            j->scene_path = strcmp(val, "default") ? val : NULL;
-        } else if (!strcmp(a, "--size")) {
-            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_size(a, val, &j->width_px, &j->height_px))
-                goto bad;
-        } else if (!strcmp(a, "--threads")) {
-            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 256, &j->threads))
-                goto bad;
-        } else if (!strcmp(a, "--frames")) {
-            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 1000000, &j->frames))
-                goto bad;
-        } else if (!strcmp(a, "--camera")) {
-            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_camera(a, val, &j->camera))
-                goto bad;
-            j->have_camera = true;
-        } else if (!strcmp(a, "--out")) {
-            if (!(val = cli_option_value(argc, argv, &i)))
-                goto bad;
-            j->out = val;
-        } else if (!strcmp(a, "--no-shadows")) {
-            j->shadows = false;
+            *scene_path = strcmp(val, "default") ? val : NULL;
         } else {
             cli_error("unknown option '%s' (see 'tessera %s --help')", a, argv[0]);
             goto bad;
@@ -101,64 +75,83 @@ static bool check_output_dir(const char *path)
     return true;
 }
 
-static bool job_prepare(job *j)
+static bool check_outputs(const cli_pipeline_spec *s)
 {
-    return cli_scene_prepare(j->scene_path, j->threads, &j->loaded) &&
-           cli_scene_camera(&j->loaded, j->have_camera ? &j->camera : NULL, j->width_px, j->height_px, &j->camera);
+    for (int i = 0; i < s->channel_count; i++)
+        if (!strcmp(s->channels[i].display, "dump") && !check_output_dir(s->channels[i].out))
+            return false;
+    return !s->record_file[0] || check_output_dir(s->record_file);
 }
 
-static void job_finish(job *j) { cli_scene_finish(&j->loaded); }
-
-/* Rotate the camera's eye about the vertical axis through look_at. */
-static camera_desc orbit(camera_desc c, float angle_rad)
+/* Run the pipeline for a command; `orbit` animates channel 0 when no path is given. */
+static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
 {
-    vec3 r = v3_sub(c.eye, c.look_at);
-    float cs = cosf(angle_rad), sn = sinf(angle_rad);
-    c.eye = v3_add(c.look_at, v3(cs * r.x + sn * r.z, r.y, -sn * r.x + cs * r.z));
-    return c;
-}
-
-/* Render j->frames frames (orbiting when `orbit_frames` > 0) and write each.
- * Prints the frame rate of rendering alone and with writing. */
-static int render_frames(job *j, int orbit_frames)
-{
-    size_t pixels = (size_t)j->width_px * (size_t)j->height_px;
-    float *rgb = malloc(pixels * 3 * sizeof *rgb);
-    if (!rgb) {
-        cli_error("out of memory for a %dx%d image", j->width_px, j->height_px);
+    if (!check_outputs(s))
+        return 1;
+    cli_scene cs;
+    if (!cli_scene_prepare(scene_path, s->threads, &cs)) {
+        cli_scene_finish(&cs);
         return 1;
     }
-    double render_s = 0.0, total_start = cli_now_s();
-    char path[4096], first[4096] = "";
-    for (int f = 0; f < j->frames; f++) {
-        camera_desc cam = orbit_frames > 0 ? orbit(j->camera, 6.2831853f * (float)f / (float)orbit_frames) : j->camera;
-        render_view view = {j->loaded.scene, j->loaded.accel, camera_basis_make(&cam, j->width_px, j->height_px), j->shadows,
-                            RENDER_SHADE_PHONG};
-        double t0 = cli_now_s();
-        render_image(&view, j->threads, rgb, NULL);
-        render_s += cli_now_s() - t0;
-        tess_error err = {{0}};
-        if (!dump_frame_path(j->out, f, j->frames > 1, path, sizeof path, &err) ||
-            !dump_write_rgb(path, j->width_px, j->height_px, rgb, &err)) {
+    int code = 1;
+    cli_path_player player = {{0}, 0.0};
+    cli_recorder recorder;
+    cli_orbit orbit_state;
+    tess_error err = {{0}};
+    pipeline *p = cli_pipeline_create(s, &cs);
+    if (!p)
+        goto done;
+    if (s->path_file[0]) {
+        if (!camera_path_load(s->path_file, &player.path, &err)) {
             cli_error("%s", err.msg);
-            free(rgb);
-            return 1;
+            goto done;
         }
-        if (f == 0)
-            snprintf(first, sizeof first, "%s", path);
+        cli_path_player_start(p, &player);
+    } else if (orbit) {
+        cli_orbit_start(p, &orbit_state, CLI_ORBIT_PERIOD_S);
     }
-    double total_s = cli_now_s() - total_start;
-    free(rgb);
-    if (j->frames == 1)
-        printf("wrote %s\n", first);
-    else
-        printf("wrote %d frames: %s ... %s\n", j->frames, first, path);
-    printf("%d frame%s %dx%d, %d thread%s: rendering %.2f frames/s (%.1f ms/frame, %.2f Mpixels/s); "
-           "with writing %.2f frames/s\n",
-           j->frames, j->frames == 1 ? "" : "s", j->width_px, j->height_px, j->threads, j->threads == 1 ? "" : "s",
-           j->frames / render_s, 1e3 * render_s / j->frames, (double)pixels * j->frames / render_s * 1e-6,
-           j->frames / total_s);
-    return 0;
+    if (s->record_file[0])
+        cli_recorder_start(p, &recorder, s->record_file);
+    if (!pipeline_run(p, &err)) {
+        cli_error("%s", err.msg);
+        goto done;
+    }
+    if (s->record_file[0] && recorder.failed)
+        goto done;
+    pipeline_stats st = pipeline_get_stats(p);
+    const cli_channel_spec *ch = &s->channels[0];
+    double pixels = 0.0;
+    for (int i = 0; i < s->channel_count; i++)
+        pixels += (double)s->channels[i].width_px * s->channels[i].height_px;
+    if (!strcmp(ch->display, "dump")) {
+        char first[4096], last[4096];
+        uint64_t n = st.frames_displayed;
+        bool sequence = s->frames != 1;
+        if (dump_frame_path(ch->out, 0, sequence, first, sizeof first, &err) &&
+            dump_frame_path(ch->out, n > 0 ? (int)(n - 1) : 0, sequence, last, sizeof last, &err))
+        {
+            if (n == 1)
+                printf("wrote %s\n", first);
+            else
+                printf("wrote %llu frames: %s ... %s\n", (unsigned long long)n, first, last);
+        }
+    }
+    double fps = st.run_s > 0.0 ? (double)st.frames_rendered / st.run_s : 0.0;
+    printf("%llu frame%s %dx%d%s, %d thread%s: %.2f frames/s (%.1f ms/frame, %.2f Mpixels/s), display %s "
+           "%.1f ms/frame on thread 0\n",
+           (unsigned long long)st.frames_rendered, st.frames_rendered == 1 ? "" : "s", ch->width_px, ch->height_px,
+           s->channel_count > 1 ? " (+ more channels)" : "", s->threads, s->threads == 1 ? "" : "s", fps,
+           fps > 0.0 ? 1e3 / fps : 0.0, pixels * fps * 1e-6, ch->display,
+           st.frames_displayed ? 1e3 * st.display_s / (double)st.frames_displayed : 0.0);
+    cli_pipeline_report(p, s);
+    code = 0;
+done:
+    pipeline_destroy(p);
+    camera_path_free(&player.path);
+    if (s->record_file[0] && p)
+        camera_path_free(&recorder.path);
+    cli_scene_finish(&cs);
+    return code;
 }
 
 static void render_usage(FILE *f)
@@ -174,68 +167,60 @@ static void render_usage(FILE *f)
           "  --camera ex,ey,ez,lx,ly,lz,ux,uy,uz,fov\n"
           "                   eye, look-at point, up vector, vertical field of view in degrees\n"
           "                   (default: the scene's camera, else the bounding box framed from (1,0.5,1.5))\n"
-          "  --threads N      render threads (default: the number of CPUs)\n"
-          "  --frames N       render and write N frames of the same camera (default 1)\n"
-          "  --no-shadows     skip shadow rays\n",
+          "  --frames N       render and write N frames (default 1; with --path the camera moves)\n",
           f);
+    cli_pipeline_usage(f);
 }
 
 int cli_render(int argc, char **argv)
 {
-    job j = {.width_px = 1280, .height_px = 720, .threads = default_threads(), .frames = 1, .shadows = true,
-             .out = "out/render.png"};
+    cli_pipeline_spec s;
+    cli_pipeline_spec_default(&s, "dump", "out/render.png");
+    s.frames = 1;
+    s.time_mode = PIPELINE_TIME_FIXED_RATE;
+    const char *scene_path = NULL;
     int code = 0;
-    if (!parse_common(argc, argv, &j, render_usage, &code))
+    if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code))
         return code;
-    if (!check_output_dir(j.out))
-        return 1;
-    if (!job_prepare(&j)) {
-        job_finish(&j);
-        return 1;
-    }
-    code = render_frames(&j, 0);
-    job_finish(&j);
-    return code;
+    return run_job(&s, scene_path, false);
 }
 
 static void run_usage(FILE *f)
 {
     fputs("usage: tessera run [options]\n"
           "The main job. With no DRM/KMS output (not implemented yet: see the wall issue) it\n"
-          "renders headless through the dump backend: an orbit of the camera around the\n"
-          "scene, written as out/frame_NNNN.png, and prints the frame rate.\n"
+          "runs the pipeline headless with the dump display: the camera orbits the scene (one\n"
+          "turn per 2 s of frame time) or follows --path, frames go to out/frame_NNNN.png, and\n"
+          "it prints the frame rate.\n"
           "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
           "  --size WxH       image size in pixels (default 1280x720)\n"
-          "  --frames N       frames to render, one full orbit (default 48)\n"
+          "  --frames N       frames to render (default 48: one turn at the default 24 Hz)\n"
           "  --out PATTERN    frame file pattern (default out/frame_####.png)\n"
           "  --camera ...     start camera, as for 'tessera render'\n"
-          "  --threads N      render threads (default: the number of CPUs)\n"
-          "  --no-shadows     skip shadow rays\n",
+          "  (run's default time mode is fixed at 24 Hz: frame k shows time k/24 s)\n",
           f);
+    cli_pipeline_usage(f);
 }
 
 int cli_run(int argc, char **argv)
 {
-    job j = {.width_px = 1280, .height_px = 720, .threads = default_threads(), .frames = 48, .shadows = true,
-             .out = "out/frame_####.png"};
+    cli_pipeline_spec s;
+    cli_pipeline_spec_default(&s, "dump", "out/frame_####.png");
+    s.frames = 48;
+    s.time_mode = PIPELINE_TIME_FIXED_RATE;
+    s.rate_hz = 24.0;
+    const char *scene_path = NULL;
     int code = 0;
-    if (!parse_common(argc, argv, &j, run_usage, &code))
+    if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code))
         return code;
     if (access("/dev/dri", F_OK) == 0)
         fprintf(stderr, "tessera: a DRM device is present, but the DRM/KMS backend is not built yet; "
                         "rendering headless\n");
     /* the default output directory is ours to create */
-    if (!strcmp(j.out, "out/frame_####.png") && mkdir("out", 0777) != 0 && errno != EEXIST) {
+    if (!strcmp(s.channels[0].display, "dump") && !strcmp(s.channels[0].out, "out/frame_####.png") &&
+        mkdir("out", 0777) != 0 && errno != EEXIST) {
         cli_error("out: cannot create directory: %s", strerror(errno));
         return 1;
     }
-    if (!check_output_dir(j.out))
-        return 1;
-    if (!job_prepare(&j)) {
-        job_finish(&j);
-        return 1;
-    }
-    code = render_frames(&j, j.frames);
-    job_finish(&j);
-    return code;
+    return run_job(&s, scene_path, true);
 }

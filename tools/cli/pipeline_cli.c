@@ -1,0 +1,529 @@
+/* pipeline_cli.c - pipeline components by name: the config file, the
+ * command-line options, making the pipeline, camera-path playback and
+ * recording. The config format is in docs/pipeline-config.md. */
+#include "pipeline_cli.h"
+
+#include <libgen.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "engine/json_read.h"
+#include "engine/log.h"
+#include "engine/scene.h"
+#include "wall/display.h"
+
+#define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
+
+static int online_cpus(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : n > PIPELINE_MAX_THREADS ? PIPELINE_MAX_THREADS : (int)n;
+}
+
+void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const char *out)
+{
+    memset(s, 0, sizeof *s);
+    s->threads = online_cpus();
+    s->time_mode = PIPELINE_TIME_REAL;
+    s->rate_hz = 30.0;
+    s->frames = 0;
+    s->tile_px = RENDER_TILE_PX;
+    s->order = TILE_ORDER_ROWS;
+    s->order_seed = 1;
+    s->sampler = pixel_sampler_single();
+    s->shading = RENDER_SHADE_PHONG;
+    s->shadows = true;
+    s->channel_count = 1;
+    s->channels[0].width_px = 1280;
+    s->channels[0].height_px = 720;
+    snprintf(s->channels[0].display, sizeof s->channels[0].display, "%s", display);
+    snprintf(s->channels[0].out, sizeof s->channels[0].out, "%s", out ? out : "");
+}
+
+/* ---------------------------------------------------------------- the config file */
+
+/* An integer member in [lo, hi]. */
+static bool opt_int(jr_ctx *c, json_object *obj, const char *key, int lo, int hi, int *out)
+{
+    double v = 0.0;
+    json_object *m;
+    if (!jr_get_member(obj, key, &m))
+        return true;
+    size_t saved = jr_field_key(c, key);
+    bool ok = jr_double(c, m, (jr_range){lo, hi, false, false}, &v);
+    if (ok && v != floor(v))
+        ok = jr_field_fail(c, "expected an integer, got %g", v);
+    jr_field_leave(c, saved);
+    if (ok)
+        *out = (int)v;
+    return ok;
+}
+
+/* A string member copied into a fixed buffer. */
+static bool opt_text(jr_ctx *c, json_object *obj, const char *key, char *out, size_t out_bytes)
+{
+    const char *v = NULL;
+    if (!jr_opt_string(c, obj, key, &v))
+        return false;
+    if (!v)
+        return true;
+    if (strlen(v) >= out_bytes)
+        return jr_member_fail(c, key, "too long");
+    snprintf(out, out_bytes, "%s", v);
+    return true;
+}
+
+static bool opt_size(jr_ctx *c, json_object *obj, int *w, int *h)
+{
+    json_object *m;
+    if (!jr_get_member(obj, "size", &m))
+        return true;
+    size_t saved = jr_field_key(c, "size");
+    float v[2];
+    bool ok = jr_numbers(c, m, 2, (jr_range){1, CLI_MAX_IMAGE_EDGE_PX, false, false}, v);
+    if (ok && (v[0] != floorf(v[0]) || v[1] != floorf(v[1])))
+        ok = jr_field_fail(c, "expected whole pixel counts, got [%g, %g]", v[0], v[1]);
+    jr_field_leave(c, saved);
+    if (ok) {
+        *w = (int)v[0];
+        *h = (int)v[1];
+    }
+    return ok;
+}
+
+static bool opt_camera(jr_ctx *c, json_object *obj, cli_channel_spec *ch)
+{
+    static const char *const fields[] = {"eye", "look_at", "up", "fov_deg", NULL};
+    json_object *m;
+    if (!jr_get_member(obj, "camera", &m))
+        return true;
+    size_t saved = jr_field_key(c, "camera");
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_camera_members(c, m, &ch->camera);
+    jr_field_leave(c, saved);
+    if (ok)
+        ch->have_camera = true;
+    return ok;
+}
+
+/* A path in the config is relative to the config file's directory. */
+static bool resolve_relative(const char *config_file, const char *path, char *out, size_t out_bytes)
+{
+    if (path[0] == '/') {
+        snprintf(out, out_bytes, "%s", path);
+        return strlen(path) < out_bytes;
+    }
+    char copy[CLI_PATTERN_BYTES];
+    snprintf(copy, sizeof copy, "%s", config_file);
+    int n = snprintf(out, out_bytes, "%s/%s", dirname(copy), path);
+    return n >= 0 && (size_t)n < out_bytes;
+}
+
+static bool opt_display(jr_ctx *c, json_object *obj, cli_channel_spec *ch)
+{
+    static const char *const fields[] = {"name", "out", NULL};
+    static const char *const names[] = {"null", "convert", "dump", NULL};
+    json_object *m;
+    if (!jr_get_member(obj, "display", &m))
+        return true;
+    size_t saved = jr_field_key(c, "display");
+    int which = -1;
+    char out[CLI_PATTERN_BYTES] = "";
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_require_member(c, m, "name") &&
+              jr_opt_choice(c, m, "name", names, &which) && opt_text(c, m, "out", out, sizeof out);
+    if (ok && which == 2 && !out[0])
+        ok = jr_member_fail(c, "out", "required for the dump display (a file pattern such as out/frame_####.png)");
+    if (ok && out[0])
+        snprintf(ch->out, sizeof ch->out, "%s", out); /* relative to the working directory, as --out */
+    jr_field_leave(c, saved);
+    if (ok)
+        snprintf(ch->display, sizeof ch->display, "%s", names[which]);
+    return ok;
+}
+
+static bool load_channel(jr_ctx *c, json_object *v, cli_channel_spec *ch)
+{
+    static const char *const fields[] = {"size", "camera", "display", NULL};
+    return jr_expect_object(c, v) && jr_check_fields(c, v, fields) && opt_size(c, v, &ch->width_px, &ch->height_px) &&
+           opt_camera(c, v, ch) && opt_display(c, v, ch);
+}
+
+static bool load_time(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"mode", "rate_hz", NULL};
+    static const char *const modes[] = {"real", "fixed", NULL};
+    json_object *m;
+    if (!jr_get_member(root, "time", &m))
+        return true;
+    size_t saved = jr_field_key(c, "time");
+    int mode = s->time_mode == PIPELINE_TIME_FIXED_RATE ? 1 : 0;
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_choice(c, m, "mode", modes, &mode) &&
+              jr_opt_double(c, m, "rate_hz", (jr_range){0.0, 1e6, true, false}, &s->rate_hz);
+    jr_field_leave(c, saved);
+    s->time_mode = mode == 1 ? PIPELINE_TIME_FIXED_RATE : PIPELINE_TIME_REAL;
+    return ok;
+}
+
+static bool load_traverser(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"name", "tile_px", "order", "seed", NULL};
+    static const char *const names[] = {"tiled", NULL};
+    const char *orders[TILE_ORDER_COUNT + 1];
+    for (int i = 0; i < TILE_ORDER_COUNT; i++)
+        orders[i] = tile_order_name((tile_order)i);
+    orders[TILE_ORDER_COUNT] = NULL;
+    json_object *m;
+    if (!jr_get_member(root, "traverser", &m))
+        return true;
+    size_t saved = jr_field_key(c, "traverser");
+    int name = 0, order = (int)s->order, seed = (int)(s->order_seed & 0x7fffffff);
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_choice(c, m, "name", names, &name) &&
+              opt_int(c, m, "tile_px", PIPELINE_TILE_PX_MIN, PIPELINE_TILE_PX_MAX, &s->tile_px) &&
+              jr_opt_choice(c, m, "order", orders, &order) && opt_int(c, m, "seed", 0, INT32_MAX, &seed);
+    jr_field_leave(c, saved);
+    s->order = (tile_order)order;
+    s->order_seed = (uint32_t)seed;
+    return ok;
+}
+
+static bool load_sampler(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"name", "k", "seed", NULL};
+    static const char *const names[] = {"single", "jittered", NULL};
+    json_object *m;
+    if (!jr_get_member(root, "sampler", &m))
+        return true;
+    size_t saved = jr_field_key(c, "sampler");
+    int kind = s->sampler.kind == PIXEL_SAMPLER_JITTERED ? 1 : 0;
+    int k = s->sampler.kind == PIXEL_SAMPLER_JITTERED ? s->sampler.k : PIXEL_SAMPLER_DEFAULT_K;
+    int seed = (int)(s->sampler.seed & 0x7fffffff);
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_require_member(c, m, "name") &&
+              jr_opt_choice(c, m, "name", names, &kind) && opt_int(c, m, "k", 1, PIXEL_SAMPLER_MAX_K, &k) &&
+              opt_int(c, m, "seed", 0, INT32_MAX, &seed);
+    jr_field_leave(c, saved);
+    s->sampler = kind == 1 ? pixel_sampler_jittered(k, (uint32_t)seed) : pixel_sampler_single();
+    return ok;
+}
+
+static bool load_renderer(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"name", "shadows", NULL};
+    static const char *const names[] = {"raytracer", "eyelight", NULL};
+    json_object *m;
+    if (!jr_get_member(root, "renderer", &m))
+        return true;
+    size_t saved = jr_field_key(c, "renderer");
+    int name = s->shading == RENDER_SHADE_EYELIGHT ? 1 : 0;
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_choice(c, m, "name", names, &name) &&
+              jr_opt_bool(c, m, "shadows", &s->shadows);
+    jr_field_leave(c, saved);
+    s->shading = name == 1 ? RENDER_SHADE_EYELIGHT : RENDER_SHADE_PHONG;
+    return ok;
+}
+
+static bool load_channels(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    json_object *m;
+    if (!jr_get_member(root, "channels", &m))
+        return true;
+    size_t saved = jr_field_key(c, "channels");
+    bool ok = jr_expect_array(c, m);
+    size_t n = ok ? json_object_array_length(m) : 0;
+    if (ok && n + 1 > PIPELINE_MAX_CHANNELS)
+        ok = jr_field_fail(c, "%zu channels; at most %d besides the main one", n, PIPELINE_MAX_CHANNELS - 1);
+    for (size_t i = 0; ok && i < n; i++) {
+        cli_channel_spec *ch = &s->channels[1 + i];
+        *ch = s->channels[0]; /* size and display default to the main channel's */
+        ch->have_camera = false;
+        ch->out[0] = '\0';
+        size_t at = jr_field_index(c, i);
+        ok = load_channel(c, json_object_array_get_idx(m, i), ch);
+        if (ok && !strcmp(ch->display, "dump") && !ch->out[0])
+            ok = jr_field_fail(c, "a dump display needs its own \"out\" pattern");
+        jr_field_leave(c, at);
+    }
+    jr_field_leave(c, saved);
+    if (ok)
+        s->channel_count = 1 + (int)n;
+    return ok;
+}
+
+bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
+                                         "camera", "display", "path", "channels", NULL};
+    tess_error err = {{0}};
+    size_t len = 0;
+    char *text = jr_read_file(file, CONFIG_MAX_BYTES, "a pipeline config", &len, &err);
+    json_object *root = NULL;
+    bool ok = text && jr_parse(file, text, len, &root, &err);
+    jr_ctx c = {file, &err, "", 0};
+    char path[CLI_PATTERN_BYTES] = "";
+    ok = ok && jr_expect_object(&c, root) && jr_check_fields(&c, root, fields) &&
+         opt_int(&c, root, "threads", 1, PIPELINE_MAX_THREADS, &s->threads) &&
+         opt_int(&c, root, "frames", 0, 100000000, &s->frames) && load_time(&c, root, s) &&
+         load_traverser(&c, root, s) && load_sampler(&c, root, s) && load_renderer(&c, root, s) &&
+         opt_size(&c, root, &s->channels[0].width_px, &s->channels[0].height_px) &&
+         opt_camera(&c, root, &s->channels[0]) && opt_display(&c, root, &s->channels[0]) &&
+         opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s);
+    if (ok && path[0] && !resolve_relative(file, path, s->path_file, sizeof s->path_file))
+        ok = jr_member_fail(&c, "path", "path too long");
+    json_object_put(root);
+    free(text);
+    if (!ok)
+        cli_error("%s", err.msg);
+    return ok;
+}
+
+/* ---------------------------------------------------------------- the command line */
+
+const char *cli_pipeline_find_config(int argc, char **argv)
+{
+    for (int i = 1; i + 1 < argc; i++)
+        if (!strcmp(argv[i], "--config"))
+            return argv[i + 1];
+    return NULL;
+}
+
+static bool copy_value(const char *option, const char *value, char *out, size_t out_bytes)
+{
+    if (strlen(value) >= out_bytes) {
+        cli_error("%s: value longer than %zu bytes", option, out_bytes - 1);
+        return false;
+    }
+    snprintf(out, out_bytes, "%s", value);
+    return true;
+}
+
+bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bool *handled)
+{
+    const char *a = argv[*i], *val = NULL;
+    cli_channel_spec *main_ch = &s->channels[0];
+    *handled = true;
+    if (!strcmp(a, "--config")) {
+        return cli_option_value(argc, argv, i) != NULL; /* loaded before the other options */
+    } else if (!strcmp(a, "--size")) {
+        return (val = cli_option_value(argc, argv, i)) && cli_parse_size(a, val, &main_ch->width_px,
+                                                                          &main_ch->height_px);
+    } else if (!strcmp(a, "--camera")) {
+        if (!(val = cli_option_value(argc, argv, i)) || !cli_parse_camera(a, val, &main_ch->camera))
+            return false;
+        main_ch->have_camera = true;
+        return true;
+    } else if (!strcmp(a, "--threads")) {
+        return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 1, PIPELINE_MAX_THREADS, &s->threads);
+    } else if (!strcmp(a, "--frames")) {
+        return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 1, 100000000, &s->frames);
+    } else if (!strcmp(a, "--time")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (strcmp(val, "real") && strcmp(val, "fixed")) {
+            cli_error("--time: '%s' is not a time mode (expected real or fixed)", val);
+            return false;
+        }
+        s->time_mode = !strcmp(val, "fixed") ? PIPELINE_TIME_FIXED_RATE : PIPELINE_TIME_REAL;
+        return true;
+    } else if (!strcmp(a, "--rate")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        char *end;
+        double hz = strtod(val, &end);
+        if (end == val || *end || !(hz > 0.0 && hz <= 1e6)) {
+            cli_error("--rate: '%s' is not a frame rate in Hz (expected a number in (0, 1e6])", val);
+            return false;
+        }
+        s->rate_hz = hz;
+        return true;
+    } else if (!strcmp(a, "--tile-size")) {
+        return (val = cli_option_value(argc, argv, i)) &&
+               cli_parse_int(a, val, PIPELINE_TILE_PX_MIN, PIPELINE_TILE_PX_MAX, &s->tile_px);
+    } else if (!strcmp(a, "--tile-order")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (!tile_order_from_name(val, &s->order)) {
+            cli_error("--tile-order: unknown order '%s' (expected one of: %s)", val, TILE_ORDER_NAMES);
+            return false;
+        }
+        return true;
+    } else if (!strcmp(a, "--sampler")) {
+        tess_error err = {{0}};
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (!pixel_sampler_from_name(val, &s->sampler, &err)) {
+            cli_error("--sampler: %s", err.msg);
+            return false;
+        }
+        return true;
+    } else if (!strcmp(a, "--renderer")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (strcmp(val, "raytracer") && strcmp(val, "eyelight")) {
+            cli_error("--renderer: unknown renderer '%s' (expected raytracer or eyelight)", val);
+            return false;
+        }
+        s->shading = !strcmp(val, "eyelight") ? RENDER_SHADE_EYELIGHT : RENDER_SHADE_PHONG;
+        return true;
+    } else if (!strcmp(a, "--display")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (strcmp(val, "null") && strcmp(val, "convert") && strcmp(val, "dump")) {
+            cli_error("--display: unknown display '%s' (expected one of: %s)", val, DISPLAY_NAMES);
+            return false;
+        }
+        return copy_value(a, val, main_ch->display, sizeof main_ch->display);
+    } else if (!strcmp(a, "--out")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, main_ch->out, sizeof main_ch->out);
+    } else if (!strcmp(a, "--no-shadows")) {
+        s->shadows = false;
+        return true;
+    } else if (!strcmp(a, "--path")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->path_file, sizeof s->path_file);
+    } else if (!strcmp(a, "--record")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->record_file, sizeof s->record_file);
+    }
+    *handled = false;
+    return true;
+}
+
+void cli_pipeline_usage(FILE *f)
+{
+    fputs("pipeline options (a --config file sets the same; the command line wins):\n"
+          "  --config FILE    pipeline config (JSON; docs/pipeline-config.md): components, channels\n"
+          "  --threads N      render threads (default: the number of CPUs)\n"
+          "  --time real|fixed  frame time: the clock, or frame / rate (reproducible; default real)\n"
+          "  --rate HZ        frames per second of time in fixed mode (default 30)\n"
+          "  --tile-size N    tile edge in pixels, 4..256 (default 16)\n"
+          "  --tile-order O   order tiles are handed out: rows, columns, morton, hilbert, spiral,\n"
+          "                   shuffle (default rows; the image does not depend on it)\n"
+          "  --sampler S      single, or jittered[:K] (K x K strata per pixel, default K 4)\n"
+          "  --renderer R     raytracer (Phong, shadows) or eyelight (default raytracer)\n"
+          "  --no-shadows     skip shadow rays\n"
+          "  --display D      null (drop frames), convert (to 8-bit sRGB as scan-out would, then\n"
+          "                   drop), dump (write files to --out)\n"
+          "  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
+          "  --record FILE    write the main channel's camera changes as a camera path\n",
+          f);
+}
+
+/* ---------------------------------------------------------------- making the pipeline */
+
+pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
+{
+    tess_error err = {{0}};
+    pipeline_config cfg = pipeline_config_default(cs->scene, cs->accel);
+    cfg.threads = s->threads;
+    cfg.time_mode = s->time_mode;
+    cfg.rate_hz = s->rate_hz;
+    cfg.max_frames = (uint64_t)s->frames;
+    cfg.tile_px = s->tile_px;
+    cfg.order = s->order;
+    cfg.order_seed = s->order_seed;
+    cfg.sampler = s->sampler;
+    cfg.shading = s->shading;
+    cfg.shadows = s->shadows;
+    pipeline *p = pipeline_create(&cfg, &err);
+    if (!p) {
+        cli_error("%s", err.msg);
+        return NULL;
+    }
+    for (int i = 0; i < s->channel_count; i++) {
+        const cli_channel_spec *ch = &s->channels[i];
+        camera_desc cam;
+        if (!cli_scene_camera(cs, ch->have_camera ? &ch->camera : NULL, ch->width_px, ch->height_px, &cam)) {
+            pipeline_destroy(p);
+            return NULL;
+        }
+        image_display *d = display_create(ch->display, ch->out, s->frames != 1, &err);
+        if (!d || pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) < 0) {
+            cli_error("channel %d: %s", i, err.msg);
+            pipeline_destroy(p);
+            return NULL;
+        }
+    }
+    return p;
+}
+
+/* ---------------------------------------------------------------- path playback, recording */
+
+static void play_path(pipeline *p, void *ctx, const frame_info *fi)
+{
+    cli_path_player *pl = ctx;
+    camera_desc c = camera_path_eval(&pl->path, fi->time_s + pl->time_offset_s);
+    pipeline_set_camera(p, 0, &c);
+}
+
+bool cli_path_player_start(pipeline *p, cli_path_player *player)
+{
+    return pipeline_add_serial_animation(p, "camera path", play_path, player);
+}
+
+static void orbit_step(pipeline *p, void *ctx, const frame_info *fi)
+{
+    cli_orbit *o = ctx;
+    camera_desc c = o->start;
+    float angle = (float)(6.283185307179586 * fmod(fi->time_s / o->period_s, 1.0));
+    vec3 r = v3_sub(c.eye, c.look_at);
+    float cs = cosf(angle), sn = sinf(angle);
+    c.eye = v3_add(c.look_at, v3(cs * r.x + sn * r.z, r.y, -sn * r.x + cs * r.z));
+    pipeline_set_camera(p, 0, &c);
+}
+
+bool cli_orbit_start(pipeline *p, cli_orbit *orbit, double period_s)
+{
+    orbit->start = pipeline_camera(p, 0);
+    orbit->period_s = period_s;
+    return pipeline_add_serial_animation(p, "orbit", orbit_step, orbit);
+}
+
+static void record_camera(pipeline *p, void *ctx, const frame_info *fi)
+{
+    cli_recorder *r = ctx;
+    uint64_t serial = pipeline_camera_serial(p, 0);
+    if (r->failed || (r->started && serial == r->last_serial))
+        return;
+    tess_error err = {{0}};
+    camera_desc c = pipeline_camera(p, 0);
+    if (!camera_path_append(&r->path, fi->time_s, &c, &err)) {
+        log_error("--record %s: %s; recording stopped", r->file, err.msg);
+        r->failed = true;
+    }
+    r->started = true;
+    r->last_serial = serial;
+}
+
+static void save_recording(pipeline *p, void *ctx)
+{
+    (void)p;
+    cli_recorder *r = ctx;
+    tess_error err = {{0}};
+    if (r->path.count == 0)
+        return;
+    if (!camera_path_save(&r->path, r->file, &err)) {
+        cli_error("%s", err.msg);
+        r->failed = true;
+    } else {
+        fprintf(stderr, "tessera: recorded %zu camera keys to %s\n", r->path.count, r->file);
+    }
+}
+
+bool cli_recorder_start(pipeline *p, cli_recorder *rec, const char *file)
+{
+    memset(rec, 0, sizeof *rec);
+    rec->file = file;
+    rec->path.interp = CAMERA_PATH_LINEAR; /* keys every frame: straight segments are exact enough */
+    /* registered after any path player, so it sees the camera the frame will use */
+    return pipeline_add_serial_animation(p, "camera recorder", record_camera, rec) &&
+           pipeline_add_termination(p, "save recording", save_recording, rec);
+}
+
+void cli_pipeline_report(pipeline *p, const cli_pipeline_spec *s)
+{
+    pipeline_stats st = pipeline_get_stats(p);
+    fprintf(stderr,
+            "tessera: pipeline: %llu frames rendered, %llu displayed, %llu transactions (%llu refused, %llu slow), "
+            "%d channel%s, %d threads\n",
+            (unsigned long long)st.frames_rendered, (unsigned long long)st.frames_displayed,
+            (unsigned long long)st.transactions_applied, (unsigned long long)st.transactions_rejected,
+            (unsigned long long)st.slow_callbacks, s->channel_count, s->channel_count == 1 ? "" : "s", s->threads);
+}

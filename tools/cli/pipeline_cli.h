@@ -1,0 +1,100 @@
+/* pipeline_cli.h - what the pipeline commands (run, render, bench --path,
+ * bench --scaling) share: the pipeline's components chosen by name, from a
+ * pipeline config file (--config FILE, docs/pipeline-config.md) and then the
+ * command line, which overrides the file; and the camera-path animation and
+ * recording callbacks. */
+#ifndef TESSERA_CLI_PIPELINE_H
+#define TESSERA_CLI_PIPELINE_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "cli.h"
+#include "engine/camera_path.h"
+#include "engine/pipeline.h"
+
+#define CLI_PATTERN_BYTES 4096
+
+/* One viewpoint: its size, camera and display. */
+typedef struct cli_channel_spec {
+    int width_px, height_px;
+    bool have_camera;            /* else the scene's camera, else framed bounds */
+    camera_desc camera;
+    char display[16];            /* "null", "convert" or "dump" */
+    char out[CLI_PATTERN_BYTES]; /* dump: file pattern */
+} cli_channel_spec;
+
+typedef struct cli_pipeline_spec {
+    int threads;
+    pipeline_time_mode time_mode;
+    double rate_hz;              /* FIXED_RATE, and the path sample rate of bench --path */
+    int frames;                  /* 0: until stopped */
+    int tile_px;
+    tile_order order;
+    uint32_t order_seed;
+    pixel_sampler sampler;
+    render_shading shading;
+    bool shadows;
+    /* channel 0 comes from the top-level options; a config's "channels" adds more */
+    cli_channel_spec channels[PIPELINE_MAX_CHANNELS];
+    int channel_count;           /* >= 1 */
+    char path_file[CLI_PATTERN_BYTES];   /* camera path for channel 0, "" for none */
+    char record_file[CLI_PATTERN_BYTES]; /* --record: write channel 0's camera changes, "" for none */
+} cli_pipeline_spec;
+
+/* Defaults for a command: one channel of 1280x720 with `display` writing to
+ * `out`, threads = CPUs, real time at rate 30, 16-pixel row-order tiles,
+ * single sample, Phong with shadows. */
+void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const char *out);
+
+/* Load --config FILE into s (only the fields it names). False after printing
+ * the error (file, line or field, problem). */
+bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s);
+
+/* If argv[*i] is a pipeline option, parse it (advancing *i past its value)
+ * and set *handled. False after printing an error for a bad value. */
+bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bool *handled);
+
+/* The --config value in argv, or NULL (read before the other options, so the
+ * command line overrides the file whatever the order). */
+const char *cli_pipeline_find_config(int argc, char **argv);
+
+/* The option help shared by the commands. */
+void cli_pipeline_usage(FILE *f);
+
+/* Make the pipeline: channels with their cameras (given, else the scene's,
+ * else framed) and displays. NULL after printing the error. */
+pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs);
+
+/* Channel 0 follows a camera path: a serial animation callback sets the
+ * camera at each frame's time (time_offset_s added). */
+typedef struct cli_path_player {
+    camera_path path;
+    double time_offset_s;
+} cli_path_player;
+bool cli_path_player_start(pipeline *p, cli_path_player *player);
+
+/* The default animation of `tessera run` and `bench --scaling`: channel 0's
+ * eye orbits its look-at point about the vertical axis, one turn per
+ * period_s of pipeline time, from the camera the channel has when started. */
+#define CLI_ORBIT_PERIOD_S 2.0
+typedef struct cli_orbit {
+    camera_desc start;
+    double period_s;
+} cli_orbit;
+bool cli_orbit_start(pipeline *p, cli_orbit *orbit, double period_s);
+
+/* --record: every change of channel 0's camera becomes a key at its frame's
+ * time; written (linear interpolation) when the pipeline terminates. */
+typedef struct cli_recorder {
+    camera_path path;
+    uint64_t last_serial;
+    bool started, failed;
+    const char *file;
+} cli_recorder;
+bool cli_recorder_start(pipeline *p, cli_recorder *rec, const char *file);
+
+/* Print the pipeline's counters as one line on stderr. */
+void cli_pipeline_report(pipeline *p, const cli_pipeline_spec *s);
+
+#endif
