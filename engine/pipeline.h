@@ -207,6 +207,8 @@ typedef struct pipeline_stats {
     render_counts rays;             /* over all frames */
     double display_s;               /* thread 0's time in display stages */
     double run_s;                   /* pipeline_run's wall time */
+    double barrier_s;               /* summed over threads: time from arriving at a frame barrier to
+                                       leaving it (idle at the end of frames + serial sections) */
 } pipeline_stats;
 
 /* Counters so far (exact after run returns; may lag while running). */

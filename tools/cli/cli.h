@@ -5,6 +5,7 @@
 #define TESSERA_CLI_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "engine/camera.h"
 
@@ -18,6 +19,14 @@ bool cli_parse_camera(const char *option, const char *text, camera_desc *out);
 const char *cli_option_value(int argc, char **argv, int *i);
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 double cli_now_s(void); /* monotonic seconds */
+/* Busy CPU seconds of the whole machine since boot (user + nice + system + irq
+ * + softirq + steal from /proc/stat); -1 when unreadable. With cli_own_cpu_s
+ * (this process, all threads) it gives the CPU other programs took during a
+ * measurement, for rejecting noisy runs. */
+double cli_machine_busy_s(void);
+double cli_own_cpu_s(void);
+/* Median of n values (sorts them in place); 0 for n == 0. */
+double cli_median(double *values, size_t n);
 
 struct scene;
 struct accel;

@@ -198,47 +198,6 @@ static bool output_dir_ok(const char *path)
     return true;
 }
 
-/* Busy CPU seconds of the whole machine since boot: user + nice + system +
- * irq + softirq + steal from the first line of /proc/stat (guest time is
- * already inside user); -1 when unreadable. */
-static double machine_busy_s(void)
-{
-    FILE *f = fopen("/proc/stat", "r");
-    if (!f)
-        return -1.0;
-    unsigned long long v[8] = {0};
-    int n = fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6],
-                   &v[7]);
-    fclose(f);
-    long ticks_per_s = sysconf(_SC_CLK_TCK);
-    if (n < 8 || ticks_per_s <= 0)
-        return -1.0;
-    return (double)(v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / (double)ticks_per_s;
-}
-
-/* CPU seconds of this process, all threads (exited ones included). */
-static double own_cpu_s(void)
-{
-    struct rusage ru;
-    if (getrusage(RUSAGE_SELF, &ru) != 0)
-        return 0.0;
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
-           1e-6 * (double)ru.ru_stime.tv_usec;
-}
-
-static int compare_doubles(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* Median of n > 0 values; sorts them in place. */
-static double median_of(double *values, int n)
-{
-    qsort(values, (size_t)n, sizeof *values, compare_doubles);
-    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
 /* The scene path for a space-separated line: whitespace and '%' as %XX. */
 static void print_field_path(FILE *f, const char *path)
 {
@@ -312,7 +271,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
 {
     for (int f = 0; f < o->warmup; f++)
         render_image(view, o->threads, rgb, NULL);
-    double busy0 = machine_busy_s(), own0 = own_cpu_s(), wall0 = cli_now_s();
+    double busy0 = cli_machine_busy_s(), own0 = cli_own_cpu_s(), wall0 = cli_now_s();
     for (int f = 0; f < o->frames; f++) {
         render_counts counts = {0, 0, 0};
         double t0 = cli_now_s();
@@ -322,7 +281,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
         samples[f].shadow_rays = counts.shadow_rays;
         samples[f].primary_hits = counts.primary_hits;
     }
-    double busy1 = machine_busy_s(), own1 = own_cpu_s(), wall1 = cli_now_s();
+    double busy1 = cli_machine_busy_s(), own1 = cli_own_cpu_s(), wall1 = cli_now_s();
     if (busy0 < 0.0 || busy1 < 0.0 || !(wall1 > wall0))
         *cpu_other = -1.0;
     else {
@@ -342,15 +301,15 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
         ms_min = samples[f].seconds < ms_min ? samples[f].seconds : ms_min;
         ms_max = samples[f].seconds > ms_max ? samples[f].seconds : ms_max;
     }
-    prim_mrays = median_of(scratch, n);
+    prim_mrays = cli_median(scratch, (size_t)n);
     for (int f = 0; f < n; f++) {
         double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
         scratch[f] = 1e-6 * (double)(samples[f].primary_rays + samples[f].shadow_rays) / sec;
     }
-    total_mrays = median_of(scratch, n);
+    total_mrays = cli_median(scratch, (size_t)n);
     for (int f = 0; f < n; f++)
         scratch[f] = samples[f].seconds;
-    ms_median = median_of(scratch, n);
+    ms_median = cli_median(scratch, (size_t)n);
 
     const frame_sample *last = &samples[n - 1];
     double hit_rate = last->primary_rays ? (double)last->primary_hits / (double)last->primary_rays : 0.0;

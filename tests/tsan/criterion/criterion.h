@@ -27,6 +27,7 @@ typedef struct shim_test {
 } shim_test;
 
 typedef struct shim_options {
+    int given;        /* a field to initialise when Test() has no options */
     unsigned timeout; /* seconds, 0: default */
 } shim_options;
 
@@ -47,7 +48,7 @@ static inline void shim_register(const char *suite, const char *name, void (*fn)
     static void suite##_##name(void);                                                          \
     __attribute__((constructor)) static void shim_register_##suite##_##name(void)              \
     {                                                                                          \
-        shim_register(#suite, #name, suite##_##name, (shim_options){0, __VA_ARGS__});          \
+        shim_register(#suite, #name, suite##_##name, (shim_options){.given = 1, __VA_ARGS__});          \
     }                                                                                          \
     static void suite##_##name(void)
 
@@ -66,10 +67,10 @@ static inline void shim_check(bool ok, const char *file, int line, const char *e
     exit(1);
 }
 
-#define cr_assert(cond, ...) shim_check((cond) ? true : false, __FILE__, __LINE__, #cond, "" __VA_ARGS__)
-#define cr_assert_not(cond, ...) shim_check((cond) ? false : true, __FILE__, __LINE__, "!(" #cond ")", "" __VA_ARGS__)
-#define cr_assert_eq(a, b, ...) shim_check((a) == (b), __FILE__, __LINE__, #a " == " #b, "" __VA_ARGS__)
-#define cr_assert_null(x, ...) shim_check((x) == NULL, __FILE__, __LINE__, #x " == NULL", "" __VA_ARGS__)
+#define cr_assert(cond, ...) shim_check((cond) ? true : false, __FILE__, __LINE__, #cond, " " __VA_ARGS__)
+#define cr_assert_not(cond, ...) shim_check((cond) ? false : true, __FILE__, __LINE__, "!(" #cond ")", " " __VA_ARGS__)
+#define cr_assert_eq(a, b, ...) shim_check((a) == (b), __FILE__, __LINE__, #a " == " #b, " " __VA_ARGS__)
+#define cr_assert_null(x, ...) shim_check((x) == NULL, __FILE__, __LINE__, #x " == NULL", " " __VA_ARGS__)
 
 /* Run every test whose "suite/name" starts with argv[1] (all without one). */
 int main(int argc, char **argv)
