@@ -44,7 +44,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-tsan bench clean check-headers
+.PHONY: all deps run test test-asan test-tsan bench bench-pipeline clean check-headers
 
 all: tessera
 
@@ -118,6 +118,12 @@ bench:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera
 	sh tools/bench.sh
+	sh tools/bench_pipeline.sh
+
+# the pipeline benchmarks alone (scaling, camera transactions): the last section of BENCHMARKS.md
+bench-pipeline: deps
+	$(MAKE) tessera
+	sh tools/bench_pipeline.sh
 
 clean:
 	rm -rf build build-asan build-tsan tessera tessera-asan out

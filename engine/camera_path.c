@@ -37,32 +37,31 @@ static bool format_negative_zero(char *buf, size_t size, double x)
     return true;
 }
 
-/* The fewest %g digits (1..9) that strtod reads back as the same float, which
- * is how json-c then jr_number read it (string -> double -> float). */
-static const char *format_float(char *buf, size_t size, float x)
+/* The shortest %g text with 1..max_digits digits that strtod reads back as x
+ * (as a float when `as_float`: how json-c then jr_number read it, string ->
+ * double -> float). Shortest by length, not by digits, so 40 is "40" rather
+ * than "4e+01"; ties go to fewer digits. */
+static const char *format_shortest(char *buf, size_t size, double x, int max_digits, bool as_float)
 {
     if (format_negative_zero(buf, size, x))
         return buf;
-    for (int digits = 1; digits <= 9; digits++) {
-        snprintf(buf, size, "%.*g", digits, (double)x);
-        if ((float)strtod(buf, NULL) == x)
-            break;
+    char best[64] = "", text[64];
+    for (int digits = 1; digits <= max_digits; digits++) {
+        snprintf(text, sizeof text, "%.*g", digits, x);
+        double back = strtod(text, NULL);
+        bool same = as_float ? (float)back == (float)x : back == x;
+        if (same && (!best[0] || strlen(text) < strlen(best)))
+            snprintf(best, sizeof best, "%s", text);
     }
+    if (!best[0]) /* not reached for finite values: 9 / 17 digits always round-trip */
+        snprintf(best, sizeof best, "%.*g", max_digits, x);
+    snprintf(buf, size, "%s", best);
     return buf;
 }
 
-/* The fewest %g digits (1..17) that strtod reads back as the same double. */
-static const char *format_double(char *buf, size_t size, double x)
-{
-    if (format_negative_zero(buf, size, x))
-        return buf;
-    for (int digits = 1; digits <= 17; digits++) {
-        snprintf(buf, size, "%.*g", digits, x);
-        if (strtod(buf, NULL) == x)
-            break;
-    }
-    return buf;
-}
+static const char *format_float(char *buf, size_t size, float x) { return format_shortest(buf, size, x, 9, true); }
+
+static const char *format_double(char *buf, size_t size, double x) { return format_shortest(buf, size, x, 17, false); }
 
 /* ---- reading the file --------------------------------------------------- */
 

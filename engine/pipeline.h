@@ -130,7 +130,9 @@ int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, i
  * always displayed before returning. Runs once per pipeline. */
 bool pipeline_run(pipeline *p, tess_error *err);
 
-/* Stop all threads (if running, wait first: pipeline_stop + run's return). */
+/* Free the pipeline, its channels and their displays. Only when it is not
+ * running (never run, or pipeline_run has returned: stop it with
+ * pipeline_stop and wait for that); while running it logs and refuses. */
 void pipeline_destroy(pipeline *p);
 
 /* ---- transactions and callbacks: any thread, any time (before run too) ---- */

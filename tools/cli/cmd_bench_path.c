@@ -226,9 +226,9 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
 
 /* A run, repeated while the machine was busy with other work. */
 static bool scaling_run(cli_pipeline_spec *spec, const cli_scene *cs, const camera_path *path, int threads,
-                        scaling_sample *out, int *rejected)
+                        bool reject_noisy, scaling_sample *out, int *rejected)
 {
-    for (int attempt = 0; attempt < SCALING_MAX_ATTEMPTS; attempt++) {
+    for (int attempt = 0; attempt < (reject_noisy ? SCALING_MAX_ATTEMPTS : 1); attempt++) {
         if (!scaling_run_once(spec, cs, path, threads, out))
             return false;
         if (out->cpu_other <= fmax(SCALING_NOISE_FRACTION * out->run_s, SCALING_NOISE_FLOOR_S))
@@ -238,7 +238,8 @@ static bool scaling_run(cli_pipeline_spec *spec, const cli_scene *cs, const came
     return true; /* kept, and counted as noisy in the report */
 }
 
-static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_threads, int rounds)
+static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_threads, int rounds,
+                         bool reject_noisy)
 {
     tess_error err = {{0}};
     camera_path path = {0};
@@ -262,7 +263,8 @@ static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_t
     /* rounds alternate over the thread counts, so slow drifts of the machine hit all alike */
     for (int r = 0; r < rounds; r++)
         for (int n = 1; n <= max_threads; n++)
-            if (!scaling_run(spec, cs, have_path ? &path : NULL, n, &samples[(n - 1) * rounds + r], &rejected))
+            if (!scaling_run(spec, cs, have_path ? &path : NULL, n, reject_noisy, &samples[(n - 1) * rounds + r],
+                             &rejected))
                 goto done;
     printf("# %d frames %dx%d, display %s, %d rounds, %d noisy runs repeated; medians; fraction = speed-up / "
            "threads\n",
@@ -319,7 +321,9 @@ static void usage(FILE *f)
           "  display does), so the display stage's overlap with rendering is measured too.\n"
           "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
           "  --size WxH       image size (default 1280x720)\n"
-          "  --frames N       --scaling: frames per run (default: the path at --rate, or 48)\n",
+          "  --frames N       --scaling: frames per run (default: the path at --rate, or 48)\n"
+          "  --keep-noisy     --scaling: keep runs during which other programs were busy (for a control\n"
+          "                   that runs copies side by side); by default such runs are repeated\n",
           f);
     cli_pipeline_usage(f);
 }
@@ -329,7 +333,7 @@ int cli_bench_path(int argc, char **argv)
     cli_pipeline_spec spec;
     cli_pipeline_spec_default(&spec, "null", NULL);
     const char *scene_path = NULL;
-    bool scaling = false;
+    bool scaling = false, reject_noisy = true;
     int rounds = SCALING_DEFAULT_ROUNDS;
     const char *config = cli_pipeline_find_config(argc, argv);
     if (config && !cli_pipeline_config_load(config, &spec))
@@ -349,6 +353,8 @@ int cli_bench_path(int argc, char **argv)
             continue;
         if (!strcmp(a, "--scaling")) {
             scaling = true;
+        } else if (!strcmp(a, "--keep-noisy")) {
+            reject_noisy = false;
         } else if (!strcmp(a, "--rounds")) {
             if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 1000, &rounds))
                 return 2;
@@ -375,7 +381,7 @@ int cli_bench_path(int argc, char **argv)
         cli_scene_finish(&cs);
         return 1;
     }
-    int code = scaling ? bench_scaling(&spec, &cs, max_threads, rounds) : bench_path(&spec, &cs);
+    int code = scaling ? bench_scaling(&spec, &cs, max_threads, rounds, reject_noisy) : bench_path(&spec, &cs);
     cli_scene_finish(&cs);
     return code;
 }
