@@ -7,6 +7,7 @@
 #include <criterion/criterion.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 
 /* A fresh mkdtemp directory /tmp/tessera-NAME-XXXXXX into dir. */
@@ -55,6 +56,31 @@ static inline int support_tessera(const char *dir, int timeout_s, char *out, siz
     int code = support_run(cmd);
     support_read_text(log_path, out, out_bytes);
     return code;
+}
+
+/* Write `text` to dir/name. */
+static inline void support_write_file(const char *dir, const char *name, const char *text)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    cr_assert(f, "cannot write %s", path);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Expect `tessera ARGS` (as for support_tessera) to fail cleanly: a non-zero
+ * exit that is not a crash or a timeout, an error line, and every one of the
+ * NULL-terminated needles in its output. */
+static inline void support_expect_error(const char *dir, int timeout_s, const char *args_fmt,
+                                        const char *const *needles)
+{
+    char out[8192];
+    int code = support_tessera(dir, timeout_s, out, sizeof out, args_fmt);
+    cr_expect(code != 0 && code < 124, "'%s' should fail cleanly, got exit %d: %s", args_fmt, code, out);
+    cr_expect(strstr(out, "error") != NULL, "no error line for '%s': %s", args_fmt, out);
+    for (const char *const *n = needles; *n; n++)
+        cr_expect(strstr(out, *n) != NULL, "'%s': message lacks '%s': %s", args_fmt, *n, out);
 }
 
 #endif

@@ -19,15 +19,7 @@ static char tmp_dir[256];
 
 static void make_tmp_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "cli"); }
 
-static void write_text(const char *name, const char *text)
-{
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, name);
-    FILE *f = fopen(path, "wb");
-    cr_assert(f, "cannot write %s", path);
-    fputs(text, f);
-    fclose(f);
-}
+static void write_text(const char *name, const char *text) { support_write_file(tmp_dir, name, text); }
 
 /* Run `tessera ARGS` (every %s in ARGS is the temp dir); output goes to `out`. */
 static int run_tessera(char *out, size_t out_bytes, const char *args_fmt)
@@ -38,12 +30,7 @@ static int run_tessera(char *out, size_t out_bytes, const char *args_fmt)
 /* Expect failure with a message containing every needle (NULL-terminated). */
 static void expect_error(const char *args_fmt, const char *const *needles)
 {
-    char out[8192];
-    int code = run_tessera(out, sizeof out, args_fmt);
-    cr_expect(code != 0 && code < 124, "'%s' should fail cleanly, got exit %d: %s", args_fmt, code, out);
-    cr_expect(strstr(out, "error") != NULL, "no error line for '%s': %s", args_fmt, out);
-    for (const char *const *n = needles; *n; n++)
-        cr_expect(strstr(out, *n) != NULL, "'%s': message lacks '%s': %s", args_fmt, *n, out);
+    support_expect_error(tmp_dir, CLI_TIMEOUT_S, args_fmt, needles);
 }
 
 #define EXPECT_ERROR(args, ...) expect_error(args, (const char *const[]){__VA_ARGS__, NULL})

@@ -26,15 +26,7 @@ static int run(char *out, size_t out_bytes, const char *args_fmt)
     return support_tessera(tmp_dir, TIMEOUT_S, out, out_bytes, args_fmt);
 }
 
-static void write_file(const char *name, const char *text)
-{
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, name);
-    FILE *f = fopen(path, "wb");
-    cr_assert(f, "cannot write %s", path);
-    fputs(text, f);
-    fclose(f);
-}
+static void write_file(const char *name, const char *text) { support_write_file(tmp_dir, name, text); }
 
 /* Float pixels of an EXR in the temp dir (caller frees). */
 static float *read_exr(const char *name, int *w, int *h)
@@ -59,11 +51,7 @@ static void expect_same_exr(const char *a, const char *b)
 
 static void expect_error(const char *args_fmt, const char *const *needles)
 {
-    char out[8192];
-    int code = run(out, sizeof out, args_fmt);
-    cr_expect(code != 0 && code < 124, "'%s' should fail cleanly, got exit %d: %s", args_fmt, code, out);
-    for (const char *const *n = needles; *n; n++)
-        cr_expect(strstr(out, *n) != NULL, "'%s': message lacks '%s': %s", args_fmt, *n, out);
+    support_expect_error(tmp_dir, TIMEOUT_S, args_fmt, needles);
 }
 
 #define EXPECT_ERROR(args, ...) expect_error(args, (const char *const[]){__VA_ARGS__, NULL})
