@@ -1,5 +1,5 @@
-/* pipeline.c - the frame loop, the frame barrier, transactions and the tiled
- * image traverser. See pipeline.h for the model; the comments here say which
+/* pipeline.c - the frame loop, the frame barrier and transactions; the
+ * image traverser (traverser.h) hands out the work of a frame. See pipeline.h for the model; the comments here say which
  * lock or which stage guards each field. */
 #include "pipeline.h"
 
@@ -59,9 +59,6 @@ typedef struct pipe_channel {
     /* fixed after pipeline_add_channel */
     int width_px, height_px;
     image_display *display;
-    int tiles_x, tiles_y;
-    uint32_t *tile_order; /* tiles_x * tiles_y tile indices (y * tiles_x + x) in hand-out order */
-    uint32_t tile_base;   /* index of this channel's first tile in the frame's tile sequence */
     frame_buffer buffers[BUFFER_COUNT];
     /* buffer states (indices into buffers): changed only by the serial section */
     int pending, queued, on_screen;
@@ -115,7 +112,7 @@ struct pipeline {
     /* channels: the array is fixed once run starts */
     pipe_channel channels[PIPELINE_MAX_CHANNELS];
     int channel_count;
-    uint32_t tile_total; /* tiles of all channels per frame */
+    image_traverser *traverser; /* made by pipeline_run, when the channels are known */
 
     /* transaction queue (ring) and one-shots: guarded by queue_lock */
     pthread_mutex_t queue_lock;
@@ -143,7 +140,6 @@ struct pipeline {
     loop_step step;
     render_thread threads[PIPELINE_MAX_THREADS];
     int thread_count;      /* threads in the loop this step: serial section only */
-    atomic_uint next_tile; /* the load balancer: next index into the frame's tile sequence */
     atomic_bool stop_requested;
     atomic_bool running;
     bool ran;              /* pipeline_run was called: its thread only */
@@ -238,7 +234,7 @@ pipeline_config pipeline_config_default(const struct scene *s, const struct acce
     c.order = TILE_ORDER_ROWS;
     c.order_seed = 1;
     c.sampler = pixel_sampler_single();
-    c.shading = RENDER_SHADE_PHONG;
+    c.renderer = renderer_by_name("raytracer");
     c.shadows = true;
     return c;
 }
@@ -256,6 +252,8 @@ bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
     if (cfg->tile_px < PIPELINE_TILE_PX_MIN || cfg->tile_px > PIPELINE_TILE_PX_MAX)
         return tess_error_set(err, "pipeline: tile_px: %d is not in %d..%d", cfg->tile_px, PIPELINE_TILE_PX_MIN,
                               PIPELINE_TILE_PX_MAX);
+    if (!cfg->renderer)
+        return tess_error_set(err, "pipeline: no renderer");
     if ((unsigned)cfg->order >= TILE_ORDER_COUNT)
         return tess_error_set(err, "pipeline: unknown tile order %d", (int)cfg->order);
     if (!pixel_sampler_validate(&cfg->sampler, err)) {
@@ -291,7 +289,6 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
     pthread_mutex_init(&p->stats_lock, NULL);
     barrier_init(&p->frame_barrier);
     barrier_init(&p->anim_barrier);
-    atomic_init(&p->next_tile, 0);
     atomic_init(&p->stop_requested, false);
     atomic_init(&p->running, false);
     p->thread_count = 1;
@@ -306,7 +303,6 @@ static void channel_free(pipe_channel *c)
 {
     for (int b = 0; b < BUFFER_COUNT; b++)
         free(c->buffers[b].rgb);
-    free(c->tile_order);
     image_display_destroy(c->display);
 }
 
@@ -337,11 +333,7 @@ int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, i
     c->width_px = width_px;
     c->height_px = height_px;
     c->display = display;
-    c->tiles_x = (width_px + p->cfg.tile_px - 1) / p->cfg.tile_px;
-    c->tiles_y = (height_px + p->cfg.tile_px - 1) / p->cfg.tile_px;
-    size_t tiles = (size_t)c->tiles_x * (size_t)c->tiles_y;
     size_t floats = (size_t)width_px * (size_t)height_px * 3;
-    c->tile_order = malloc(tiles * sizeof *c->tile_order);
     /* cache-line aligned, so a tile row shares lines with a neighbour tile only where the
      * image width makes it (16-pixel float RGB rows are whole lines) */
     size_t bytes = (floats * sizeof(float) + 63) & ~(size_t)63;
@@ -350,19 +342,16 @@ int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, i
         if (c->buffers[b].rgb)
             memset(c->buffers[b].rgb, 0, bytes);
     }
-    bool have_memory = c->tile_order != NULL;
+    bool have_memory = true;
     for (int b = 0; b < BUFFER_COUNT; b++)
         have_memory = have_memory && c->buffers[b].rgb != NULL;
-    if (!have_memory || p->tile_total + tiles > UINT32_MAX / 2) {
+    if (!have_memory) {
         channel_free(c);
         memset(c, 0, sizeof *c);
         tess_error_set(err, "pipeline: channel %d: out of memory for %dx%d frame buffers", p->channel_count,
                        width_px, height_px);
         return -1;
     }
-    tile_order_fill(p->cfg.order, c->tiles_x, c->tiles_y, p->cfg.order_seed, c->tile_order);
-    c->tile_base = p->tile_total;
-    p->tile_total += (uint32_t)tiles;
     c->pending = 0;
     c->queued = 1;
     c->on_screen = 2;
@@ -773,18 +762,21 @@ static void finish_previous_step(pipeline *p)
     }
 }
 
-/* Freeze each channel's camera and options for the frame about to render. */
+/* Freeze each channel's camera and options for the frame about to render,
+ * and give the traverser the frame's targets. */
 static void freeze_frame(pipeline *p)
 {
+    traverser_target targets[PIPELINE_MAX_CHANNELS];
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
         c->view = (render_view){p->cfg.scene, p->cfg.accel, camera_basis_make(&c->camera, c->width_px, c->height_px),
-                                p->shadows, p->cfg.shading};
+                                p->shadows, p->cfg.renderer->shading};
+        targets[i] = (traverser_target){&c->view, c->buffers[c->pending].rgb};
         frame_buffer *b = &c->buffers[c->pending];
         b->meta = (frame_image){b->rgb, c->width_px, c->height_px, p->step.info.frame, p->step.info.time_s, i,
                                 c->camera, c->camera_serial};
     }
-    atomic_store_explicit(&p->next_tile, 0, memory_order_relaxed);
+    p->traverser->ops->begin_frame(p->traverser, targets);
 }
 
 /* The serial section of the frame barrier; returns the threads of the next step. */
@@ -863,29 +855,12 @@ static void display_stage(pipeline *p)
     p->display_stage_s = now_s() - t0;
 }
 
-/* The image traverser "tiled": one atomic counter over the tiles of every
- * channel, in each channel's tile order. */
+/* The dynamically balanced stage: the traverser hands out the frame's work. */
 static void render_stage(pipeline *p, render_thread *t)
 {
-    const int tile_px = p->cfg.tile_px;
-    const uint32_t total = p->tile_total;
     render_counts counts = {0, 0, 0}; /* on this thread's stack: no shared cache line per packet */
-    for (;;) {
-        uint32_t g = atomic_fetch_add_explicit(&p->next_tile, 1, memory_order_relaxed);
-        if (g >= total) {
-            t->counts = counts;
-            return;
-        }
-        int ci = 0;
-        while (ci + 1 < p->channel_count && g >= p->channels[ci + 1].tile_base)
-            ci++;
-        pipe_channel *c = &p->channels[ci];
-        uint32_t tile = c->tile_order[g - c->tile_base];
-        int x0 = (int)(tile % (uint32_t)c->tiles_x) * tile_px, y0 = (int)(tile / (uint32_t)c->tiles_x) * tile_px;
-        int x1 = x0 + tile_px < c->width_px ? x0 + tile_px : c->width_px;
-        int y1 = y0 + tile_px < c->height_px ? y0 + tile_px : c->height_px;
-        render_tile_sampled(&c->view, &p->cfg.sampler, x0, y0, x1, y1, c->buffers[c->pending].rgb, &counts);
-    }
+    p->traverser->ops->render(p->traverser, p->cfg.renderer, &p->cfg.sampler, &counts);
+    t->counts = counts;
 }
 
 /* Steps 2-4 of the current loop step, then the next frame barrier. Returns
@@ -935,6 +910,15 @@ bool pipeline_run(pipeline *p, tess_error *err)
         return tess_error_set(err, "pipeline_run: the pipeline has already run");
     if (p->channel_count == 0)
         return tess_error_set(err, "pipeline: no channels to render");
+    int widths[PIPELINE_MAX_CHANNELS], heights[PIPELINE_MAX_CHANNELS];
+    for (int i = 0; i < p->channel_count; i++) {
+        widths[i] = p->channels[i].width_px;
+        heights[i] = p->channels[i].height_px;
+    }
+    p->traverser = traverser_tiled_create(p->cfg.tile_px, p->cfg.order, p->cfg.order_seed, widths, heights,
+                                          p->channel_count, err);
+    if (!p->traverser)
+        return false;
     p->ran = true;
     atomic_store(&p->running, true);
     double t0 = now_s();
@@ -973,6 +957,7 @@ void pipeline_destroy(pipeline *p)
     }
     for (int i = 0; i < p->channel_count; i++)
         channel_free(&p->channels[i]);
+    image_traverser_destroy(p->traverser);
     barrier_destroy(&p->frame_barrier);
     barrier_destroy(&p->anim_barrier);
     pthread_mutex_destroy(&p->queue_lock);

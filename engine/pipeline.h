@@ -70,6 +70,7 @@
 #include "render.h"
 #include "sampler.h"
 #include "tile_order.h"
+#include "traverser.h"
 
 struct scene;
 struct accel;
@@ -99,13 +100,12 @@ typedef struct pipeline_config {
     pipeline_time_mode time_mode;
     double rate_hz;            /* FIXED_RATE: frames per second of pipeline time, > 0 */
     uint64_t max_frames;       /* frames to render and display, then stop; 0: until pipeline_stop */
-    /* image traverser "tiled": square tiles handed out by one atomic counter */
+    /* image traverser "tiled" (traverser.h): square tiles handed out by one atomic counter */
     int tile_px;               /* PIPELINE_TILE_PX_MIN..MAX */
     tile_order order;
     uint32_t order_seed;       /* for TILE_ORDER_SHUFFLE */
     pixel_sampler sampler;
-    /* renderer "raytracer" (RENDER_SHADE_PHONG) or "eyelight" */
-    render_shading shading;
+    const renderer *renderer;  /* renderer_by_name: "raytracer" or "eyelight" */
     bool shadows;
 } pipeline_config;
 

@@ -6,6 +6,7 @@
 #include <stdalign.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "accel.h"
 #include "log.h"
@@ -499,4 +500,17 @@ void render_image_sampled(const render_view *v, const pixel_sampler *s, int thre
         counts->primary_hits = atomic_load(&q.primary_hits);
         counts->shadow_rays = atomic_load(&q.shadow_rays);
     }
+}
+
+static const renderer renderers[] = {
+    {"raytracer", RENDER_SHADE_PHONG, render_tile_sampled},
+    {"eyelight", RENDER_SHADE_EYELIGHT, render_tile_sampled},
+};
+
+const renderer *renderer_by_name(const char *name)
+{
+    for (size_t i = 0; i < sizeof renderers / sizeof renderers[0]; i++)
+        if (!strcmp(renderers[i].name, name))
+            return &renderers[i];
+    return NULL;
 }

@@ -74,6 +74,22 @@ void render_tile_sampled(const render_view *v, const pixel_sampler *s, int x0, i
  * the rays traced. */
 void render_image(const render_view *v, int threads, float *rgb, render_counts *counts);
 
+/* The renderer component, chosen by name (configs, --renderer): renders a
+ * tile of a view with a pixel sampler. The pipeline puts `shading` into the
+ * views it hands to render_tile. More renderers (transparency, ambient
+ * occlusion, volumes) come with the visualization issues. */
+typedef struct renderer {
+    const char *name;       /* "raytracer" (Phong, shadows) or "eyelight" */
+    render_shading shading;
+    void (*render_tile)(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                        render_counts *counts);
+} renderer;
+
+#define RENDERER_NAMES "raytracer, eyelight"
+
+/* The renderer called `name`, or NULL. */
+const renderer *renderer_by_name(const char *name);
+
 /* render_image with a pixel sampler (render_tile_sampled for each tile). */
 void render_image_sampled(const render_view *v, const pixel_sampler *s, int threads, float *rgb,
                           render_counts *counts);

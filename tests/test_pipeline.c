@@ -648,8 +648,9 @@ typedef struct stopper {
 static void *stop_soon(void *arg)
 {
     stopper *s = arg;
-    struct timespec ts = {0, 20000000};
-    nanosleep(&ts, NULL);
+    struct timespec ts = {0, 1000000};
+    while (pipeline_get_stats(s->p).frames_rendered < 2) /* stop while frames are flowing */
+        nanosleep(&ts, NULL);
     pipeline_stop(s->p);
     return NULL;
 }
@@ -671,7 +672,7 @@ Test(pipeline, stop_from_another_thread_displays_the_last_frame_and_runs_termina
     pthread_join(th, NULL);
     pipeline_stats st = pipeline_get_stats(p);
     cr_assert_eq(terminations, 1);
-    cr_assert(st.frames_rendered >= 1);
+    cr_assert(st.frames_rendered >= 2);
     cr_assert_eq(st.frames_displayed, st.frames_rendered, "rendered %llu, displayed %llu",
                  (unsigned long long)st.frames_rendered, (unsigned long long)st.frames_displayed);
     cr_assert_eq((uint64_t)cap->count, st.frames_displayed);
@@ -757,7 +758,8 @@ Test(pipeline, limits_are_enforced)
     cr_assert(m.run_refused, "pipeline_run inside a transaction was not refused");
     cr_assert(m.setter_outside_refused, "a camera change outside the serial section was not refused");
     pipeline_stats st = pipeline_get_stats(p);
-    cr_assert_eq(st.slow_callbacks, 1);
+    /* the 5 ms one at least (on a loaded machine a preempted quick one may be counted too) */
+    cr_assert(st.slow_callbacks >= 1, "the slow transaction was not counted");
     cr_assert_eq(st.transactions_rejected, 1);
     pipeline_destroy(p);
 

@@ -33,7 +33,7 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     s->order = TILE_ORDER_ROWS;
     s->order_seed = 1;
     s->sampler = pixel_sampler_single();
-    s->shading = RENDER_SHADE_PHONG;
+    s->renderer = renderer_by_name("raytracer");
     s->shadows = true;
     s->channel_count = 1;
     s->channels[0].width_px = 1280;
@@ -209,16 +209,24 @@ static bool load_sampler(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
 static bool load_renderer(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
 {
     static const char *const fields[] = {"name", "shadows", NULL};
-    static const char *const names[] = {"raytracer", "eyelight", NULL};
     json_object *m;
     if (!jr_get_member(root, "renderer", &m))
         return true;
     size_t saved = jr_field_key(c, "renderer");
-    int name = s->shading == RENDER_SHADE_EYELIGHT ? 1 : 0;
-    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_choice(c, m, "name", names, &name) &&
+    const char *name = NULL;
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_string(c, m, "name", &name) &&
               jr_opt_bool(c, m, "shadows", &s->shadows);
+    if (ok && name) {
+        const renderer *r = renderer_by_name(name);
+        if (!r) {
+            char reason[256];
+            snprintf(reason, sizeof reason, "unknown renderer '%s' (expected one of: %s)", name, RENDERER_NAMES);
+            ok = jr_member_fail(c, "name", reason);
+        } else {
+            s->renderer = r;
+        }
+    }
     jr_field_leave(c, saved);
-    s->shading = name == 1 ? RENDER_SHADE_EYELIGHT : RENDER_SHADE_PHONG;
     return ok;
 }
 
@@ -358,11 +366,12 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--renderer")) {
         if (!(val = cli_option_value(argc, argv, i)))
             return false;
-        if (strcmp(val, "raytracer") && strcmp(val, "eyelight")) {
-            cli_error("--renderer: unknown renderer '%s' (expected raytracer or eyelight)", val);
+        const renderer *r = renderer_by_name(val);
+        if (!r) {
+            cli_error("--renderer: unknown renderer '%s' (expected one of: %s)", val, RENDERER_NAMES);
             return false;
         }
-        s->shading = !strcmp(val, "eyelight") ? RENDER_SHADE_EYELIGHT : RENDER_SHADE_PHONG;
+        s->renderer = r;
         return true;
     } else if (!strcmp(a, "--display")) {
         if (!(val = cli_option_value(argc, argv, i)))
@@ -420,7 +429,7 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
     cfg.order = s->order;
     cfg.order_seed = s->order_seed;
     cfg.sampler = s->sampler;
-    cfg.shading = s->shading;
+    cfg.renderer = s->renderer;
     cfg.shadows = s->shadows;
     pipeline *p = pipeline_create(&cfg, &err);
     if (!p) {

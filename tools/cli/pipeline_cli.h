@@ -33,7 +33,7 @@ typedef struct cli_pipeline_spec {
     tile_order order;
     uint32_t order_seed;
     pixel_sampler sampler;
-    render_shading shading;
+    const renderer *renderer;    /* renderer_by_name */
     bool shadows;
     /* channel 0 comes from the top-level options; a config's "channels" adds more */
     cli_channel_spec channels[PIPELINE_MAX_CHANNELS];
