@@ -1,0 +1,156 @@
+/* wall_config.h (wall) - the wall configuration file (configs/walls/NAME.json):
+ * which monitors (outputs) make up a display wall, their modes and rotations,
+ * and where their active areas and bezels sit on ONE virtual image plane.
+ *
+ * COORDINATES. Millimetres on the wall; the origin is the top-left corner of
+ * the wall's bounding box (active areas and bezels of all outputs), x grows to
+ * the right and y downwards, as the viewer faces the wall. Every size and
+ * position is "as mounted", i.e. after the panel's rotation.
+ *
+ * WALL FILE FORMAT (docs/wall-format.md holds the same reference)
+ *
+ * One JSON object, read as strictly as scene files (engine/json_read.h):
+ * comments allowed, an unknown field or a key given twice is an error, numbers
+ * finite and within float range.
+ *
+ *   "format": "tessera-wall"           required, exactly this (checked first)
+ *   "version": 1                       required, exactly 1
+ *   "units": "mm"                      required, exactly "mm"
+ *   "outputs": [                       required, 1..WALL_MAX_OUTPUTS
+ *     {"connector": "HDMI-A-1",        required: DRM connector name TYPE-INDEX
+ *                                      (letters, digits, '-'; ends in -N), 1..31 chars
+ *      "edid": {"manufacturer": "DEL", optional object, at least one field; when
+ *               "model": "U2415",      given it identifies the monitor and wins over
+ *               "serial": "ABC123"},   the connector name. manufacturer: 3 letters
+ *                                      A-Z (the EDID PNP id); model, serial: 1..63 chars
+ *      "mode": "1920x1200@60",         "WxH", "WxH@HZ" (HZ may be fractional, 59.94)
+ *                                      or "preferred" (the default). W, H are the
+ *                                      pixels the monitor scans out, before rotation;
+ *                                      1..32767. No HZ: any refresh rate
+ *      "rotation": 0,                  0, 90, 180 or 270: degrees clockwise the panel
+ *                                      is turned as the viewer sees it; default 0.
+ *                                      90 and 270 swap the mode's W and H
+ *      "grid": [column, row],          exactly one of grid, position_mm and
+ *      "position_mm": [x, y],          position_px places the output; see below
+ *      "position_px": [x, y],
+ *      "size_mm": [width, height],     required: the ACTIVE area as mounted, > 0
+ *      "bezel_mm": {"left": 0, "top": 0, "right": 0, "bottom": 0}
+ *                                      as mounted; each optional (default 0), >= 0
+ *     }, ...
+ *   ]
+ *
+ * Placement (all give the top-left corner of the output's active area):
+ *  - position_mm: [x, y] in wall millimetres (any finite values; see below).
+ *  - position_px: [x, y] in wall pixels, where one wall pixel is this output's
+ *    pixel as mounted: x_mm = x * width_mm / width_px and y_mm likewise, with
+ *    width_px, height_px the mode's pixels after rotation. Needs an explicit mode.
+ *  - grid: [column, row], integers 0..255. Every grid-placed output must have
+ *    the same size_mm and bezel_mm as the first grid-placed one; the tile is
+ *    tile_w = width + left + right and tile_h = height + top + bottom, and cell
+ *    (c, r) puts the active area at (c * tile_w + left, r * tile_h + top).
+ *    Grid and position_mm / position_px outputs may be mixed (same coordinates).
+ * After reading, every output is shifted so that the bounding box of all the
+ * tiles (active area plus bezels) starts at (0, 0); width_mm and height_mm of
+ * the wall are that box's size.
+ *
+ * Checks made from the file alone (each message names the outputs involved):
+ * 1..16 outputs; exactly one placement; the grid rule above; no two tiles
+ * (active + bezels) overlapping by more than WALL_OVERLAP_TOLERANCE_MM in both
+ * directions; no two outputs with the same connector name, nor with the same
+ * EDID identity (all three fields equal, an absent field equal only to an
+ * absent one); with an explicit mode, |(w_mm / h_mm) / (w_px / h_px) - 1| <=
+ * WALL_ASPECT_TOLERANCE using the mounted sizes (non-square pixels are refused).
+ *
+ * Messages are one line: "FILE: field 'outputs[2].bezel_mm.left': must be >= 0,
+ * got -3". Checks that need a device (wall_config_match_device) or a headless
+ * run (wall_config_headless_sizes) report "outputs[N]: ..." without the file
+ * name, which the caller may add with tess_error_prefix. */
+#ifndef TESSERA_WALL_CONFIG_H
+#define TESSERA_WALL_CONFIG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "engine/err.h"
+
+#define WALL_MAX_OUTPUTS 16
+#define WALL_CONNECTOR_BYTES 32      /* name up to 31 chars + NUL */
+#define WALL_EDID_TEXT_BYTES 64      /* model / serial up to 63 chars + NUL */
+#define WALL_OVERLAP_TOLERANCE_MM 0.01
+#define WALL_ASPECT_TOLERANCE 0.02   /* relative difference of the aspects */
+#define WALL_REFRESH_TOLERANCE_HZ 0.5
+
+/* What identifies a monitor. An empty string is a field the file did not give. */
+typedef struct wall_edid {
+    bool given;                           /* the file had an "edid" object */
+    char manufacturer[4];                 /* 3 letters A-Z, or "" */
+    char model[WALL_EDID_TEXT_BYTES];
+    char serial[WALL_EDID_TEXT_BYTES];
+} wall_edid;
+
+/* One monitor of the wall. Lengths in wall mm (see COORDINATES). */
+typedef struct wall_output {
+    char connector[WALL_CONNECTOR_BYTES];
+    wall_edid edid;
+    bool mode_preferred;                  /* "preferred": mode_* are 0 */
+    int mode_w_px, mode_h_px;             /* as the monitor scans out (before rotation) */
+    double mode_hz;                       /* 0 = any refresh rate */
+    int rotation_deg;                     /* 0, 90, 180, 270 clockwise */
+    double x_mm, y_mm;                    /* top-left of the active area, after normalisation */
+    double width_mm, height_mm;           /* active area as mounted, > 0 */
+    double bezel_left_mm, bezel_top_mm, bezel_right_mm, bezel_bottom_mm; /* as mounted, >= 0 */
+    int width_px, height_px;              /* mounted pixel size once resolved, 0 until then */
+    int device_connector, device_mode;    /* indices chosen by wall_config_match_device, -1 until then */
+} wall_output;
+
+typedef struct wall_config {
+    wall_output outputs[WALL_MAX_OUTPUTS];
+    int count;                            /* 1..WALL_MAX_OUTPUTS */
+    double width_mm, height_mm;           /* bounding box of all tiles (active + bezels) */
+} wall_config;
+
+/* Read and check a wall file; *out is fully written (zeroed on failure). */
+bool wall_config_load(const char *file, wall_config *out, tess_error *err);
+
+/* The same for `len` bytes of `text`; `name` only names it in messages. */
+bool wall_config_parse(const char *name, const char *text, size_t len, wall_config *out, tess_error *err);
+
+/* ---- resolving pixel sizes ----------------------------------------------- */
+
+/* A mode a connector offers, as DRM lists it (scan-out pixels, before rotation). */
+typedef struct wall_device_mode {
+    int width_px, height_px;
+    double refresh_hz;
+} wall_device_mode;
+
+/* What one connector of a DRM card offers. Strings may be NULL or "" (unknown). */
+typedef struct wall_device_connector {
+    const char *name;                     /* e.g. "HDMI-A-1" */
+    bool connected;                       /* a monitor is attached */
+    const char *edid_manufacturer, *edid_model, *edid_serial;
+    const wall_device_mode *modes;
+    size_t mode_count;
+    int preferred;                        /* index into modes, -1 if none is marked */
+} wall_device_connector;
+
+/* Pick for every output the connector of conns[0..n) that drives it and its
+ * mode, filling device_connector, device_mode, width_px and height_px.
+ * Connector: with an edid, the one connected connector whose EDID has every
+ * given field equal (the name is then ignored); else the connector of that
+ * name, which must be connected. Mode: an explicit one needs exact W and H and,
+ * when HZ was given, a refresh within WALL_REFRESH_TOLERANCE_HZ (the closest;
+ * without HZ the preferred mode if it fits, else the highest refresh);
+ * "preferred" takes the connector's preferred mode, else the largest (area,
+ * then refresh), and must then pass the aspect check too. Fails with e.g.
+ *   "outputs[1]: connector 'HDMI-A-3' not found (the card has: HDMI-A-1, DP-1)"
+ *   "outputs[0]: mode 2560x1440@60 not offered by HDMI-A-1 (it offers: 1920x1080@60, ...)"
+ * and when two outputs resolve to one connector. On failure the outputs' resolved
+ * fields are left unresolved (-1 / 0). */
+bool wall_config_match_device(wall_config *w, const wall_device_connector *conns, size_t n, tess_error *err);
+
+/* Without a device: width_px, height_px from each explicit mode (rotated).
+ * Fails for "preferred" with "outputs[1] (Virtual-2): mode 'preferred' needs a
+ * device; give an explicit mode such as 1920x1080 for headless runs". */
+bool wall_config_headless_sizes(wall_config *w, tess_error *err);
+
+#endif
