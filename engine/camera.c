@@ -30,19 +30,24 @@ bool camera_validate(const camera_desc *c, tess_error *err)
 
 camera_basis camera_basis_make(const camera_desc *c, int width_px, int height_px)
 {
+    return camera_basis_window(c, (float)width_px / (float)height_px, CAMERA_WINDOW_FULL, width_px, height_px);
+}
+
+camera_basis camera_basis_window(const camera_desc *c, float plane_aspect, camera_window window, int width_px,
+                                 int height_px)
+{
     float tan_half = tanf(0.5f * c->fov_deg * deg_to_rad);
-    float aspect = (float)width_px / (float)height_px;
+    float aspect = plane_aspect;
     vec3 forward = v3_normalize(v3_sub(c->look_at, c->eye));
     vec3 right = v3_normalize(v3_cross(forward, c->up));
     vec3 up = v3_cross(right, forward);
-    return (camera_basis){
-        .eye = c->eye,
-        .forward = forward,
-        .right = v3_scale(right, tan_half * aspect),
-        .up = v3_scale(up, tan_half),
-        .width_px = width_px,
-        .height_px = height_px,
-    };
+    vec3 plane_right = v3_scale(right, tan_half * aspect), plane_up = v3_scale(up, tan_half);
+    if (window.center_x == 0.f && window.center_y == 0.f && window.half_width == 1.f && window.half_height == 1.f)
+        return (camera_basis){c->eye, forward, plane_right, plane_up, width_px, height_px};
+    /* the window's centre direction and half extents: pixel mapping as camera_pixel_direction */
+    vec3 centre = v3_add(forward, v3_add(v3_scale(plane_right, window.center_x), v3_scale(plane_up, window.center_y)));
+    return (camera_basis){c->eye, centre, v3_scale(plane_right, window.half_width),
+                          v3_scale(plane_up, window.half_height), width_px, height_px};
 }
 
 camera_desc camera_frame_bounds(vec3 lo, vec3 hi, vec3 view_dir, float fov_deg, int width_px, int height_px)

@@ -23,7 +23,8 @@ typedef struct camera_desc {
 
 typedef struct camera_basis {
     vec3 eye;
-    vec3 forward;   /* unit, eye -> look_at */
+    vec3 forward;   /* direction through the image centre; unit (eye -> look_at) except for a
+                       camera_basis_window that is off-centre */
     vec3 right;     /* length tan(fov/2) * aspect */
     vec3 up;        /* length tan(fov/2) */
     int width_px, height_px;
@@ -35,6 +36,25 @@ bool camera_validate(const camera_desc *c, tess_error *err);
 
 /* Build the basis for an image size; the description must be valid. */
 camera_basis camera_basis_make(const camera_desc *c, int width_px, int height_px);
+
+/* A window onto a larger virtual image plane (a display wall): the screen
+ * rectangle [cx - hw, cx + hw] x [cy - hh, cy + hh] in the plane's screen
+ * coordinates, where the whole plane is sx, sy in [-1, 1] (sx right, sy up).
+ * {0, 0, 1, 1} is the whole plane. */
+typedef struct camera_window {
+    float center_x, center_y;
+    float half_width, half_height;
+} camera_window;
+
+#define CAMERA_WINDOW_FULL ((camera_window){0.f, 0.f, 1.f, 1.f})
+
+/* The basis for a W x H image of `window` of the plane that camera c sees at
+ * aspect plane_aspect (plane width / height): every output of a wall is one
+ * off-axis view of one pinhole camera, so a straight line stays straight
+ * across outputs. With the full window and plane_aspect = (float)W / H it is
+ * camera_basis_make, bit for bit. */
+camera_basis camera_basis_window(const camera_desc *c, float plane_aspect, camera_window window, int width_px,
+                                 int height_px);
 
 /* Unnormalised direction through the centre of pixel (x, y); see the header comment. */
 static inline vec3 camera_pixel_direction(const camera_basis *b, int x, int y)

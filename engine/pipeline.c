@@ -58,6 +58,8 @@ typedef struct pipe_channel {
     uint64_t camera_serial;
     /* fixed after pipeline_add_channel */
     int width_px, height_px;
+    float plane_aspect;    /* width / height of the image plane the window is part of */
+    camera_window window;  /* the part of that plane this channel shows */
     image_display *display;
     frame_buffer buffers[BUFFER_COUNT];
     /* buffer states (indices into buffers): changed only by the serial section */
@@ -309,6 +311,13 @@ static void channel_free(pipe_channel *c)
 int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, int height_px, image_display *display,
                          tess_error *err)
 {
+    float aspect = height_px > 0 ? (float)width_px / (float)height_px : 1.f;
+    return pipeline_add_channel_window(p, camera, aspect, CAMERA_WINDOW_FULL, width_px, height_px, display, err);
+}
+
+int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float plane_aspect, camera_window window,
+                                int width_px, int height_px, image_display *display, tess_error *err)
+{
     bool ok = true;
     if (p->ran || atomic_load(&p->running))
         ok = tess_error_set(err, "pipeline: channels can only be added before the pipeline runs");
@@ -319,6 +328,10 @@ int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, i
                             p->channel_count, width_px, height_px);
     else if (!display)
         ok = tess_error_set(err, "pipeline: channel %d has no display", p->channel_count);
+    else if (!(plane_aspect > 0.f && isfinite(plane_aspect)) || !(window.half_width > 0.f) ||
+             !(window.half_height > 0.f) || !isfinite(window.center_x) || !isfinite(window.center_y) ||
+             !isfinite(window.half_width) || !isfinite(window.half_height))
+        ok = tess_error_set(err, "pipeline: channel %d: degenerate window or plane aspect", p->channel_count);
     else if (!camera_validate(camera, err)) {
         tess_error_prefix(err, "pipeline: channel %d: ", p->channel_count);
         ok = false;
@@ -332,6 +345,8 @@ int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, i
     c->camera = *camera;
     c->width_px = width_px;
     c->height_px = height_px;
+    c->plane_aspect = plane_aspect;
+    c->window = window;
     c->display = display;
     size_t floats = (size_t)width_px * (size_t)height_px * 3;
     /* cache-line aligned, so a tile row shares lines with a neighbour tile only where the
@@ -533,6 +548,12 @@ uint64_t pipeline_camera_serial(const pipeline *p, int channel)
 }
 
 int pipeline_channel_count(const pipeline *p) { return p->channel_count; }
+
+camera_basis pipeline_channel_basis(const pipeline *p, int channel)
+{
+    const pipe_channel *c = &p->channels[channel < 0 || channel >= p->channel_count ? 0 : channel];
+    return camera_basis_window(&c->camera, c->plane_aspect, c->window, c->width_px, c->height_px);
+}
 uint64_t pipeline_frame(const pipeline *p) { return p->step.info.frame; }
 int pipeline_threads(const pipeline *p) { return p->step.info.threads > 0 ? p->step.info.threads : p->thread_count; }
 
@@ -769,7 +790,8 @@ static void freeze_frame(pipeline *p)
     traverser_target targets[PIPELINE_MAX_CHANNELS];
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
-        c->view = (render_view){p->cfg.scene, p->cfg.accel, camera_basis_make(&c->camera, c->width_px, c->height_px),
+        c->view = (render_view){p->cfg.scene, p->cfg.accel,
+                                camera_basis_window(&c->camera, c->plane_aspect, c->window, c->width_px, c->height_px),
                                 p->shadows, p->cfg.renderer->shading};
         targets[i] = (traverser_target){&c->view, c->buffers[c->pending].rgb};
         frame_buffer *b = &c->buffers[c->pending];

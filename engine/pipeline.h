@@ -124,6 +124,13 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err);
 int pipeline_add_channel(pipeline *p, const camera_desc *camera, int width_px, int height_px, image_display *display,
                          tess_error *err);
 
+/* A channel that shows `window` of the image plane of `camera` seen at
+ * plane_aspect (width / height): one output of a display wall, an off-axis
+ * part of one picture (camera_basis_window). pipeline_add_channel is this with
+ * the whole plane at the image's own aspect. */
+int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float plane_aspect, camera_window window,
+                                int width_px, int height_px, image_display *display, tess_error *err);
+
 /* Run the frame loop on the calling thread (render thread 0) and the others
  * it starts, until max_frames frames have been displayed, pipeline_stop, or a
  * display fails (then false with its error). The last rendered frame is
@@ -195,6 +202,8 @@ bool pipeline_set_shadows(pipeline *p, bool shadows);
 camera_desc pipeline_camera(const pipeline *p, int channel);
 uint64_t pipeline_camera_serial(const pipeline *p, int channel); /* changes so far */
 int pipeline_channel_count(const pipeline *p);
+/* Channel `channel`'s camera basis for its current camera (its image size, window). */
+camera_basis pipeline_channel_basis(const pipeline *p, int channel);
 /* The frame the current serial section prepares (serial section only). */
 uint64_t pipeline_frame(const pipeline *p);
 int pipeline_threads(const pipeline *p);

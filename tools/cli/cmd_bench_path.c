@@ -45,6 +45,7 @@ static void clock_tick(pipeline *p, void *ctx, const frame_info *fi)
 
 typedef struct path_sender {
     pipeline *p;
+    bool all_channels;    /* a wall: the camera of every output */
     const camera_path *path;
     double rate_hz;
     size_t transactions;  /* to send: floor(duration * rate) + 1 */
@@ -61,7 +62,9 @@ typedef struct camera_txn {
 static void apply_path_camera(pipeline *p, void *args)
 {
     camera_txn *t = args;
-    pipeline_set_camera(p, 0, &t->camera);
+    int channels = t->sender->all_channels ? pipeline_channel_count(p) : 1;
+    for (int i = 0; i < channels; i++)
+        pipeline_set_camera(p, i, &t->camera);
     t->sender->applied_at[t->seq] = pipeline_frame(p);
 }
 
@@ -143,7 +146,8 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs)
         camera_path_free(&path);
         return 2;
     }
-    path_sender s = {.path = &path, .rate_hz = spec->rate_hz, .transactions = (size_t)n};
+    path_sender s = {.path = &path, .rate_hz = spec->rate_hz, .transactions = (size_t)n,
+                     .all_channels = spec->wall_file[0] != '\0'};
     atomic_init(&s.refused, 0);
     s.applied_at = calloc(s.transactions, sizeof *s.applied_at);
     frame_clock fc = {NULL, 0, 0};
@@ -202,8 +206,9 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
     pipeline *p = cli_pipeline_create(spec, cs);
     if (!p)
         return false;
-    cli_path_player player = {{0}, 0.0};
-    cli_orbit orbit;
+    bool wall = spec->wall_file[0] != '\0';
+    cli_path_player player = {.time_offset_s = 0.0, .all_channels = wall};
+    cli_orbit orbit = {.all_channels = wall};
     if (path) {
         player.path = *path; /* borrowed: not freed here */
         cli_path_player_start(p, &player);

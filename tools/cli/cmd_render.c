@@ -94,7 +94,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
         return 1;
     }
     int code = 1;
-    cli_path_player player = {{0}, 0.0};
+    cli_path_player player = {.time_offset_s = 0.0, .all_channels = false};
     cli_recorder recorder;
     cli_orbit orbit_state;
     tess_error err = {{0}};
@@ -106,8 +106,10 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
             cli_error("%s", err.msg);
             goto done;
         }
+        player.all_channels = s->wall_file[0] != '\0';
         cli_path_player_start(p, &player);
     } else if (orbit) {
+        orbit_state.all_channels = s->wall_file[0] != '\0';
         cli_orbit_start(p, &orbit_state, CLI_ORBIT_PERIOD_S);
     }
     if (s->record_file[0])
@@ -120,9 +122,17 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
         goto done;
     pipeline_stats st = pipeline_get_stats(p);
     const cli_channel_spec *ch = &s->channels[0];
-    double pixels = 0.0;
-    for (int i = 0; i < s->channel_count; i++)
-        pixels += (double)s->channels[i].width_px * s->channels[i].height_px;
+    double pixels = 0.0; /* per frame, over every channel the pipeline rendered */
+    char what[128];
+    int channels = pipeline_channel_count(p);
+    for (int i = 0; i < channels; i++) {
+        camera_basis b = pipeline_channel_basis(p, i);
+        pixels += (double)b.width_px * b.height_px;
+    }
+    if (s->wall_file[0])
+        snprintf(what, sizeof what, "wall of %d outputs (%.2f Mpixels)", channels, pixels * 1e-6);
+    else
+        snprintf(what, sizeof what, "%dx%d%s", ch->width_px, ch->height_px, channels > 1 ? " (+ more channels)" : "");
     if (!strcmp(ch->display, "dump")) {
         char first[4096], last[4096];
         uint64_t n = st.frames_displayed;
@@ -137,10 +147,10 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
         }
     }
     double fps = st.run_s > 0.0 ? (double)st.frames_rendered / st.run_s : 0.0;
-    printf("%llu frame%s %dx%d%s, %d thread%s: %.2f frames/s (%.1f ms/frame, %.2f Mpixels/s), display %s "
+    printf("%llu frame%s %s, %d thread%s: %.2f frames/s (%.1f ms/frame, %.2f Mpixels/s), display %s "
            "%.1f ms/frame on thread 0\n",
-           (unsigned long long)st.frames_rendered, st.frames_rendered == 1 ? "" : "s", ch->width_px, ch->height_px,
-           s->channel_count > 1 ? " (+ more channels)" : "", s->threads, s->threads == 1 ? "" : "s", fps,
+           (unsigned long long)st.frames_rendered, st.frames_rendered == 1 ? "" : "s", what, s->threads,
+           s->threads == 1 ? "" : "s", fps,
            fps > 0.0 ? 1e3 / fps : 0.0, pixels * fps * 1e-6, ch->display,
            st.frames_displayed ? 1e3 * st.display_s / (double)st.frames_displayed : 0.0);
     cli_pipeline_report(p, s);

@@ -13,6 +13,7 @@
 #include "engine/log.h"
 #include "engine/scene.h"
 #include "wall/display.h"
+#include "wall/wall_headless.h"
 
 #define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
 
@@ -388,6 +389,8 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
         return true;
     } else if (!strcmp(a, "--path")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->path_file, sizeof s->path_file);
+    } else if (!strcmp(a, "--wall")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->wall_file, sizeof s->wall_file);
     } else if (!strcmp(a, "--record")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->record_file, sizeof s->record_file);
     }
@@ -411,11 +414,50 @@ void cli_pipeline_usage(FILE *f)
           "  --display D      null (drop frames), convert (to 8-bit sRGB as scan-out would, then\n"
           "                   drop), dump (write files to --out)\n"
           "  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
-          "  --record FILE    write the main channel's camera changes as a camera path\n",
+          "  --record FILE    write the main channel's camera changes as a camera path\n"
+          "  --wall FILE      render a display wall's layout (configs/walls/*.json, docs/wall-format.md):\n"
+          "                   one channel per output, each its part of one picture; with the dump\n"
+          "                   display each output's image goes beside --out (NAME-CONNECTOR.png) and\n"
+          "                   --out gets the stitched wall with the bezels black\n",
           f);
 }
 
 /* ---------------------------------------------------------------- making the pipeline */
+
+/* The wall's outputs as channels (headless: explicit modes). */
+static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli_scene *cs)
+{
+    tess_error err = {{0}};
+    wall_config wall;
+    if (!wall_config_load(s->wall_file, &wall, &err))
+        return cli_error("%s", err.msg), false;
+    if (!wall_config_headless_sizes(&wall, &err)) /* its messages name the output, not the file */
+        return cli_error("%s: %s", s->wall_file, err.msg), false;
+    const cli_channel_spec *main_ch = &s->channels[0];
+    int stitched_w, stitched_h;
+    wall_stitched_size(&wall, &stitched_w, &stitched_h);
+    camera_desc cam;
+    if (!cli_scene_camera(cs, main_ch->have_camera ? &main_ch->camera : NULL, stitched_w, stitched_h, &cam))
+        return false;
+    image_display *displays[WALL_MAX_OUTPUTS] = {NULL};
+    bool ok = true;
+    if (!strcmp(main_ch->display, "dump")) {
+        ok = wall_headless_displays(&wall, main_ch->out, s->frames != 1, displays, &err);
+    } else {
+        for (int i = 0; ok && i < wall.count; i++)
+            ok = (displays[i] = display_create(main_ch->display, NULL, false, &err)) != NULL;
+    }
+    /* the pipeline owns each display from pipeline_add_channel_window on, also on failure */
+    int added = 0;
+    for (int i = 0; ok && i < wall.count; i++, added++)
+        ok = pipeline_add_channel_window(p, &cam, wall_plane_aspect(&wall), wall_output_window(&wall, i),
+                                         wall.outputs[i].width_px, wall.outputs[i].height_px, displays[i], &err) >= 0;
+    for (int i = added + (ok ? 0 : 1); i < wall.count; i++)
+        image_display_destroy(displays[i]);
+    if (!ok)
+        cli_error("%s: %s", s->wall_file, err.msg);
+    return ok;
+}
 
 pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
 {
@@ -435,6 +477,15 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
     if (!p) {
         cli_error("%s", err.msg);
         return NULL;
+    }
+    if (s->wall_file[0]) {
+        if (s->channel_count > 1)
+            cli_error("--wall: the config's extra channels are ignored (a wall's channels are its outputs)");
+        if (!add_wall_channels(p, s, cs)) {
+            pipeline_destroy(p);
+            return NULL;
+        }
+        return p;
     }
     for (int i = 0; i < s->channel_count; i++) {
         const cli_channel_spec *ch = &s->channels[i];
@@ -459,7 +510,9 @@ static void play_path(pipeline *p, void *ctx, const frame_info *fi)
 {
     cli_path_player *pl = ctx;
     camera_desc c = camera_path_eval(&pl->path, fi->time_s + pl->time_offset_s);
-    pipeline_set_camera(p, 0, &c);
+    int channels = pl->all_channels ? pipeline_channel_count(p) : 1;
+    for (int i = 0; i < channels; i++)
+        pipeline_set_camera(p, i, &c);
 }
 
 bool cli_path_player_start(pipeline *p, cli_path_player *player)
@@ -475,7 +528,9 @@ static void orbit_step(pipeline *p, void *ctx, const frame_info *fi)
     vec3 r = v3_sub(c.eye, c.look_at);
     float cs = cosf(angle), sn = sinf(angle);
     c.eye = v3_add(c.look_at, v3(cs * r.x + sn * r.z, r.y, -sn * r.x + cs * r.z));
-    pipeline_set_camera(p, 0, &c);
+    int channels = o->all_channels ? pipeline_channel_count(p) : 1;
+    for (int i = 0; i < channels; i++)
+        pipeline_set_camera(p, i, &c);
 }
 
 bool cli_orbit_start(pipeline *p, cli_orbit *orbit, double period_s)

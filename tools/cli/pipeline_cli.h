@@ -40,6 +40,7 @@ typedef struct cli_pipeline_spec {
     int channel_count;           /* >= 1 */
     char path_file[CLI_PATTERN_BYTES];   /* camera path for channel 0, "" for none */
     char record_file[CLI_PATTERN_BYTES]; /* --record: write channel 0's camera changes, "" for none */
+    char wall_file[CLI_PATTERN_BYTES];   /* --wall: the channels are a wall's outputs, "" for none */
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
@@ -63,7 +64,10 @@ const char *cli_pipeline_find_config(int argc, char **argv);
 void cli_pipeline_usage(FILE *f);
 
 /* Make the pipeline: channels with their cameras (given, else the scene's,
- * else framed) and displays. NULL after printing the error. */
+ * else framed) and displays; with --wall, one channel per output of the wall
+ * (each its window of the one camera's image plane) and, with the dump
+ * display, per-output images beside the stitched wall image. NULL after
+ * printing the error. */
 pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs);
 
 /* Channel 0 follows a camera path: a serial animation callback sets the
@@ -71,6 +75,7 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs);
 typedef struct cli_path_player {
     camera_path path;
     double time_offset_s;
+    bool all_channels; /* a wall: every output shows the one camera */
 } cli_path_player;
 bool cli_path_player_start(pipeline *p, cli_path_player *player);
 
@@ -81,6 +86,7 @@ bool cli_path_player_start(pipeline *p, cli_path_player *player);
 typedef struct cli_orbit {
     camera_desc start;
     double period_s;
+    bool all_channels; /* a wall: every output shows the one camera */
 } cli_orbit;
 bool cli_orbit_start(pipeline *p, cli_orbit *orbit, double period_s);
 
