@@ -138,11 +138,11 @@ Test(wall_config, example_vm_2x2)
     wall_config w = load_example("vm_2x2.json");
     cr_assert_eq(w.count, 4);
     expect_near(w.width_mm, 336, "wall width");
-    expect_near(w.height_mm, 196, "wall height");
-    expect_rect(&w.outputs[0], 4, 4, 160, 90);
-    expect_rect(&w.outputs[3], 172, 102, 160, 90);
+    expect_near(w.height_mm, 256, "wall height");
+    expect_rect(&w.outputs[0], 4, 4, 160, 120);
+    expect_rect(&w.outputs[3], 172, 132, 160, 120);
     cr_expect_eq(w.outputs[0].mode_hz, 0.0, "no refresh given: any");
-    expect_headless(&w, 640, 360);
+    expect_headless(&w, 640, 480);
 }
 
 /* ---- geometry --------------------------------------------------------------- */

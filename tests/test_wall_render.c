@@ -207,6 +207,19 @@ Test(wall_render, wall_errors_are_clear)
     support_expect_error(tmp_dir, TIMEOUT_S, "render --wall %s/overlap.json --out %s/w.png", overlap);
     const char *missing[] = {"nowall.json", NULL};
     support_expect_error(tmp_dir, TIMEOUT_S, "render --wall %s/nowall.json --out %s/w.png", missing);
+    const char *drm_no_wall[] = {"--display drm", "--wall", NULL};
+    support_expect_error(tmp_dir, TIMEOUT_S, "run --display drm --out %s/f_####.png", drm_no_wall);
+}
+
+/* `tessera outputs` lists the cards, or says clearly there is none (exit 1). */
+Test(wall_render, outputs_lists_cards_or_says_there_is_none)
+{
+    char out[8192];
+    int code = support_tessera(tmp_dir, TIMEOUT_S, out, sizeof out, "outputs");
+    if (access("/dev/dri/card0", F_OK) == 0)
+        cr_expect(code == 0 && strstr(out, "/dev/dri/card"), "exit %d: %s", code, out);
+    else
+        cr_expect(code == 1 && strstr(out, "no DRM card"), "exit %d: %s", code, out);
 }
 
 /* Every example wall renders headless. */

@@ -4,6 +4,7 @@
  * run the parallel pipeline (engine/pipeline.h) with components chosen by
  * name (pipeline_cli.h). */
 #include <errno.h>
+#include <signal.h>
 #include <libgen.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -83,6 +84,29 @@ static bool check_outputs(const cli_pipeline_spec *s)
     return !s->record_file[0] || check_output_dir(s->record_file);
 }
 
+/* The running pipeline, for SIGINT/SIGTERM: pipeline_stop only stores to a
+ * lock-free atomic, which a signal handler may do. */
+static pipeline *volatile signal_target;
+
+static void stop_on_signal(int sig)
+{
+    (void)sig;
+    pipeline *p = signal_target;
+    if (p)
+        pipeline_stop(p);
+}
+
+static void catch_stop_signals(pipeline *p)
+{
+    signal_target = p;
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = p ? stop_on_signal : SIG_DFL;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+}
+
 /* Run the pipeline for a command; `orbit` animates channel 0 when no path is given. */
 static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
 {
@@ -114,7 +138,10 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     }
     if (s->record_file[0])
         cli_recorder_start(p, &recorder, s->record_file);
-    if (!pipeline_run(p, &err)) {
+    catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
+    bool ran = pipeline_run(p, &err);
+    catch_stop_signals(NULL);
+    if (!ran) {
         cli_error("%s", err.msg);
         goto done;
     }
@@ -157,6 +184,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     code = 0;
 done:
     pipeline_destroy(p);
+    cli_pipeline_release_outputs(); /* a DRM card: the CRTCs as they were */
     camera_path_free(&player.path);
     if (s->record_file[0] && p)
         camera_path_free(&recorder.path);
@@ -223,9 +251,19 @@ int cli_run(int argc, char **argv)
     int code = 0;
     if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code))
         return code;
-    if (access("/dev/dri", F_OK) == 0)
-        fprintf(stderr, "tessera: a DRM device is present, but the DRM/KMS backend is not built yet; "
-                        "rendering headless\n");
+    /* the kiosk: a wall on a card when there is one, until stopped, in real time */
+    if (s.wall_file[0] && !s.display_given && access("/dev/dri/card0", F_OK) == 0)
+        snprintf(s.channels[0].display, sizeof s.channels[0].display, "drm");
+    if (!strcmp(s.channels[0].display, "drm")) {
+        if (!s.wall_file[0]) {
+            cli_error("--display drm needs --wall FILE (configs/walls/desk.json for one monitor)");
+            return 2;
+        }
+        if (!s.frames_given)
+            s.frames = 0;
+        if (!s.time_given)
+            s.time_mode = PIPELINE_TIME_REAL;
+    }
     /* the default output directory is ours to create */
     if (!strcmp(s.channels[0].display, "dump") && !strcmp(s.channels[0].out, "out/frame_####.png") &&
         mkdir("out", 0777) != 0 && errno != EEXIST) {

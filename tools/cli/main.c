@@ -3,6 +3,20 @@
 #include <string.h>
 
 #include "cli.h"
+#include "wall/drm.h"
+
+/* tessera outputs: what the cards offer, to help write a wall config. */
+static int cli_outputs(int argc, char **argv)
+{
+    (void)argv;
+    if (argc > 1) {
+        printf("usage: tessera outputs\n"
+               "List every DRM card, its connectors (names as wall configs use them), the EDID identity\n"
+               "of each connected monitor and its modes.\n");
+        return strcmp(argv[1], "--help") && strcmp(argv[1], "-h") ? 2 : 0;
+    }
+    return drm_print_outputs(stdout) > 0 ? 0 : 1;
+}
 
 typedef struct command {
     const char *name;
@@ -15,6 +29,7 @@ static const command commands[] = {
     {"render", cli_render, "render a scene headless and write image files"},
     {"trace", cli_trace, "trace rays from a binary file and write their hits (for users and tests)"},
     {"bench", cli_bench, "measure ray throughput, build time and memory (machine-readable lines)"},
+    {"outputs", cli_outputs, "list DRM cards, connectors, monitors (EDID) and modes, for wall configs"},
 };
 
 static void usage(FILE *f)
@@ -40,6 +55,7 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);
-    cli_error("unknown command '%s' (expected one of: run, render, trace, bench; see 'tessera --help')", argv[1]);
+    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, outputs; see 'tessera --help')",
+              argv[1]);
     return 2;
 }

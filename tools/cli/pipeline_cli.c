@@ -13,6 +13,7 @@
 #include "engine/log.h"
 #include "engine/scene.h"
 #include "wall/display.h"
+#include "wall/drm.h"
 #include "wall/wall_headless.h"
 
 #define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
@@ -124,7 +125,7 @@ static bool resolve_relative(const char *config_file, const char *path, char *ou
 static bool opt_display(jr_ctx *c, json_object *obj, cli_channel_spec *ch)
 {
     static const char *const fields[] = {"name", "out", NULL};
-    static const char *const names[] = {"null", "convert", "dump", NULL};
+    static const char *const names[] = {"null", "convert", "dump", "drm", NULL};
     json_object *m;
     if (!jr_get_member(obj, "display", &m))
         return true;
@@ -278,6 +279,10 @@ bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
          opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s);
     if (ok && path[0] && !resolve_relative(file, path, s->path_file, sizeof s->path_file))
         ok = jr_member_fail(&c, "path", "path too long");
+    json_object *given;
+    s->display_given = s->display_given || (ok && jr_get_member(root, "display", &given));
+    s->frames_given = s->frames_given || (ok && jr_get_member(root, "frames", &given));
+    s->time_given = s->time_given || (ok && jr_get_member(root, "time", &given));
     json_object_put(root);
     free(text);
     if (!ok)
@@ -323,6 +328,7 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--threads")) {
         return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 1, PIPELINE_MAX_THREADS, &s->threads);
     } else if (!strcmp(a, "--frames")) {
+        s->frames_given = true;
         return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 1, 100000000, &s->frames);
     } else if (!strcmp(a, "--time")) {
         if (!(val = cli_option_value(argc, argv, i)))
@@ -332,6 +338,7 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
             return false;
         }
         s->time_mode = !strcmp(val, "fixed") ? PIPELINE_TIME_FIXED_RATE : PIPELINE_TIME_REAL;
+        s->time_given = true;
         return true;
     } else if (!strcmp(a, "--rate")) {
         if (!(val = cli_option_value(argc, argv, i)))
@@ -377,10 +384,11 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--display")) {
         if (!(val = cli_option_value(argc, argv, i)))
             return false;
-        if (strcmp(val, "null") && strcmp(val, "convert") && strcmp(val, "dump")) {
-            cli_error("--display: unknown display '%s' (expected one of: %s)", val, DISPLAY_NAMES);
+        if (strcmp(val, "null") && strcmp(val, "convert") && strcmp(val, "dump") && strcmp(val, "drm")) {
+            cli_error("--display: unknown display '%s' (expected one of: %s, drm)", val, DISPLAY_NAMES);
             return false;
         }
+        s->display_given = true;
         return copy_value(a, val, main_ch->display, sizeof main_ch->display);
     } else if (!strcmp(a, "--out")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, main_ch->out, sizeof main_ch->out);
@@ -389,6 +397,8 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
         return true;
     } else if (!strcmp(a, "--path")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->path_file, sizeof s->path_file);
+    } else if (!strcmp(a, "--card")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->card_path, sizeof s->card_path);
     } else if (!strcmp(a, "--wall")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->wall_file, sizeof s->wall_file);
     } else if (!strcmp(a, "--record")) {
@@ -412,7 +422,9 @@ void cli_pipeline_usage(FILE *f)
           "  --renderer R     raytracer (Phong, shadows) or eyelight (default raytracer)\n"
           "  --no-shadows     skip shadow rays\n"
           "  --display D      null (drop frames), convert (to 8-bit sRGB as scan-out would, then\n"
-          "                   drop), dump (write files to --out)\n"
+          "                   drop), dump (write files to --out), drm (scan-out on the wall's\n"
+          "                   monitors through DRM/KMS; needs --wall)\n"
+          "  --card PATH      DRM card for --display drm (default: the first with a connected monitor)\n"
           "  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
           "  --record FILE    write the main channel's camera changes as a camera path\n"
           "  --wall FILE      render a display wall's layout (configs/walls/*.json, docs/wall-format.md):\n"
@@ -424,29 +436,69 @@ void cli_pipeline_usage(FILE *f)
 
 /* ---------------------------------------------------------------- making the pipeline */
 
-/* The wall's outputs as channels (headless: explicit modes). */
+/* The DRM card of a running wall (closed by cli_pipeline_release_outputs). */
+static drm_card *active_card;
+
+void cli_pipeline_release_outputs(void)
+{
+    drm_card_close(active_card);
+    active_card = NULL;
+}
+
+/* Open the card, match the wall's outputs to its connectors (which resolves
+ * their modes), bring them up. */
+static bool start_drm(const cli_pipeline_spec *s, wall_config *wall, image_display **displays, tess_error *err)
+{
+    active_card = drm_card_open(s->card_path[0] ? s->card_path : NULL, err);
+    if (!active_card)
+        return false;
+    const wall_device_connector *conns;
+    size_t n = drm_card_connectors(active_card, &conns);
+    if (!wall_config_match_device(wall, conns, n, err)) {
+        tess_error_prefix(err, "%s: ", drm_card_path(active_card));
+        return false;
+    }
+    if (!drm_wall_start(active_card, wall, displays, err))
+        return false;
+    fprintf(stderr, "tessera: %s: %d outputs up (%s modesetting)\n", drm_card_path(active_card), wall->count,
+            drm_card_atomic(active_card) ? "atomic" : "legacy");
+    return true;
+}
+
+/* The wall's outputs as channels: on the card (display drm), else headless
+ * (explicit modes) with the display asked for. */
 static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli_scene *cs)
 {
     tess_error err = {{0}};
     wall_config wall;
-    if (!wall_config_load(s->wall_file, &wall, &err))
-        return cli_error("%s", err.msg), false;
-    if (!wall_config_headless_sizes(&wall, &err)) /* its messages name the output, not the file */
-        return cli_error("%s: %s", s->wall_file, err.msg), false;
     const cli_channel_spec *main_ch = &s->channels[0];
+    bool on_device = !strcmp(main_ch->display, "drm");
+    image_display *displays[WALL_MAX_OUTPUTS] = {NULL};
+    bool ok = wall_config_load(s->wall_file, &wall, &err);
+    if (ok && on_device)
+        ok = start_drm(s, &wall, displays, &err);
+    else if (ok && !wall_config_headless_sizes(&wall, &err)) /* its messages name the output, not the file */
+        ok = false;
+    if (!ok) {
+        cli_error("%s%s%s", strstr(err.msg, s->wall_file) ? "" : s->wall_file,
+                  strstr(err.msg, s->wall_file) ? "" : ": ", err.msg);
+        return false;
+    }
     int stitched_w, stitched_h;
     wall_stitched_size(&wall, &stitched_w, &stitched_h);
     camera_desc cam;
-    if (!cli_scene_camera(cs, main_ch->have_camera ? &main_ch->camera : NULL, stitched_w, stitched_h, &cam))
+    if (!cli_scene_camera(cs, main_ch->have_camera ? &main_ch->camera : NULL, stitched_w, stitched_h, &cam)) {
+        for (int i = 0; i < wall.count; i++)
+            image_display_destroy(displays[i]);
         return false;
-    image_display *displays[WALL_MAX_OUTPUTS] = {NULL};
-    bool ok = true;
-    if (!strcmp(main_ch->display, "dump")) {
+    }
+    if (on_device)
+        ok = true;
+    else if (!strcmp(main_ch->display, "dump"))
         ok = wall_headless_displays(&wall, main_ch->out, s->frames != 1, displays, &err);
-    } else {
+    else
         for (int i = 0; ok && i < wall.count; i++)
             ok = (displays[i] = display_create(main_ch->display, NULL, false, &err)) != NULL;
-    }
     /* the pipeline owns each display from pipeline_add_channel_window on, also on failure */
     int added = 0;
     for (int i = 0; ok && i < wall.count; i++, added++)
@@ -589,5 +641,6 @@ void cli_pipeline_report(pipeline *p, const cli_pipeline_spec *s)
             "%d channel%s, %d threads\n",
             (unsigned long long)st.frames_rendered, (unsigned long long)st.frames_displayed,
             (unsigned long long)st.transactions_applied, (unsigned long long)st.transactions_rejected,
-            (unsigned long long)st.slow_callbacks, s->channel_count, s->channel_count == 1 ? "" : "s", s->threads);
+            (unsigned long long)st.slow_callbacks, pipeline_channel_count(p), pipeline_channel_count(p) == 1 ? "" : "s",
+            s->threads);
 }

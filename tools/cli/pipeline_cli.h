@@ -41,6 +41,8 @@ typedef struct cli_pipeline_spec {
     char path_file[CLI_PATTERN_BYTES];   /* camera path for channel 0, "" for none */
     char record_file[CLI_PATTERN_BYTES]; /* --record: write channel 0's camera changes, "" for none */
     char wall_file[CLI_PATTERN_BYTES];   /* --wall: the channels are a wall's outputs, "" for none */
+    char card_path[CLI_PATTERN_BYTES];   /* --card: the DRM card for display drm, "" = the first connected */
+    bool display_given, frames_given, time_given; /* on the command line or in --config */
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
@@ -69,6 +71,10 @@ void cli_pipeline_usage(FILE *f);
  * display, per-output images beside the stitched wall image. NULL after
  * printing the error. */
 pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs);
+
+/* Release what cli_pipeline_create opened besides the pipeline (a DRM card:
+ * its CRTCs are restored): after pipeline_destroy. */
+void cli_pipeline_release_outputs(void);
 
 /* Channel 0 follows a camera path: a serial animation callback sets the
  * camera at each frame's time (time_offset_s added). */
