@@ -80,10 +80,12 @@ run: deps
 	$(MAKE) tessera
 	./tessera run
 
-# the whole suite; Criterion prints the summary line last
+# the whole suite (Criterion prints its summary line), then the DRM/KMS wall end to end in a
+# qemu guest (tests/vm_wall.sh: its own summary line; SKIPPED, said so, when qemu cannot be installed)
 test: deps
 	$(MAKE) $(TEST_BIN) tessera check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
+	sh tests/vm_wall.sh
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan: deps
