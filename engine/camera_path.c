@@ -72,38 +72,6 @@ static bool same_camera(const camera_desc *a, const camera_desc *b)
            a->up.y == b->up.y && a->up.z == b->up.z && a->fov_deg == b->fov_deg;
 }
 
-/* "format" must name this format; checked first, so that another kind of
- * JSON file (a scene) is reported as that rather than as unknown fields. */
-static bool read_format(jr_ctx *c, json_object *root)
-{
-    const char *name = NULL;
-    json_object *v;
-    if (!jr_get_member(root, "format", &v))
-        return jr_member_fail(c, "format", "required field is missing (a camera path file has "
-                                           "\"format\": \"tessera-camera-path\")");
-    if (!jr_opt_string(c, root, "format", &name))
-        return false;
-    if (strcmp(name, format_name) == 0)
-        return true;
-    size_t saved = jr_field_key(c, "format");
-    jr_field_fail(c, "expected \"%s\", got \"%.64s\"", format_name, name);
-    jr_field_leave(c, saved);
-    return false;
-}
-
-static bool read_version(jr_ctx *c, json_object *root)
-{
-    json_object *v;
-    if (!jr_require_member(c, root, "version") || !jr_get_member(root, "version", &v))
-        return false;
-    size_t saved = jr_field_key(c, "version");
-    double version = 0.0;
-    bool ok = jr_double(c, v, jr_range_float, &version) &&
-              (version == format_version ||
-               jr_field_fail(c, "unsupported version %g (this build reads version %d)", version, format_version));
-    jr_field_leave(c, saved);
-    return ok;
-}
 
 /* Keyframe `v` (the current field is "keyframes[i]"); `prev` is the key
  * before it, NULL for the first. */
@@ -179,7 +147,8 @@ static bool read_path(jr_ctx *c, json_object *root, camera_path *p)
         return tess_error_set(c->err, "%s: expected a JSON object at the top level, got %s", c->path,
                               jr_kind(root));
     int interp = CAMERA_PATH_CATMULL_ROM;
-    if (!read_format(c, root) || !jr_check_fields(c, root, fields) || !read_version(c, root) ||
+    if (!jr_check_format(c, root, format_name, "a camera path file") || !jr_check_fields(c, root, fields) ||
+        !jr_check_version(c, root, format_version) ||
         !jr_opt_choice(c, root, "interpolation", interps, &interp) || !jr_opt_bool(c, root, "loop", &p->loop) ||
         !read_keyframes(c, root, p))
         return false;

@@ -687,3 +687,36 @@ bool jr_camera_members(jr_ctx *c, json_object *obj, camera_desc *out)
     *out = cam;
     return true;
 }
+
+bool jr_check_format(jr_ctx *c, json_object *root, const char *format_name, const char *what)
+{
+    const char *name = NULL;
+    json_object *v;
+    if (!jr_get_member(root, "format", &v)) {
+        char reason[256];
+        snprintf(reason, sizeof reason, "required field is missing (%s has \"format\": \"%s\")", what, format_name);
+        return jr_member_fail(c, "format", reason);
+    }
+    if (!jr_opt_string(c, root, "format", &name))
+        return false;
+    if (strcmp(name, format_name) == 0)
+        return true;
+    size_t saved = jr_field_key(c, "format");
+    jr_field_fail(c, "expected \"%s\", got \"%.64s\"", format_name, name);
+    jr_field_leave(c, saved);
+    return false;
+}
+
+bool jr_check_version(jr_ctx *c, json_object *root, int version)
+{
+    json_object *v;
+    if (!jr_require_member(c, root, "version") || !jr_get_member(root, "version", &v))
+        return false;
+    size_t saved = jr_field_key(c, "version");
+    double found = 0.0;
+    bool ok = jr_double(c, v, jr_range_float, &found) &&
+              (found == version ||
+               jr_field_fail(c, "unsupported version %g (this build reads version %d)", found, version));
+    jr_field_leave(c, saved);
+    return ok;
+}

@@ -142,6 +142,14 @@ bool jr_opt_choice(jr_ctx *c, json_object *obj, const char *key, const char *con
 
 /* ---- shared by the formats --------------------------------------------- */
 
+/* The header of a tessera file format. "format" must be `format_name`:
+ * check it first, so that another kind of JSON file is reported as that
+ * rather than as unknown fields (`what` names the kind in the message, e.g.
+ * "a wall file"). "version" must be `version`. */
+bool jr_check_format(jr_ctx *c, json_object *root, const char *format_name, const char *what);
+bool jr_check_version(jr_ctx *c, json_object *root, int version);
+
+
 /* The camera members of object `obj` (the current field), as scene files and
  * camera paths write them: "eye" and "look_at" required, "up" default [0, 1, 0],
  * "fov_deg" in (0, 180) default CAMERA_DEFAULT_FOV_DEG. The result must pass

@@ -10,6 +10,8 @@
 #include <string.h>
 #include <sys/wait.h>
 
+#include "wall/dump.h"
+
 /* A fresh mkdtemp directory /tmp/tessera-NAME-XXXXXX into dir. */
 static inline void support_make_tmp_dir(char *dir, size_t size, const char *name)
 {
@@ -81,6 +83,17 @@ static inline void support_expect_error(const char *dir, int timeout_s, const ch
     cr_expect(strstr(out, "error") != NULL, "no error line for '%s': %s", args_fmt, out);
     for (const char *const *n = needles; *n; n++)
         cr_expect(strstr(out, *n) != NULL, "'%s': message lacks '%s': %s", args_fmt, *n, out);
+}
+
+/* Float pixels of the image dir/name (caller frees); fails the test if unreadable. */
+static inline float *support_read_image(const char *dir, const char *name, int *w, int *h)
+{
+    char path[512];
+    tess_error err = {{0}};
+    float *rgb = NULL;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    cr_assert(dump_read_rgbf(path, w, h, &rgb, &err), "%s", err.msg);
+    return rgb;
 }
 
 #endif

@@ -28,16 +28,7 @@ static int run(char *out, size_t out_bytes, const char *args_fmt)
 
 static void write_file(const char *name, const char *text) { support_write_file(tmp_dir, name, text); }
 
-/* Float pixels of an EXR in the temp dir (caller frees). */
-static float *read_exr(const char *name, int *w, int *h)
-{
-    char path[512];
-    tess_error err = {{0}};
-    float *rgb = NULL;
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, name);
-    cr_assert(dump_read_rgbf(path, w, h, &rgb, &err), "%s", err.msg);
-    return rgb;
-}
+static float *read_exr(const char *name, int *w, int *h) { return support_read_image(tmp_dir, name, w, h); }
 
 static void expect_same_exr(const char *a, const char *b)
 {

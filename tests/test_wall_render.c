@@ -24,15 +24,7 @@ static void make_tmp_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "
 
 TestSuite(wall_render, .init = make_tmp_dir, .timeout = 300);
 
-static float *read_exr(const char *name, int *w, int *h)
-{
-    char path[512];
-    tess_error err = {{0}};
-    float *rgb = NULL;
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, name);
-    cr_assert(dump_read_rgbf(path, w, h, &rgb, &err), "%s", err.msg);
-    return rgb;
-}
+static float *read_exr(const char *name, int *w, int *h) { return support_read_image(tmp_dir, name, w, h); }
 
 /* A wall of `cols` x 1 outputs of w x h pixels, each 4 mm per pixel... as JSON. */
 static void write_row_wall(const char *name, int cols, int w_px, int h_px, double bezel_mm)

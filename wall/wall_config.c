@@ -117,38 +117,6 @@ static void list_add(text_list *l, const char *item)
 
 /* ---- the top level ---------------------------------------------------------- */
 
-/* "format" must name this format; checked first, so that another kind of JSON
- * file (a scene, a camera path) is reported as that rather than as unknown fields. */
-static bool read_format(jr_ctx *c, json_object *root)
-{
-    const char *name = NULL;
-    json_object *v;
-    if (!jr_get_member(root, "format", &v))
-        return jr_member_fail(c, "format", "required field is missing (a wall file has "
-                                           "\"format\": \"tessera-wall\")");
-    if (!jr_opt_string(c, root, "format", &name))
-        return false;
-    if (strcmp(name, format_name) == 0)
-        return true;
-    size_t saved = jr_field_key(c, "format");
-    jr_field_fail(c, "expected \"%s\", got \"%.64s\"", format_name, name);
-    jr_field_leave(c, saved);
-    return false;
-}
-
-static bool read_version(jr_ctx *c, json_object *root)
-{
-    json_object *v;
-    if (!jr_require_member(c, root, "version") || !jr_get_member(root, "version", &v))
-        return false;
-    size_t saved = jr_field_key(c, "version");
-    double version = 0.0;
-    bool ok = jr_double(c, v, jr_range_float, &version) &&
-              (version == format_version ||
-               jr_field_fail(c, "unsupported version %g (this build reads version %d)", version, format_version));
-    jr_field_leave(c, saved);
-    return ok;
-}
 
 /* "units" is required so that every file says what its numbers are. */
 static bool read_units(jr_ctx *c, json_object *root)
@@ -639,7 +607,8 @@ static bool read_wall(jr_ctx *c, json_object *root, wall_config *w)
     if (!json_object_is_type(root, json_type_object))
         return tess_error_set(c->err, "%s: expected a JSON object at the top level, got %s", c->path,
                               jr_kind(root));
-    if (!read_format(c, root) || !jr_check_fields(c, root, fields) || !read_version(c, root) ||
+    if (!jr_check_format(c, root, format_name, "a wall file") || !jr_check_fields(c, root, fields) ||
+        !jr_check_version(c, root, format_version) ||
         !read_units(c, root) || !read_outputs(c, root, w, places) || !check_grid(c, w, places))
         return false;
     for (int i = 0; i < w->count; i++)
