@@ -525,14 +525,6 @@ bool pipeline_set_threads(pipeline *p, int threads)
     return true;
 }
 
-bool pipeline_set_shadows(pipeline *p, bool shadows)
-{
-    if (!may_change_state(p, "shadow setting"))
-        return false;
-    p->shadows = shadows;
-    return true;
-}
-
 camera_desc pipeline_camera(const pipeline *p, int channel)
 {
     if (channel < 0 || channel >= p->channel_count)
@@ -555,7 +547,6 @@ camera_basis pipeline_channel_basis(const pipeline *p, int channel)
     return camera_basis_window(&c->camera, c->plane_aspect, c->window, c->width_px, c->height_px);
 }
 uint64_t pipeline_frame(const pipeline *p) { return p->step.info.frame; }
-int pipeline_threads(const pipeline *p) { return p->step.info.threads > 0 ? p->step.info.threads : p->thread_count; }
 
 pipeline_stats pipeline_get_stats(pipeline *p)
 {
@@ -600,27 +591,6 @@ bool pipeline_add_termination(pipeline *p, const char *name, pipeline_terminatio
         return false;
     p->terminations[p->termination_count++] = (termination_callback){name ? name : "(unnamed)", fn, ctx};
     return true;
-}
-
-bool pipeline_remove_animation(pipeline *p, void *fn, void *ctx)
-{
-    if (!may_change_state(p, "animation callback removal"))
-        return false;
-    for (int i = 0; i < p->serial_anim_count; i++)
-        if ((void *)p->serial_anim[i].fn == fn && p->serial_anim[i].ctx == ctx) {
-            memmove(&p->serial_anim[i], &p->serial_anim[i + 1],
-                    (size_t)(p->serial_anim_count - i - 1) * sizeof p->serial_anim[0]);
-            p->serial_anim_count--;
-            return true;
-        }
-    for (int i = 0; i < p->parallel_anim_count; i++)
-        if ((void *)p->parallel_anim[i].fn == fn && p->parallel_anim[i].ctx == ctx) {
-            memmove(&p->parallel_anim[i], &p->parallel_anim[i + 1],
-                    (size_t)(p->parallel_anim_count - i - 1) * sizeof p->parallel_anim[0]);
-            p->parallel_anim_count--;
-            return true;
-        }
-    return false;
 }
 
 /* ---------------------------------------------------------------- serial section */
@@ -685,7 +655,7 @@ static void run_oneshots(pipeline *p, uint64_t frame)
 
 static void run_serial_animation(pipeline *p)
 {
-    /* a callback may remove itself: iterate over a copy */
+    /* a callback may register another (it runs from the next frame): iterate over a copy */
     serial_callback cbs[PIPELINE_MAX_CALLBACKS];
     int n = p->serial_anim_count;
     memcpy(cbs, p->serial_anim, (size_t)n * sizeof cbs[0]);

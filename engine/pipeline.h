@@ -187,18 +187,16 @@ typedef void (*pipeline_termination_fn)(pipeline *p, void *ctx);
 
 /* Register callbacks: before pipeline_run, or inside the serial section (a
  * transaction or a serial callback). They take effect from the next frame
- * they can; the same (fn, ctx) pair is removed with pipeline_remove_animation.
+ * they can.
  * False when PIPELINE_MAX_CALLBACKS are registered or called elsewhere. */
 bool pipeline_add_serial_animation(pipeline *p, const char *name, pipeline_serial_fn fn, void *ctx);
 bool pipeline_add_parallel_animation(pipeline *p, const char *name, pipeline_parallel_fn fn, void *ctx);
-bool pipeline_remove_animation(pipeline *p, void *fn, void *ctx);
 bool pipeline_add_termination(pipeline *p, const char *name, pipeline_termination_fn fn, void *ctx);
 
 /* ---- state: read anywhere the state cannot change under you (serial
  * section, or before/after run); set only inside the serial section ---- */
 bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera);
 bool pipeline_set_threads(pipeline *p, int threads);
-bool pipeline_set_shadows(pipeline *p, bool shadows);
 camera_desc pipeline_camera(const pipeline *p, int channel);
 uint64_t pipeline_camera_serial(const pipeline *p, int channel); /* changes so far */
 int pipeline_channel_count(const pipeline *p);
@@ -206,7 +204,6 @@ int pipeline_channel_count(const pipeline *p);
 camera_basis pipeline_channel_basis(const pipeline *p, int channel);
 /* The frame the current serial section prepares (serial section only). */
 uint64_t pipeline_frame(const pipeline *p);
-int pipeline_threads(const pipeline *p);
 /* True on a thread inside p's serial section. */
 bool pipeline_in_serial_section(const pipeline *p);
 

@@ -136,31 +136,24 @@ static void fill_hilbert(order_writer *w)
     hilbert_curve(w, &whole);
 }
 
-/* Tiles (x, y_first) .. (x, y_last) of one column (either direction),
- * clipped to the grid, walked from y_first towards y_last. */
-static void spiral_column(order_writer *w, int64_t x, int64_t y_first, int64_t y_last)
+/* The tiles of one column (x = fixed, y from first towards last) or one row
+ * (y = fixed, x from first towards last), clipped to the grid, in that order. */
+static void spiral_segment(order_writer *w, bool column, int64_t fixed, int64_t first, int64_t last)
 {
-    if (x < 0 || x >= w->tiles_x)
+    int64_t fixed_limit = column ? w->tiles_x : w->tiles_y, run_limit = column ? w->tiles_y : w->tiles_x;
+    if (fixed < 0 || fixed >= fixed_limit)
         return;
-    int64_t step = y_last >= y_first ? 1 : -1;
-    int64_t lo = step > 0 ? y_first : y_last, hi = step > 0 ? y_last : y_first;
+    int64_t step = last >= first ? 1 : -1;
+    int64_t lo = step > 0 ? first : last, hi = step > 0 ? last : first;
     lo = lo < 0 ? 0 : lo;
-    hi = hi >= w->tiles_y ? w->tiles_y - 1 : hi;
-    for (int64_t k = 0; k <= hi - lo; k++)
-        emit(w, x, step > 0 ? lo + k : hi - k);
-}
-
-/* The same for a row: (x_first, y) .. (x_last, y), clipped, in that order. */
-static void spiral_row(order_writer *w, int64_t y, int64_t x_first, int64_t x_last)
-{
-    if (y < 0 || y >= w->tiles_y)
-        return;
-    int64_t step = x_last >= x_first ? 1 : -1;
-    int64_t lo = step > 0 ? x_first : x_last, hi = step > 0 ? x_last : x_first;
-    lo = lo < 0 ? 0 : lo;
-    hi = hi >= w->tiles_x ? w->tiles_x - 1 : hi;
-    for (int64_t k = 0; k <= hi - lo; k++)
-        emit(w, step > 0 ? lo + k : hi - k, y);
+    hi = hi >= run_limit ? run_limit - 1 : hi;
+    for (int64_t k = 0; k <= hi - lo; k++) {
+        int64_t along = step > 0 ? lo + k : hi - k;
+        if (column)
+            emit(w, fixed, along);
+        else
+            emit(w, along, fixed);
+    }
 }
 
 /* Rings r = 0, 1, ... around the centre tile until every tile is out:
@@ -178,10 +171,10 @@ static void fill_spiral(order_writer *w)
         last_ring = w->tiles_y - 1 - cy;
     emit(w, cx, cy);
     for (int64_t r = 1; r <= last_ring; r++) {
-        spiral_column(w, cx + r, cy - r + 1, cy + r);
-        spiral_row(w, cy + r, cx + r - 1, cx - r);
-        spiral_column(w, cx - r, cy + r - 1, cy - r);
-        spiral_row(w, cy - r, cx - r + 1, cx + r);
+        spiral_segment(w, true, cx + r, cy - r + 1, cy + r);
+        spiral_segment(w, false, cy + r, cx + r - 1, cx - r);
+        spiral_segment(w, true, cx - r, cy + r - 1, cy - r);
+        spiral_segment(w, false, cy - r, cx - r + 1, cx + r);
     }
 }
 

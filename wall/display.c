@@ -6,17 +6,11 @@
 
 #include "dump.h"
 
-/* Both kinds start with this, so display_frames_shown reads either. */
-typedef struct counted_display {
-    image_display base;
-    unsigned long frames_shown; /* display thread only */
-} counted_display;
-
 static bool null_show(image_display *d, const frame_image *img, tess_error *err)
 {
+    (void)d;
     (void)img;
     (void)err;
-    ((counted_display *)d)->frames_shown++;
     return true;
 }
 
@@ -26,14 +20,14 @@ static const image_display_ops null_ops = {"null", null_show, plain_destroy};
 
 image_display *display_null_create(void)
 {
-    counted_display *d = calloc(1, sizeof *d);
+    image_display *d = calloc(1, sizeof *d);
     if (d)
-        d->base.ops = &null_ops;
-    return d ? &d->base : NULL;
+        d->ops = &null_ops;
+    return d;
 }
 
 typedef struct dump_display {
-    counted_display counted;
+    image_display base;
     char pattern[4096];
     bool sequence;
 } dump_display;
@@ -48,7 +42,6 @@ static bool dump_show(image_display *d, const frame_image *img, tess_error *err)
     if (!dump_frame_path(dd->pattern, (int)img->frame, dd->sequence, path, sizeof path, err) ||
         !dump_write_rgb(path, img->width_px, img->height_px, img->rgb, err))
         return false;
-    dd->counted.frames_shown++;
     return true;
 }
 
@@ -73,17 +66,17 @@ image_display *display_dump_create(const char *pattern, bool sequence, tess_erro
         tess_error_set(err, "dump display: out of memory");
         return NULL;
     }
-    d->counted.base.ops = &dump_ops;
+    d->base.ops = &dump_ops;
     strcpy(d->pattern, pattern);
     d->sequence = sequence;
-    return &d->counted.base;
+    return &d->base;
 }
 
 /* What a scan-out display does with a frame, without the device: encode to
  * 8-bit sRGB XRGB8888 (one 32-bit word per pixel) in its own buffer. For
  * benchmarks of the display stage. */
 typedef struct convert_display {
-    counted_display counted;
+    image_display base;
     uint32_t *xrgb;      /* capacity_px words */
     size_t capacity_px;
 } convert_display;
@@ -104,7 +97,6 @@ static bool convert_show(image_display *d, const frame_image *img, tess_error *e
         cd->xrgb[i] = (uint32_t)dump_srgb_encode_u8(c[0]) << 16 | (uint32_t)dump_srgb_encode_u8(c[1]) << 8 |
                       (uint32_t)dump_srgb_encode_u8(c[2]);
     }
-    cd->counted.frames_shown++;
     return true;
 }
 
@@ -120,8 +112,8 @@ image_display *display_convert_create(void)
 {
     convert_display *d = calloc(1, sizeof *d);
     if (d)
-        d->counted.base.ops = &convert_ops;
-    return d ? &d->counted.base : NULL;
+        d->base.ops = &convert_ops;
+    return d ? &d->base : NULL;
 }
 
 image_display *display_create(const char *name, const char *dump_pattern, bool sequence, tess_error *err)
@@ -143,5 +135,3 @@ image_display *display_create(const char *name, const char *dump_pattern, bool s
     tess_error_set(err, "unknown display '%s' (known: %s)", name, DISPLAY_NAMES);
     return NULL;
 }
-
-unsigned long display_frames_shown(const image_display *d) { return ((const counted_display *)d)->frames_shown; }

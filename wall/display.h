@@ -30,7 +30,4 @@ image_display *display_dump_create(const char *pattern, bool sequence, tess_erro
  * unknown name. */
 image_display *display_create(const char *name, const char *dump_pattern, bool sequence, tess_error *err);
 
-/* Frames a display has shown (any kind created here). */
-unsigned long display_frames_shown(const image_display *d);
-
 #endif

@@ -57,8 +57,10 @@ bool wall_output_pattern(const char *pattern, const char *name, char *out, size_
 typedef struct wall_state {
     int outputs;
     int width_px, height_px;  /* stitched image */
-    int16_t *source_output;   /* per stitched pixel: the output it shows, -1 behind a bezel or in a gap */
-    uint32_t *source_pixel;   /* per stitched pixel: the pixel index in that output's image */
+    /* per output k: the stitched pixels it shows (dest[k][i]) and their pixels in its image (source[k][i]);
+     * pixels behind bezels and in gaps are in no list and stay black */
+    uint32_t *dest[WALL_MAX_OUTPUTS], *source[WALL_MAX_OUTPUTS];
+    size_t count[WALL_MAX_OUTPUTS];
     float *rgb;               /* the stitched frame being assembled */
     char pattern[4096];
     bool sequence;
@@ -74,8 +76,10 @@ typedef struct wall_display {
 
 static void wall_state_free(wall_state *ws)
 {
-    free(ws->source_output);
-    free(ws->source_pixel);
+    for (int k = 0; k < WALL_MAX_OUTPUTS; k++) {
+        free(ws->dest[k]);
+        free(ws->source[k]);
+    }
     free(ws->rgb);
     free(ws);
 }
@@ -86,10 +90,9 @@ static bool wall_show(image_display *d, const frame_image *img, tess_error *err)
     wall_state *ws = wd->wall;
     if (!wd->dump->ops->show(wd->dump, img, err))
         return false;
-    size_t pixels = (size_t)ws->width_px * (size_t)ws->height_px;
-    for (size_t i = 0; i < pixels; i++)
-        if (ws->source_output[i] == wd->index)
-            memcpy(ws->rgb + 3 * i, img->rgb + 3 * (size_t)ws->source_pixel[i], 3 * sizeof(float));
+    const uint32_t *dest = ws->dest[wd->index], *source = ws->source[wd->index];
+    for (size_t i = 0; i < ws->count[wd->index]; i++)
+        memcpy(ws->rgb + 3 * (size_t)dest[i], img->rgb + 3 * (size_t)source[i], 3 * sizeof(float));
     if (wd->index != ws->outputs - 1) /* the last output completes the frame */
         return true;
     char path[4096];
@@ -110,15 +113,21 @@ static void wall_destroy(image_display *d)
 
 static const image_display_ops wall_ops = {"wall", wall_show, wall_destroy};
 
-/* Which output pixel each stitched pixel shows (nearest, by the pixel centre's wall position). */
-static void map_sources(const wall_config *w, wall_state *ws)
+/* Which output pixel each stitched pixel shows (nearest, by the pixel
+ * centre's wall position), as per-output lists. False when out of memory. */
+static bool map_sources(const wall_config *w, wall_state *ws)
 {
+    size_t pixels = (size_t)ws->width_px * (size_t)ws->height_px;
+    for (int k = 0; k < w->count; k++) { /* an output covers at most all of them */
+        ws->dest[k] = malloc(pixels * sizeof *ws->dest[k]);
+        ws->source[k] = malloc(pixels * sizeof *ws->source[k]);
+        if (!ws->dest[k] || !ws->source[k])
+            return false;
+    }
     double mm_per_px_x = w->width_mm / ws->width_px, mm_per_px_y = w->height_mm / ws->height_px;
     for (int y = 0; y < ws->height_px; y++)
         for (int x = 0; x < ws->width_px; x++) {
-            size_t i = (size_t)y * (size_t)ws->width_px + (size_t)x;
             double wx = (x + 0.5) * mm_per_px_x, wy = (y + 0.5) * mm_per_px_y;
-            ws->source_output[i] = -1;
             for (int k = 0; k < w->count; k++) {
                 const wall_output *o = &w->outputs[k];
                 double u = (wx - o->x_mm) / o->width_mm, v = (wy - o->y_mm) / o->height_mm;
@@ -127,11 +136,12 @@ static void map_sources(const wall_config *w, wall_state *ws)
                 int ox = (int)(u * o->width_px), oy = (int)(v * o->height_px);
                 ox = ox < o->width_px ? ox : o->width_px - 1;
                 oy = oy < o->height_px ? oy : o->height_px - 1;
-                ws->source_output[i] = (int16_t)k;
-                ws->source_pixel[i] = (uint32_t)oy * (uint32_t)o->width_px + (uint32_t)ox;
+                ws->dest[k][ws->count[k]] = (uint32_t)y * (uint32_t)ws->width_px + (uint32_t)x;
+                ws->source[k][ws->count[k]++] = (uint32_t)oy * (uint32_t)o->width_px + (uint32_t)ox;
                 break;
             }
         }
+    return true;
 }
 
 bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequence, image_display **displays,
@@ -149,15 +159,12 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
     ws->outputs = w->count;
     wall_stitched_size(w, &ws->width_px, &ws->height_px);
     size_t pixels = (size_t)ws->width_px * (size_t)ws->height_px;
-    ws->source_output = malloc(pixels * sizeof *ws->source_output);
-    ws->source_pixel = malloc(pixels * sizeof *ws->source_pixel);
     ws->rgb = calloc(pixels * 3, sizeof *ws->rgb); /* bezels stay black */
-    if (!ws->source_output || !ws->source_pixel || !ws->rgb) {
+    if (!ws->rgb || !map_sources(w, ws)) {
         tess_error_set(err, "wall: out of memory for a %dx%d stitched image", ws->width_px, ws->height_px);
         wall_state_free(ws);
         return false;
     }
-    map_sources(w, ws);
     char probe[4096];
     if (!dump_frame_path(pattern, 0, sequence, probe, sizeof probe, err)) {
         wall_state_free(ws);
