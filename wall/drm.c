@@ -624,6 +624,38 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
 
 /* ---------------------------------------------------------------- tessera outputs */
 
+/* The scan-out state of every CRTC, one line each, e.g.
+ *   "  CRTC 36: 640x480@60.00 fb 45 at 0,0 -> Virtual-1" or "  CRTC 37: off"
+ * (what tests compare before and after a run: the state must come back). */
+static void print_crtcs(FILE *f, int fd, const drmModeRes *res)
+{
+    for (int k = 0; k < res->count_crtcs; k++) {
+        drmModeCrtc *crtc = drmModeGetCrtc(fd, res->crtcs[k]);
+        if (!crtc)
+            continue;
+        fprintf(f, "  CRTC %u: ", crtc->crtc_id);
+        if (!crtc->mode_valid) {
+            fprintf(f, "off\n");
+            drmModeFreeCrtc(crtc);
+            continue;
+        }
+        fprintf(f, "%dx%d@%.2f fb %u at %u,%u ->", crtc->mode.hdisplay, crtc->mode.vdisplay,
+                mode_refresh_hz(&crtc->mode), crtc->buffer_id, crtc->x, crtc->y);
+        int driven = 0;
+        for (int c = 0; c < res->count_connectors; c++) {
+            drmModeConnector *cn = drmModeGetConnectorCurrent(fd, res->connectors[c]);
+            if (cn && current_crtc(fd, cn) == crtc->crtc_id) {
+                const char *type = drmModeGetConnectorTypeName(cn->connector_type);
+                fprintf(f, " %s-%u", type ? type : "Unknown", cn->connector_type_id);
+                driven++;
+            }
+            drmModeFreeConnector(cn);
+        }
+        fprintf(f, "%s\n", driven ? "" : " (no connector)");
+        drmModeFreeCrtc(crtc);
+    }
+}
+
 int drm_print_outputs(FILE *f)
 {
     int cards = 0;
@@ -658,6 +690,7 @@ int drm_print_outputs(FILE *f)
                         mode_refresh_hz(&cn->modes[m]), cn->modes[m].type & DRM_MODE_TYPE_PREFERRED ? " preferred" : "");
             drmModeFreeConnector(cn);
         }
+        print_crtcs(f, fd, res);
         drmModeFreeResources(res);
         close(fd);
     }
