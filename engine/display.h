@@ -6,7 +6,24 @@
  * Threading: show() is called by the pipeline's display thread only, one call
  * at a time per display, during the display stage of the frame after the one
  * that rendered the image. The image is read-only and stays unchanged until
- * show() returns; a display that needs the pixels later copies them. */
+ * show() returns; a display that needs the pixels later copies them.
+ *
+ * Two optional hooks (NULL when not wanted; a display without them costs the
+ * pipeline nothing):
+ *   write_tile: called by render threads, concurrently, right after each tile
+ *     of a frame was rendered into img->rgb, with the tile's pixel rectangle
+ *     [x0, x1) x [y0, y1); tiles of one frame never overlap. A scan-out display
+ *     converts the tile straight into the buffer that frame will be shown
+ *     from, while the pixels are still in the render thread's cache (each
+ *     pixel written once, never read back: scan-out memory may be
+ *     write-combined). img->frame tells which frame (and so which buffer); the
+ *     display must keep at least four buffers' worth of frames apart: frame f
+ *     is written while f-1 waits for display and f-2 (or, until its flip
+ *     completes, f-3) is on screen.
+ *   end_stage: called on the display thread once per display stage, after all
+ *     show() calls of that stage (also for displays that got no frame in it,
+ *     e.g. a channel switched off): where a display that drives several
+ *     channels' outputs (one card) commits them together. */
 #ifndef TESSERA_DISPLAY_H
 #define TESSERA_DISPLAY_H
 
@@ -34,6 +51,8 @@ typedef struct image_display_ops {
     /* Present one frame. False with err set stops the pipeline with that error. */
     bool (*show)(image_display *d, const frame_image *img, tess_error *err);
     void (*destroy)(image_display *d); /* frees d */
+    void (*write_tile)(image_display *d, const frame_image *img, int x0, int y0, int x1, int y1); /* optional */
+    bool (*end_stage)(image_display *d, tess_error *err); /* optional; false with err stops the pipeline */
 } image_display_ops;
 
 /* Implementations embed this as their first member. */

@@ -50,12 +50,14 @@ enum { BUFFER_COUNT = 3 };
 typedef struct frame_buffer {
     float *rgb;       /* width * height * 3 */
     frame_image meta; /* what is (being) rendered into rgb */
+    bool rendered;    /* the frame in meta was rendered (its channel was on); serial section */
 } frame_buffer;
 
 typedef struct pipe_channel {
     /* live state: changed only in the serial section (or before run) */
     camera_desc camera;
     uint64_t camera_serial;
+    bool active;           /* rendered and displayed (off: e.g. its monitor was unplugged) */
     /* fixed after pipeline_add_channel */
     int width_px, height_px;
     float plane_aspect;    /* width / height of the image plane the window is part of */
@@ -370,6 +372,7 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     c->pending = 0;
     c->queued = 1;
     c->on_screen = 2;
+    c->active = true;
     return p->channel_count++;
 }
 
@@ -464,6 +467,27 @@ bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, 
     return true;
 }
 
+typedef struct channel_switch_args {
+    int channel;
+    bool active;
+} channel_switch_args;
+
+static void apply_channel_switch(pipeline *p, void *args)
+{
+    channel_switch_args *a = args;
+    pipeline_set_channel_active(p, a->channel, a->active);
+}
+
+bool pipeline_queue_channel_active(pipeline *p, int channel, bool active)
+{
+    if (channel < 0 || channel >= p->channel_count) {
+        log_error("pipeline: switching channel %d: there are %d channels", channel, p->channel_count);
+        return false;
+    }
+    channel_switch_args a = {channel, active};
+    return pipeline_transaction(p, "channel switch", apply_channel_switch, &a, sizeof a);
+}
+
 static void apply_threads(pipeline *p, void *args)
 {
     int n;
@@ -511,6 +535,23 @@ bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera)
     p->channels[channel].camera = *camera;
     p->channels[channel].camera_serial++;
     return true;
+}
+
+bool pipeline_set_channel_active(pipeline *p, int channel, bool active)
+{
+    if (!may_change_state(p, "channel switch"))
+        return false;
+    if (channel < 0 || channel >= p->channel_count) {
+        log_error("pipeline: switching channel %d: there are %d channels", channel, p->channel_count);
+        return false;
+    }
+    p->channels[channel].active = active;
+    return true;
+}
+
+bool pipeline_channel_active(const pipeline *p, int channel)
+{
+    return channel >= 0 && channel < p->channel_count && p->channels[channel].active;
 }
 
 bool pipeline_set_threads(pipeline *p, int threads)
@@ -748,7 +789,7 @@ static void finish_previous_step(pipeline *p)
             c->on_screen = c->queued;
             c->queued = c->pending;
             c->pending = old_on_screen;
-            c->queued_valid = true;
+            c->queued_valid = c->buffers[c->queued].rendered;
         }
     }
 }
@@ -763,10 +804,12 @@ static void freeze_frame(pipeline *p)
         c->view = (render_view){p->cfg.scene, p->cfg.accel,
                                 camera_basis_window(&c->camera, c->plane_aspect, c->window, c->width_px, c->height_px),
                                 p->shadows, p->cfg.renderer->shading};
-        targets[i] = (traverser_target){&c->view, c->buffers[c->pending].rgb};
         frame_buffer *b = &c->buffers[c->pending];
         b->meta = (frame_image){b->rgb, c->width_px, c->height_px, p->step.info.frame, p->step.info.time_s, i,
                                 c->camera, c->camera_serial};
+        b->rendered = c->active;
+        image_display *sink = c->display->ops->write_tile ? c->display : NULL;
+        targets[i] = (traverser_target){&c->view, c->active ? b->rgb : NULL, sink, &b->meta};
     }
     p->traverser->ops->begin_frame(p->traverser, targets);
 }
@@ -840,6 +883,16 @@ static void display_stage(pipeline *p)
         if (!c->display->ops->show(c->display, &c->buffers[c->queued].meta, &err)) {
             if (!tess_error_is_set(&err))
                 tess_error_set(&err, "display '%s' failed without a reason", c->display->ops->name);
+            p->display_error = err;
+            p->display_failed = true;
+        }
+    }
+    for (int i = 0; i < p->channel_count && !p->display_failed; i++) {
+        image_display *d = p->channels[i].display;
+        tess_error err = {{0}};
+        if (d->ops->end_stage && !d->ops->end_stage(d, &err)) {
+            if (!tess_error_is_set(&err))
+                tess_error_set(&err, "display '%s' failed without a reason", d->ops->name);
             p->display_error = err;
             p->display_failed = true;
         }

@@ -13,7 +13,8 @@
  *      second barrier follows, because rendering reads what they write; a
  *      pipeline without them pays nothing.
  *   3. thread 0 hands frame f-1 of every channel to its display (imbalanced
- *      work) and then joins step 4.
+ *      work), then calls each display's end_stage hook (display.h), and joins
+ *      step 4.
  *   4. rendering of frame f (dynamically balanced): threads take tiles from
  *      one atomic counter over the tiles of every channel until none is left.
  * So the display of frame f-1 overlaps the rendering of frame f.
@@ -170,6 +171,12 @@ bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, 
 /* A thread-count change as a transaction (threads join or leave at the barrier). */
 bool pipeline_queue_threads(pipeline *p, int threads);
 
+/* Switch a channel off or on again, as a transaction (a wall output whose
+ * monitor was unplugged, or came back). An off channel is not rendered and
+ * its display gets no frames (its end_stage hook still runs); it keeps its
+ * camera. From the frame after the barrier that applies it. */
+bool pipeline_queue_channel_active(pipeline *p, int channel, bool active);
+
 /* ---- per-frame information given to callbacks ---- */
 typedef struct frame_info {
     uint64_t frame;        /* the frame about to be rendered */
@@ -197,6 +204,8 @@ bool pipeline_add_termination(pipeline *p, const char *name, pipeline_terminatio
  * section, or before/after run); set only inside the serial section ---- */
 bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera);
 bool pipeline_set_threads(pipeline *p, int threads);
+bool pipeline_set_channel_active(pipeline *p, int channel, bool active);
+bool pipeline_channel_active(const pipeline *p, int channel);
 camera_desc pipeline_camera(const pipeline *p, int channel);
 uint64_t pipeline_camera_serial(const pipeline *p, int channel); /* changes so far */
 int pipeline_channel_count(const pipeline *p);

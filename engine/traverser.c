@@ -49,7 +49,11 @@ static void tiled_render(image_traverser *t, const renderer *r, const pixel_samp
         int x0 = (int)(tile % (uint32_t)c->tiles_x) * tile_px, y0 = (int)(tile / (uint32_t)c->tiles_x) * tile_px;
         int x1 = x0 + tile_px < c->width_px ? x0 + tile_px : c->width_px;
         int y1 = y0 + tile_px < c->height_px ? y0 + tile_px : c->height_px;
+        if (!c->target.rgb)
+            continue;
         r->render_tile(c->target.view, s, x0, y0, x1, y1, c->target.rgb, counts);
+        if (c->target.sink)
+            c->target.sink->ops->write_tile(c->target.sink, c->target.img, x0, y0, x1, y1);
     }
 }
 

@@ -12,6 +12,7 @@
 
 #include <stdint.h>
 
+#include "display.h"
 #include "err.h"
 #include "render.h"
 #include "sampler.h"
@@ -20,7 +21,10 @@
 /* One channel's frame as the traverser sees it. */
 typedef struct traverser_target {
     const render_view *view; /* camera (with the image size), scene, options */
-    float *rgb;              /* where the pixels go: width * height * 3 floats */
+    float *rgb;              /* where the pixels go: width * height * 3 floats; NULL: the channel
+                                is switched off this frame and its tiles are skipped */
+    image_display *sink;     /* with a write_tile hook: gets each finished tile; else NULL */
+    const frame_image *img;  /* what sink->write_tile is given (the frame being rendered) */
 } traverser_target;
 
 typedef struct image_traverser image_traverser;

@@ -57,7 +57,7 @@ static void capture_destroy(image_display *d)
     free(c);
 }
 
-static const image_display_ops capture_ops = {"capture", capture_show, capture_destroy};
+static const image_display_ops capture_ops = {.name = "capture", .show = capture_show, .destroy = capture_destroy};
 
 static capture_display *capture_create(void)
 {
@@ -629,6 +629,152 @@ Test(pipeline, channels_render_their_own_camera_and_size_to_their_own_display)
         }
         free(ref);
     }
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
+/* ---- channels switched off and on (a wall output unplugged and back) ---- */
+typedef struct stage_counting_display {
+    capture_display cap; /* first: frames shown */
+    int stages;          /* end_stage calls */
+} stage_counting_display;
+
+static bool count_stage(image_display *d, tess_error *err)
+{
+    (void)err;
+    ((stage_counting_display *)d)->stages++;
+    return true;
+}
+
+static const image_display_ops stage_counting_ops = {
+    .name = "stage-counting", .show = capture_show, .destroy = capture_destroy, .end_stage = count_stage};
+
+static void switch_channel_1(pipeline *p, void *args)
+{
+    bool on;
+    memcpy(&on, args, sizeof on);
+    cr_assert(pipeline_set_channel_active(p, 1, on));
+}
+
+Test(pipeline, a_switched_off_channel_is_neither_rendered_nor_shown_and_comes_back, .timeout = 60)
+{
+    fixture fx = fixture_make();
+    tess_error err = {{0}};
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 3;
+    cfg.max_frames = 12;
+    pipeline *p = pipeline_create(&cfg, &err);
+    cr_assert(p);
+    stage_counting_display *disp[2];
+    camera_desc cams[2] = {test_camera(&fx, 1), test_camera(&fx, 2)};
+    for (int c = 0; c < 2; c++) {
+        disp[c] = calloc(1, sizeof *disp[c]);
+        cr_assert(disp[c]);
+        disp[c]->cap.base.ops = &stage_counting_ops;
+        disp[c]->cap.fail_at_frame = -1;
+        cr_assert_eq(pipeline_add_channel(p, &cams[c], TEST_W, TEST_H, &disp[c]->cap.base, &err), c, "%s", err.msg);
+    }
+    bool off = false, on = true;
+    cr_assert(pipeline_at_frame(p, 3, "unplug", switch_channel_1, &off, sizeof off));
+    cr_assert(pipeline_at_frame(p, 7, "plug", switch_channel_1, &on, sizeof on));
+    cr_assert(pipeline_channel_active(p, 1));
+    run_ok(p);
+    cr_assert(pipeline_channel_active(p, 1));
+    /* channel 0 never stopped; channel 1 missed frames 3..6 exactly */
+    cr_assert_eq(disp[0]->cap.count, 12);
+    const uint64_t expected[] = {0, 1, 2, 7, 8, 9, 10, 11};
+    cr_assert_eq(disp[1]->cap.count, 8);
+    float *ref = reference(&fx, &cams[1], TEST_W, TEST_H);
+    for (int i = 0; i < 8; i++) {
+        cr_expect_eq(disp[1]->cap.frames[i].meta.frame, expected[i], "shown frame %d is %llu", i,
+                     (unsigned long long)disp[1]->cap.frames[i].meta.frame);
+        cr_expect(same_pixels(disp[1]->cap.frames[i].pixels, ref, TEST_W, TEST_H), "frame %llu",
+                  (unsigned long long)expected[i]);
+    }
+    free(ref);
+    /* every display stage ends with every display's end_stage, frame or not */
+    cr_expect_eq(disp[0]->stages, 12);
+    cr_expect_eq(disp[1]->stages, 12);
+    pipeline_stats st = pipeline_get_stats(p);
+    cr_expect_eq(st.frames_displayed, 12);
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
+/* ---- the write_tile hook: what a scan-out display gets from the render threads ---- */
+#define TILE_RING 4 /* as the DRM display: frame f in slot f % 4 */
+typedef struct tile_display {
+    image_display base;
+    float *slots[TILE_RING];           /* copies of the tiles, TEST_W x TEST_H each */
+    atomic_int *written[TILE_RING];    /* per pixel: times a tile covered it */
+    int frames_checked;                /* display thread */
+    int bad_frames;                    /* display thread */
+} tile_display;
+
+static void tile_write(image_display *d, const frame_image *img, int x0, int y0, int x1, int y1)
+{
+    tile_display *t = (tile_display *)d;
+    int slot = (int)(img->frame % TILE_RING);
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            size_t i = (size_t)y * img->width_px + x;
+            memcpy(&t->slots[slot][3 * i], &img->rgb[3 * i], 3 * sizeof(float));
+            atomic_fetch_add_explicit(&t->written[slot][i], 1, memory_order_relaxed);
+        }
+}
+
+static bool tile_show(image_display *d, const frame_image *img, tess_error *err)
+{
+    (void)err;
+    tile_display *t = (tile_display *)d;
+    int slot = (int)(img->frame % TILE_RING);
+    bool good = same_pixels(t->slots[slot], img->rgb, img->width_px, img->height_px);
+    for (int i = 0; i < img->width_px * img->height_px; i++) {
+        good = good && atomic_load(&t->written[slot][i]) == 1;
+        atomic_store(&t->written[slot][i], 0);
+    }
+    t->frames_checked++;
+    t->bad_frames += !good;
+    return true;
+}
+
+static void tile_destroy(image_display *d)
+{
+    tile_display *t = (tile_display *)d;
+    for (int k = 0; k < TILE_RING; k++) {
+        free(t->slots[k]);
+        free(t->written[k]);
+    }
+    free(t);
+}
+
+static const image_display_ops tile_ops = {
+    .name = "tiles", .show = tile_show, .destroy = tile_destroy, .write_tile = tile_write};
+
+Test(pipeline, write_tile_gets_every_pixel_of_every_frame_once_before_show, .timeout = 60)
+{
+    fixture fx = fixture_make();
+    tess_error err = {{0}};
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 3;
+    cfg.max_frames = 10;
+    cfg.tile_px = 8; /* TEST_W 72 x TEST_H 40: 9 x 5 tiles */
+    cfg.order = TILE_ORDER_SHUFFLE;
+    pipeline *p = pipeline_create(&cfg, &err);
+    cr_assert(p);
+    tile_display *t = calloc(1, sizeof *t);
+    cr_assert(t);
+    t->base.ops = &tile_ops;
+    for (int k = 0; k < TILE_RING; k++) {
+        t->slots[k] = calloc((size_t)TEST_W * TEST_H * 3, sizeof(float));
+        t->written[k] = calloc((size_t)TEST_W * TEST_H, sizeof(atomic_int));
+        cr_assert(t->slots[k] && t->written[k]);
+    }
+    camera_desc cam = test_camera(&fx, 4);
+    cr_assert_eq(pipeline_add_channel(p, &cam, TEST_W, TEST_H, &t->base, &err), 0, "%s", err.msg);
+    run_ok(p);
+    cr_expect_eq(t->frames_checked, 10);
+    cr_expect_eq(t->bad_frames, 0, "%d of 10 frames had pixels written twice, never or differently", t->bad_frames);
     pipeline_destroy(p);
     fixture_free(&fx);
 }
