@@ -3,7 +3,7 @@
 
 CC  ?= gcc
 CXX ?= g++
-PKGS := libdrm libinput libevdev OpenImageIO json-c assimp
+PKGS := libdrm libudev libinput libevdev OpenImageIO json-c assimp
 TEST_PKGS := criterion
 
 BUILD := build

@@ -461,9 +461,9 @@ static const wall_device_mode modes_1440[] = {{1920, 1080, 60.0}, {2560, 1440, 5
  * (serial BBB) offering 1440 modes, none marked preferred; DP-2: nothing connected. */
 static void card(wall_device_connector conns[3])
 {
-    conns[0] = (wall_device_connector){"HDMI-A-1", true, "DEL", "U2415", "AAA", modes_1080, 3, 0};
-    conns[1] = (wall_device_connector){"DP-1", true, "DEL", "U2415", "BBB", modes_1440, 3, -1};
-    conns[2] = (wall_device_connector){"DP-2", false, NULL, NULL, NULL, NULL, 0, -1};
+    conns[0] = (wall_device_connector){"HDMI-A-1", true, "DEL", "U2415", "AAA", modes_1080, 3, 0, -1};
+    conns[1] = (wall_device_connector){"DP-1", true, "DEL", "U2415", "BBB", modes_1440, 3, -1, -1};
+    conns[2] = (wall_device_connector){"DP-2", false, NULL, NULL, NULL, NULL, 0, -1, -1};
 }
 
 static wall_config one_output(const char *connector, const char *edid, const char *mode)
@@ -565,7 +565,7 @@ Test(wall_config, two_outputs_on_one_connector)
 Test(wall_config, preferred_mode_with_the_wrong_aspect)
 {
     wall_device_mode m[] = {{1920, 1200, 60.0}};
-    wall_device_connector conn = {"DP-3", true, NULL, NULL, NULL, m, 1, 0};
+    wall_device_connector conn = {"DP-3", true, NULL, NULL, NULL, m, 1, 0, -1};
     wall_config w = one_output("DP-3", "", "preferred");
     tess_error err = {{0}};
     cr_assert_not(wall_config_match_device(&w, &conn, 1, &err));
@@ -578,7 +578,7 @@ Test(wall_config, long_mode_lists_are_cut)
     wall_device_mode m[64];
     for (int i = 0; i < 64; i++)
         m[i] = (wall_device_mode){1000 + i, 500 + i, 60.0};
-    wall_device_connector conn = {"DP-3", true, NULL, NULL, NULL, m, 64, 0};
+    wall_device_connector conn = {"DP-3", true, NULL, NULL, NULL, m, 64, 0, -1};
     wall_config w = one_output("DP-3", "", "640x360");
     tess_error err = {{0}};
     cr_assert_not(wall_config_match_device(&w, &conn, 1, &err));

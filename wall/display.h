@@ -1,7 +1,9 @@
 /* display.h (wall) - the image displays the pipeline can hand frames to,
  * chosen by name: "null" (drops frames: benchmarks of rendering alone),
- * "convert" (encodes to 8-bit sRGB like scan-out, then drops) and "dump" (writes each frame through the dump backend, wall/dump.h). DRM/KMS
- * comes with the wall issue. */
+ * "convert" (encodes each finished frame to 8-bit sRGB like scan-out, then
+ * drops it), "convert-tiles" (the same per tile on the render threads) and
+ * "dump" (writes each frame through the dump backend, wall/dump.h). The DRM/KMS
+ * display is wall/drm.h. */
 #ifndef TESSERA_WALL_DISPLAY_H
 #define TESSERA_WALL_DISPLAY_H
 
@@ -11,7 +13,7 @@
 #include "engine/err.h"
 
 /* Names display_create knows, for messages. */
-#define DISPLAY_NAMES "null, convert, dump"
+#define DISPLAY_NAMES "null, convert, convert-tiles, dump"
 
 /* A display that only counts frames. */
 image_display *display_null_create(void);
@@ -19,6 +21,11 @@ image_display *display_null_create(void);
 /* A display that converts each frame to 8-bit sRGB XRGB8888, as a scan-out
  * display must, into a buffer of its own, and drops it (benchmarks). */
 image_display *display_convert_create(void);
+
+/* The same conversion done by the render threads as each tile finishes
+ * (display.h's write_tile hook), into a ring of four buffers: what the DRM
+ * display does with scan-out buffers (benchmarks: convert vs convert-tiles). */
+image_display *display_convert_tiles_create(void);
 
 /* A display that writes frame N of the pipeline to `pattern` with N as the
  * frame number (dump_frame_path rules: "####" or "%04d"; a pattern without

@@ -9,16 +9,26 @@
 #include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
+#include <sys/stat.h>
 #include <drm_fourcc.h>
+#include <libudev.h>
 #include <xf86drm.h>
 #include <xf86drmMode.h>
 
-#include "dump.h"
 #include "edid.h"
 #include "engine/log.h"
+#include "engine/pipeline.h"
+#include "xrgb.h"
 
 #define DRM_MAX_CARDS 16
-#define DRM_FLIP_TIMEOUT_MS 1000 /* a flip event later than this means the output is gone */
+#define DRM_FLIP_TIMEOUT_MS 1000   /* a flip event later than this: probe the connectors */
+#define DRM_FLIP_TIMEOUTS_FATAL 5  /* ... and this many in a row with nothing unplugged is an error */
+#define DRM_HOTPLUG_PASSES 3       /* a monitor that moved connectors: gone, then back */
+/* Frame f is written into buffer f % DRM_FRAME_BUFFERS by the render threads
+ * while f-1 waits for its flip and f-2 is on screen; until the flip to f-2
+ * has completed (waited for at the end of the display stage of frame f-1,
+ * before frame f starts) f-3 is on screen. So four never collide. */
+#define DRM_FRAME_BUFFERS 4
 
 typedef struct drm_buffer {
     uint32_t handle, fb_id, pitch_bytes;
@@ -26,14 +36,19 @@ typedef struct drm_buffer {
     uint8_t *map; /* write-only: scan-out memory may be write-combined */
 } drm_buffer;
 
+/* One output of the wall. Fixed after drm_wall_start: rotation, sizes,
+ * buffers (render threads write them through write_tile). The rest belongs to
+ * the display thread (show, end_stage) and drm_card_close. */
 typedef struct drm_output {
     uint32_t connector_id, crtc_id, plane_id;
     uint32_t mode_blob;          /* atomic: MODE_ID blob */
     drmModeModeInfo mode;
     int rotation_deg;            /* as mounted, clockwise (wall_config.h) */
     int width_px, height_px;     /* mounted image size (the channel's) */
-    drm_buffer buffers[2];
-    int back;                    /* the buffer the next frame is written into; display thread only */
+    drm_buffer buffers[DRM_FRAME_BUFFERS];
+    drm_buffer blank;            /* black: what a modeset shows before the first frame */
+    bool live;                   /* being driven (false once its monitor is unplugged) */
+    int ready;                   /* buffer of a finished frame to flip to at end_stage, -1 if none */
 } drm_output;
 
 /* One connector as the card reports it, with storage for wall_device_connector's strings. */
@@ -58,7 +73,16 @@ struct drm_card {
     int saved_count;
     drm_output outputs[WALL_MAX_OUTPUTS];
     int output_count;
+    wall_config wall;             /* as matched at drm_wall_start: hotplug plans against it */
     int pending_flips;            /* flip events still to come; display thread only */
+    int flip_timeouts;            /* in a row */
+    /* hotplug (display thread): udev's connector-change events for this card */
+    struct udev *udev;
+    struct udev_monitor *monitor; /* NULL: no udev; only flip timeouts make us probe */
+    dev_t devnum;
+    bool probe_needed;            /* read the connectors again at the next end_stage */
+    pipeline *pipeline;           /* whose channels first_channel.. are the outputs (drm_wall_attach) */
+    int first_channel;
 };
 
 /* ---------------------------------------------------------------- properties */
@@ -128,47 +152,81 @@ static uint32_t current_crtc(int fd, const drmModeConnector *cn)
     return crtc;
 }
 
-static bool read_connectors(drm_card *c, drmModeRes *res, tess_error *err)
+static void free_connectors(drm_connector_info *infos, wall_device_connector *conns, size_t n)
 {
-    size_t n = (size_t)res->count_connectors;
-    c->infos = calloc(n ? n : 1, sizeof *c->infos);
-    c->conns = calloc(n ? n : 1, sizeof *c->conns);
-    if (!c->infos || !c->conns)
-        return tess_error_set(err, "%s: out of memory", c->path);
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; infos && i < n; i++) {
+        free(infos[i].modes);
+        free(infos[i].mode_infos);
+    }
+    free(infos);
+    free(conns);
+}
+
+/* The card's connectors now (a full probe) into c->infos / c->conns,
+ * replacing the earlier lists; a connector seen before keeps the CRTC it had
+ * when the card was opened (what close restores). */
+static bool read_connectors(drm_card *c, tess_error *err)
+{
+    drmModeRes *res = drmModeGetResources(c->fd);
+    if (!res)
+        return tess_error_set(err, "%s: not a KMS device (no mode resources)", c->path);
+    size_t n = (size_t)res->count_connectors, count = 0;
+    drm_connector_info *infos = calloc(n ? n : 1, sizeof *infos);
+    wall_device_connector *conns = calloc(n ? n : 1, sizeof *conns);
+    bool first_read = c->infos == NULL;
+    bool ok = infos && conns;
+    if (!ok)
+        tess_error_set(err, "%s: out of memory", c->path);
+    for (size_t i = 0; ok && i < n; i++) {
         drmModeConnector *cn = drmModeGetConnector(c->fd, res->connectors[i]);
         if (!cn)
             continue;
-        drm_connector_info *info = &c->infos[c->conn_count];
-        wall_device_connector *dc = &c->conns[c->conn_count];
+        drm_connector_info *info = &infos[count];
+        wall_device_connector *dc = &conns[count];
         const char *type = drmModeGetConnectorTypeName(cn->connector_type);
         info->id = cn->connector_id;
         snprintf(info->name, sizeof info->name, "%s-%u", type ? type : "Unknown", cn->connector_type_id);
-        info->saved_crtc = current_crtc(c->fd, cn);
+        if (first_read)
+            info->saved_crtc = current_crtc(c->fd, cn);
+        for (size_t k = 0; !first_read && k < c->conn_count; k++)
+            if (c->infos[k].id == info->id)
+                info->saved_crtc = c->infos[k].saved_crtc;
         read_edid(c->fd, cn->connector_id, info);
         size_t modes = cn->count_modes > 0 ? (size_t)cn->count_modes : 0;
         info->modes = calloc(modes ? modes : 1, sizeof *info->modes);
         info->mode_infos = calloc(modes ? modes : 1, sizeof *info->mode_infos);
+        count++; /* freed with the list from here on */
         if (!info->modes || !info->mode_infos) {
             drmModeFreeConnector(cn);
-            return tess_error_set(err, "%s: out of memory", c->path);
+            ok = tess_error_set(err, "%s: out of memory", c->path);
+            break;
         }
-        int preferred = -1;
+        int preferred = -1, user_defined = -1;
         for (size_t m = 0; m < modes; m++) {
             info->mode_infos[m] = cn->modes[m];
             info->modes[m] = (wall_device_mode){cn->modes[m].hdisplay, cn->modes[m].vdisplay,
                                                 mode_refresh_hz(&cn->modes[m])};
             if (preferred < 0 && (cn->modes[m].type & DRM_MODE_TYPE_PREFERRED))
                 preferred = (int)m;
+            if (user_defined < 0 && (cn->modes[m].type & DRM_MODE_TYPE_USERDEF))
+                user_defined = (int)m;
         }
         *dc = (wall_device_connector){info->name, cn->connection == DRM_MODE_CONNECTED && modes > 0,
                                       info->has_edid ? info->edid.manufacturer : NULL,
                                       info->has_edid ? info->edid.model : NULL,
                                       info->has_edid ? info->edid.serial : NULL,
-                                      info->modes, modes, preferred};
-        c->conn_count++;
+                                      info->modes, modes, preferred, user_defined};
         drmModeFreeConnector(cn);
     }
+    drmModeFreeResources(res);
+    if (!ok) {
+        free_connectors(infos, conns, count);
+        return false;
+    }
+    free_connectors(c->infos, c->conns, c->conn_count);
+    c->infos = infos;
+    c->conns = conns;
+    c->conn_count = count;
     return true;
 }
 
@@ -233,13 +291,16 @@ drm_card *drm_card_open(const char *path, tess_error *err)
     }
     drmSetClientCap(c->fd, DRM_CLIENT_CAP_UNIVERSAL_PLANES, 1);
     c->atomic = drmSetClientCap(c->fd, DRM_CLIENT_CAP_ATOMIC, 1) == 0;
+    struct stat st;
+    if (fstat(c->fd, &st) == 0)
+        c->devnum = st.st_rdev;
     drmModeRes *res = drmModeGetResources(c->fd);
     if (!res) {
         tess_error_set(err, "%s: not a KMS device (no mode resources)", c->path);
         drm_card_close(c);
         return NULL;
     }
-    bool ok = read_connectors(c, res, err);
+    bool ok = read_connectors(c, err);
     c->saved_crtcs = calloc((size_t)res->count_crtcs + 1, sizeof *c->saved_crtcs);
     for (int i = 0; ok && c->saved_crtcs && i < res->count_crtcs; i++)
         c->saved_crtcs[c->saved_count++] = drmModeGetCrtc(c->fd, res->crtcs[i]);
@@ -273,7 +334,21 @@ static void free_buffer(int fd, drm_buffer *b)
     memset(b, 0, sizeof *b);
 }
 
-static void wait_flips(drm_card *c, tess_error *err);
+static void wait_flips(drm_card *c);
+
+static void free_outputs(drm_card *c)
+{
+    for (int o = 0; o < c->output_count; o++) {
+        drm_output *out = &c->outputs[o];
+        for (int b = 0; b < DRM_FRAME_BUFFERS; b++)
+            free_buffer(c->fd, &out->buffers[b]);
+        free_buffer(c->fd, &out->blank);
+        if (out->mode_blob)
+            drmModeDestroyPropertyBlob(c->fd, out->mode_blob);
+        out->mode_blob = 0;
+    }
+    c->output_count = 0;
+}
 
 /* Put back what was there at open: each saved CRTC with its connectors, or off. */
 static void restore_crtcs(drm_card *c)
@@ -300,25 +375,18 @@ void drm_card_close(drm_card *c)
     if (!c)
         return;
     if (c->fd >= 0 && c->output_count > 0) {
-        tess_error err = {{0}};
-        wait_flips(c, &err); /* a buffer still queued for scan-out must not be freed under it */
+        wait_flips(c); /* a buffer still queued for scan-out must not be freed under it */
         restore_crtcs(c);
     }
-    for (int i = 0; i < c->output_count; i++) {
-        for (int b = 0; b < 2; b++)
-            free_buffer(c->fd, &c->outputs[i].buffers[b]);
-        if (c->outputs[i].mode_blob)
-            drmModeDestroyPropertyBlob(c->fd, c->outputs[i].mode_blob);
-    }
+    free_outputs(c);
     for (int i = 0; i < c->saved_count; i++)
         drmModeFreeCrtc(c->saved_crtcs[i]);
     free(c->saved_crtcs);
-    for (size_t i = 0; i < c->conn_count; i++) {
-        free(c->infos[i].modes);
-        free(c->infos[i].mode_infos);
-    }
-    free(c->infos);
-    free(c->conns);
+    free_connectors(c->infos, c->conns, c->conn_count);
+    if (c->monitor)
+        udev_monitor_unref(c->monitor);
+    if (c->udev)
+        udev_unref(c->udev);
     if (c->fd >= 0) {
         drmDropMaster(c->fd);
         close(c->fd);
@@ -399,67 +467,104 @@ static bool assign_crtcs(drm_card *c, drmModeRes *res, tess_error *err)
     return ok;
 }
 
-/* Add the properties that show buffer `b` of every output (and, with
- * `modeset`, the connector routing and modes). */
-static bool add_frame_props(drm_card *c, drmModeAtomicReq *req, int buffer_of[], bool modeset)
+static bool add_prop(drm_card *c, drmModeAtomicReq *req, uint32_t object, uint32_t type, const char *name,
+                     uint64_t value)
 {
-    bool ok = true;
-    for (int o = 0; o < c->output_count; o++) {
-        drm_output *out = &c->outputs[o];
-        uint32_t w = out->mode.hdisplay, h = out->mode.vdisplay;
-        if (modeset) {
-            ok = ok &&
-                 drmModeAtomicAddProperty(req, out->connector_id,
-                                          prop_id(c->fd, out->connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID"),
-                                          out->crtc_id) >= 0 &&
-                 drmModeAtomicAddProperty(req, out->crtc_id,
-                                          prop_id(c->fd, out->crtc_id, DRM_MODE_OBJECT_CRTC, "MODE_ID"),
-                                          out->mode_blob) >= 0 &&
-                 drmModeAtomicAddProperty(req, out->crtc_id,
-                                          prop_id(c->fd, out->crtc_id, DRM_MODE_OBJECT_CRTC, "ACTIVE"), 1) >= 0;
-            const char *names[] = {"CRTC_ID", "SRC_X", "SRC_Y", "SRC_W", "SRC_H", "CRTC_X", "CRTC_Y", "CRTC_W",
-                                   "CRTC_H"};
-            uint64_t values[] = {out->crtc_id, 0, 0, (uint64_t)w << 16, (uint64_t)h << 16, 0, 0, w, h};
-            for (int k = 0; k < 9 && ok; k++)
-                ok = drmModeAtomicAddProperty(req, out->plane_id,
-                                              prop_id(c->fd, out->plane_id, DRM_MODE_OBJECT_PLANE, names[k]),
-                                              values[k]) >= 0;
-        }
-        ok = ok && drmModeAtomicAddProperty(req, out->plane_id,
-                                            prop_id(c->fd, out->plane_id, DRM_MODE_OBJECT_PLANE, "FB_ID"),
-                                            out->buffers[buffer_of[o]].fb_id) >= 0;
-    }
-    return ok;
+    uint32_t id = prop_id(c->fd, object, type, name);
+    return id && drmModeAtomicAddProperty(req, object, id, value) >= 0;
 }
 
-static bool modeset(drm_card *c, tess_error *err)
+/* Output o shows framebuffer fb_id; with `modeset` also its routing and mode. */
+static bool add_output_props(drm_card *c, drmModeAtomicReq *req, int o, uint32_t fb_id, bool modeset)
 {
-    int front[WALL_MAX_OUTPUTS] = {0};
+    drm_output *out = &c->outputs[o];
+    uint32_t w = out->mode.hdisplay, h = out->mode.vdisplay;
+    bool ok = true;
+    if (modeset) {
+        ok = add_prop(c, req, out->connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID", out->crtc_id) &&
+             add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "MODE_ID", out->mode_blob) &&
+             add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "ACTIVE", 1);
+        const char *names[] = {"CRTC_ID", "SRC_X", "SRC_Y", "SRC_W", "SRC_H", "CRTC_X", "CRTC_Y", "CRTC_W", "CRTC_H"};
+        uint64_t values[] = {out->crtc_id, 0, 0, (uint64_t)w << 16, (uint64_t)h << 16, 0, 0, w, h};
+        for (int k = 0; k < 9 && ok; k++)
+            ok = add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, names[k], values[k]);
+    }
+    return ok && add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, "FB_ID", fb_id);
+}
+
+/* Output o switched off: its connector, CRTC and plane released. */
+static bool add_disable_props(drm_card *c, drmModeAtomicReq *req, int o)
+{
+    drm_output *out = &c->outputs[o];
+    return add_prop(c, req, out->connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID", 0) &&
+           add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "ACTIVE", 0) &&
+           add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "MODE_ID", 0) &&
+           add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, "FB_ID", 0) &&
+           add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, "CRTC_ID", 0);
+}
+
+/* Commit a modeset request: tested whole (TEST_ONLY) before anything changes. */
+static bool commit_modeset(drm_card *c, drmModeAtomicReq *req, bool built, const char *what, tess_error *err)
+{
+    if (!req || !built)
+        return tess_error_set(err, "%s: cannot build the atomic request for %s", c->path, what);
+    if (drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_TEST_ONLY | DRM_MODE_ATOMIC_ALLOW_MODESET, NULL) != 0)
+        return tess_error_set(err, "%s: %s was refused by the driver (TEST_ONLY): %s", c->path, what,
+                              strerror(errno));
+    if (drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_ALLOW_MODESET, NULL) != 0)
+        return tess_error_set(err, "%s: the commit of %s failed: %s", c->path, what, strerror(errno));
+    return true;
+}
+
+static bool make_mode_blob(drm_card *c, drm_output *out, tess_error *err)
+{
+    if (out->mode_blob)
+        drmModeDestroyPropertyBlob(c->fd, out->mode_blob);
+    out->mode_blob = 0;
+    if (drmModeCreatePropertyBlob(c->fd, &out->mode, sizeof out->mode, &out->mode_blob) != 0)
+        return tess_error_set(err, "%s: cannot create a mode blob: %s", c->path, strerror(errno));
+    return true;
+}
+
+/* Light outputs [first, last] in their modes, showing their blank buffers. */
+static bool modeset(drm_card *c, int first, int last, const char *what, tess_error *err)
+{
     if (!c->atomic) {
-        for (int o = 0; o < c->output_count; o++) {
+        for (int o = first; o <= last; o++) {
             drm_output *out = &c->outputs[o];
-            if (drmModeSetCrtc(c->fd, out->crtc_id, out->buffers[0].fb_id, 0, 0, &out->connector_id, 1, &out->mode))
+            if (drmModeSetCrtc(c->fd, out->crtc_id, out->blank.fb_id, 0, 0, &out->connector_id, 1, &out->mode))
                 return tess_error_set(err, "%s: setting mode %s on CRTC %u failed: %s", c->path, out->mode.name,
                                       out->crtc_id, strerror(errno));
         }
         return true;
     }
-    for (int o = 0; o < c->output_count; o++)
-        if (drmModeCreatePropertyBlob(c->fd, &c->outputs[o].mode, sizeof c->outputs[o].mode,
-                                      &c->outputs[o].mode_blob) != 0)
-            return tess_error_set(err, "%s: cannot create a mode blob: %s", c->path, strerror(errno));
+    for (int o = first; o <= last; o++)
+        if (!make_mode_blob(c, &c->outputs[o], err))
+            return false;
     drmModeAtomicReq *req = drmModeAtomicAlloc();
-    bool ok = req && add_frame_props(c, req, front, true);
-    /* the whole configuration is tested before anything changes */
-    if (ok && drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_TEST_ONLY | DRM_MODE_ATOMIC_ALLOW_MODESET, NULL) != 0)
-        ok = tess_error_set(err, "%s: the wall's configuration was refused by the driver (TEST_ONLY): %s", c->path,
-                            strerror(errno));
-    else if (ok && drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_ALLOW_MODESET, NULL) != 0)
-        ok = tess_error_set(err, "%s: the modeset commit failed: %s", c->path, strerror(errno));
-    else if (!req || !ok)
-        ok = tess_error_set(err, "%s: cannot build the atomic request", c->path);
+    bool built = req != NULL;
+    for (int o = first; o <= last && built; o++)
+        built = add_output_props(c, req, o, c->outputs[o].blank.fb_id, true);
+    bool ok = commit_modeset(c, req, built, what, err);
     drmModeAtomicFree(req);
     return ok;
+}
+
+static void disable_output(drm_card *c, int o)
+{
+    drm_output *out = &c->outputs[o];
+    tess_error err = {{0}};
+    bool ok;
+    if (c->atomic) {
+        drmModeAtomicReq *req = drmModeAtomicAlloc();
+        ok = commit_modeset(c, req, req && add_disable_props(c, req, o), "switching an output off", &err);
+        drmModeAtomicFree(req);
+    } else {
+        ok = drmModeSetCrtc(c->fd, out->crtc_id, 0, 0, 0, NULL, 0, NULL) == 0 ||
+             tess_error_set(&err, "%s: switching CRTC %u off: %s", c->path, out->crtc_id, strerror(errno));
+    }
+    if (!ok)
+        log_warn("%s", err.msg);
 }
 
 /* ---------------------------------------------------------------- frames */
@@ -472,7 +577,9 @@ static void flip_done(int fd, unsigned sequence, unsigned tv_sec, unsigned tv_us
         c->pending_flips--;
 }
 
-static void wait_flips(drm_card *c, tess_error *err)
+/* Wait for the flip events of the last commit. One that never comes (an
+ * output unplugged under it) makes the connectors be probed. */
+static void wait_flips(drm_card *c)
 {
     drmEventContext ev = {.version = 3, .page_flip_handler2 = flip_done};
     while (c->pending_flips > 0) {
@@ -481,91 +588,227 @@ static void wait_flips(drm_card *c, tess_error *err)
         if (n < 0 && errno == EINTR)
             continue;
         if (n <= 0) {
-            tess_error_set(err, "%s: no page-flip event within %d ms (an output was unplugged?)", c->path,
-                           DRM_FLIP_TIMEOUT_MS);
+            log_warn("%s: no page-flip event within %d ms; probing the connectors", c->path, DRM_FLIP_TIMEOUT_MS);
             c->pending_flips = 0;
+            c->flip_timeouts++;
+            c->probe_needed = true;
             return;
         }
         drmHandleEvent(c->fd, &ev);
     }
+    c->flip_timeouts = 0;
 }
 
-static bool flip_all(drm_card *c, tess_error *err)
+/* Flip every live output that has a new frame, in one commit (atomic) or one
+ * page flip per CRTC (legacy). A refused flip makes the connectors be probed:
+ * an output may have gone between the last probe and now. */
+static void flip_ready(drm_card *c)
 {
-    int back[WALL_MAX_OUTPUTS];
-    for (int o = 0; o < c->output_count; o++)
-        back[o] = c->outputs[o].back;
+    int count = 0;
+    bool ok = true;
     if (c->atomic) {
         drmModeAtomicReq *req = drmModeAtomicAlloc();
-        bool ok = req && add_frame_props(c, req, back, false) &&
-                  drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT, c) == 0;
-        drmModeAtomicFree(req);
-        if (!ok)
-            return tess_error_set(err, "%s: page flip commit failed: %s", c->path, strerror(errno));
-        c->pending_flips = c->output_count; /* one event per CRTC */
-    } else {
-        for (int o = 0; o < c->output_count; o++) {
-            if (drmModePageFlip(c->fd, c->outputs[o].crtc_id, c->outputs[o].buffers[back[o]].fb_id,
-                                DRM_MODE_PAGE_FLIP_EVENT, c) != 0)
-                return tess_error_set(err, "%s: page flip failed: %s", c->path, strerror(errno));
-            c->pending_flips++;
+        ok = req != NULL;
+        for (int o = 0; o < c->output_count && ok; o++) {
+            drm_output *out = &c->outputs[o];
+            if (out->live && out->ready >= 0) {
+                ok = add_output_props(c, req, o, out->buffers[out->ready].fb_id, false);
+                count++;
+            }
         }
+        if (ok && count > 0)
+            ok = drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT, c) == 0;
+        drmModeAtomicFree(req);
+    } else {
+        for (int o = 0; o < c->output_count && ok; o++) {
+            drm_output *out = &c->outputs[o];
+            if (out->live && out->ready >= 0) {
+                ok = drmModePageFlip(c->fd, out->crtc_id, out->buffers[out->ready].fb_id, DRM_MODE_PAGE_FLIP_EVENT,
+                                     c) == 0;
+                count += ok;
+            }
+        }
+    }
+    c->pending_flips = count;
+    if (!ok) {
+        log_warn("%s: page flip refused: %s; probing the connectors", c->path, strerror(errno));
+        c->flip_timeouts++;
+        c->probe_needed = true;
+        if (!c->atomic)
+            wait_flips(c); /* the flips that were queued */
+        c->pending_flips = c->atomic ? 0 : c->pending_flips;
     }
     for (int o = 0; o < c->output_count; o++)
-        c->outputs[o].back ^= 1;
-    return true;
+        c->outputs[o].ready = -1;
 }
 
-/* The frame into the back buffer: 8-bit sRGB XRGB8888, each pixel written once,
- * rotated from the mounted image to the panel's scan-out orientation. */
-static void convert_frame(const frame_image *img, drm_output *out)
+/* ---------------------------------------------------------------- hotplug */
+
+/* Listen for udev's connector-change events of this card; without udev (or
+ * its daemon) only flip time-outs make us probe. */
+static void watch_hotplug(drm_card *c)
 {
-    drm_buffer *b = &out->buffers[out->back];
-    const int mw = img->width_px, mh = img->height_px; /* mounted */
-    const int sw = out->mode.hdisplay, sh = out->mode.vdisplay;
-    for (int v = 0; v < sh; v++) {
-        uint32_t *row = (uint32_t *)(b->map + (size_t)v * b->pitch_bytes);
-        for (int u = 0; u < sw; u++) {
-            int x, y; /* the mounted pixel scan-out pixel (u, v) shows */
-            switch (out->rotation_deg) {
-            case 90: x = mw - 1 - v, y = u; break;
-            case 180: x = mw - 1 - u, y = mh - 1 - v; break;
-            case 270: x = v, y = mh - 1 - u; break;
-            default: x = u, y = v; break;
-            }
-            uint32_t px = 0;
-            if (x >= 0 && x < mw && y >= 0 && y < mh) {
-                const float *c = img->rgb + 3 * ((size_t)y * (size_t)mw + (size_t)x);
-                px = (uint32_t)dump_srgb_encode_u8(c[0]) << 16 | (uint32_t)dump_srgb_encode_u8(c[1]) << 8 |
-                     (uint32_t)dump_srgb_encode_u8(c[2]);
-            }
-            row[u] = px;
-        }
+    c->udev = udev_new();
+    /* udevd re-broadcasts the kernel's events once its rules ran; without the daemon, the kernel's own */
+    const char *source = access("/run/udev/control", F_OK) == 0 ? "udev" : "kernel";
+    c->monitor = c->udev ? udev_monitor_new_from_netlink(c->udev, source) : NULL;
+    if (c->monitor && (udev_monitor_filter_add_match_subsystem_devtype(c->monitor, "drm", NULL) < 0 ||
+                       udev_monitor_enable_receiving(c->monitor) < 0)) {
+        udev_monitor_unref(c->monitor);
+        c->monitor = NULL;
+    }
+    if (!c->monitor)
+        log_warn("%s: cannot listen for hotplug events (udev); unplugged monitors are noticed only when their "
+                 "page flips stop", c->path);
+}
+
+/* Drain the monitor; true if one of the events was a HOTPLUG=1 of this card. */
+static bool hotplug_event(drm_card *c)
+{
+    bool ours = false;
+    for (;;) {
+        struct pollfd pfd = {udev_monitor_get_fd(c->monitor), POLLIN, 0};
+        if (poll(&pfd, 1, 0) <= 0)
+            return ours;
+        struct udev_device *dev = udev_monitor_receive_device(c->monitor);
+        if (!dev)
+            return ours;
+        const char *hotplug = udev_device_get_property_value(dev, "HOTPLUG");
+        if (hotplug && !strcmp(hotplug, "1") && udev_device_get_devnum(dev) == c->devnum)
+            ours = true;
+        udev_device_unref(dev);
     }
 }
+
+static const char *output_name(const drm_card *c, int o) { return c->wall.outputs[o].connector; }
+
+static void announce(drm_card *c, int o, bool live)
+{
+    if (c->pipeline && !pipeline_queue_channel_active(c->pipeline, c->first_channel + o, live))
+        log_warn("%s: could not switch channel %d %s", c->path, c->first_channel + o, live ? "on" : "off");
+}
+
+/* Bring a dark output back on connector `conn` in `mode` (same size as before). */
+static void bring_back(drm_card *c, int o, int conn, int mode)
+{
+    drm_output *out = &c->outputs[o];
+    uint32_t old_connector = out->connector_id;
+    drmModeModeInfo old_mode = out->mode;
+    out->connector_id = c->infos[conn].id;
+    out->mode = c->infos[conn].mode_infos[mode];
+    tess_error err = {{0}};
+    if (!modeset(c, o, o, "bringing an output back", &err)) {
+        log_warn("outputs[%d] (%s) stays dark: %s", o, output_name(c, o), err.msg);
+        out->connector_id = old_connector;
+        out->mode = old_mode;
+        return;
+    }
+    out->live = true;
+    out->ready = -1;
+    log_info("%s: outputs[%d] (%s) is back on %s, %dx%d", c->path, o, output_name(c, o), c->infos[conn].name,
+             out->mode.hdisplay, out->mode.vdisplay);
+    announce(c, o, true);
+}
+
+/* Read the connectors again and apply what the plan says. */
+static void handle_hotplug(drm_card *c)
+{
+    tess_error err = {{0}};
+    if (!read_connectors(c, &err)) {
+        log_warn("%s: reading the connectors after a hotplug event: %s", c->path, err.msg);
+        return;
+    }
+    for (int pass = 0; pass < DRM_HOTPLUG_PASSES; pass++) {
+        bool live[WALL_MAX_OUTPUTS];
+        int driving[WALL_MAX_OUTPUTS];
+        wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+        for (int o = 0; o < c->output_count; o++) {
+            live[o] = c->outputs[o].live;
+            driving[o] = -1;
+            for (size_t k = 0; live[o] && k < c->conn_count; k++)
+                if (c->infos[k].id == c->outputs[o].connector_id)
+                    driving[o] = (int)k;
+        }
+        wall_hotplug_plan(&c->wall, live, driving, c->conns, c->conn_count, steps);
+        bool changed = false;
+        for (int o = 0; o < c->output_count; o++) {
+            if (steps[o].action == WALL_HOTPLUG_GONE) {
+                log_warn("%s: outputs[%d] (%s) is gone (%s); the rest of the wall goes on", c->path, o,
+                         output_name(c, o), steps[o].reason.msg);
+                disable_output(c, o);
+                c->outputs[o].live = false;
+                c->outputs[o].ready = -1;
+                announce(c, o, false);
+                changed = true;
+            } else if (steps[o].action == WALL_HOTPLUG_BACK) {
+                bring_back(c, o, steps[o].connector, steps[o].mode);
+                changed = changed || c->outputs[o].live;
+            } else if (pass == 0 && !live[o] && tess_error_is_set(&steps[o].reason)) {
+                log_info("%s: outputs[%d] (%s) stays dark: %s", c->path, o, output_name(c, o), steps[o].reason.msg);
+            }
+        }
+        if (!changed)
+            break;
+    }
+}
+
+/* ---------------------------------------------------------------- the displays */
 
 typedef struct drm_display {
     image_display base;
     drm_card *card;
-    int output; /* index into card->outputs = channel index */
+    int output; /* index into card->outputs */
 } drm_display;
 
+/* Render threads: a finished tile straight into the frame's scan-out buffer. */
+static void drm_write_tile(image_display *d, const frame_image *img, int x0, int y0, int x1, int y1)
+{
+    drm_display *dd = (drm_display *)d;
+    const drm_output *out = &dd->card->outputs[dd->output];
+    const drm_buffer *b = &out->buffers[img->frame % DRM_FRAME_BUFFERS];
+    xrgb_target t = {b->map, b->pitch_bytes, out->mode.hdisplay, out->mode.vdisplay};
+    xrgb_write_rect(img->rgb, img->width_px, img->height_px, x0, y0, x1, y1, out->rotation_deg, &t);
+}
+
+/* The frame is already in its buffer: flip to it at the end of the stage. */
 static bool drm_show(image_display *d, const frame_image *img, tess_error *err)
+{
+    (void)err;
+    drm_display *dd = (drm_display *)d;
+    dd->card->outputs[dd->output].ready = (int)(img->frame % DRM_FRAME_BUFFERS);
+    return true;
+}
+
+/* Once per display stage (output 0's display speaks for the card): wait for
+ * the previous flips (this paces the pipeline on the display), follow
+ * hotplug, flip every live output in one commit. */
+static bool drm_end_stage(image_display *d, tess_error *err)
 {
     drm_display *dd = (drm_display *)d;
     drm_card *c = dd->card;
-    if (dd->output == 0) { /* a new frame: the previous flips must be done before their old fronts are reused */
-        wait_flips(c, err);
-        if (tess_error_is_set(err))
-            return false;
+    if (dd->output != 0)
+        return true;
+    wait_flips(c);
+    if (c->monitor && hotplug_event(c))
+        c->probe_needed = true;
+    if (c->probe_needed) {
+        c->probe_needed = false;
+        handle_hotplug(c);
     }
-    convert_frame(img, &c->outputs[dd->output]);
-    return dd->output == c->output_count - 1 ? flip_all(c, err) : true;
+    if (c->flip_timeouts >= DRM_FLIP_TIMEOUTS_FATAL)
+        return tess_error_set(err, "%s: %d page flips in a row never completed or were refused, and no output was "
+                                   "unplugged", c->path, c->flip_timeouts);
+    flip_ready(c);
+    return true;
 }
 
 static void drm_display_destroy(image_display *d) { free(d); }
 
-static const image_display_ops drm_display_ops = {"drm", drm_show, drm_display_destroy};
+static const image_display_ops drm_display_ops = {.name = "drm",
+                                                  .show = drm_show,
+                                                  .destroy = drm_display_destroy,
+                                                  .write_tile = drm_write_tile,
+                                                  .end_stage = drm_end_stage};
 
 bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays, tess_error *err)
 {
@@ -573,6 +816,7 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
     if (!res)
         return tess_error_set(err, "%s: no mode resources", c->path);
     c->output_count = w->count;
+    c->wall = *w;
     bool ok = true;
     for (int o = 0; o < w->count && ok; o++) {
         const wall_output *wo = &w->outputs[o];
@@ -588,15 +832,18 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
         out->rotation_deg = wo->rotation_deg;
         out->width_px = wo->width_px;
         out->height_px = wo->height_px;
-        out->back = 1; /* buffer 0 is shown (black) by the modeset */
+        out->live = true;
+        out->ready = -1;
     }
     ok = ok && assign_crtcs(c, res, err);
-    for (int o = 0; o < c->output_count && ok; o++)
-        for (int b = 0; b < 2 && ok; b++)
-            ok = create_buffer(c, c->outputs[o].mode.hdisplay, c->outputs[o].mode.vdisplay, &c->outputs[o].buffers[b],
-                               err);
+    for (int o = 0; o < c->output_count && ok; o++) {
+        drm_output *out = &c->outputs[o];
+        for (int b = 0; b < DRM_FRAME_BUFFERS && ok; b++)
+            ok = create_buffer(c, out->mode.hdisplay, out->mode.vdisplay, &out->buffers[b], err);
+        ok = ok && create_buffer(c, out->mode.hdisplay, out->mode.vdisplay, &out->blank, err);
+    }
     drmModeFreeResources(res);
-    ok = ok && modeset(c, err);
+    ok = ok && modeset(c, 0, c->output_count - 1, "the wall's configuration", err);
     for (int o = 0; o < c->output_count && ok; o++) {
         drm_display *dd = calloc(1, sizeof *dd);
         if (!dd) {
@@ -611,15 +858,17 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
         displays[o] = &dd->base;
     }
     if (!ok) { /* leave the card as found */
-        for (int o = 0; o < c->output_count; o++) {
-            for (int b = 0; b < 2; b++)
-                free_buffer(c->fd, &c->outputs[o].buffers[b]);
-            if (c->outputs[o].mode_blob)
-                drmModeDestroyPropertyBlob(c->fd, c->outputs[o].mode_blob);
-        }
-        c->output_count = 0;
+        free_outputs(c);
+        return false;
     }
-    return ok;
+    watch_hotplug(c);
+    return true;
+}
+
+void drm_wall_attach(drm_card *c, pipeline *p, int first_channel)
+{
+    c->pipeline = p;
+    c->first_channel = first_channel;
 }
 
 /* ---------------------------------------------------------------- tessera outputs */
@@ -686,8 +935,9 @@ int drm_print_outputs(FILE *f)
                 fprintf(f, ", %ux%u mm", cn->mmWidth, cn->mmHeight);
             fputc('\n', f);
             for (int m = 0; m < cn->count_modes; m++)
-                fprintf(f, "    %dx%d@%.2f%s\n", cn->modes[m].hdisplay, cn->modes[m].vdisplay,
-                        mode_refresh_hz(&cn->modes[m]), cn->modes[m].type & DRM_MODE_TYPE_PREFERRED ? " preferred" : "");
+                fprintf(f, "    %dx%d@%.2f%s%s\n", cn->modes[m].hdisplay, cn->modes[m].vdisplay,
+                        mode_refresh_hz(&cn->modes[m]), cn->modes[m].type & DRM_MODE_TYPE_PREFERRED ? " preferred" : "",
+                        cn->modes[m].type & DRM_MODE_TYPE_USERDEF ? " user-defined" : "");
             drmModeFreeConnector(cn);
         }
         print_crtcs(f, fd, res);

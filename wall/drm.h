@@ -3,17 +3,27 @@
  *
  * Life of a card: drm_card_open (becomes DRM master, saves every CRTC's state)
  * -> drm_card_connectors -> wall_config_match_device -> drm_wall_start (a CRTC
- * and its primary plane per output, two XRGB8888 dumb buffers each, the mode
- * set with one atomic commit tested first with TEST_ONLY, or the legacy API
- * where atomic is missing) -> frames through the displays it returns ->
+ * and its primary plane per output, four XRGB8888 dumb buffers and a black one
+ * each, the mode set with one atomic commit tested first with TEST_ONLY, or the
+ * legacy API where atomic is missing) -> drm_wall_attach (the pipeline whose
+ * channels the outputs are) -> frames through the displays it returns ->
  * drm_card_close (restores the saved CRTCs, frees the buffers).
  *
- * Frames: each output is a pipeline channel whose display converts the
- * finished float frame into the output's back buffer (8-bit sRGB, rotated to
- * the panel's scan-out orientation), written once and never read back (scan-out
- * memory may be write-combined); the last output of a frame flips every output
- * in one atomic commit (non-blocking, with flip events); the next frame waits
- * for those events before writing, so the pipeline runs at the display's pace. */
+ * Frames: each output is a pipeline channel. Its display's write_tile hook
+ * (engine/display.h) has the render threads convert each finished tile into
+ * the scan-out buffer of that frame (frame f -> buffer f % 4; 8-bit sRGB,
+ * rotated to the panel's scan-out orientation), each pixel written once and
+ * never read back (scan-out memory may be write-combined). At the end of each
+ * display stage the card waits for the previous flip events (so the pipeline
+ * runs at the display's pace) and flips every live output in one atomic commit
+ * (non-blocking, with flip events).
+ *
+ * Hotplug: udev's HOTPLUG=1 events for the card (and any flip that never
+ * completes) make it read the connectors again at the next display stage and
+ * apply wall_hotplug_plan: an output whose monitor is gone is switched off
+ * (its CRTC released) and its channel switched off in the pipeline (a
+ * transaction); one whose monitor is back in a mode of the same size is
+ * brought up again and its channel switched on. The other outputs go on. */
 #ifndef TESSERA_DRM_H
 #define TESSERA_DRM_H
 
@@ -45,6 +55,11 @@ size_t drm_card_connectors(const drm_card *c, const wall_device_connector **out)
  * order. The displays refer to the card: destroy them (the pipeline) before
  * drm_card_close. False with err; nothing is left changed then. */
 bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays, tess_error *err);
+
+/* The pipeline whose channels first_channel .. + w->count are this card's
+ * outputs, so hotplug can switch them off and on. Before pipeline_run. */
+struct pipeline;
+void drm_wall_attach(drm_card *c, struct pipeline *p, int first_channel);
 
 /* Whether the card took the atomic path (else legacy). */
 bool drm_card_atomic(const drm_card *c);

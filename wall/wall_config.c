@@ -768,7 +768,8 @@ static int resolve_mode(const wall_output *o, int i, const wall_device_connector
     text_list offered = {0};
     if (o->mode_preferred) {
         bool marked = d->preferred >= 0 && (size_t)d->preferred < d->mode_count;
-        int k = marked ? d->preferred : largest_mode(d);
+        bool user = d->user_defined >= 0 && (size_t)d->user_defined < d->mode_count;
+        int k = marked ? d->preferred : user ? d->user_defined : largest_mode(d);
         if (k < 0)
             tess_error_set(err, "outputs[%d]: %s offers no modes", i, connector_name(d));
         return k;
@@ -835,6 +836,72 @@ bool wall_config_match_device(wall_config *w, const wall_device_connector *conns
         mounted_px(o, m->width_px, m->height_px, &o->width_px, &o->height_px);
     }
     return true;
+}
+
+/* ---- hotplug ------------------------------------------------------------------ */
+
+static void plan_output(const wall_config *w, int i, const bool *live, const int *driving,
+                        const wall_device_connector *conns, size_t n, const wall_hotplug_step *steps,
+                        wall_hotplug_step *step)
+{
+    const wall_output *o = &w->outputs[i];
+    int conn = -1, mode = -1;
+    tess_error why = {{0}};
+    int taken[WALL_MAX_OUTPUTS]; /* match_output's duplicate check is done here, against the live outputs */
+    for (int j = 0; j < i; j++)
+        taken[j] = -1;
+    bool matched = match_output(w, i, taken, conns, n, &conn, &mode, &why);
+    *step = (wall_hotplug_step){WALL_HOTPLUG_KEEP, -1, -1, {{0}}};
+    if (live[i]) {
+        if (!matched) {
+            step->action = WALL_HOTPLUG_GONE;
+            step->reason = why;
+        } else if (conn != driving[i]) {
+            step->action = WALL_HOTPLUG_GONE;
+            tess_error_set(&step->reason, "outputs[%d]: its monitor is now on %s", i, connector_name(&conns[conn]));
+        }
+        return;
+    }
+    if (!matched) {
+        step->reason = why;
+        return;
+    }
+    for (int j = 0; j < w->count; j++) {
+        bool keeps = j != i && live[j] && driving[j] == conn && steps[j].action != WALL_HOTPLUG_GONE;
+        bool returns = j < i && steps[j].action == WALL_HOTPLUG_BACK && steps[j].connector == conn;
+        if (keeps || returns) {
+            tess_error_set(&step->reason, "outputs[%d]: connector %s is driven by outputs[%d]", i,
+                           connector_name(&conns[conn]), j);
+            return;
+        }
+    }
+    int w_px, h_px;
+    const wall_device_mode *m = &conns[conn].modes[mode];
+    mounted_px(o, m->width_px, m->height_px, &w_px, &h_px);
+    if (w_px != o->width_px || h_px != o->height_px) {
+        char text[MODE_TEXT_BYTES];
+        tess_error_set(&step->reason, "outputs[%d]: %s is back with mode %s (%d x %d px as mounted), but the wall "
+                                      "started at %d x %d px; restart tessera to use it",
+                       i, connector_name(&conns[conn]), format_mode(text, sizeof text, m->width_px, m->height_px,
+                                                                   m->refresh_hz),
+                       w_px, h_px, o->width_px, o->height_px);
+        return;
+    }
+    step->action = WALL_HOTPLUG_BACK;
+    step->connector = conn;
+    step->mode = mode;
+}
+
+void wall_hotplug_plan(const wall_config *w, const bool *live, const int *driving, const wall_device_connector *conns,
+                       size_t n, wall_hotplug_step *steps)
+{
+    /* live outputs first, so a dark one never takes a connector a live one keeps */
+    for (int i = 0; i < w->count; i++)
+        if (live[i])
+            plan_output(w, i, live, driving, conns, n, steps, &steps[i]);
+    for (int i = 0; i < w->count; i++)
+        if (!live[i])
+            plan_output(w, i, live, driving, conns, n, steps, &steps[i]);
 }
 
 /* ---- headless runs ---------------------------------------------------------- */

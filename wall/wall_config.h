@@ -131,6 +131,7 @@ typedef struct wall_device_connector {
     const wall_device_mode *modes;
     size_t mode_count;
     int preferred;                        /* index into modes, -1 if none is marked */
+    int user_defined;                     /* index of a mode the user added (kernel video=), -1 if none */
 } wall_device_connector;
 
 /* Pick for every output the connector of conns[0..n) that drives it and its
@@ -140,13 +141,43 @@ typedef struct wall_device_connector {
  * name, which must be connected. Mode: an explicit one needs exact W and H and,
  * when HZ was given, a refresh within WALL_REFRESH_TOLERANCE_HZ (the closest;
  * without HZ the preferred mode if it fits, else the highest refresh);
- * "preferred" takes the connector's preferred mode, else the largest (area,
- * then refresh), and must then pass the aspect check too. Fails with e.g.
+ * "preferred" takes the connector's preferred mode, else the user-defined one
+ * (video= on the kernel command line), else the largest (area, then refresh),
+ * and must then pass the aspect check too. Fails with e.g.
  *   "outputs[1]: connector 'HDMI-A-3' not found (the card has: HDMI-A-1, DP-1)"
  *   "outputs[0]: mode 2560x1440@60 not offered by HDMI-A-1 (it offers: 1920x1080@60, ...)"
  * and when two outputs resolve to one connector. On failure the outputs' resolved
  * fields are left unresolved (-1 / 0). */
 bool wall_config_match_device(wall_config *w, const wall_device_connector *conns, size_t n, tess_error *err);
+
+/* ---- hotplug ----------------------------------------------------------------
+ * After a connector-change event the card's connectors are read again and each
+ * output of a running wall (matched before by wall_config_match_device: its
+ * pixel size is fixed for the run) gets one step: */
+typedef enum wall_hotplug_action {
+    WALL_HOTPLUG_KEEP, /* stays as it is: driven, or dark (reason says why it cannot come back) */
+    WALL_HOTPLUG_GONE, /* was driven; its monitor is unplugged, or moved: stop driving it */
+    WALL_HOTPLUG_BACK, /* was dark; its monitor is there again: drive it on `connector` in `mode` */
+} wall_hotplug_action;
+
+typedef struct wall_hotplug_step {
+    wall_hotplug_action action;
+    int connector, mode;  /* BACK: indices into the new conns and that connector's modes */
+    tess_error reason;    /* GONE, or KEEP of a dark output: why, naming the output and connector */
+} wall_hotplug_step;
+
+/* Plan the steps for every output of w. live[i]: output i is driven now;
+ * driving[i]: the index in conns of the connector driving it (-1 when dark, or
+ * when its connector is no longer listed). An output is GONE when it would no
+ * longer match (wall_config_match_device's rules: unplugged, EDID elsewhere,
+ * connector vanished) or matches a different connector than the one driving
+ * it; a dark output comes BACK when it matches a connector no other output
+ * keeps, in a mode of the size the wall started with (else it stays dark with
+ * the reason). A monitor that moved connectors takes two plans: GONE, then
+ * BACK once the caller has applied the first. Pure: no device involved, so
+ * tests feed recorded connector states. */
+void wall_hotplug_plan(const wall_config *w, const bool *live, const int *driving, const wall_device_connector *conns,
+                       size_t n, wall_hotplug_step *steps);
 
 /* Without a device: width_px, height_px from each explicit mode (rotated).
  * Fails for "preferred" with "outputs[1] (Virtual-2): mode 'preferred' needs a

@@ -111,7 +111,7 @@ static void wall_destroy(image_display *d)
     free(wd);
 }
 
-static const image_display_ops wall_ops = {"wall", wall_show, wall_destroy};
+static const image_display_ops wall_ops = {.name = "wall", .show = wall_show, .destroy = wall_destroy};
 
 /* Which output pixel each stitched pixel shows (nearest, by the pixel
  * centre's wall position), as per-output lists. False when out of memory. */

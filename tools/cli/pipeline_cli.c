@@ -125,7 +125,7 @@ static bool resolve_relative(const char *config_file, const char *path, char *ou
 static bool opt_display(jr_ctx *c, json_object *obj, cli_channel_spec *ch)
 {
     static const char *const fields[] = {"name", "out", NULL};
-    static const char *const names[] = {"null", "convert", "dump", "drm", NULL};
+    static const char *const names[] = {"null", "convert", "convert-tiles", "dump", "drm", NULL};
     json_object *m;
     if (!jr_get_member(obj, "display", &m))
         return true;
@@ -384,7 +384,8 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--display")) {
         if (!(val = cli_option_value(argc, argv, i)))
             return false;
-        if (strcmp(val, "null") && strcmp(val, "convert") && strcmp(val, "dump") && strcmp(val, "drm")) {
+        if (strcmp(val, "null") && strcmp(val, "convert") && strcmp(val, "convert-tiles") && strcmp(val, "dump") &&
+            strcmp(val, "drm")) {
             cli_error("--display: unknown display '%s' (expected one of: %s, drm)", val, DISPLAY_NAMES);
             return false;
         }
@@ -422,7 +423,8 @@ void cli_pipeline_usage(FILE *f)
           "  --renderer R     raytracer (Phong, shadows) or eyelight (default raytracer)\n"
           "  --no-shadows     skip shadow rays\n"
           "  --display D      null (drop frames), convert (to 8-bit sRGB as scan-out would, then\n"
-          "                   drop), dump (write files to --out), drm (scan-out on the wall's\n"
+          "                   drop), convert-tiles (the same, per tile on the render threads, as\n"
+          "                   drm does), dump (write files to --out), drm (scan-out on the wall's\n"
           "                   monitors through DRM/KMS; needs --wall)\n"
           "  --card PATH      DRM card for --display drm (default: the first with a connected monitor)\n"
           "  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
@@ -500,12 +502,18 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
         for (int i = 0; ok && i < wall.count; i++)
             ok = (displays[i] = display_create(main_ch->display, NULL, false, &err)) != NULL;
     /* the pipeline owns each display from pipeline_add_channel_window on, also on failure */
-    int added = 0;
-    for (int i = 0; ok && i < wall.count; i++, added++)
-        ok = pipeline_add_channel_window(p, &cam, wall_plane_aspect(&wall), wall_output_window(&wall, i),
-                                         wall.outputs[i].width_px, wall.outputs[i].height_px, displays[i], &err) >= 0;
+    int added = 0, first_channel = -1;
+    for (int i = 0; ok && i < wall.count; i++, added++) {
+        int channel = pipeline_add_channel_window(p, &cam, wall_plane_aspect(&wall), wall_output_window(&wall, i),
+                                                  wall.outputs[i].width_px, wall.outputs[i].height_px, displays[i],
+                                                  &err);
+        ok = channel >= 0;
+        first_channel = i == 0 ? channel : first_channel;
+    }
     for (int i = added + (ok ? 0 : 1); i < wall.count; i++)
         image_display_destroy(displays[i]);
+    if (ok && on_device)
+        drm_wall_attach(active_card, p, first_channel); /* hotplug switches the outputs' channels */
     if (!ok)
         cli_error("%s: %s", s->wall_file, err.msg);
     return ok;

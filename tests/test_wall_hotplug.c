@@ -1,0 +1,313 @@
+/* test_wall_hotplug.c - what a running wall does when monitors are unplugged,
+ * come back or move connectors: wall_hotplug_plan fed a recorded KMS state
+ * (tests/data/outputs_vm_4heads.txt, `tessera outputs` in the qemu guest of
+ * tests/vm with 4 virtio-gpu heads) and synthetic connector changes of it.
+ * Below the udev layer: the DRM backend reads the connectors again on a
+ * HOTPLUG=1 event and applies exactly this plan. Also the mode choice for
+ * "preferred" on that state (preferred, else user-defined, else largest). */
+#include <criterion/criterion.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "wall/wall_config.h"
+
+#define MAX_CONNECTORS 8
+#define MAX_MODES 64
+
+/* A card's connectors as `tessera outputs` printed them, with storage. */
+typedef struct recorded_card {
+    wall_device_connector conns[MAX_CONNECTORS];
+    char names[MAX_CONNECTORS][WALL_CONNECTOR_BYTES];
+    char edid[MAX_CONNECTORS][3][64];
+    wall_device_mode modes[MAX_CONNECTORS][MAX_MODES];
+    size_t count;
+} recorded_card;
+
+/* Copy the quoted value after `"key": "` into out ("" if absent). */
+static void edid_field(const char *line, const char *key, char *out, size_t size)
+{
+    char pattern[64];
+    snprintf(pattern, sizeof pattern, "\"%s\": \"", key);
+    const char *p = strstr(line, pattern);
+    out[0] = '\0';
+    if (!p)
+        return;
+    p += strlen(pattern);
+    size_t n = strcspn(p, "\"");
+    snprintf(out, size, "%.*s", (int)(n < size ? n : size - 1), p);
+}
+
+static void load_recorded(recorded_card *card, const char *file)
+{
+    memset(card, 0, sizeof *card);
+    FILE *f = fopen(file, "r");
+    cr_assert(f, "cannot open %s", file);
+    char line[512];
+    wall_device_connector *cur = NULL;
+    size_t cur_index = 0;
+    while (fgets(line, sizeof line, f)) {
+        char name[WALL_CONNECTOR_BYTES], state[32];
+        int w, h;
+        double hz;
+        int indent = (int)strspn(line, " "); /* card lines 0, connectors and CRTCs 2, modes 4 */
+        if (indent == 4 && sscanf(line + indent, "%dx%d@%lf", &w, &h, &hz) == 3 && cur) {
+            cr_assert(cur->mode_count < MAX_MODES);
+            if (strstr(line, " preferred") && cur->preferred < 0)
+                cur->preferred = (int)cur->mode_count;
+            if (strstr(line, " user-defined") && cur->user_defined < 0)
+                cur->user_defined = (int)cur->mode_count;
+            card->modes[cur_index][cur->mode_count++] = (wall_device_mode){w, h, hz};
+        } else if (indent == 2 && sscanf(line + indent, "%31[^: ]: %31[a-z]", name, state) == 2 &&
+                   strncmp(name, "CRTC", 4) != 0) {
+            cr_assert(card->count < MAX_CONNECTORS);
+            cur_index = card->count++;
+            cur = &card->conns[cur_index];
+            snprintf(card->names[cur_index], WALL_CONNECTOR_BYTES, "%s", name);
+            const char *keys[3] = {"manufacturer", "model", "serial"};
+            for (int k = 0; k < 3; k++)
+                edid_field(line, keys[k], card->edid[cur_index][k], sizeof card->edid[cur_index][k]);
+            *cur = (wall_device_connector){card->names[cur_index], strcmp(state, "connected") == 0,
+                                           card->edid[cur_index][0], card->edid[cur_index][1],
+                                           card->edid[cur_index][2], card->modes[cur_index], 0, -1, -1};
+        }
+    }
+    fclose(f);
+}
+
+static int find_connector(const recorded_card *card, const char *name)
+{
+    for (size_t k = 0; k < card->count; k++)
+        if (!strcmp(card->names[k], name))
+            return (int)k;
+    cr_assert_fail("no connector %s in the recording", name);
+    return -1;
+}
+
+/* The vm_2x2 wall matched to the recording: the state of a running wall. */
+static wall_config running_wall(const recorded_card *card)
+{
+    wall_config w;
+    tess_error err = {{0}};
+    cr_assert(wall_config_load("../configs/walls/vm_2x2.json", &w, &err), "%s", err.msg);
+    cr_assert(wall_config_match_device(&w, card->conns, card->count, &err), "%s", err.msg);
+    return w;
+}
+
+static void all_live(const wall_config *w, bool *live, int *driving)
+{
+    for (int i = 0; i < w->count; i++) {
+        live[i] = true;
+        driving[i] = w->outputs[i].device_connector;
+    }
+}
+
+Test(wall_hotplug, the_recording_reads_as_four_connected_heads)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    cr_assert_eq(card.count, 4);
+    for (int k = 0; k < 4; k++) {
+        cr_expect(card.conns[k].connected);
+        size_t modes = k == 0 ? 26 : 25; /* head 1 also has its xres x yres mode, 640x480@75 */
+        cr_expect_eq(card.conns[k].mode_count, modes, "%s: %zu modes", card.names[k], card.conns[k].mode_count);
+        cr_expect_str_eq(card.conns[k].edid_manufacturer, "RHT");
+        cr_expect_geq(card.conns[k].user_defined, 0);
+    }
+    cr_expect_eq(card.conns[0].preferred, 0);
+    cr_expect_eq(card.conns[1].preferred, -1, "heads 2+ mark no mode preferred");
+    wall_config w = running_wall(&card);
+    for (int i = 0; i < 4; i++) {
+        const wall_device_mode *m = &card.conns[w.outputs[i].device_connector].modes[w.outputs[i].device_mode];
+        cr_expect(m->width_px == 640 && m->height_px == 480, "outputs[%d]: %dx%d", i, m->width_px, m->height_px);
+    }
+}
+
+Test(wall_hotplug, an_unplugged_monitor_is_gone_and_the_others_stay)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w = running_wall(&card);
+    bool live[WALL_MAX_OUTPUTS];
+    int driving[WALL_MAX_OUTPUTS];
+    all_live(&w, live, driving);
+    card.conns[find_connector(&card, "Virtual-2")].connected = false; /* the synthetic change */
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_assert_eq(steps[1].action, WALL_HOTPLUG_GONE);
+    cr_expect(strstr(steps[1].reason.msg, "outputs[1]: connector 'Virtual-2' has no monitor connected"), "%s",
+              steps[1].reason.msg);
+    for (int i = 0; i < 4; i++)
+        if (i != 1) {
+            cr_expect_eq(steps[i].action, WALL_HOTPLUG_KEEP, "outputs[%d]", i);
+            cr_expect_str_empty(steps[i].reason.msg, "outputs[%d]: %s", i, steps[i].reason.msg);
+        }
+}
+
+Test(wall_hotplug, a_vanished_connector_is_gone)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w = running_wall(&card);
+    bool live[WALL_MAX_OUTPUTS];
+    int driving[WALL_MAX_OUTPUTS];
+    all_live(&w, live, driving);
+    card.count = 3; /* Virtual-4 is no longer listed (an MST branch went away) */
+    driving[3] = -1;
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_assert_eq(steps[3].action, WALL_HOTPLUG_GONE);
+    cr_expect(strstr(steps[3].reason.msg, "connector 'Virtual-4' not found (the card has: Virtual-1, Virtual-2, "
+                                          "Virtual-3)"), "%s", steps[3].reason.msg);
+    cr_expect_eq(steps[0].action, WALL_HOTPLUG_KEEP);
+}
+
+Test(wall_hotplug, a_monitor_plugged_back_comes_back_in_its_mode)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w = running_wall(&card);
+    bool live[WALL_MAX_OUTPUTS];
+    int driving[WALL_MAX_OUTPUTS];
+    all_live(&w, live, driving);
+    live[2] = false; /* Virtual-3 was unplugged earlier ... */
+    driving[2] = -1;
+    int v3 = find_connector(&card, "Virtual-3");
+    card.conns[v3].connected = false;
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_expect_eq(steps[2].action, WALL_HOTPLUG_KEEP, "still unplugged: stays dark");
+    cr_expect(strstr(steps[2].reason.msg, "has no monitor connected"), "%s", steps[2].reason.msg);
+    card.conns[v3].connected = true; /* ... and is back */
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_assert_eq(steps[2].action, WALL_HOTPLUG_BACK, "%s", steps[2].reason.msg);
+    cr_expect_eq(steps[2].connector, v3);
+    cr_expect_eq(steps[2].mode, w.outputs[2].device_mode, "the mode it started in");
+    for (int i = 0; i < 4; i++)
+        if (i != 2)
+            cr_expect_eq(steps[i].action, WALL_HOTPLUG_KEEP);
+}
+
+Test(wall_hotplug, a_monitor_back_without_the_mode_stays_dark_and_says_why)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w = running_wall(&card);
+    bool live[WALL_MAX_OUTPUTS];
+    int driving[WALL_MAX_OUTPUTS];
+    all_live(&w, live, driving);
+    live[3] = false;
+    driving[3] = -1;
+    card.conns[find_connector(&card, "Virtual-4")].mode_count = 3; /* a different monitor: 5K and 4K modes only */
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_expect_eq(steps[3].action, WALL_HOTPLUG_KEEP);
+    cr_expect(strstr(steps[3].reason.msg, "outputs[3]: mode 640x480 not offered by Virtual-4 (it offers: "
+                                          "5120x2160@50, 4096x2160@50, 3840x2160@60)"), "%s", steps[3].reason.msg);
+}
+
+static const char edid_wall[] =
+    "{\"format\": \"tessera-wall\", \"version\": 1, \"units\": \"mm\", \"outputs\": ["
+    "{\"connector\": \"Virtual-1\", \"mode\": \"640x480\", \"grid\": [0, 0], \"size_mm\": [160, 120]},"
+    "{\"connector\": \"Virtual-2\", \"edid\": {\"manufacturer\": \"RHT\", \"serial\": \"B\"}, \"mode\": \"640x480\","
+    " \"grid\": [1, 0], \"size_mm\": [160, 120]}]}";
+
+Test(wall_hotplug, a_monitor_that_moved_connectors_is_gone_then_back_on_the_new_one)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    int v2 = find_connector(&card, "Virtual-2"), v3 = find_connector(&card, "Virtual-3");
+    card.conns[v2].edid_serial = "B";
+    wall_config w;
+    tess_error err = {{0}};
+    cr_assert(wall_config_parse("edid_wall", edid_wall, sizeof edid_wall - 1, &w, &err), "%s", err.msg);
+    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
+    cr_assert_eq(w.outputs[1].device_connector, v2);
+    bool live[WALL_MAX_OUTPUTS];
+    int driving[WALL_MAX_OUTPUTS];
+    all_live(&w, live, driving);
+    /* the monitor with serial B moves from Virtual-2 to Virtual-3 */
+    card.conns[v2].connected = false;
+    card.conns[v2].edid_serial = "";
+    card.conns[v3].edid_serial = "B";
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_assert_eq(steps[1].action, WALL_HOTPLUG_GONE);
+    cr_expect(strstr(steps[1].reason.msg, "outputs[1]: its monitor is now on Virtual-3"), "%s", steps[1].reason.msg);
+    cr_expect_eq(steps[0].action, WALL_HOTPLUG_KEEP);
+    live[1] = false; /* the caller applied the first plan */
+    driving[1] = -1;
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_assert_eq(steps[1].action, WALL_HOTPLUG_BACK, "%s", steps[1].reason.msg);
+    cr_expect_eq(steps[1].connector, v3);
+    cr_expect_eq(card.conns[v3].modes[steps[1].mode].width_px, 640);
+}
+
+Test(wall_hotplug, a_dark_output_never_takes_a_connector_a_live_one_keeps)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    int v1 = find_connector(&card, "Virtual-1"), v2 = find_connector(&card, "Virtual-2");
+    card.conns[v2].edid_serial = "B";
+    wall_config w;
+    tess_error err = {{0}};
+    cr_assert(wall_config_parse("edid_wall", edid_wall, sizeof edid_wall - 1, &w, &err), "%s", err.msg);
+    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
+    bool live[WALL_MAX_OUTPUTS] = {true, false};
+    int driving[WALL_MAX_OUTPUTS] = {v1, -1};
+    /* monitor B now hangs on Virtual-1, which outputs[0] drives by name */
+    card.conns[v2].connected = false;
+    card.conns[v1].edid_serial = "B";
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_expect_eq(steps[0].action, WALL_HOTPLUG_KEEP);
+    cr_expect_eq(steps[1].action, WALL_HOTPLUG_KEEP);
+    cr_expect(strstr(steps[1].reason.msg, "outputs[1]: connector Virtual-1 is driven by outputs[0]"), "%s",
+              steps[1].reason.msg);
+}
+
+static const char preferred_wall[] =
+    "{\"format\": \"tessera-wall\", \"version\": 1, \"units\": \"mm\", \"outputs\": ["
+    "{\"connector\": \"Virtual-2\", \"mode\": \"preferred\", \"grid\": [0, 0], \"size_mm\": [160, 120]}]}";
+
+Test(wall_hotplug, preferred_takes_the_user_defined_mode_when_none_is_marked_preferred)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w;
+    tess_error err = {{0}};
+    cr_assert(wall_config_parse("preferred_wall", preferred_wall, sizeof preferred_wall - 1, &w, &err), "%s",
+              err.msg);
+    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
+    const wall_device_connector *v2 = &card.conns[find_connector(&card, "Virtual-2")];
+    cr_expect_eq(w.outputs[0].device_mode, v2->user_defined, "not the largest, 5120x2160");
+    cr_expect_eq(w.outputs[0].width_px, 640);
+    /* without a user-defined mode: the largest, which must then fit the aspect (it does not: 5120x2160) */
+    card.conns[find_connector(&card, "Virtual-2")].user_defined = -1;
+    cr_expect_not(wall_config_match_device(&w, card.conns, card.count, &err));
+    cr_expect(strstr(err.msg, "the preferred mode of Virtual-2, 5120x2160@50"), "%s", err.msg);
+}
+
+Test(wall_hotplug, a_preferred_monitor_back_at_another_size_stays_dark)
+{
+    recorded_card card;
+    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w;
+    tess_error err = {{0}};
+    cr_assert(wall_config_parse("preferred_wall", preferred_wall, sizeof preferred_wall - 1, &w, &err), "%s",
+              err.msg);
+    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
+    bool live[1] = {false};
+    int driving[1] = {-1};
+    /* back, but now a 1024x768 mode is the user-defined one: same aspect, another size */
+    wall_device_connector *v2 = &card.conns[find_connector(&card, "Virtual-2")];
+    for (size_t k = 0; k < v2->mode_count; k++)
+        if (v2->modes[k].width_px == 1024)
+            v2->user_defined = (int)k;
+    wall_hotplug_step steps[1];
+    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
+    cr_expect_eq(steps[0].action, WALL_HOTPLUG_KEEP);
+    cr_expect(strstr(steps[0].reason.msg, "Virtual-2 is back with mode 1024x768@60 (1024 x 768 px as mounted), but "
+                                          "the wall started at 640 x 480 px; restart tessera"), "%s",
+              steps[0].reason.msg);
+}
