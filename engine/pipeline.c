@@ -444,6 +444,8 @@ bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_f
 
 void pipeline_stop(pipeline *p) { atomic_store(&p->stop_requested, true); }
 
+bool pipeline_stop_requested(const pipeline *p) { return atomic_load(&p->stop_requested); }
+
 typedef struct camera_args {
     int channel;
     camera_desc camera;

@@ -164,6 +164,10 @@ bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_f
  * then run returns. Any thread; an atomic flag, not a transaction. */
 void pipeline_stop(pipeline *p);
 
+/* Whether pipeline_stop was called (any thread: a display waiting for
+ * something outside tessera looks here so it never outlasts a stop). */
+bool pipeline_stop_requested(const pipeline *p);
+
 /* A camera change for a channel, as a transaction (what input and camera
  * paths send). The camera is validated here: false with err if invalid. */
 bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err);

@@ -5,7 +5,7 @@
 # Usage: tools/deps.sh [--bench]   (--bench adds Embree, for the peer comparison)
 set -eu
 
-PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libinput-dev libevdev-dev \
+PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libseat-dev libinput-dev libevdev-dev \
 libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev"
 if [ "${1:-}" = "--bench" ]; then
     PACKAGES="$PACKAGES libembree-dev"

@@ -18,12 +18,14 @@
 #include "edid.h"
 #include "engine/log.h"
 #include "engine/pipeline.h"
+#include "session.h"
 #include "xrgb.h"
 
 #define DRM_MAX_CARDS 16
 #define DRM_FLIP_TIMEOUT_MS 1000   /* a flip event later than this: probe the connectors */
 #define DRM_FLIP_TIMEOUTS_FATAL 5  /* ... and this many in a row with nothing unplugged is an error */
 #define DRM_HOTPLUG_PASSES 3       /* a monitor that moved connectors: gone, then back */
+#define DRM_SEAT_WAIT_MS 200       /* while switched away: how often to look for a stop */
 /* Frame f is written into buffer f % DRM_FRAME_BUFFERS by the render threads
  * while f-1 waits for its flip and f-2 is on screen; until the flip to f-2
  * has completed (waited for at the end of the display stage of frame f-1,
@@ -64,6 +66,7 @@ typedef struct drm_connector_info {
 
 struct drm_card {
     int fd;
+    session *session;             /* opened fd through it; VT switches come from it */
     char path[64];
     bool atomic;
     drm_connector_info *infos;
@@ -245,47 +248,50 @@ static bool any_connected(int fd)
     return found;
 }
 
-static int open_first_card(char *path, size_t path_bytes, tess_error *err)
+static int open_first_card(session *sn, char *path, size_t path_bytes, tess_error *err)
 {
     bool any = false;
     for (int i = 0; i < DRM_MAX_CARDS; i++) {
         snprintf(path, path_bytes, "/dev/dri/card%d", i);
-        int fd = open(path, O_RDWR | O_CLOEXEC);
+        if (access(path, F_OK) != 0)
+            continue;
+        tess_error why = {{0}};
+        int fd = session_open_device(sn, path, &why);
         if (fd < 0)
             continue;
         any = true;
         if (any_connected(fd))
             return fd;
-        close(fd);
+        session_close_device(sn, fd);
     }
     tess_error_set(err, any ? "drm: no card has a connected monitor" : "drm: no DRM card (/dev/dri/card*) can be opened");
     return -1;
 }
 
-drm_card *drm_card_open(const char *path, tess_error *err)
+drm_card *drm_card_open(const char *path, session *sn, tess_error *err)
 {
     drm_card *c = calloc(1, sizeof *c);
     if (!c) {
         tess_error_set(err, "drm: out of memory");
         return NULL;
     }
+    c->session = sn;
     c->fd = -1;
     if (path) {
         snprintf(c->path, sizeof c->path, "%s", path);
-        c->fd = open(path, O_RDWR | O_CLOEXEC);
-        if (c->fd < 0)
-            tess_error_set(err, "%s: cannot open: %s", path, strerror(errno));
+        c->fd = session_open_device(sn, path, err);
     } else {
-        c->fd = open_first_card(c->path, sizeof c->path, err);
+        c->fd = open_first_card(sn, c->path, sizeof c->path, err);
     }
     if (c->fd < 0) {
         free(c);
         return NULL;
     }
-    if (drmSetMaster(c->fd) != 0 && !drmIsMaster(c->fd)) {
+    /* a seat made us master already; without one we must be root */
+    if (!drmIsMaster(c->fd) && drmSetMaster(c->fd) != 0) {
         tess_error_set(err, "%s: cannot become DRM master (another program, e.g. a compositor, drives the "
                        "outputs; or run as root / through a seat): %s", c->path, strerror(errno));
-        close(c->fd);
+        session_close_device(sn, c->fd);
         free(c);
         return NULL;
     }
@@ -374,7 +380,8 @@ void drm_card_close(drm_card *c)
 {
     if (!c)
         return;
-    if (c->fd >= 0 && c->output_count > 0) {
+    bool ours = session_active(c->session); /* switched away: the console's owner has the CRTCs */
+    if (c->fd >= 0 && c->output_count > 0 && ours) {
         wait_flips(c); /* a buffer still queued for scan-out must not be freed under it */
         restore_crtcs(c);
     }
@@ -388,8 +395,9 @@ void drm_card_close(drm_card *c)
     if (c->udev)
         udev_unref(c->udev);
     if (c->fd >= 0) {
-        drmDropMaster(c->fd);
-        close(c->fd);
+        if (!session_has_seat(c->session) && ours)
+            drmDropMaster(c->fd);
+        session_close_device(c->session, c->fd);
     }
     free(c);
 }
@@ -752,6 +760,40 @@ static void handle_hotplug(drm_card *c)
     }
 }
 
+/* ---------------------------------------------------------------- VT switches */
+
+/* Light every live output again (after a VT switch the console had the CRTCs). */
+static void restore_wall(drm_card *c)
+{
+    for (int o = 0; o < c->output_count; o++) {
+        tess_error err = {{0}};
+        if (c->outputs[o].live && !modeset(c, o, o, "restoring an output after a VT switch", &err))
+            log_warn("outputs[%d] (%s): %s", o, output_name(c, o), err.msg);
+    }
+}
+
+/* The seat wants the card back (a VT switch away): finish the flips in
+ * flight, let go, and wait (the frame loop waits with us: nothing renders)
+ * until the seat is ours again or the pipeline is asked to stop. */
+static void follow_seat(drm_card *c)
+{
+    session_dispatch(c->session, 0);
+    if (!session_disable_pending(c->session))
+        return;
+    wait_flips(c);
+    session_ack_disable(c->session);
+    log_info("%s: switched away from our VT: the wall pauses", c->path);
+    while (!session_active(c->session) && !(c->pipeline && pipeline_stop_requested(c->pipeline)))
+        session_dispatch(c->session, DRM_SEAT_WAIT_MS);
+    if (!session_active(c->session))
+        return;
+    log_info("%s: back on our VT: the wall goes on", c->path);
+    restore_wall(c);
+    c->probe_needed = true; /* monitors may have come and gone meanwhile */
+    for (int o = 0; o < c->output_count; o++)
+        c->outputs[o].ready = -1; /* their buffers may have been written while we waited: show the next frame */
+}
+
 /* ---------------------------------------------------------------- the displays */
 
 typedef struct drm_display {
@@ -788,6 +830,9 @@ static bool drm_end_stage(image_display *d, tess_error *err)
     drm_card *c = dd->card;
     if (dd->output != 0)
         return true;
+    follow_seat(c);
+    if (!session_active(c->session))
+        return true; /* stopping while switched away: touch nothing */
     wait_flips(c);
     if (c->monitor && hotplug_event(c))
         c->probe_needed = true;

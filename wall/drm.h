@@ -36,12 +36,17 @@
 #include "wall_config.h"
 
 typedef struct drm_card drm_card;
+typedef struct session session;
 
-/* Open a card: `path`, or NULL for the first /dev/dri/cardN that has a
- * connected connector. NULL with err (no card, not permitted, not master). */
-drm_card *drm_card_open(const char *path, tess_error *err);
+/* Open a card through the session (wall/session.h: libseat, or direct as
+ * root): `path`, or NULL for the first /dev/dri/cardN that has a connected
+ * connector. NULL with err (no card, not permitted, not master). The session
+ * must outlive the card; VT switches it reports pause the wall (the display
+ * stage waits, so the frame loop does) and restore it on return. */
+drm_card *drm_card_open(const char *path, session *sn, tess_error *err);
 
-/* Restore the CRTC configuration found at open, free everything. NULL is fine. */
+/* Restore the CRTC configuration found at open (unless switched away to
+ * another VT: then the console's owner has them), free everything. NULL is fine. */
 void drm_card_close(drm_card *c);
 
 const char *drm_card_path(const drm_card *c);

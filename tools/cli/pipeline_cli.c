@@ -14,6 +14,7 @@
 #include "engine/scene.h"
 #include "wall/display.h"
 #include "wall/drm.h"
+#include "wall/session.h"
 #include "wall/wall_headless.h"
 
 #define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
@@ -438,20 +439,27 @@ void cli_pipeline_usage(FILE *f)
 
 /* ---------------------------------------------------------------- making the pipeline */
 
-/* The DRM card of a running wall (closed by cli_pipeline_release_outputs). */
+/* The DRM card of a running wall and the seat it was opened through (closed
+ * by cli_pipeline_release_outputs). */
 static drm_card *active_card;
+static session *active_session;
 
 void cli_pipeline_release_outputs(void)
 {
     drm_card_close(active_card);
     active_card = NULL;
+    session_close(active_session);
+    active_session = NULL;
 }
 
 /* Open the card, match the wall's outputs to its connectors (which resolves
  * their modes), bring them up. */
 static bool start_drm(const cli_pipeline_spec *s, wall_config *wall, image_display **displays, tess_error *err)
 {
-    active_card = drm_card_open(s->card_path[0] ? s->card_path : NULL, err);
+    active_session = session_open();
+    if (!active_session)
+        return tess_error_set(err, "seat: out of memory");
+    active_card = drm_card_open(s->card_path[0] ? s->card_path : NULL, active_session, err);
     if (!active_card)
         return false;
     const wall_device_connector *conns;
