@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "wall/drm.h"
 #include "wall/wall_config.h"
 
 #define MAX_CONNECTORS 8
@@ -310,4 +311,24 @@ Test(wall_hotplug, a_preferred_monitor_back_at_another_size_stays_dark)
     cr_expect(strstr(steps[0].reason.msg, "Virtual-2 is back with mode 1024x768@60 (1024 x 768 px as mounted), but "
                                           "the wall started at 640 x 480 px; restart tessera"), "%s",
               steps[0].reason.msg);
+}
+
+/* ---- CRTC assignment (drm_match_crtcs): a matching, not first fit ---- */
+Test(wall_hotplug, crtcs_are_matched_so_no_output_is_starved_by_an_earlier_one)
+{
+    /* output 0 can use CRTC 0 or 1, output 1 only CRTC 0: first fit would leave output 1 without */
+    uint32_t masks[3] = {0x3, 0x1, 0x6};
+    int crtc[3];
+    cr_assert_eq(drm_match_crtcs(masks, 3, 3, crtc), -1);
+    cr_expect_eq(crtc[1], 0);
+    cr_expect_neq(crtc[0], crtc[1]);
+    cr_expect_neq(crtc[2], crtc[0]);
+    for (int o = 0; o < 3; o++)
+        cr_expect(masks[o] & (1u << crtc[o]), "output %d got CRTC %d outside its mask", o, crtc[o]);
+    /* three outputs that can only share two CRTCs: the third is named */
+    uint32_t tight[3] = {0x3, 0x3, 0x3};
+    cr_expect_eq(drm_match_crtcs(tight, 3, 2, crtc), 2);
+    /* an output whose encoders reach no CRTC at all */
+    uint32_t none[2] = {0x1, 0x0};
+    cr_expect_eq(drm_match_crtcs(none, 2, 4, crtc), 1);
 }

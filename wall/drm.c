@@ -428,31 +428,74 @@ static bool create_buffer(drm_card *c, int width, int height, drm_buffer *b, tes
     return true;
 }
 
-/* A CRTC for each output from its encoders' possible-CRTC masks, and that
- * CRTC's primary plane; first fit in output order. */
+/* Try to give output o a CRTC from its mask, moving earlier outputs to other
+ * CRTCs of theirs when needed (one augmenting path). */
+static bool match_crtc(int o, const uint32_t *masks, int crtcs, int *owner, uint32_t *visited)
+{
+    for (int k = 0; k < crtcs; k++) {
+        if (!(masks[o] & (1u << k)) || (*visited & (1u << k)))
+            continue;
+        *visited |= 1u << k;
+        if (owner[k] < 0 || match_crtc(owner[k], masks, crtcs, owner, visited)) {
+            owner[k] = o;
+            return true;
+        }
+    }
+    return false;
+}
+
+int drm_match_crtcs(const uint32_t *masks, int outputs, int crtcs, int *crtc_of_output)
+{
+    int owner[32];
+    crtcs = crtcs < 32 ? crtcs : 32;
+    for (int k = 0; k < 32; k++)
+        owner[k] = -1;
+    for (int o = 0; o < outputs; o++) {
+        uint32_t visited = 0;
+        crtc_of_output[o] = -1;
+        if (!match_crtc(o, masks, crtcs, owner, &visited))
+            return o;
+    }
+    for (int k = 0; k < crtcs; k++)
+        if (owner[k] >= 0)
+            crtc_of_output[owner[k]] = k;
+    return -1;
+}
+
+/* The CRTCs each output's encoders can drive (possible_crtcs masks, bit k = res->crtcs[k]). */
+static uint32_t possible_crtcs(drm_card *c, uint32_t connector_id)
+{
+    drmModeConnector *cn = drmModeGetConnector(c->fd, connector_id);
+    uint32_t mask = 0;
+    for (int e = 0; cn && e < cn->count_encoders; e++) {
+        drmModeEncoder *enc = drmModeGetEncoder(c->fd, cn->encoders[e]);
+        mask |= enc ? enc->possible_crtcs : 0;
+        drmModeFreeEncoder(enc);
+    }
+    drmModeFreeConnector(cn);
+    return mask;
+}
+
+/* A CRTC for each output from its encoders' possible-CRTC masks (a maximum
+ * bipartite matching, so a first choice never blocks a later output that
+ * could only use it), and that CRTC's primary plane. */
 static bool assign_crtcs(drm_card *c, drmModeRes *res, tess_error *err)
 {
-    uint32_t used_crtcs = 0;
+    uint32_t masks[WALL_MAX_OUTPUTS];
+    int crtc_index_of[WALL_MAX_OUTPUTS];
+    for (int o = 0; o < c->output_count; o++)
+        masks[o] = possible_crtcs(c, c->outputs[o].connector_id);
+    int unmatched = drm_match_crtcs(masks, c->output_count, res->count_crtcs, crtc_index_of);
+    if (unmatched >= 0)
+        return tess_error_set(err, "%s: no CRTC is left for outputs[%d] (%s): the card cannot drive all these "
+                                   "outputs at once (its possible-CRTC mask 0x%x of %d CRTCs)",
+                              c->path, unmatched, c->wall.outputs[unmatched].connector, masks[unmatched],
+                              res->count_crtcs);
     drmModePlaneRes *planes = drmModeGetPlaneResources(c->fd);
     bool ok = true;
     for (int o = 0; o < c->output_count && ok; o++) {
         drm_output *out = &c->outputs[o];
-        drmModeConnector *cn = drmModeGetConnector(c->fd, out->connector_id);
-        int crtc_index = -1;
-        for (int e = 0; cn && e < cn->count_encoders && crtc_index < 0; e++) {
-            drmModeEncoder *enc = drmModeGetEncoder(c->fd, cn->encoders[e]);
-            for (int k = 0; enc && k < res->count_crtcs && crtc_index < 0; k++)
-                if ((enc->possible_crtcs & (1u << k)) && !(used_crtcs & (1u << k)))
-                    crtc_index = k;
-            drmModeFreeEncoder(enc);
-        }
-        drmModeFreeConnector(cn);
-        if (crtc_index < 0) {
-            ok = tess_error_set(err, "%s: no free CRTC can drive output %d (connector %u)", c->path, o,
-                                out->connector_id);
-            break;
-        }
-        used_crtcs |= 1u << crtc_index;
+        int crtc_index = crtc_index_of[o];
         out->crtc_id = res->crtcs[crtc_index];
         for (uint32_t p = 0; planes && p < planes->count_planes && !out->plane_id; p++) {
             drmModePlane *pl = drmModeGetPlane(c->fd, planes->planes[p]);

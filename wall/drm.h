@@ -29,6 +29,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "engine/display.h"
@@ -65,6 +66,14 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
  * outputs, so hotplug can switch them off and on. Before pipeline_run. */
 struct pipeline;
 void drm_wall_attach(drm_card *c, struct pipeline *p, int first_channel);
+
+/* CRTCs for outputs: masks[o] has bit k set when output o's encoders can
+ * drive CRTC k (of `crtcs`, at most 32). Fills crtc_of_output[o] with distinct
+ * CRTC indices by a maximum bipartite matching (augmenting paths: an earlier
+ * output moves to another CRTC of its own when a later one needs its first
+ * choice). Returns -1 when every output got one, else the first output that
+ * cannot. Pure; drm_wall_start uses it with the card's masks. */
+int drm_match_crtcs(const uint32_t *masks, int outputs, int crtcs, int *crtc_of_output);
 
 /* Whether the card took the atomic path (else legacy). */
 bool drm_card_atomic(const drm_card *c);
