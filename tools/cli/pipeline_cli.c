@@ -135,7 +135,7 @@ static bool opt_display(jr_ctx *c, json_object *obj, cli_channel_spec *ch)
     char out[CLI_PATTERN_BYTES] = "";
     bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_require_member(c, m, "name") &&
               jr_opt_choice(c, m, "name", names, &which) && opt_text(c, m, "out", out, sizeof out);
-    if (ok && which == 2 && !out[0])
+    if (ok && !strcmp(names[which], "dump") && !out[0])
         ok = jr_member_fail(c, "out", "required for the dump display (a file pattern such as out/frame_####.png)");
     if (ok && out[0])
         snprintf(ch->out, sizeof ch->out, "%s", out); /* relative to the working directory, as --out */
