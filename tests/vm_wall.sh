@@ -1,30 +1,78 @@
 #!/bin/sh
 # tests/vm_wall.sh - end-to-end: tessera drives a 2x2 wall (configs/walls/vm_2x2.json)
-# on the 4 heads of a virtio-gpu in a qemu guest (tests/vm/), through DRM/KMS.
+# on the 4 heads of a virtio-gpu in a qemu guest (tests/vm/), through DRM/KMS,
+# playing a looping camera path. One guest boot for the whole scenario.
+#
+# The animation: a scene of spheres without a floor (background pixels are
+# cheap; under TCG the guest shows a new frame every 1-2 s, 3 s with a CPU hog
+# beside it; a floor or the built-in scene make it 3-7 s) and an orbit of 8
+# Catmull-Rom keys that loops every 4 s, played with --time fixed --rate 4:
+# frame k shows time k/4 s, an exact binary fraction, so frame k+16 is bit for
+# bit frame k and each output has K = 16 possible pictures. Frame 0 has the
+# still camera of the earlier version of this test (which used the built-in
+# scene). The host renders 2K frames natively (same binary; every ISA gives
+# bit-identical images) as references.
 #
 # Checks, each printed as PASS/FAIL:
-#   1. the guest's tessera brings the 4 outputs up (atomic or legacy modeset);
-#   2. every head's QMP screendump equals, pixel for pixel (tolerance 0), the
-#      headless render of that output made natively on the host by the same
-#      binary (still camera; every ISA gives bit-identical images);
-#   3. SIGTERM ends tessera cleanly (exit 0) after it restored the CRTCs.
+#   1. the native references: frame j+K equals frame j on every output (the
+#      loop is exact) and the K frames of each output all differ;
+#   2. the guest's tessera brings the 4 outputs up (atomic or legacy modeset);
+#   3. from the first frame on, every screendump of every head equals, pixel for
+#      pixel (tolerance 0), the native render of one frame of that output
+#      (a torn or mixed picture fails; qmp.py match says which rows are which);
+#   4. frames keep flipping: each head shows >= 3 distinct frames, and between
+#      two screendumps of a head the frame only moves forward (by less than K/2,
+#      modulo K; assumes the guest needs > 0.2 s per frame: true under TCG);
+#   5. a host-driven guest step (cmd-1.sh) runs while tessera runs;
+#   6. SIGTERM ends tessera cleanly (exit 0);
+#   7. `tessera outputs` after the run has the same card, connector and CRTC
+#      lines as before it (the CRTCs were restored: modes, framebuffer, routing).
+#      The guest keeps /dev/dri/renderD128 open meanwhile: when the last file
+#      of a DRM device closes, the kernel restores the fbdev console itself
+#      (checked: a client that restores nothing, kms_fill, then leaves "fb 55"
+#      as before; with the render node held it leaves "fb 0"), which would
+#      hide a tessera that does not restore;
+#   8. head 0 shows the same console picture after the run as before it: the
+#      guest first writes a line to the console and hides the (blinking) cursor,
+#      so the picture is steady and not all black.
 # Exits 0 when all pass. When qemu cannot be installed (no apt, no network) it
 # says so and exits 0 with SKIPPED in its last line: never silently.
-# Run from the repository root by `make test` (after ./tessera is built).
-# Environment: TESSERA_VM_CACHE (default /tmp/tessera-vm-cache: downloads and the guest).
+#
+# Guest protocol (files in the shared folder $W; the guest script is guest.sh):
+#   guest: outputs-before.txt, then `console-before`; host: screendump of head 0,
+#   then `console-before.done`; guest: starts tessera, then runs each
+#   `cmd-N.sh` (N = 1, 2, ... in order) the host drops in, output to cmd-N.log,
+#   exit status to `cmd-N.done`; host: `done`; guest: SIGTERM, tessera.rc,
+#   outputs-after.txt, `console-after`; host: screendump, `console-after.done`.
+#   To add a step while tessera runs: `guest_step N 'COMMAND' [SECS]` below
+#   (after the animation check, before `done`), then check $W/cmd-N.done / .log.
+#
+# Run from the repository root by `make test` (after ./tessera is built). Takes
+# 29-54 s here (warm cache, 2 cores, TCG; 70 s with a CPU hog beside it), most
+# of it before the first frame: boot 6 s, each tessera start in the guest ~9 s.
+# Environment: TESSERA_VM_CACHE (default /tmp/tessera-vm-cache: downloads and the guest),
+# VM_KEEP=1 keeps the work folder (screendumps, references, logs).
 set -u
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 CACHE=${TESSERA_VM_CACHE:-/tmp/tessera-vm-cache}
 W=$(mktemp -d /tmp/tessera-vm-wall.XXXXXX)
 GPID=
 cleanup() {
     [ -n "$GPID" ] && kill "$GPID" 2>/dev/null
-    rm -rf "$W"
+    if [ -n "${VM_KEEP:-}" ]; then echo "vm_wall: kept $W"; else rm -rf "$W"; fi
 }
-trap cleanup EXIT INT TERM
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
 PASS=0 FAIL=0
 ok() { echo "vm_wall: PASS: $*"; PASS=$((PASS + 1)); }
 bad() { echo "vm_wall: FAIL: $*"; FAIL=$((FAIL + 1)); }
+T0=$(date +%s)
+elapsed() { echo $(($(date +%s) - T0)); }
+
+K=16    # frames per loop: period 4 s x rate 4 Hz
+RATE=4  # also in guest.sh's tessera run
+MIN_FRAMES=3
 
 mkdir -p "$CACHE"
 if ! tests/vm/build-guest.sh "$CACHE" ./tessera > "$W/build.log" 2>&1; then
@@ -38,70 +86,317 @@ if ! tests/vm/build-guest.sh "$CACHE" ./tessera > "$W/build.log" 2>&1; then
     exit 1
 fi
 
-# a still camera, so every frame is the same picture
 cp configs/walls/vm_2x2.json "$W/wall.json"
-cat > "$W/still.json" <<'EOF'
-{"format": "tessera-camera-path", "version": 1,
- "keyframes": [{"time": 0, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40}]}
+cat > "$W/scene.json" <<'EOF'
+{
+  "background": [0.05, 0.06, 0.09],
+  "ambient": [0.08, 0.08, 0.1],
+  "materials": {
+    "red":   {"model": "phong", "diffuse": [0.7, 0.08, 0.06], "specular": [0.5, 0.5, 0.5], "shininess": 48},
+    "blue":  {"model": "lambert", "diffuse": [0.1, 0.2, 0.7]},
+    "white": {"model": "phong", "diffuse": [0.8, 0.8, 0.8], "specular": [0.9, 0.9, 0.9], "shininess": 200},
+    "gold":  {"model": "phong", "diffuse": [0.75, 0.55, 0.1], "specular": [0.8, 0.7, 0.4], "shininess": 24}
+  },
+  "lights": [
+    {"type": "directional", "direction": [0.5, 1, 0.4], "color": [1, 0.97, 0.9], "intensity": 0.9, "shadows": true},
+    {"type": "point", "position": [-3, 4, 3], "color": [0.6, 0.7, 1], "intensity": 12, "shadows": false}
+  ],
+  "spheres": [
+    {"center": [0, 1, 0], "radius": 1, "material": "red"},
+    {"center": [2.2, 0.6, 0.5], "radius": 0.6, "material": "blue"},
+    {"center": [-2.1, 0.75, -0.4], "radius": 0.75, "material": "white"},
+    {"center": [0.9, 0.3, 1.8], "radius": 0.3, "material": "gold"},
+    {"center": [-0.8, 0.25, 1.9], "radius": 0.25, "material": "gold"},
+    {"center": [1.5, 0.4, -2.0], "radius": 0.4, "material": "blue"}
+  ]
+}
 EOF
-if ! ./tessera render --wall "$W/wall.json" --path "$W/still.json" --threads 2 --out "$W/native.png" \
-    > "$W/native.log" 2>&1; then
-    cat "$W/native.log"
-    echo "vm_wall: FAIL: the native render failed"
-    exit 1
-fi
+# every other key of configs/paths/orbit.json, twice as fast: one turn in 4 s
+cat > "$W/loop.json" <<'EOF'
+{"format": "tessera-camera-path", "version": 1, "interpolation": "catmull-rom", "loop": true,
+ "keyframes": [
+  {"time": 0, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 0.5, "eye": [-1.414, 3.2, 7.778], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 1, "eye": [-6.5, 3.2, 4.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 1.5, "eye": [-7.778, 3.2, -1.414], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 2, "eye": [-4.5, 3.2, -6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 2.5, "eye": [1.414, 3.2, -7.778], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 3, "eye": [6.5, 3.2, -4.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 3.5, "eye": [7.778, 3.2, 1.414], "look_at": [0, 0.6, 0], "fov_deg": 40},
+  {"time": 4, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40}]}
+EOF
 
-# the guest: tessera until the host says "done", then SIGTERM and its exit status
+# the guest (busybox sh in the share); the protocol is in the header
 cat > "$W/guest.sh" <<'EOF'
-/usr/local/bin/tessera run --wall wall.json --path still.json --threads 2 > tessera.log 2>&1 &
+alive() { # a process that has not ended (a zombie has)
+    [ -r "/proc/$1/stat" ] && read -r st < "/proc/$1/stat" 2>/dev/null || return 1
+    st=${st##*") "}
+    [ "${st%% *}" != Z ]
+}
+wait_for() { # FILE SECS
+    i=0
+    while [ ! -e "$1" ] && [ $i -lt $(($2 * 10)) ]; do sleep 0.1; i=$((i + 1)); done
+    [ -e "$1" ]
+}
+# a steady console for the screendumps: no blinking, cursor hidden, a line of text
+echo 0 > /sys/class/graphics/fbcon/cursor_blink 2>/dev/null
+printf '\033[?25l\nvm_wall: the console before tessera runs\n' > /dev/tty0
+# The kernel puts the fbdev console back by itself when the last file of the DRM
+# device closes, which would hide whether tessera restored the CRTCs: keep one open.
+if [ -e /dev/dri/renderD128 ]; then
+    exec 3< /dev/dri/renderD128
+    echo renderD128 > holder
+fi
+tessera outputs > outputs-before.txt 2>&1 3<&-
+touch console-before
+wait_for console-before.done 60
+tessera run --wall wall.json --scene scene.json --path loop.json --time fixed --rate 4 --threads 2 \
+    > tessera.log 2>&1 3<&- &
 pid=$!
-i=0
-while [ ! -e done ] && [ $i -lt 2400 ] && kill -0 $pid 2>/dev/null; do sleep 0.1; i=$((i + 1)); done
+n=1 i=0
+while [ ! -e done ] && [ $i -lt 2400 ] && alive $pid; do
+    if [ -e cmd-$n.sh ]; then
+        sh cmd-$n.sh > cmd-$n.log 2>&1 3<&-
+        echo $? > cmd-$n.tmp
+        mv cmd-$n.tmp cmd-$n.done
+        n=$((n + 1))
+    else
+        sleep 0.1
+        i=$((i + 1))
+    fi
+done
 kill -TERM $pid 2>/dev/null
-wait $pid
-echo $? > tessera.rc
+i=0
+while alive $pid && [ $i -lt 300 ]; do sleep 0.1; i=$((i + 1)); done
+if alive $pid; then
+    kill -KILL $pid
+    wait $pid
+    echo "none (still running 30 s after SIGTERM; killed)" > tessera.rc
+else
+    wait $pid
+    echo $? > tessera.rc
+fi
+tessera outputs > outputs-after.txt 2>&1 3<&-
+touch console-after
+wait_for console-after.done 60
+exec 3<&-
 EOF
 tests/vm/run-guest.sh -c "$CACHE" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 400 -- 'sh guest.sh' \
     > "$W/guest.console" 2>&1 &
 GPID=$!
 
-# poll the heads until each equals its native render (the first frames take seconds under TCG)
-matched=0
-t=0
-while [ $t -lt 240 ] && kill -0 "$GPID" 2>/dev/null; do
-    sleep 2
-    t=$((t + 2))
-    [ -S "$W/qmp.sock" ] || continue
-    matched=0
-    for h in 0 1 2 3; do
-        python3 tests/vm/qmp.py "$W/qmp.sock" screendump "$W/head$h.ppm" "$h" > /dev/null 2>&1 || break
-        python3 tests/vm/qmp.py compare "$W/head$h.ppm" "$W/native-Virtual-$((h + 1)).png" 0 > "$W/cmp$h" 2>&1 ||
-            break
-        matched=$((matched + 1))
+# wait_for FILE SECS: until FILE is in the share; 1 when the guest is gone or time ran out
+wait_for() {
+    _n=0
+    while [ ! -e "$W/$1" ]; do
+        kill -0 "$GPID" 2>/dev/null && [ $_n -lt $(($2 * 10)) ] || return 1
+        sleep 0.1
+        _n=$((_n + 1))
     done
-    [ $matched -eq 4 ] && break
+}
+# guest_step N 'COMMAND' [SECS]: the guest runs COMMAND (sh) while tessera runs; waits
+# for it (default 30 s). Its output is in $W/cmd-N.log, its exit status in $W/cmd-N.done.
+guest_step() {
+    printf '%s\n' "$2" > "$W/cmd-$1.tmp" && mv "$W/cmd-$1.tmp" "$W/cmd-$1.sh" && wait_for "cmd-$1.done" "${3:-30}"
+}
+qmp() { python3 tests/vm/qmp.py "$W/qmp.sock" "$@"; }
+dump() { qmp screendump "$2" "$1" > "$W/dump.err" 2>&1; } # HEAD FILE
+
+# the native references, while the guest boots: frames 0 .. 2K-1 of every output
+mkdir "$W/ref"
+if ! ./tessera render --wall "$W/wall.json" --scene "$W/scene.json" --path "$W/loop.json" --time fixed \
+    --rate $RATE --frames $((2 * K)) --threads 2 --out "$W/ref/f_####.bmp" > "$W/native.log" 2>&1; then
+    cat "$W/native.log"
+    echo "vm_wall: FAIL: the native render failed"
+    exit 1
+fi
+rm -f "$W"/ref/f_????.bmp # the stitched wall images
+ref() { printf '%s/ref/f_%04d-Virtual-%d.bmp' "$W" "$2" $(($1 + 1)); } # HEAD FRAME
+loop_bad='' same_bad=''
+for h in 0 1 2 3; do
+    refs=
+    j=0
+    while [ $j -lt $K ]; do
+        cmp -s "$(ref $h $j)" "$(ref $h $((j + K)))" || loop_bad="$loop_bad Virtual-$((h + 1)):$j/$((j + K))"
+        refs="$refs $(ref $h $j)"
+        j=$((j + 1))
+    done
+    echo "$refs" > "$W/refs$h"
+    # shellcheck disable=SC2086
+    [ "$(cksum $refs | cut -d' ' -f1,2 | sort -u | wc -l)" -eq $K ] || same_bad="$same_bad Virtual-$((h + 1))"
 done
+if [ -z "$loop_bad$same_bad" ]; then
+    ok "native references: frame j+$K equals frame j on every output (exact loop), $K distinct frames each"
+else
+    bad "native references:${loop_bad:+ frames differ although a loop apart:$loop_bad}${same_bad:+; outputs with repeated frames:$same_bad}"
+fi
+# match HEAD FILE: prints the frame index of that output FILE shows; 1 (reason in $W/match.out) if none
+match() {
+    # shellcheck disable=SC2046
+    python3 tests/vm/qmp.py match "$2" $(cat "$W/refs$1") > "$W/match.out" 2>&1 || return 1
+    cut -d' ' -f1 "$W/match.out"
+}
+
+# the console before tessera starts
+console_before=no
+if wait_for console-before 120 && dump 0 "$W/console-before.ppm"; then
+    console_before=yes
+fi
+touch "$W/console-before.done"
+
+# the first frame (boot, `tessera outputs` and tessera's start take ~25 s under TCG)
+up=no waiting=0
+while [ "$(elapsed)" -lt 240 ] && kill -0 "$GPID" 2>/dev/null; do
+    sleep 1
+    [ -S "$W/qmp.sock" ] || continue
+    up=yes
+    for h in 0 1 2 3; do
+        if ! dump $h "$W/first$h.ppm" || ! match $h "$W/first$h.ppm" > /dev/null; then
+            up=no waiting=$h
+            break
+        fi
+    done
+    [ $up = yes ] && break
+done
+t_up=$(elapsed)
+
+# the animation: rounds of screendumps until each head showed MIN_FRAMES distinct pictures
+# (matched afterwards, so that the host leaves the CPUs to the guest meanwhile)
+rounds=0
+if [ $up = yes ]; then
+    mkdir "$W/obs"
+    for h in 0 1 2 3; do
+        cp "$W/first$h.ppm" "$W/obs/0-$h.ppm"
+        cksum < "$W/first$h.ppm" > "$W/obs/seen$h"
+    done
+    rounds=1
+    t_obs=$(elapsed)
+    while [ $(($(elapsed) - t_obs)) -lt 60 ] && kill -0 "$GPID" 2>/dev/null; do
+        for h in 0 1 2 3; do
+            f="$W/obs/$rounds-$h.ppm"
+            dump $h "$f" || break 2
+            sum=$(cksum < "$f")
+            if grep -qx "$sum" "$W/obs/seen$h"; then
+                : > "$f.same" # an earlier dump of this head was identical
+            else
+                echo "$sum" >> "$W/obs/seen$h"
+            fi
+        done
+        rounds=$((rounds + 1))
+        least=$(for h in 0 1 2 3; do wc -l < "$W/obs/seen$h"; done | sort -n | head -n 1)
+        [ "$least" -ge $MIN_FRAMES ] && break
+        sleep 0.3
+    done
+    t_obs=$(($(elapsed) - t_obs))
+fi
+
+# a step in the guest while tessera runs (the pattern for later steps such as hotplug)
+step_ok=no
+guest_step 1 'cat /sys/class/drm/card0-Virtual-*/status' && step_ok=yes
+
+# stop tessera; match the screendumps while the guest shuts it down
 touch "$W/done"
+mismatch=
+[ $up = yes ] && for h in 0 1 2 3; do
+    seq='' last=''
+    r=0
+    while [ $r -lt $rounds ]; do
+        f="$W/obs/$r-$h.ppm"
+        [ -e "$f" ] || break
+        if [ -e "$f.same" ] && [ -n "$last" ] && cmp -s "$f" "$W/obs/$((r - 1))-$h.ppm"; then
+            idx=$last # the same picture as the dump before
+        elif idx=$(match $h "$f"); then
+            :
+        else
+            mismatch="head $h, screendump $r: $(cat "$W/match.out")"
+            break 2
+        fi
+        seq="$seq $idx"
+        last=$idx
+        r=$((r + 1))
+    done
+    echo "$seq" > "$W/seq$h"
+done
+console_after=no
+if wait_for console-after 120 && dump 0 "$W/console-after.ppm"; then
+    console_after=yes
+fi
+touch "$W/console-after.done"
 wait "$GPID"
 guest_status=$?
 GPID=
 
+# ---- the checks
 if grep -q "4 outputs up" "$W/tessera.log" 2>/dev/null; then
     ok "4 outputs up ($(sed -n 's/.*(\(.*\) modesetting).*/\1/p' "$W/tessera.log") modesetting)"
 else
-    bad "the outputs did not come up: $(cat "$W/tessera.log" 2>/dev/null | tail -n 5)"
+    bad "the outputs did not come up: $(tail -n 5 "$W/tessera.log" 2>/dev/null)"
 fi
-if [ $matched -eq 4 ]; then
-    ok "all 4 heads equal the native per-output renders pixel for pixel (after ${t} s)"
+dumps=$(find "$W/obs" -name '*.ppm' 2>/dev/null | wc -l)
+if [ $up = no ]; then
+    bad "the heads never all showed a frame of the animation within 240 s (VM_KEEP=1 keeps the screendumps); head $waiting: $(cat "$W/match.out" 2>/dev/null) $(cat "$W/dump.err" 2>/dev/null)"
+elif [ -n "$mismatch" ]; then
+    bad "a screendump equals no native frame of its output (VM_KEEP=1 keeps them): $mismatch"
 else
-    bad "head $matched differs from its native render: $(cat "$W/cmp$matched" 2>/dev/null)"
+    ok "all $dumps screendumps of the 4 heads ($rounds rounds) equal native renders of animation frames pixel for pixel (first frame up after $t_up s)"
+fi
+if [ $up = yes ] && [ -z "$mismatch" ]; then
+    # per head: distinct frames, and every step forward by less than K/2 (modulo K)
+    flips=$(for h in 0 1 2 3; do
+        awk -v K=$K -v h=$h -v min=$MIN_FRAMES '{
+            n = 0; adv = 0; back = ""
+            for (i = 1; i <= NF; i++) {
+                if (!($i in seen)) { seen[$i] = 1; n++ }
+                if (i > 1) { d = ($i - $(i - 1) + K) % K; if (d >= K / 2) back = back " " $(i - 1) "->" $i; adv += d }
+            }
+            printf "%s head %d: frames%s: %d distinct, +%d%s\n", (n >= min && back == "" ? "ok" : "bad"), h, $0, n, adv,
+                back == "" ? "" : ", backwards (or >= K/2 ahead):" back
+        }' "$W/seq$h"
+    done)
+    rate=$(sed -n 's/.*: \([0-9.]*\) frames\/s.*/\1/p' "$W/tessera.log" | tail -n 1)
+    summary=$(echo "$flips" | sed 's/^[a-z]* //' | paste -sd ';' | sed 's/;/; /g')
+    if echo "$flips" | grep -q '^bad'; then
+        bad "frames did not keep flipping forward ($MIN_FRAMES distinct per head needed, in $t_obs s): $summary"
+    else
+        ok "frames keep flipping forward (observed for $t_obs s, guest ${rate:-?} frames/s): $summary"
+    fi
+else
+    bad "frames keep flipping: not checked (${mismatch:+a screendump matched no frame}${mismatch:-the animation never came up})"
+fi
+if [ $step_ok = yes ] && [ "$(cat "$W/cmd-1.done")" = 0 ]; then
+    ok "guest step cmd-1.sh ran while tessera ran (connector status: $(paste -sd ' ' "$W/cmd-1.log"))"
+else
+    bad "guest step cmd-1.sh: status '$(cat "$W/cmd-1.done" 2>/dev/null || echo none)': $(cat "$W/cmd-1.log" 2>/dev/null)"
 fi
 rc=$(cat "$W/tessera.rc" 2>/dev/null || echo none)
 if [ "$rc" = 0 ] && [ "$guest_status" = 0 ]; then
     ok "SIGTERM ended tessera with exit 0"
 else
     bad "tessera exit status '$rc' after SIGTERM (guest status $guest_status)"
-    tail -n 20 "$W/guest.console"
+    tail -n 20 "$W/tessera.log" "$W/guest.console" 2>/dev/null
 fi
-echo "vm_wall: $PASS passed, $FAIL failed"
+# card, connector and CRTC lines (not the mode lists)
+grep -v '^    ' "$W/outputs-before.txt" > "$W/outputs-before.state" 2>/dev/null
+grep -v '^    ' "$W/outputs-after.txt" > "$W/outputs-after.state" 2>/dev/null
+if ! grep -q '^  CRTC ' "$W/outputs-before.state" 2>/dev/null; then
+    bad "no CRTC lines in 'tessera outputs' before the run:"
+    cat "$W/outputs-before.txt" 2>/dev/null
+elif cmp -s "$W/outputs-before.state" "$W/outputs-after.state"; then
+    held=$(cat "$W/holder" 2>/dev/null || echo "nothing: the kernel's own console restore on last close may hide tessera's")
+    ok "CRTCs and connectors as before the run (DRM device held open by $held): $(grep '^  CRTC ' "$W/outputs-after.state" | sed 's/^  //' | paste -sd ';' | sed 's/;/; /g')"
+else
+    bad "'tessera outputs' differs after the run (card, connector and CRTC lines); before:"
+    cat "$W/outputs-before.state"
+    echo "vm_wall: after:"
+    cat "$W/outputs-after.state" 2>/dev/null || echo "(none)"
+fi
+if [ $console_before = yes ] && python3 tests/vm/qmp.py solid "$W/console-before.ppm" 000000 > /dev/null 2>&1; then
+    bad "head 0's console before the run is all black: the text the guest wrote to /dev/tty0 is missing"
+elif [ $console_before = yes ] && [ $console_after = yes ] &&
+    python3 tests/vm/qmp.py compare "$W/console-before.ppm" "$W/console-after.ppm" 0 > "$W/console.cmp" 2>&1; then
+    ok "head 0 shows the console as before the run ($(python3 tests/vm/qmp.py colors "$W/console-after.ppm" 2))"
+else
+    bad "head 0's console after the run (screendumps before: $console_before, after: $console_after): $(cat "$W/console.cmp" 2>/dev/null)"
+fi
+echo "vm_wall: $PASS passed, $FAIL failed ($(elapsed) s)"
 [ $FAIL -eq 0 ]

@@ -15,8 +15,13 @@ usage: qmp.py SOCKET COMMAND [ARGS...]
                                  no down/up: press and release
   raw JSON                       any QMP command, prints the return value
   quit                           stop qemu now
-usage: qmp.py compare A B [TOL]  images (PPM P6 or PNG); prints how many pixels differ
+usage: qmp.py compare A B [TOL]  images (PPM P6, PNG or BMP); prints how many pixels differ
                                  by more than TOL (default 0) in a channel; exit 1 if any
+usage: qmp.py match DUMP REF...  prints "I REF" for the first REF (I from 0) whose decoded
+                                 RGB equals DUMP's exactly; exit 1 if none, printing the
+                                 closest REF, its count of differing pixels and their rows,
+                                 and whether every row equals a row of some REF (a mix of
+                                 frames: tearing)
 usage: qmp.py solid FILE RRGGBB [TOL]  exit 0 if every pixel is that colour
 usage: qmp.py colors FILE [N]    size and the N (default 5) most common colours
 usage: qmp.py evdev FILE         decode struct input_event records (x86-64) that
@@ -187,15 +192,38 @@ def _png(data, path):
     return width, height, bytes(out)
 
 
+def _bmp(data, path):
+    """Uncompressed 24-bit or 32-bit (BGRX) BMP, bottom-up or top-down."""
+    offset, header_bytes = struct.unpack("<I", data[10:14])[0], struct.unpack("<I", data[14:18])[0]
+    if header_bytes < 40:
+        raise ValueError(f"{path}: unsupported BMP header ({header_bytes} bytes)")
+    width, height, _, bits, compression = struct.unpack("<iiHHI", data[18:34])
+    if bits not in (24, 32) or compression not in (0, 3) or (compression == 3 and bits != 32) or width <= 0:
+        raise ValueError(f"{path}: only uncompressed 24/32-bit BMP is supported")
+    bpp = bits // 8
+    stride = (width * bpp + 3) & ~3
+    rows = abs(height)
+    if len(data) < offset + stride * rows:
+        raise ValueError(f"{path}: truncated BMP")
+    order = range(rows - 1, -1, -1) if height > 0 else range(rows)  # positive height: bottom row first
+    packed = b"".join(data[offset + y * stride:offset + y * stride + width * bpp] for y in order)
+    rgb = bytearray(width * rows * 3)
+    for c in range(3):  # stored B, G, R(, X)
+        rgb[2 - c::3] = packed[c::bpp]
+    return width, rows, bytes(rgb)
+
+
 def read_image(path):
-    """(width, height, RGB bytes) of a P6 PPM or an 8-bit PNG."""
+    """(width, height, RGB bytes) of a P6 PPM, an 8-bit PNG or an uncompressed BMP."""
     with open(path, "rb") as f:
         data = f.read()
     if data[:2] == b"P6":
         return _ppm(data, path)
     if data[:8] == b"\x89PNG\r\n\x1a\n":
         return _png(data, path)
-    raise ValueError(f"{path}: neither a P6 PPM nor a PNG")
+    if data[:2] == b"BM":
+        return _bmp(data, path)
+    raise ValueError(f"{path}: neither a P6 PPM, a PNG nor a BMP")
 
 
 def compare(path_a, path_b, tol=0):
@@ -222,6 +250,65 @@ def compare(path_a, path_b, tol=0):
         msg += f"; first at x={first[0]} y={first[1]}: {first[2]} vs {first[3]}"
     print(msg)
     return 1 if bad else 0
+
+
+_NONZERO = bytes([0] + [1] * 255)
+
+
+def differing_pixels(a, b):
+    """Per pixel of two RGB byte strings of one size: b"\\x01" where they differ, else b"\\x00"."""
+    x = (int.from_bytes(a, "little") ^ int.from_bytes(b, "little")).to_bytes(len(a), "little")
+    nz = x.translate(_NONZERO)
+    n = len(a) // 3
+    return (int.from_bytes(nz[0::3], "little") | int.from_bytes(nz[1::3], "little") |
+            int.from_bytes(nz[2::3], "little")).to_bytes(n, "little")
+
+
+def match(dump, refs):
+    """Index of the reference image identical to dump (exact RGB), else 1 and why not."""
+    w, h, px = read_image(dump)
+    images = []
+    for i, ref in enumerate(refs):
+        rw, rh, rpx = read_image(ref)
+        if (rw, rh) == (w, h) and rpx == px:
+            print(f"{i} {ref}")
+            return 0
+        images.append(rpx if (rw, rh) == (w, h) else None)
+    best = None  # (differing pixels, index, first row, last row)
+    for i, rpx in enumerate(images):
+        if rpx is None:
+            continue
+        diff = differing_pixels(px, rpx)
+        n = len(diff) - diff.count(0)
+        if best is None or n < best[0]:
+            first = len(diff) - len(diff.lstrip(b"\0"))
+            last = len(diff.rstrip(b"\0")) - 1
+            best = (n, i, first // w, last // w)
+    if best is None:
+        print(f"no reference is identical to {dump} ({w}x{h}): none has its size")
+        return 1
+    n, i, y0, y1 = best
+    msg = (f"no reference is identical to {dump}; closest: {i} {refs[i]}: {n} of {w * h} pixels differ, "
+           f"in rows {y0}..{y1}")
+    # a mix of frames (tearing): does every row equal that row of some reference?
+    # (rows many references share, such as background, go to the current run, else to the closest)
+    stride, runs = w * 3, []
+    for y in range(h):
+        row = px[y * stride:(y + 1) * stride]
+        order = ([runs[-1][0]] if runs else []) + [i] + list(range(len(images)))
+        hit = next((k for k in order if images[k] is not None and images[k][y * stride:(y + 1) * stride] == row),
+                   None)
+        if hit is None:
+            runs = None
+            break
+        if runs and runs[-1][0] == hit:
+            runs[-1][2] = y
+        else:
+            runs.append([hit, y, y])
+    if runs and len(runs) > 1:
+        msg += "; every row equals a reference's row: " + ", ".join(f"rows {a}..{b} = {k}" for k, a, b in runs)
+    print(msg)
+    return 1
 
 
 def colour_counts(path):
@@ -320,6 +407,8 @@ def main(argv):
     try:
         if argv and argv[0] == "compare" and len(argv) in (3, 4):
             return compare(argv[1], argv[2], int(argv[3]) if len(argv) > 3 else 0)
+        if argv and argv[0] == "match" and len(argv) >= 3:
+            return match(argv[1], argv[2:])
         if argv and argv[0] == "solid" and len(argv) in (3, 4):
             return solid(argv[1], argv[2], int(argv[3]) if len(argv) > 3 else 0)
         if argv and argv[0] == "colors" and len(argv) in (2, 3):
