@@ -976,8 +976,9 @@ static void print_crtcs(FILE *f, int fd, const drmModeRes *res)
             drmModeFreeCrtc(crtc);
             continue;
         }
-        fprintf(f, "%dx%d@%.2f fb %u at %u,%u ->", crtc->mode.hdisplay, crtc->mode.vdisplay,
-                mode_refresh_hz(&crtc->mode), crtc->buffer_id, crtc->x, crtc->y);
+        fprintf(f, "%dx%d@%.2f fb %u%s at %u,%u ->", crtc->mode.hdisplay, crtc->mode.vdisplay,
+                mode_refresh_hz(&crtc->mode), crtc->buffer_id, crtc->buffer_id ? "" : " (no framebuffer)", crtc->x,
+                crtc->y);
         int driven = 0;
         for (int c = 0; c < res->count_connectors; c++) {
             drmModeConnector *cn = drmModeGetConnectorCurrent(fd, res->connectors[c]);

@@ -226,16 +226,20 @@ int cli_render(int argc, char **argv)
 static void run_usage(FILE *f)
 {
     fputs("usage: tessera run [options]\n"
-          "The main job. With no DRM/KMS output (not implemented yet: see the wall issue) it\n"
-          "runs the pipeline headless with the dump display: the camera orbits the scene (one\n"
-          "turn per 2 s of frame time) or follows --path, frames go to out/frame_NNNN.png, and\n"
-          "it prints the frame rate.\n"
+          "The main job. With --wall FILE and a DRM card (/dev/dri/card0) it is the kiosk: every\n"
+          "output of the wall is driven through DRM/KMS (--display drm), in real time, until\n"
+          "SIGINT/SIGTERM, following hotplug and VT switches (see README, display walls).\n"
+          "Otherwise it runs the pipeline headless with the dump display: the camera orbits the\n"
+          "scene (one turn per 2 s of frame time) or follows --path, frames go to\n"
+          "out/frame_NNNN.png, and it prints the frame rate.\n"
           "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
           "  --size WxH       image size in pixels (default 1280x720)\n"
-          "  --frames N       frames to render (default 48: one turn at the default 24 Hz)\n"
+          "  --frames N       frames to render (headless default 48: one turn at 24 Hz; drm: until\n"
+          "                   stopped)\n"
           "  --out PATTERN    frame file pattern (default out/frame_####.png)\n"
           "  --camera ...     start camera, as for 'tessera render'\n"
-          "  (run's default time mode is fixed at 24 Hz: frame k shows time k/24 s)\n",
+          "  (headless, run's default time is fixed at 24 Hz: frame k shows time k/24 s; with\n"
+          "  drm it is real time: give --time fixed --rate HZ for reproducible frames on a wall)\n",
           f);
     cli_pipeline_usage(f);
 }
