@@ -71,6 +71,11 @@ static inline void shim_check(bool ok, const char *file, int line, const char *e
 #define cr_assert_not(cond, ...) shim_check((cond) ? false : true, __FILE__, __LINE__, "!(" #cond ")", " " __VA_ARGS__)
 #define cr_assert_eq(a, b, ...) shim_check((a) == (b), __FILE__, __LINE__, #a " == " #b, " " __VA_ARGS__)
 #define cr_assert_null(x, ...) shim_check((x) == NULL, __FILE__, __LINE__, #x " == NULL", " " __VA_ARGS__)
+/* Criterion's expectations go on after a failure; here they stop the test like
+ * an assertion (stricter, and the test fails either way). */
+#define cr_expect(cond, ...) cr_assert(cond, __VA_ARGS__)
+#define cr_expect_not(cond, ...) cr_assert_not(cond, __VA_ARGS__)
+#define cr_expect_eq(a, b, ...) cr_assert_eq(a, b, __VA_ARGS__)
 
 /* Run every test whose "suite/name" starts with argv[1] (all without one). */
 int main(int argc, char **argv)
