@@ -213,16 +213,29 @@ static const char edid_wall[] =
     "{\"connector\": \"Virtual-2\", \"edid\": {\"manufacturer\": \"RHT\", \"serial\": \"B\"}, \"mode\": \"640x480\","
     " \"grid\": [1, 0], \"size_mm\": [160, 120]}]}";
 
+/* A wall from JSON text, matched to the card (its running state). */
+static wall_config matched_wall(const char *name, const char *text, const recorded_card *card)
+{
+    wall_config w;
+    tess_error err = {{0}};
+    cr_assert(wall_config_parse(name, text, strlen(text), &w, &err), "%s: %s", name, err.msg);
+    cr_assert(wall_config_match_device(&w, card->conns, card->count, &err), "%s: %s", name, err.msg);
+    return w;
+}
+
+/* The recording with Virtual-2's monitor given serial B, and edid_wall matched to it. */
+static wall_config edid_wall_on_card(recorded_card *card)
+{
+    load_recorded(card, "data/outputs_vm_4heads.txt");
+    card->conns[find_connector(card, "Virtual-2")].edid_serial = "B";
+    return matched_wall("edid_wall", edid_wall, card);
+}
+
 Test(wall_hotplug, a_monitor_that_moved_connectors_is_gone_then_back_on_the_new_one)
 {
     recorded_card card;
-    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w = edid_wall_on_card(&card);
     int v2 = find_connector(&card, "Virtual-2"), v3 = find_connector(&card, "Virtual-3");
-    card.conns[v2].edid_serial = "B";
-    wall_config w;
-    tess_error err = {{0}};
-    cr_assert(wall_config_parse("edid_wall", edid_wall, sizeof edid_wall - 1, &w, &err), "%s", err.msg);
-    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
     cr_assert_eq(w.outputs[1].device_connector, v2);
     bool live[WALL_MAX_OUTPUTS];
     int driving[WALL_MAX_OUTPUTS];
@@ -247,13 +260,8 @@ Test(wall_hotplug, a_monitor_that_moved_connectors_is_gone_then_back_on_the_new_
 Test(wall_hotplug, a_dark_output_never_takes_a_connector_a_live_one_keeps)
 {
     recorded_card card;
-    load_recorded(&card, "data/outputs_vm_4heads.txt");
+    wall_config w = edid_wall_on_card(&card);
     int v1 = find_connector(&card, "Virtual-1"), v2 = find_connector(&card, "Virtual-2");
-    card.conns[v2].edid_serial = "B";
-    wall_config w;
-    tess_error err = {{0}};
-    cr_assert(wall_config_parse("edid_wall", edid_wall, sizeof edid_wall - 1, &w, &err), "%s", err.msg);
-    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
     bool live[WALL_MAX_OUTPUTS] = {true, false};
     int driving[WALL_MAX_OUTPUTS] = {v1, -1};
     /* monitor B now hangs on Virtual-1, which outputs[0] drives by name */
@@ -275,16 +283,13 @@ Test(wall_hotplug, preferred_takes_the_user_defined_mode_when_none_is_marked_pre
 {
     recorded_card card;
     load_recorded(&card, "data/outputs_vm_4heads.txt");
-    wall_config w;
-    tess_error err = {{0}};
-    cr_assert(wall_config_parse("preferred_wall", preferred_wall, sizeof preferred_wall - 1, &w, &err), "%s",
-              err.msg);
-    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
+    wall_config w = matched_wall("preferred_wall", preferred_wall, &card);
     const wall_device_connector *v2 = &card.conns[find_connector(&card, "Virtual-2")];
     cr_expect_eq(w.outputs[0].device_mode, v2->user_defined, "not the largest, 5120x2160");
     cr_expect_eq(w.outputs[0].width_px, 640);
     /* without a user-defined mode: the largest, which must then fit the aspect (it does not: 5120x2160) */
     card.conns[find_connector(&card, "Virtual-2")].user_defined = -1;
+    tess_error err = {{0}};
     cr_expect_not(wall_config_match_device(&w, card.conns, card.count, &err));
     cr_expect(strstr(err.msg, "the preferred mode of Virtual-2, 5120x2160@50"), "%s", err.msg);
 }
@@ -293,11 +298,7 @@ Test(wall_hotplug, a_preferred_monitor_back_at_another_size_stays_dark)
 {
     recorded_card card;
     load_recorded(&card, "data/outputs_vm_4heads.txt");
-    wall_config w;
-    tess_error err = {{0}};
-    cr_assert(wall_config_parse("preferred_wall", preferred_wall, sizeof preferred_wall - 1, &w, &err), "%s",
-              err.msg);
-    cr_assert(wall_config_match_device(&w, card.conns, card.count, &err), "%s", err.msg);
+    wall_config w = matched_wall("preferred_wall", preferred_wall, &card);
     bool live[1] = {false};
     int driving[1] = {-1};
     /* back, but now a 1024x768 mode is the user-defined one: same aspect, another size */
