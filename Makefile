@@ -44,7 +44,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-tsan bench bench-pipeline clean check-headers
+.PHONY: all deps run test test-asan test-tsan bench bench-pipeline bench-wall clean check-headers
 
 all: tessera
 
@@ -120,7 +120,13 @@ bench:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera
 	sh tools/bench.sh
+	sh tools/bench_wall.sh
 	sh tools/bench_pipeline.sh
+
+# the wall benchmarks alone (bench --wall): the "## Wall" section of BENCHMARKS.md
+bench-wall: deps
+	$(MAKE) tessera
+	sh tools/bench_wall.sh
 
 # the pipeline benchmarks alone (scaling, camera transactions): the last section of BENCHMARKS.md
 bench-pipeline: deps

@@ -53,5 +53,6 @@ int cli_run(int argc, char **argv);    /* tessera run ... */
 int cli_trace(int argc, char **argv);  /* tessera trace ... (cmd_trace.c) */
 int cli_bench(int argc, char **argv);  /* tessera bench ... (cmd_bench.c) */
 int cli_bench_path(int argc, char **argv); /* tessera bench --path / --scaling (cmd_bench_path.c) */
+int cli_bench_wall(int argc, char **argv); /* tessera bench --wall without --path / --scaling (cmd_bench_wall.c) */
 
 #endif

@@ -77,6 +77,8 @@ static void bench_usage(FILE *f)
           "  --isa NAME       traversal kernels: sse2, avx2 or avx512 (default: the best this CPU\n"
           "                   runs, or the environment's TESSERA_ISA)\n"
           "  --path FILE, --scaling  the pipeline benchmarks: see 'tessera bench --scaling --help'\n"
+          "  --wall FILE      frame time of a display wall, whole and output by output, per display\n"
+          "                   kind: see 'tessera bench --wall --help'\n"
           "  --out FILE       write the last timed frame's image: .pfm is grey float written as\n"
           "                   embree_bench writes it, to compare value by value with its\n"
           "                   --out-shade image (or, with --shadows, its --out-lit image without\n"
@@ -337,6 +339,9 @@ int cli_bench(int argc, char **argv)
     for (int i = 1; i < argc; i++)
         if (!strcmp(argv[i], "--path") || !strcmp(argv[i], "--scaling"))
             return cli_bench_path(argc, argv);
+    for (int i = 1; i < argc; i++) /* (so --wall with --path / --scaling stays theirs) */
+        if (!strcmp(argv[i], "--wall"))
+            return cli_bench_wall(argc, argv);
     bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
                        .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP};
     int code = 0;

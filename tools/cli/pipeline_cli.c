@@ -527,9 +527,8 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
     return ok;
 }
 
-pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
+pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene *cs)
 {
-    tess_error err = {{0}};
     pipeline_config cfg = pipeline_config_default(cs->scene, cs->accel);
     cfg.threads = s->threads;
     cfg.time_mode = s->time_mode;
@@ -541,6 +540,13 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
     cfg.sampler = s->sampler;
     cfg.renderer = s->renderer;
     cfg.shadows = s->shadows;
+    return cfg;
+}
+
+pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
+{
+    tess_error err = {{0}};
+    pipeline_config cfg = cli_pipeline_config(s, cs);
     pipeline *p = pipeline_create(&cfg, &err);
     if (!p) {
         cli_error("%s", err.msg);

@@ -65,6 +65,9 @@ const char *cli_pipeline_find_config(int argc, char **argv);
 /* The option help shared by the commands. */
 void cli_pipeline_usage(FILE *f);
 
+/* The pipeline config the spec describes (threads, time, frames, components). */
+pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene *cs);
+
 /* Make the pipeline: channels with their cameras (given, else the scene's,
  * else framed) and displays; with --wall, one channel per output of the wall
  * (each its window of the one camera's image plane) and, with the dump
