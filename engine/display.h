@@ -23,7 +23,12 @@
  *   end_stage: called on the display thread once per display stage, after all
  *     show() calls of that stage (also for displays that got no frame in it,
  *     e.g. a channel switched off): where a display that drives several
- *     channels' outputs (one card) commits them together. */
+ *     channels' outputs (one card) commits them together. A pipeline with such
+ *     a display runs a display stage every loop step, frames or not (from the
+ *     first step, before any frame exists, to the one after the last frame),
+ *     so it is served even while all its channels are switched off; the hook
+ *     then paces the loop (it should wait for its events rather than return
+ *     at once). */
 #ifndef TESSERA_DISPLAY_H
 #define TESSERA_DISPLAY_H
 

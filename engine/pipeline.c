@@ -76,7 +76,8 @@ typedef struct pipe_channel {
 typedef struct loop_step {
     frame_info info;
     bool render;           /* render frame info.frame */
-    bool display;          /* thread 0 shows the queued buffers first */
+    bool display;          /* thread 0 runs the display stage first: shows the queued buffers, end_stage hooks */
+    bool frames_queued;    /* ... and some channel has a queued frame to show */
     bool animate_parallel; /* parallel animation callbacks, then the animation barrier */
     bool exit;             /* leave the loop */
 } loop_step;
@@ -117,6 +118,7 @@ struct pipeline {
     pipe_channel channels[PIPELINE_MAX_CHANNELS];
     int channel_count;
     image_traverser *traverser; /* made by pipeline_run, when the channels are known */
+    bool displays_every_stage;  /* some channel's display has an end_stage hook; set by pipeline_run */
 
     /* transaction queue (ring) and one-shots: guarded by queue_lock */
     pthread_mutex_t queue_lock;
@@ -777,7 +779,7 @@ static void finish_previous_step(pipeline *p)
     p->stats.rays.shadow_rays += sum.shadow_rays;
     if (prev->render)
         p->stats.frames_rendered++;
-    if (prev->display && !p->display_failed)
+    if (prev->display && prev->frames_queued && !p->display_failed)
         p->stats.frames_displayed++;
     if (prev->display)
         p->stats.display_s += p->display_stage_s;
@@ -851,7 +853,10 @@ static int serial_section(pipeline *p)
     bool any_queued = false;
     for (int i = 0; i < p->channel_count; i++)
         any_queued = any_queued || p->channels[i].queued_valid;
-    s->display = any_queued && !p->display_failed;
+    /* displays with an end_stage hook are served every step, frames or not (a wall
+     * whose monitors are all unplugged still has to notice one coming back) */
+    s->frames_queued = any_queued;
+    s->display = (any_queued || (!stop && p->displays_every_stage)) && !p->display_failed;
     if (stop) {
         s->render = s->animate_parallel = false;
         p->exit_after_step = true;
@@ -961,6 +966,7 @@ bool pipeline_run(pipeline *p, tess_error *err)
     for (int i = 0; i < p->channel_count; i++) {
         widths[i] = p->channels[i].width_px;
         heights[i] = p->channels[i].height_px;
+        p->displays_every_stage = p->displays_every_stage || p->channels[i].display->ops->end_stage != NULL;
     }
     p->traverser = traverser_tiled_create(p->cfg.tile_px, p->cfg.order, p->cfg.order_seed, widths, heights,
                                           p->channel_count, err);

@@ -692,11 +692,51 @@ Test(pipeline, a_switched_off_channel_is_neither_rendered_nor_shown_and_comes_ba
                   (unsigned long long)expected[i]);
     }
     free(ref);
-    /* every display stage ends with every display's end_stage, frame or not */
-    cr_expect_eq(disp[0]->stages, 12);
-    cr_expect_eq(disp[1]->stages, 12);
+    /* with an end_stage hook a display stage runs every loop step, frames or not:
+     * steps 0..11 (frames 0..11 render; step 0 has nothing to show yet) and the
+     * last one (frame 11 shown); every display's end_stage in each */
+    cr_expect_eq(disp[0]->stages, 13);
+    cr_expect_eq(disp[1]->stages, 13);
     pipeline_stats st = pipeline_get_stats(p);
     cr_expect_eq(st.frames_displayed, 12);
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
+static void switch_channel_0(pipeline *p, void *args)
+{
+    bool on;
+    memcpy(&on, args, sizeof on);
+    cr_assert(pipeline_set_channel_active(p, 0, on));
+}
+
+Test(pipeline, with_every_channel_off_end_stage_is_still_served_every_step, .timeout = 60)
+{
+    fixture fx = fixture_make();
+    tess_error err = {{0}};
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 2;
+    cfg.max_frames = 10;
+    pipeline *p = pipeline_create(&cfg, &err);
+    cr_assert(p);
+    stage_counting_display *disp = calloc(1, sizeof *disp);
+    cr_assert(disp);
+    disp->cap.base.ops = &stage_counting_ops;
+    disp->cap.fail_at_frame = -1;
+    camera_desc cam = test_camera(&fx, 5);
+    cr_assert_eq(pipeline_add_channel(p, &cam, TEST_W, TEST_H, &disp->cap.base, &err), 0, "%s", err.msg);
+    bool off = false, on = true;
+    cr_assert(pipeline_at_frame(p, 2, "unplug", switch_channel_0, &off, sizeof off));
+    cr_assert(pipeline_at_frame(p, 6, "plug", switch_channel_0, &on, sizeof on));
+    run_ok(p);
+    const uint64_t shown[] = {0, 1, 6, 7, 8, 9};
+    cr_assert_eq(disp->cap.count, 6);
+    for (int i = 0; i < 6; i++)
+        cr_expect_eq(disp->cap.frames[i].meta.frame, shown[i]);
+    cr_expect_eq(disp->stages, 11, "steps 0..9 and the last: %d", disp->stages);
+    pipeline_stats st = pipeline_get_stats(p);
+    cr_expect_eq(st.frames_displayed, 6, "stages without a frame are not frames displayed");
+    cr_expect_eq(st.frames_rendered, 10);
     pipeline_destroy(p);
     fixture_free(&fx);
 }

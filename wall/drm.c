@@ -26,6 +26,8 @@
 #define DRM_FLIP_TIMEOUTS_FATAL 5  /* ... and this many in a row with nothing unplugged is an error */
 #define DRM_HOTPLUG_PASSES 3       /* a monitor that moved connectors: gone, then back */
 #define DRM_SEAT_WAIT_MS 200       /* while switched away: how often to look for a stop */
+#define DRM_IDLE_WAIT_MS 100       /* every monitor unplugged: wait this long for a hotplug event per step */
+#define DRM_IDLE_PROBE_MS 1000     /* ... and without udev, probe the connectors this often */
 /* Frame f is written into buffer f % DRM_FRAME_BUFFERS by the render threads
  * while f-1 waits for its flip and f-2 is on screen; until the flip to f-2
  * has completed (waited for at the end of the display stage of frame f-1,
@@ -882,6 +884,19 @@ static bool drm_end_stage(image_display *d, tess_error *err)
     if (c->probe_needed) {
         c->probe_needed = false;
         handle_hotplug(c);
+    }
+    bool any_live = false;
+    for (int o = 0; o < c->output_count; o++)
+        any_live = any_live || c->outputs[o].live;
+    if (!any_live) { /* nothing to show: wait for a monitor to come back instead of spinning the loop */
+        struct pollfd pfd = {c->monitor ? udev_monitor_get_fd(c->monitor) : -1, POLLIN, 0};
+        if (c->monitor)
+            poll(&pfd, 1, DRM_IDLE_WAIT_MS);
+        else {
+            poll(NULL, 0, DRM_IDLE_PROBE_MS); /* without udev: probe now and then */
+            c->probe_needed = true;
+        }
+        return true;
     }
     if (c->flip_timeouts >= DRM_FLIP_TIMEOUTS_FATAL)
         return tess_error_set(err, "%s: %d page flips in a row never completed or were refused, and no output was "
