@@ -41,6 +41,11 @@ bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, s
 /* sRGB encode one linear value (clamped to [0, 1]) to 8 bits, rounding to nearest. */
 uint8_t dump_srgb_encode_u8(float linear);
 
+/* `count` pixels of linear RGB (3 floats each), pixel i at rgb + 3 * i *
+ * stride_px (stride_px may be negative), encoded as dump_srgb_encode_u8 does,
+ * into XRGB8888 words out[0 .. count) (X = 0): one scan-out row in one call. */
+void dump_srgb_encode_xrgb(const float *rgb, long stride_px, int count, uint32_t *out);
+
 #ifdef __cplusplus
 }
 #endif

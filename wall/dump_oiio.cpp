@@ -492,6 +492,22 @@ bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, s
     return guarded(pattern, err, [&] { return frame_path(pattern, frame, sequence, out, out_bytes, err); });
 }
 
+void dump_srgb_encode_xrgb(const float *rgb, long stride_px, int count, uint32_t *out)
+{
+    try {
+        const srgb_table &lut = srgb_lut();
+        long index = 0; /* in pixels from rgb: never a pointer outside the row */
+        for (int i = 0; i < count; i++, index += stride_px) {
+            const float *c = rgb + 3 * index;
+            out[i] = (uint32_t)srgb_encode(lut, c[0]) << 16 | (uint32_t)srgb_encode(lut, c[1]) << 8 |
+                     (uint32_t)srgb_encode(lut, c[2]);
+        }
+    } catch (...) { /* the table's construction allocates nothing; never reached */
+        for (int i = 0; i < count; i++)
+            out[i] = 0;
+    }
+}
+
 uint8_t dump_srgb_encode_u8(float linear)
 {
     try {

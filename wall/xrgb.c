@@ -39,11 +39,7 @@ void xrgb_write_rect(const float *rgb, int mounted_w, int mounted_h, int x0, int
         v1 = dst->height_px;
     for (int v = v0; v < v1; v++) {
         uint32_t *row = (uint32_t *)(dst->pixels + (size_t)v * dst->pitch_bytes);
-        long index = base + du * u0 + dv * v; /* stays inside the image: no pointer steps past it */
-        for (int u = u0; u < u1; u++, index += du) {
-            const float *c = rgb + 3 * index;
-            row[u] = (uint32_t)dump_srgb_encode_u8(c[0]) << 16 | (uint32_t)dump_srgb_encode_u8(c[1]) << 8 |
-                     (uint32_t)dump_srgb_encode_u8(c[2]);
-        }
+        if (u1 > u0)
+            dump_srgb_encode_xrgb(rgb + 3 * (base + du * u0 + dv * v), du, u1 - u0, row + u0);
     }
 }
