@@ -80,7 +80,7 @@ struct drm_card {
     int output_count;
     wall_config wall;             /* as matched at drm_wall_start: hotplug plans against it */
     int pending_flips;            /* flip events still to come; display thread only */
-    int flip_timeouts;            /* in a row */
+    int flip_timeouts;            /* flip time-outs and refusals since flips last completed */
     /* hotplug (display thread): udev's connector-change events for this card */
     struct udev *udev;
     struct udev_monitor *monitor; /* NULL: no udev; only flip timeouts make us probe */
@@ -631,10 +631,13 @@ static void flip_done(int fd, unsigned sequence, unsigned tv_sec, unsigned tv_us
 }
 
 /* Wait for the flip events of the last commit. One that never comes (an
- * output unplugged under it) makes the connectors be probed. */
+ * output unplugged under it) makes the connectors be probed; flip_timeouts
+ * counts failures (time-outs, refused flips) since flips last completed. */
 static void wait_flips(drm_card *c)
 {
     drmEventContext ev = {.version = 3, .page_flip_handler2 = flip_done};
+    if (c->pending_flips == 0)
+        return;
     while (c->pending_flips > 0) {
         struct pollfd pfd = {c->fd, POLLIN, 0};
         int n = poll(&pfd, 1, DRM_FLIP_TIMEOUT_MS);
@@ -649,7 +652,7 @@ static void wait_flips(drm_card *c)
         }
         drmHandleEvent(c->fd, &ev);
     }
-    c->flip_timeouts = 0;
+    c->flip_timeouts = 0; /* flips complete again */
 }
 
 /* Flip every live output that has a new frame, in one commit (atomic) or one
@@ -682,14 +685,13 @@ static void flip_ready(drm_card *c)
             }
         }
     }
-    c->pending_flips = count;
+    /* a failed atomic commit changed nothing: no events come; legacy flips queued before one
+     * failed still send theirs */
+    c->pending_flips = ok || !c->atomic ? count : 0;
     if (!ok) {
         log_warn("%s: page flip refused: %s; probing the connectors", c->path, strerror(errno));
         c->flip_timeouts++;
         c->probe_needed = true;
-        if (!c->atomic)
-            wait_flips(c); /* the flips that were queued */
-        c->pending_flips = c->atomic ? 0 : c->pending_flips;
     }
     for (int o = 0; o < c->output_count; o++)
         c->outputs[o].ready = -1;
@@ -802,6 +804,7 @@ static void handle_hotplug(drm_card *c)
         }
         if (!changed)
             break;
+        c->flip_timeouts = 0; /* the failures had a cause: an output came or went */
     }
 }
 
