@@ -148,7 +148,10 @@ static uint32_t *convert_tiles_ring(convert_tiles_display *cd, const frame_image
     pthread_mutex_lock(&cd->lock);
     ring = atomic_load_explicit(&cd->ring, memory_order_relaxed);
     if (!ring && !cd->failed) {
-        ring = malloc((size_t)CONVERT_TILES_BUFFERS * (size_t)img->width_px * (size_t)img->height_px * sizeof *ring);
+        /* cache-line aligned like the pipeline's frames (and scan-out memory): a 16-pixel tile row
+         * is then whole lines, never a line shared with the neighbour tile another thread writes */
+        size_t bytes = (size_t)CONVERT_TILES_BUFFERS * (size_t)img->width_px * (size_t)img->height_px * sizeof *ring;
+        ring = aligned_alloc(64, (bytes + 63) & ~(size_t)63);
         cd->failed = ring == NULL;
         atomic_store_explicit(&cd->ring, ring, memory_order_release);
     }
