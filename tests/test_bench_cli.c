@@ -46,16 +46,7 @@ static void remove_tmp_dir(void)
  * stderr kept apart; returns the exit status (128+signal when killed). */
 static int run_bench(char *out, char *err, const char *args_fmt)
 {
-    char args[2048], cmd[4096], out_path[512], err_path[512];
-    snprintf(args, sizeof args, args_fmt, tmp_dir, tmp_dir, tmp_dir, tmp_dir);
-    snprintf(out_path, sizeof out_path, "%s/bench.out", tmp_dir);
-    snprintf(err_path, sizeof err_path, "%s/bench.err", tmp_dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s bench %s > '%s' 2> '%s'", BENCH_TIMEOUT_S, support_tessera_bin(), args,
-             out_path, err_path);
-    int code = support_run(cmd);
-    support_read_text(out_path, out, OUTPUT_BYTES);
-    support_read_text(err_path, err, OUTPUT_BYTES);
-    return code;
+    return support_tessera_bench(tmp_dir, BENCH_TIMEOUT_S, out, err, OUTPUT_BYTES, args_fmt);
 }
 
 static int count_lines(const char *text)

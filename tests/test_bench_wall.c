@@ -35,17 +35,7 @@ TestSuite(bench_wall, .init = make_tmp_dir, .fini = remove_tmp_dir, .timeout = 3
  * apart; the exit status. */
 static int run_bench(char *out, char *err, const char *args_fmt)
 {
-    char args[2048], cmd[4096], out_path[512], err_path[512];
-    const char *d = tmp_dir;
-    snprintf(args, sizeof args, args_fmt, d, d, d, d);
-    snprintf(out_path, sizeof out_path, "%s/bench.out", tmp_dir);
-    snprintf(err_path, sizeof err_path, "%s/bench.err", tmp_dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s bench %s > '%s' 2> '%s'", TIMEOUT_S, support_tessera_bin(), args,
-             out_path, err_path);
-    int code = support_run(cmd);
-    support_read_text(out_path, out, OUTPUT_BYTES);
-    support_read_text(err_path, err, OUTPUT_BYTES);
-    return code;
+    return support_tessera_bench(tmp_dir, TIMEOUT_S, out, err, OUTPUT_BYTES, args_fmt);
 }
 
 /* Three outputs of different sizes placed by position_mm, 1 mm a pixel. */

@@ -103,6 +103,34 @@ static void all_live(const wall_config *w, bool *live, int *driving)
     }
 }
 
+/* A vm_2x2 wall running on the recorded card, every output live, and the plan's steps. */
+typedef struct running {
+    recorded_card card;
+    wall_config w;
+    bool live[WALL_MAX_OUTPUTS];
+    int driving[WALL_MAX_OUTPUTS];
+    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
+} running;
+
+static void start_running(running *r)
+{
+    load_recorded(&r->card, "data/outputs_vm_4heads.txt");
+    r->w = running_wall(&r->card);
+    all_live(&r->w, r->live, r->driving);
+}
+
+static void plan(running *r)
+{
+    wall_hotplug_plan(&r->w, r->live, r->driving, r->card.conns, r->card.count, r->steps);
+}
+
+/* Output o was unplugged earlier: dark, driving nothing. */
+static void dark(running *r, int o)
+{
+    r->live[o] = false;
+    r->driving[o] = -1;
+}
+
 Test(wall_hotplug, the_recording_reads_as_four_connected_heads)
 {
     recorded_card card;
@@ -126,85 +154,63 @@ Test(wall_hotplug, the_recording_reads_as_four_connected_heads)
 
 Test(wall_hotplug, an_unplugged_monitor_is_gone_and_the_others_stay)
 {
-    recorded_card card;
-    load_recorded(&card, "data/outputs_vm_4heads.txt");
-    wall_config w = running_wall(&card);
-    bool live[WALL_MAX_OUTPUTS];
-    int driving[WALL_MAX_OUTPUTS];
-    all_live(&w, live, driving);
-    card.conns[find_connector(&card, "Virtual-2")].connected = false; /* the synthetic change */
-    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
-    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
-    cr_assert_eq(steps[1].action, WALL_HOTPLUG_GONE);
-    cr_expect(strstr(steps[1].reason.msg, "outputs[1]: connector 'Virtual-2' has no monitor connected"), "%s",
-              steps[1].reason.msg);
+    running r;
+    start_running(&r);
+    r.card.conns[find_connector(&r.card, "Virtual-2")].connected = false; /* the synthetic change */
+    plan(&r);
+    cr_assert_eq(r.steps[1].action, WALL_HOTPLUG_GONE);
+    cr_expect(strstr(r.steps[1].reason.msg, "outputs[1]: connector 'Virtual-2' has no monitor connected"), "%s",
+              r.steps[1].reason.msg);
     for (int i = 0; i < 4; i++)
         if (i != 1) {
-            cr_expect_eq(steps[i].action, WALL_HOTPLUG_KEEP, "outputs[%d]", i);
-            cr_expect_str_empty(steps[i].reason.msg, "outputs[%d]: %s", i, steps[i].reason.msg);
+            cr_expect_eq(r.steps[i].action, WALL_HOTPLUG_KEEP, "outputs[%d]", i);
+            cr_expect_str_empty(r.steps[i].reason.msg, "outputs[%d]: %s", i, r.steps[i].reason.msg);
         }
 }
 
 Test(wall_hotplug, a_vanished_connector_is_gone)
 {
-    recorded_card card;
-    load_recorded(&card, "data/outputs_vm_4heads.txt");
-    wall_config w = running_wall(&card);
-    bool live[WALL_MAX_OUTPUTS];
-    int driving[WALL_MAX_OUTPUTS];
-    all_live(&w, live, driving);
-    card.count = 3; /* Virtual-4 is no longer listed (an MST branch went away) */
-    driving[3] = -1;
-    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
-    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
-    cr_assert_eq(steps[3].action, WALL_HOTPLUG_GONE);
-    cr_expect(strstr(steps[3].reason.msg, "connector 'Virtual-4' not found (the card has: Virtual-1, Virtual-2, "
-                                          "Virtual-3)"), "%s", steps[3].reason.msg);
-    cr_expect_eq(steps[0].action, WALL_HOTPLUG_KEEP);
+    running r;
+    start_running(&r);
+    r.card.count = 3; /* Virtual-4 is no longer listed (an MST branch went away) */
+    r.driving[3] = -1;
+    plan(&r);
+    cr_assert_eq(r.steps[3].action, WALL_HOTPLUG_GONE);
+    cr_expect(strstr(r.steps[3].reason.msg, "connector 'Virtual-4' not found (the card has: Virtual-1, Virtual-2, "
+                                          "Virtual-3)"), "%s", r.steps[3].reason.msg);
+    cr_expect_eq(r.steps[0].action, WALL_HOTPLUG_KEEP);
 }
 
 Test(wall_hotplug, a_monitor_plugged_back_comes_back_in_its_mode)
 {
-    recorded_card card;
-    load_recorded(&card, "data/outputs_vm_4heads.txt");
-    wall_config w = running_wall(&card);
-    bool live[WALL_MAX_OUTPUTS];
-    int driving[WALL_MAX_OUTPUTS];
-    all_live(&w, live, driving);
-    live[2] = false; /* Virtual-3 was unplugged earlier ... */
-    driving[2] = -1;
-    int v3 = find_connector(&card, "Virtual-3");
-    card.conns[v3].connected = false;
-    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
-    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
-    cr_expect_eq(steps[2].action, WALL_HOTPLUG_KEEP, "still unplugged: stays dark");
-    cr_expect(strstr(steps[2].reason.msg, "has no monitor connected"), "%s", steps[2].reason.msg);
-    card.conns[v3].connected = true; /* ... and is back */
-    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
-    cr_assert_eq(steps[2].action, WALL_HOTPLUG_BACK, "%s", steps[2].reason.msg);
-    cr_expect_eq(steps[2].connector, v3);
-    cr_expect_eq(steps[2].mode, w.outputs[2].device_mode, "the mode it started in");
+    running r;
+    start_running(&r);
+    dark(&r, 2); /* Virtual-3 was unplugged earlier ... */
+    int v3 = find_connector(&r.card, "Virtual-3");
+    r.card.conns[v3].connected = false;
+    plan(&r);
+    cr_expect_eq(r.steps[2].action, WALL_HOTPLUG_KEEP, "still unplugged: stays dark");
+    cr_expect(strstr(r.steps[2].reason.msg, "has no monitor connected"), "%s", r.steps[2].reason.msg);
+    r.card.conns[v3].connected = true; /* ... and is back */
+    plan(&r);
+    cr_assert_eq(r.steps[2].action, WALL_HOTPLUG_BACK, "%s", r.steps[2].reason.msg);
+    cr_expect_eq(r.steps[2].connector, v3);
+    cr_expect_eq(r.steps[2].mode, r.w.outputs[2].device_mode, "the mode it started in");
     for (int i = 0; i < 4; i++)
         if (i != 2)
-            cr_expect_eq(steps[i].action, WALL_HOTPLUG_KEEP);
+            cr_expect_eq(r.steps[i].action, WALL_HOTPLUG_KEEP);
 }
 
 Test(wall_hotplug, a_monitor_back_without_the_mode_stays_dark_and_says_why)
 {
-    recorded_card card;
-    load_recorded(&card, "data/outputs_vm_4heads.txt");
-    wall_config w = running_wall(&card);
-    bool live[WALL_MAX_OUTPUTS];
-    int driving[WALL_MAX_OUTPUTS];
-    all_live(&w, live, driving);
-    live[3] = false;
-    driving[3] = -1;
-    card.conns[find_connector(&card, "Virtual-4")].mode_count = 3; /* a different monitor: 5K and 4K modes only */
-    wall_hotplug_step steps[WALL_MAX_OUTPUTS];
-    wall_hotplug_plan(&w, live, driving, card.conns, card.count, steps);
-    cr_expect_eq(steps[3].action, WALL_HOTPLUG_KEEP);
-    cr_expect(strstr(steps[3].reason.msg, "outputs[3]: mode 640x480 not offered by Virtual-4 (it offers: "
-                                          "5120x2160@50, 4096x2160@50, 3840x2160@60)"), "%s", steps[3].reason.msg);
+    running r;
+    start_running(&r);
+    dark(&r, 3);
+    r.card.conns[find_connector(&r.card, "Virtual-4")].mode_count = 3; /* a different monitor: 5K and 4K modes only */
+    plan(&r);
+    cr_expect_eq(r.steps[3].action, WALL_HOTPLUG_KEEP);
+    cr_expect(strstr(r.steps[3].reason.msg, "outputs[3]: mode 640x480 not offered by Virtual-4 (it offers: "
+                                          "5120x2160@50, 4096x2160@50, 3840x2160@60)"), "%s", r.steps[3].reason.msg);
 }
 
 static const char edid_wall[] =
