@@ -879,6 +879,15 @@ static int serial_section(pipeline *p)
 
 /* ---------------------------------------------------------------- the stages */
 
+/* A display's show or end_stage failed: the run stops with its error. */
+static void display_failed(pipeline *p, const image_display *d, tess_error *err)
+{
+    if (!tess_error_is_set(err))
+        tess_error_set(err, "display '%s' failed without a reason", d->ops->name);
+    p->display_error = *err;
+    p->display_failed = true;
+}
+
 static void display_stage(pipeline *p)
 {
     double t0 = now_s();
@@ -887,22 +896,14 @@ static void display_stage(pipeline *p)
         if (!c->queued_valid)
             continue;
         tess_error err = {{0}};
-        if (!c->display->ops->show(c->display, &c->buffers[c->queued].meta, &err)) {
-            if (!tess_error_is_set(&err))
-                tess_error_set(&err, "display '%s' failed without a reason", c->display->ops->name);
-            p->display_error = err;
-            p->display_failed = true;
-        }
+        if (!c->display->ops->show(c->display, &c->buffers[c->queued].meta, &err))
+            display_failed(p, c->display, &err);
     }
     for (int i = 0; i < p->channel_count && !p->display_failed; i++) {
         image_display *d = p->channels[i].display;
         tess_error err = {{0}};
-        if (d->ops->end_stage && !d->ops->end_stage(d, &err)) {
-            if (!tess_error_is_set(&err))
-                tess_error_set(&err, "display '%s' failed without a reason", d->ops->name);
-            p->display_error = err;
-            p->display_failed = true;
-        }
+        if (d->ops->end_stage && !d->ops->end_stage(d, &err))
+            display_failed(p, d, &err);
     }
     p->display_stage_s = now_s() - t0;
 }

@@ -19,6 +19,15 @@ static inline void support_make_tmp_dir(char *dir, size_t size, const char *name
     cr_assert(mkdtemp(dir), "mkdtemp %s", dir);
 }
 
+/* Remove a directory made by support_make_tmp_dir, with what is in it. */
+static inline void support_remove_tmp_dir(const char *dir)
+{
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "could not remove %s\n", dir);
+}
+
 /* The binary under test: $TESSERA_BIN, else ../tessera (tests run from tests/). */
 static inline const char *support_tessera_bin(void)
 {

@@ -33,13 +33,7 @@ static const char *const bench_fields[] = {
 
 static void make_tmp_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "bench"); }
 
-static void remove_tmp_dir(void)
-{
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
-    if (system(cmd) != 0)
-        fprintf(stderr, "could not remove %s\n", tmp_dir);
-}
+static void remove_tmp_dir(void) { support_remove_tmp_dir(tmp_dir); }
 
 
 /* Run `tessera bench ARGS` (every %s in ARGS is the temp dir) with stdout and

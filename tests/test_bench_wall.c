@@ -21,13 +21,7 @@ static char tmp_dir[256];
 
 static void make_tmp_dir(void) { support_make_tmp_dir(tmp_dir, sizeof tmp_dir, "benchwall"); }
 
-static void remove_tmp_dir(void)
-{
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
-    if (system(cmd) != 0)
-        fprintf(stderr, "could not remove %s\n", tmp_dir);
-}
+static void remove_tmp_dir(void) { support_remove_tmp_dir(tmp_dir); }
 
 TestSuite(bench_wall, .init = make_tmp_dir, .fini = remove_tmp_dir, .timeout = 300);
 

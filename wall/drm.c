@@ -33,6 +33,7 @@
  * has completed (waited for at the end of the display stage of frame f-1,
  * before frame f starts) f-3 is on screen. So four never collide. */
 #define DRM_FRAME_BUFFERS 4
+#define DRM_PROP_CACHE 512 /* (object, property) pairs: outputs x (connector 1 + CRTC 2 + plane 10), spare for replugs */
 
 typedef struct drm_buffer {
     uint32_t handle, fb_id, pitch_bytes;
@@ -48,12 +49,18 @@ typedef struct drm_output {
     uint32_t mode_blob;          /* atomic: MODE_ID blob */
     drmModeModeInfo mode;
     int rotation_deg;            /* as mounted, clockwise (wall_config.h) */
-    int width_px, height_px;     /* mounted image size (the channel's) */
     drm_buffer buffers[DRM_FRAME_BUFFERS];
     drm_buffer blank;            /* black: what a modeset shows before the first frame */
     bool live;                   /* being driven (false once its monitor is unplugged) */
     int ready;                   /* buffer of a finished frame to flip to at end_stage, -1 if none */
 } drm_output;
+
+/* A property id of one KMS object, by name (a string literal). */
+typedef struct drm_prop_entry {
+    uint32_t object;
+    const char *name;
+    uint32_t id;
+} drm_prop_entry;
 
 /* One connector as the card reports it, with storage for wall_device_connector's strings. */
 typedef struct drm_connector_info {
@@ -88,6 +95,10 @@ struct drm_card {
     bool probe_needed;            /* read the connectors again at the next end_stage */
     pipeline *pipeline;           /* whose channels first_channel.. are the outputs (drm_wall_attach) */
     int first_channel;
+    /* property ids by (object, name), looked up once: a flip then costs no property ioctls
+     * (display thread, and drm_wall_start before it) */
+    drm_prop_entry prop_cache[DRM_PROP_CACHE];
+    int prop_cached;
 };
 
 /* ---------------------------------------------------------------- properties */
@@ -523,7 +534,15 @@ static bool assign_crtcs(drm_card *c, drmModeRes *res, tess_error *err)
 static bool add_prop(drm_card *c, drmModeAtomicReq *req, uint32_t object, uint32_t type, const char *name,
                      uint64_t value)
 {
-    uint32_t id = prop_id(c->fd, object, type, name);
+    uint32_t id = 0;
+    for (int k = 0; k < c->prop_cached && !id; k++)
+        if (c->prop_cache[k].object == object && !strcmp(c->prop_cache[k].name, name))
+            id = c->prop_cache[k].id;
+    if (!id) {
+        id = prop_id(c->fd, object, type, name);
+        if (id && c->prop_cached < DRM_PROP_CACHE) /* names are string literals: kept, not copied */
+            c->prop_cache[c->prop_cached++] = (drm_prop_entry){object, name, id};
+    }
     return id && drmModeAtomicAddProperty(req, object, id, value) >= 0;
 }
 
@@ -936,8 +955,6 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
         out->connector_id = info->id;
         out->mode = info->mode_infos[wo->device_mode];
         out->rotation_deg = wo->rotation_deg;
-        out->width_px = wo->width_px;
-        out->height_px = wo->height_px;
         out->live = true;
         out->ready = -1;
     }
