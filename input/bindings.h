@@ -1,0 +1,105 @@
+/* bindings.h - what each key, button and gesture does: configs/bindings.json
+ * (format reference: docs/bindings-format.md), keys and buttons by their
+ * evdev names as libevdev knows them ("KEY_W", "BTN_LEFT"), gestures by name.
+ *
+ * Actions come in two kinds:
+ *  - drag actions (orbit, pan, dolly) follow a motion: bound to pointer
+ *    buttons (held while the pointer moves), the wheel, and the touch and
+ *    touchpad gestures that move;
+ *  - command actions (flight, speed, home, pick, hide, unhide, fly-to) happen
+ *    on a key or button press (flight keys and buttons act while held), or on
+ *    a discrete gesture (tap, double tap, click).
+ * Binding an action where its kind cannot happen is an error naming the
+ * field: a drag action on a keyboard key or a discrete gesture, a command
+ * action on a moving gesture, flight on a discrete gesture (it cannot be
+ * held). "none" may be bound anywhere. A code is a button when its evdev name
+ * starts with BTN_, else a keyboard key. Unknown names, a code given twice
+ * (also under two names, e.g. BTN_A and BTN_SOUTH) and bad quit chords are
+ * errors too.
+ *
+ * Each section the file gives ("keys", "gestures", "quit_chord") replaces the
+ * defaults of that section completely; a section left out keeps them. */
+#ifndef TESSERA_INPUT_BINDINGS_H
+#define TESSERA_INPUT_BINDINGS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "engine/err.h"
+
+typedef enum input_action {
+    INPUT_ACTION_NONE,
+    /* drag actions */
+    INPUT_ACTION_ORBIT,       /* about the point picked under the cursor / finger */
+    INPUT_ACTION_PAN,         /* the picked point follows the cursor */
+    INPUT_ACTION_DOLLY,       /* towards the point under the cursor */
+    /* command actions */
+    INPUT_ACTION_FLY_FORWARD, /* held: flight at the current speed */
+    INPUT_ACTION_FLY_BACK,
+    INPUT_ACTION_FLY_LEFT,
+    INPUT_ACTION_FLY_RIGHT,
+    INPUT_ACTION_FLY_UP,
+    INPUT_ACTION_FLY_DOWN,
+    INPUT_ACTION_SPEED_UP,    /* flight speed x 1.5 */
+    INPUT_ACTION_SPEED_DOWN,  /* flight speed / 1.5 */
+    INPUT_ACTION_HOME,        /* the scene's home view */
+    INPUT_ACTION_PICK,        /* report the object under the cursor */
+    INPUT_ACTION_HIDE_OBJECT, /* hide the object under the cursor */
+    INPUT_ACTION_UNHIDE_ALL,
+    INPUT_ACTION_FLY_TO,      /* fly to the point under the cursor */
+    INPUT_ACTION_COUNT
+} input_action;
+
+/* Gestures by name in the file ("gestures" object). */
+typedef enum input_gesture {
+    INPUT_GESTURE_CLICK,            /* "click": a button bound to a drag action pressed and released
+                                       without moving */
+    INPUT_GESTURE_WHEEL,            /* "wheel": scroll wheel */
+    INPUT_GESTURE_TAP,              /* "tap": a short touch without motion */
+    INPUT_GESTURE_DOUBLE_TAP,       /* "double-tap" */
+    INPUT_GESTURE_ONE_FINGER_DRAG,  /* "one-finger-drag" */
+    INPUT_GESTURE_TWO_FINGER_DRAG,  /* "two-finger-drag": motion of the two fingers' centre */
+    INPUT_GESTURE_TWO_FINGER_PINCH, /* "two-finger-pinch": change of the fingers' spread */
+    INPUT_GESTURE_TOUCHPAD_PINCH,   /* "touchpad-pinch": libinput pinch gesture, its scale */
+    INPUT_GESTURE_TOUCHPAD_SWIPE,   /* "touchpad-swipe": libinput swipe gesture */
+    INPUT_GESTURE_COUNT
+} input_gesture;
+
+/* evdev codes: KEY_* and BTN_* share one space below KEY_CNT (0x300). */
+#define INPUT_CODE_COUNT 0x300
+#define INPUT_CHORD_MAX 8
+
+typedef struct input_bindings {
+    unsigned char code_action[INPUT_CODE_COUNT];   /* input_action per KEY_ / BTN_ code */
+    unsigned char gesture_action[INPUT_GESTURE_COUNT];
+    int quit_chord[INPUT_CHORD_MAX];               /* keyboard key codes held together quit; the slots
+                                                      from quit_chord_len on are 0 */
+    int quit_chord_len;                            /* 0: no quit chord */
+} input_bindings;
+
+/* The bindings of configs/bindings.json as shipped (also what an absent
+ * file means; a test checks that the two are equal): WASD and arrows fly,
+ * PageUp/PageDown up/down, = and - (main and keypad + and -) speed, Home,
+ * left button orbit (click: pick), right and middle pan, wheel dolly, one
+ * finger orbit, two fingers pan and pinch dolly, tap pick, double tap fly-to,
+ * touchpad pinch dolly and swipe pan, P pick, F fly-to, H hide-object, U
+ * unhide-all, quit chord Ctrl+Alt+Q (left keys). The whole struct is written,
+ * padding included (memset), so bindings may be compared with memcmp. */
+void input_bindings_default(input_bindings *out);
+
+/* Load / parse a bindings file. False with err naming the file, the field and
+ * the problem ("bindings.json: field 'keys.KEY_WW': unknown evdev key or button
+ * name ..."; syntax errors as "bindings.json:LINE:COL: ..."); *out untouched on
+ * failure. `name` only names the text in messages. Files over 1 MiB are
+ * refused. On success every byte of *out is written, as by
+ * input_bindings_default. */
+bool input_bindings_load(const char *file, input_bindings *out, tess_error *err);
+bool input_bindings_parse(const char *name, const char *text, size_t len, input_bindings *out, tess_error *err);
+
+/* Names as in the file: "orbit", "fly-forward", ...; "none" for NONE; NULL
+ * for a value out of range (COUNT included). */
+const char *input_action_name(input_action a);
+const char *input_gesture_name(input_gesture g);
+bool input_action_is_drag(input_action a);
+
+#endif
