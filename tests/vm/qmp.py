@@ -11,8 +11,19 @@ usage: qmp.py SOCKET COMMAND [ARGS...]
   rel DX DY                      relative motion (virtio mouse)
   abs X Y [HEAD]                 absolute position, 0..32767 (virtio tablet; with
                                  HEAD: a tablet bound to that head of gpu0)
-  click [BUTTON] [down|up]       left (default), right, middle, wheel-up, wheel-down;
-                                 no down/up: press and release
+  click [BUTTON] [down|up] [HEAD]  left (default), right, middle, wheel-up, wheel-down;
+                                 no down/up: press and release. Buttons go to the
+                                 pointer device qemu calls current (see `mouse`; at boot
+                                 the virtio tablet), with HEAD to a tablet bound to it
+  mouse DEVICE                   make DEVICE the current pointer (gets the buttons and
+                                 the wheel): mouse (the virtio mouse), tablet (the first
+                                 virtio tablet), an index or a name from query-mice;
+                                 prints "INDEX NAME"
+  expect FILE REGEX SECS CMD [ARGS...]  run CMD (any command above), then wait until a
+                                 line matching REGEX (Python re.search) is appended to
+                                 FILE (e.g. a guest log in the share); prints "MS LINE",
+                                 MS = milliseconds from before CMD to the line seen;
+                                 exit 1 if it is not there within SECS
   raw JSON                       any QMP command, prints the return value
   quit                           stop qemu now
 usage: qmp.py compare A B [TOL]  images (PPM P6, PNG or BMP); prints how many pixels differ
@@ -31,6 +42,7 @@ Exit status: 0 ok, 1 check failed, 2 usage, 3 QMP or I/O error.
 import collections
 import json
 import os
+import re
 import socket
 import struct
 import sys
@@ -347,10 +359,54 @@ def evdev(path):
 BUTTONS = ("left", "right", "middle", "wheel-up", "wheel-down", "side", "extra")
 
 
+def pick_mouse(mice, want):
+    """(index, name) of the query-mice entry meant by want (see `mouse` in the usage)."""
+    names = {"mouse": "QEMU Virtio Mouse", "tablet": "QEMU Virtio Tablet"}
+    for m in sorted(mice, key=lambda m: m["index"]):
+        if str(m["index"]) == want or m["name"] == names.get(want, want):
+            return m["index"], m["name"]
+    raise QMPError(f"no pointer device '{want}' in query-mice: " +
+                   ", ".join(f"{m['index']} {m['name']}" for m in mice))
+
+
+def expect(sock, path, pattern, secs, op, args):
+    """run op, then wait for a line matching pattern appended to path (see usage)."""
+    regex = re.compile(pattern)
+    offset = os.path.getsize(path) if os.path.exists(path) else 0
+    t0 = time.monotonic()
+    rc = run(sock, op, args)
+    if rc:
+        return rc
+    pending = b""
+    while True:
+        try:
+            with open(path, "rb") as f:
+                f.seek(offset)
+                chunk = f.read()
+        except FileNotFoundError:
+            chunk = b""
+        offset += len(chunk)
+        pending += chunk
+        *lines, pending = pending.split(b"\n")
+        for raw_line in lines:
+            line = raw_line.decode(errors="replace")
+            if regex.search(line):
+                print(f"{(time.monotonic() - t0) * 1000:.0f} {line}")
+                return 0
+        if time.monotonic() - t0 > secs:
+            print(f"qmp.py: no line matching '{pattern}' in {path} within {secs:g} s", file=sys.stderr)
+            return 1
+        time.sleep(0.005)
+
+
 def run(sock, op, args):
     if op == "wait":
         connect_retry(sock, float(args[0]) if args else 30.0).close()
         return 0
+    if op == "expect":
+        if len(args) < 4:
+            return usage()
+        return expect(sock, args[0], args[1], float(args[2]), args[3], args[4:])
     q = QMP(sock)
     try:
         if op == "screendump":
@@ -377,12 +433,20 @@ def run(sock, op, args):
             where = {"device": "gpu0", "head": int(args[2])} if len(args) > 2 else {}
             q.send_events(axis_events("abs", int(args[0]), int(args[1])), **where)
         elif op == "click":
+            args = list(args)
+            where = {"device": "gpu0", "head": int(args.pop())} if args and args[-1].isdigit() else {}
             button = args[0] if args else "left"
             if button not in BUTTONS:
                 return usage()
             phases = {"down": [True], "up": [False]}.get(args[1] if len(args) > 1 else "", [True, False])
             for down in phases:
-                q.send_events([button_event(button, down)])
+                q.send_events([button_event(button, down)], **where)
+        elif op == "mouse":
+            index, name = pick_mouse(q.execute("query-mice"), args[0])
+            out = q.execute("human-monitor-command", **{"command-line": f"mouse_set {index}"})
+            if out:
+                raise QMPError(f"mouse_set {index}: {out.strip()}")
+            print(index, name)
         elif op == "raw":
             req = json.loads(args[0])
             print(json.dumps(q.execute(req["execute"], **req.get("arguments", {}))))
