@@ -4,6 +4,7 @@
 #include "accel.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -20,6 +21,9 @@ struct accel {
     bvh top;                   /* over the geometries' bounds; prim ids are geometry ids */
     const kernel_table *kernels; /* resolved once at build */
     float coord_abs_max;         /* largest |coordinate| of the scene bounds (cull slack) */
+    /* geom_count flags, nonzero: hidden. The only mutable part (see accel.h):
+     * relaxed loads in the loops over geometries, one byte per geometry visit */
+    atomic_uchar *hidden;
 };
 
 static float abs_max(vec3 a)
@@ -119,7 +123,8 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
     accel *a = calloc(1, sizeof *a);
     uint32_t count = s->mesh_count + (s->spheres.count > 0 ? 1u : 0u);
     aabb *geom_bounds = calloc((size_t)count + 1, sizeof *geom_bounds);
-    if (!a || !geom_bounds || !(a->geoms = calloc((size_t)count + 1, sizeof *a->geoms))) {
+    if (!a || !geom_bounds || !(a->geoms = calloc((size_t)count + 1, sizeof *a->geoms)) ||
+        !(a->hidden = calloc((size_t)count + 1, sizeof *a->hidden))) {
         tess_error_set(err, "accel: out of memory");
         goto fail;
     }
@@ -154,6 +159,7 @@ void accel_destroy(accel *a)
         for (uint32_t i = 0; i < a->geom_count; i++)
             wbvh_finish(&a->geoms[i]);
     free(a->geoms);
+    free(a->hidden);
     bvh_finish(&a->top);
     free(a);
 }
@@ -164,6 +170,30 @@ size_t accel_bytes(const accel *a)
     for (uint32_t i = 0; i < a->geom_count; i++)
         bytes += wbvh_bytes(&a->geoms[i]);
     return bytes;
+}
+
+uint32_t accel_geometry_count(const accel *a) { return a->geom_count; }
+
+void accel_set_hidden(const accel *a, uint32_t geom_id, bool hidden)
+{
+    if (geom_id < a->geom_count)
+        atomic_store_explicit(&a->hidden[geom_id], hidden ? 1u : 0u, memory_order_relaxed);
+}
+
+void accel_unhide_all(const accel *a)
+{
+    for (uint32_t g = 0; g < a->geom_count; g++)
+        atomic_store_explicit(&a->hidden[g], 0u, memory_order_relaxed);
+}
+
+bool accel_hidden(const accel *a, uint32_t geom_id)
+{
+    return geom_id < a->geom_count && atomic_load_explicit(&a->hidden[geom_id], memory_order_relaxed) != 0;
+}
+
+static inline bool is_hidden(const accel *a, uint32_t geom_id)
+{
+    return atomic_load_explicit(&a->hidden[geom_id], memory_order_relaxed) != 0;
 }
 
 const char *accel_isa_name(const accel *a) { return a->kernels->isa_name; }
@@ -204,6 +234,8 @@ static bool trace(const accel *a, ray *r, hit *h, bool any)
         }
         for (uint32_t i = n->first; i < n->first + n->count; i++) {
             uint32_t geom_id = b->prim_order[i];
+            if (is_hidden(a, geom_id))
+                continue;
             if (a->kernels->intersect1(&a->geoms[geom_id], geom_id, r, &d, h, any)) {
                 found = true;
                 if (any)
@@ -237,7 +269,8 @@ void accel_intersect_packet(const accel *a, packet_range r)
         return;
     packet_derive_inv_dir(r.packet);
     for (uint32_t g = 0; g < a->geom_count; g++)
-        a->kernels->intersect_packet(&a->geoms[g], g, r.packet, mask, false);
+        if (!is_hidden(a, g))
+            a->kernels->intersect_packet(&a->geoms[g], g, r.packet, mask, false);
 }
 
 uint64_t accel_occluded_packet(const accel *a, packet_range r)
@@ -247,6 +280,7 @@ uint64_t accel_occluded_packet(const accel *a, packet_range r)
         return 0;
     packet_derive_inv_dir(r.packet);
     for (uint32_t g = 0; g < a->geom_count && (mask & ~occluded); g++)
-        occluded |= a->kernels->intersect_packet(&a->geoms[g], g, r.packet, mask & ~occluded, true);
+        if (!is_hidden(a, g))
+            occluded |= a->kernels->intersect_packet(&a->geoms[g], g, r.packet, mask & ~occluded, true);
     return occluded;
 }

@@ -2,12 +2,21 @@
  * sphere set) under a top-level BVH over the geometries' bounds.
  *
  * Built once per scene; read-only afterwards, so any number of render threads
- * may trace through it concurrently without locks. */
+ * may trace through it concurrently without locks, with one exception: the
+ * per-geometry HIDDEN flags (accel_set_hidden). A hidden geometry is not hit
+ * by any query here (so it is not seen and casts no shadows). The flags are
+ * relaxed atomics, so reading them while they change is not a data race, but
+ * a frame traced while one changes mixes both states: change them only where
+ * nothing traces for a picture, i.e. in a pipeline's serial section (what
+ * pipeline_queue_hide does; hiding is a property of the accel, seen by every
+ * pipeline using it) or while no pipeline or render runs. Another thread may
+ * query the accel meanwhile (picking), seeing each flag old or new. */
 #ifndef TESSERA_ACCEL_H
 #define TESSERA_ACCEL_H
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "err.h"
 #include "packet.h"
@@ -36,6 +45,17 @@ void accel_intersect_packet(const accel *a, packet_range r);
 /* Any-hit for the active rays of a sub-packet: returns the mask of rays
  * (bits as in packet->active) that are occluded. */
 uint64_t accel_occluded_packet(const accel *a, packet_range r);
+
+/* Geometries: ids 0..count-1 as in scene.h (meshes, then the sphere set). */
+uint32_t accel_geometry_count(const accel *a);
+
+/* Hide geometry geom_id from every query above, or show it again; ids out of
+ * range are ignored. Who may call these: see the header comment. New accels
+ * hide nothing. */
+void accel_set_hidden(const accel *a, uint32_t geom_id, bool hidden);
+void accel_unhide_all(const accel *a);
+/* Whether geom_id is hidden (false out of range). Any thread. */
+bool accel_hidden(const accel *a, uint32_t geom_id);
 
 /* Bytes of acceleration data (nodes, primitive blocks), not counting the scene. */
 size_t accel_bytes(const accel *a);

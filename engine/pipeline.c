@@ -13,7 +13,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "accel.h"
 #include "log.h"
+#include "overlay.h"
+
+_Static_assert(PIPELINE_STATUS_BYTES == OVERLAY_TEXT_BYTES, "the status line is the overlay's text");
 
 /* A queued callback with its own copy of the arguments. */
 typedef struct queued_call {
@@ -69,6 +73,8 @@ typedef struct pipe_channel {
     bool queued_valid; /* buffers[queued] holds a finished frame not yet displayed */
     /* frozen for the frame being rendered: written by the serial section, read by render threads */
     render_view view;
+    overlay_plan overlay; /* the overlay in this channel's pixels (given to the traverser only when
+                             something of it falls on them) */
 } pipe_channel;
 
 /* What every thread does in the current loop step; written only by the
@@ -140,6 +146,7 @@ struct pipeline {
     /* live render state other than cameras: serial section only */
     int threads_wanted;
     bool shadows;
+    overlay_state overlay; /* status line and cursor */
 
     /* the loop */
     barrier frame_barrier, anim_barrier;
@@ -508,6 +515,90 @@ bool pipeline_queue_threads(pipeline *p, int threads)
     return pipeline_transaction(p, "threads", apply_threads, &threads, sizeof threads);
 }
 
+typedef struct status_args {
+    char text[PIPELINE_STATUS_BYTES];
+} status_args;
+
+static void apply_status(pipeline *p, void *args)
+{
+    pipeline_set_status(p, ((status_args *)args)->text);
+}
+
+bool pipeline_queue_status(pipeline *p, const char *text)
+{
+    if (!text) {
+        log_error("pipeline: status line: no text (\"\" hides the line)");
+        return false;
+    }
+    status_args a;
+    size_t n = strnlen(text, PIPELINE_STATUS_BYTES - 1);
+    memcpy(a.text, text, n);
+    a.text[n] = '\0';
+    return pipeline_transaction(p, "status", apply_status, &a, sizeof a);
+}
+
+typedef struct cursor_args {
+    bool visible;
+    float sx, sy;
+} cursor_args;
+
+static void apply_cursor(pipeline *p, void *args)
+{
+    cursor_args *a = args;
+    pipeline_set_cursor(p, a->visible, a->sx, a->sy);
+}
+
+bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy)
+{
+    if (!isfinite(sx) || !isfinite(sy)) {
+        log_error("pipeline: cursor position (%g, %g) is not finite", (double)sx, (double)sy);
+        return false;
+    }
+    cursor_args a = {visible, sx, sy};
+    return pipeline_transaction(p, "cursor", apply_cursor, &a, sizeof a);
+}
+
+typedef struct hide_args {
+    uint32_t geom_id;
+    bool hidden;
+} hide_args;
+
+static void apply_hide(pipeline *p, void *args)
+{
+    hide_args *a = args;
+    pipeline_set_hidden(p, a->geom_id, a->hidden);
+}
+
+/* Whether geom_id names a geometry of the pipeline's accel; logs why not. */
+static bool geometry_exists(const pipeline *p, uint32_t geom_id, const char *what)
+{
+    uint32_t count = accel_geometry_count(p->cfg.accel);
+    if (geom_id < count)
+        return true;
+    log_error("pipeline: %s geometry %u: there are %u geometries (ids 0..%u)", what, geom_id, count,
+              count ? count - 1 : 0);
+    return false;
+}
+
+bool pipeline_queue_hide(pipeline *p, uint32_t geom_id, bool hidden)
+{
+    if (!geometry_exists(p, geom_id, hidden ? "hiding" : "showing"))
+        return false;
+    hide_args a = {geom_id, hidden};
+    return pipeline_transaction(p, hidden ? "hide" : "show", apply_hide, &a, sizeof a);
+}
+
+static void apply_unhide_all(pipeline *p, void *args)
+{
+    (void)args;
+    pipeline_unhide_all(p);
+}
+
+bool pipeline_queue_unhide_all(pipeline *p)
+{
+    return pipeline_transaction(p, "unhide all", apply_unhide_all, NULL, 0);
+}
+
 /* ---------------------------------------------------------------- state */
 
 bool pipeline_in_serial_section(const pipeline *p) { return tls_serial_owner == p; }
@@ -569,6 +660,64 @@ bool pipeline_set_threads(pipeline *p, int threads)
     p->threads_wanted = threads;
     return true;
 }
+
+bool pipeline_set_status(pipeline *p, const char *text)
+{
+    if (!may_change_state(p, "status line change"))
+        return false;
+    if (!text) {
+        log_error("pipeline: status line: no text (\"\" hides the line)");
+        return false;
+    }
+    overlay_set_status(&p->overlay, text);
+    return true;
+}
+
+const char *pipeline_status(const pipeline *p) { return p->overlay.status; }
+
+bool pipeline_set_cursor(pipeline *p, bool visible, float sx, float sy)
+{
+    if (!may_change_state(p, "cursor change"))
+        return false;
+    if (!isfinite(sx) || !isfinite(sy)) {
+        log_error("pipeline: cursor position (%g, %g) is not finite", (double)sx, (double)sy);
+        return false;
+    }
+    p->overlay.cursor_visible = visible;
+    p->overlay.cursor_sx = sx;
+    p->overlay.cursor_sy = sy;
+    return true;
+}
+
+bool pipeline_cursor(const pipeline *p, float *sx, float *sy)
+{
+    if (sx)
+        *sx = p->overlay.cursor_sx;
+    if (sy)
+        *sy = p->overlay.cursor_sy;
+    return p->overlay.cursor_visible;
+}
+
+bool pipeline_set_hidden(pipeline *p, uint32_t geom_id, bool hidden)
+{
+    if (!may_change_state(p, hidden ? "hiding a geometry" : "showing a geometry") ||
+        !geometry_exists(p, geom_id, hidden ? "hiding" : "showing"))
+        return false;
+    accel_set_hidden(p->cfg.accel, geom_id, hidden);
+    return true;
+}
+
+bool pipeline_unhide_all(pipeline *p)
+{
+    if (!may_change_state(p, "showing every geometry"))
+        return false;
+    accel_unhide_all(p->cfg.accel);
+    return true;
+}
+
+bool pipeline_hidden(const pipeline *p, uint32_t geom_id) { return accel_hidden(p->cfg.accel, geom_id); }
+
+uint32_t pipeline_geometry_count(const pipeline *p) { return accel_geometry_count(p->cfg.accel); }
 
 camera_desc pipeline_camera(const pipeline *p, int channel)
 {
@@ -813,7 +962,9 @@ static void freeze_frame(pipeline *p)
                                 c->camera, c->camera_serial};
         b->rendered = c->active;
         image_display *sink = c->display->ops->write_tile ? c->display : NULL;
-        targets[i] = (traverser_target){&c->view, c->active ? b->rgb : NULL, sink, &b->meta};
+        bool overlay = overlay_plan_make(&c->overlay, &p->overlay, c->window, c->width_px, c->height_px);
+        targets[i] = (traverser_target){&c->view, c->active ? b->rgb : NULL, sink, &b->meta,
+                                        overlay ? &c->overlay : NULL};
     }
     p->traverser->ops->begin_frame(p->traverser, targets);
 }

@@ -55,9 +55,18 @@
  * frame f's time is f / rate_hz exactly, whatever the speed, so output is
  * reproducible. Either way frames render as fast as the threads allow.
  *
- * DETERMINISM. A pixel's value depends on the scene, the channel's camera,
- * the sampler and the renderer only: never on the thread count, the tile size
- * or the tile order. */
+ * OVERLAY AND HIDING. Each channel's tiles get the overlay (overlay.h: a
+ * status line at the plane's bottom-left corner, a cursor, both in plane
+ * coordinates, drawn by every channel they fall on) composited right after
+ * they are rendered, before a display's write_tile sees them. Geometries may
+ * be hidden (accel.h: not seen, no shadows, not hit by any accel query). Both
+ * change only through transactions or in the serial section, like the rest
+ * of the state; a pipeline with neither pays one branch per tile.
+ *
+ * DETERMINISM. A pixel's value depends on the scene (with its hidden
+ * geometries), the channel's camera, the sampler, the renderer and the
+ * overlay only: never on the thread count, the tile size or the tile
+ * order. */
 #ifndef TESSERA_PIPELINE_H
 #define TESSERA_PIPELINE_H
 
@@ -84,6 +93,7 @@ struct accel;
 #define PIPELINE_MAX_CALLBACKS 64        /* animation + termination callbacks of each kind */
 #define PIPELINE_TILE_PX_MIN 4
 #define PIPELINE_TILE_PX_MAX 256
+#define PIPELINE_STATUS_BYTES 128        /* status line text, with its terminating NUL */
 
 typedef struct pipeline pipeline;
 
@@ -181,6 +191,27 @@ bool pipeline_queue_threads(pipeline *p, int threads);
  * camera. From the frame after the barrier that applies it. */
 bool pipeline_queue_channel_active(pipeline *p, int channel, bool active);
 
+/* The status line as a transaction: `text` is copied (at most
+ * PIPELINE_STATUS_BYTES - 1 bytes of it, the rest cut off); bytes outside
+ * printable ASCII are drawn as '?'; "" hides the line. False (logged) for a
+ * NULL text or when the transaction is refused. */
+bool pipeline_queue_status(pipeline *p, const char *text);
+
+/* Show the cursor with its tip at plane point (sx, sy) (camera.h's screen
+ * coordinates of the whole wall: [-1, 1]^2; points off the plane are simply
+ * not drawn), or hide it, as a transaction. False (logged) for a position
+ * that is not finite or when the transaction is refused. */
+bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy);
+
+/* Hide geometry geom_id (ids as in scene.h) or show it again, as a
+ * transaction: a hidden geometry is not seen and casts no shadows. False,
+ * logged, for an id the scene does not have or when refused. The flags live
+ * in the pipeline's accel (accel_set_hidden), so every user of that accel
+ * sees them, and they stay after the pipeline is destroyed. */
+bool pipeline_queue_hide(pipeline *p, uint32_t geom_id, bool hidden);
+/* Show every geometry again, as a transaction. */
+bool pipeline_queue_unhide_all(pipeline *p);
+
 /* ---- per-frame information given to callbacks ---- */
 typedef struct frame_info {
     uint64_t frame;        /* the frame about to be rendered */
@@ -215,6 +246,18 @@ uint64_t pipeline_camera_serial(const pipeline *p, int channel); /* changes so f
 int pipeline_channel_count(const pipeline *p);
 /* Channel `channel`'s camera basis for its current camera (its image size, window). */
 camera_basis pipeline_channel_basis(const pipeline *p, int channel);
+/* Overlay and hidden geometries (see the transactions above; the setters
+ * validate as those do). pipeline_status is the text as drawn ('?' for
+ * non-printable bytes); pipeline_cursor returns whether the cursor shows and
+ * stores its position (either pointer may be NULL). */
+bool pipeline_set_status(pipeline *p, const char *text);
+const char *pipeline_status(const pipeline *p);
+bool pipeline_set_cursor(pipeline *p, bool visible, float sx, float sy);
+bool pipeline_cursor(const pipeline *p, float *sx, float *sy);
+bool pipeline_set_hidden(pipeline *p, uint32_t geom_id, bool hidden);
+bool pipeline_unhide_all(pipeline *p);
+bool pipeline_hidden(const pipeline *p, uint32_t geom_id); /* any thread */
+uint32_t pipeline_geometry_count(const pipeline *p);       /* ids 0..count-1 */
 /* The frame the current serial section prepares (serial section only). */
 uint64_t pipeline_frame(const pipeline *p);
 /* True on a thread inside p's serial section. */

@@ -52,6 +52,8 @@ static void tiled_render(image_traverser *t, const renderer *r, const pixel_samp
         if (!c->target.rgb)
             continue;
         r->render_tile(c->target.view, s, x0, y0, x1, y1, c->target.rgb, counts);
+        if (c->target.overlay) /* the one branch a frame without an overlay pays per tile */
+            overlay_draw(c->target.overlay, c->width_px, x0, y0, x1, y1, c->target.rgb);
         if (c->target.sink)
             c->target.sink->ops->write_tile(c->target.sink, c->target.img, x0, y0, x1, y1);
     }

@@ -14,6 +14,7 @@
 
 #include "display.h"
 #include "err.h"
+#include "overlay.h"
 #include "render.h"
 #include "sampler.h"
 #include "tile_order.h"
@@ -25,6 +26,8 @@ typedef struct traverser_target {
                                 is switched off this frame and its tiles are skipped */
     image_display *sink;     /* with a write_tile hook: gets each finished tile; else NULL */
     const frame_image *img;  /* what sink->write_tile is given (the frame being rendered) */
+    const overlay_plan *overlay; /* composited into each tile between rendering and write_tile;
+                                    NULL: nothing of the overlay falls on this channel */
 } traverser_target;
 
 typedef struct image_traverser image_traverser;
