@@ -4,6 +4,9 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <libseat.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,12 +23,17 @@ typedef struct session_device {
     int fd, id; /* id: libseat's device id, -1 when opened directly */
 } session_device;
 
+/* Two threads use a session: the display thread (the card, VT switches) and
+ * the input thread (event devices). `lock` serialises every libseat call and
+ * guards the device table; the flags are atomics so that session_active needs
+ * no lock. session_dispatch waits for the seat's fd without the lock. */
 struct session {
-    struct libseat *seat;  /* NULL: direct mode */
-    bool active;           /* enabled by the seat (always, in direct mode) */
-    bool disable_pending;  /* the seat asked for the devices back; not yet acknowledged */
-    session_device devices[SESSION_MAX_DEVICES];
-    int device_count;
+    struct libseat *seat;      /* NULL: direct mode */
+    pthread_mutex_t lock;
+    atomic_bool active;        /* enabled by the seat (always, in direct mode) */
+    atomic_bool disable_pending; /* the seat asked for the devices back; not yet acknowledged */
+    session_device devices[SESSION_MAX_DEVICES]; /* lock */
+    int device_count;          /* lock */
 };
 
 static void seat_enabled(struct libseat *seat, void *data)
@@ -67,6 +75,7 @@ session *session_open(void)
     session *s = calloc(1, sizeof *s);
     if (!s)
         return NULL;
+    pthread_mutex_init(&s->lock, NULL);
     libseat_set_log_handler(libseat_message);
     libseat_set_log_level(LIBSEAT_LOG_LEVEL_ERROR);
     last_libseat_error[0] = '\0';
@@ -98,12 +107,23 @@ void session_close(session *s)
         session_close_device(s, s->devices[s->device_count - 1].fd);
     if (s->seat)
         libseat_close_seat(s->seat);
+    pthread_mutex_destroy(&s->lock);
     free(s);
 }
 
 bool session_has_seat(const session *s) { return s->seat != NULL; }
 
+static int session_open_device_locked(session *s, const char *path, tess_error *err);
+
 int session_open_device(session *s, const char *path, tess_error *err)
+{
+    pthread_mutex_lock(&s->lock);
+    int fd = session_open_device_locked(s, path, err);
+    pthread_mutex_unlock(&s->lock);
+    return fd;
+}
+
+static int session_open_device_locked(session *s, const char *path, tess_error *err)
 {
     if (s->device_count == SESSION_MAX_DEVICES) {
         tess_error_set(err, "%s: more than %d devices open", path, SESSION_MAX_DEVICES);
@@ -131,6 +151,7 @@ int session_open_device(session *s, const char *path, tess_error *err)
 
 void session_close_device(session *s, int fd)
 {
+    pthread_mutex_lock(&s->lock);
     for (int i = 0; i < s->device_count; i++) {
         if (s->devices[i].fd != fd)
             continue;
@@ -138,15 +159,26 @@ void session_close_device(session *s, int fd)
             libseat_close_device(s->seat, s->devices[i].id);
         close(fd);
         s->devices[i] = s->devices[--s->device_count];
+        pthread_mutex_unlock(&s->lock);
         return;
     }
+    pthread_mutex_unlock(&s->lock);
     close(fd); /* not one of ours: still closed */
 }
 
 void session_dispatch(session *s, int timeout_ms)
 {
-    if (s->seat && libseat_dispatch(s->seat, timeout_ms) < 0)
+    if (!s->seat)
+        return;
+    if (timeout_ms != 0) { /* wait without the lock, so the other thread can open devices */
+        struct pollfd pfd = {.fd = libseat_get_fd(s->seat), .events = POLLIN};
+        if (pfd.fd >= 0)
+            poll(&pfd, 1, timeout_ms);
+    }
+    pthread_mutex_lock(&s->lock);
+    if (libseat_dispatch(s->seat, 0) < 0)
         log_warn("seat: dispatching its events failed: %s", strerror(errno));
+    pthread_mutex_unlock(&s->lock);
 }
 
 bool session_active(const session *s) { return s->active && !s->disable_pending; }
@@ -159,6 +191,8 @@ void session_ack_disable(session *s)
         return;
     s->active = false;
     s->disable_pending = false;
+    pthread_mutex_lock(&s->lock);
     if (s->seat && libseat_disable_seat(s->seat) < 0)
         log_warn("seat: acknowledging the switch away failed: %s", strerror(errno));
+    pthread_mutex_unlock(&s->lock);
 }

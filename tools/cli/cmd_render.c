@@ -121,11 +121,21 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     cli_path_player player = {.time_offset_s = 0.0, .all_channels = false};
     cli_recorder recorder;
     cli_orbit orbit_state;
+    cli_input *input = NULL;
+    pipeline *p = NULL;
     tess_error err = {{0}};
-    pipeline *p = cli_pipeline_create(s, &cs);
+    /* live input steers the camera (a --path becomes its idle tour); a replay steers it alone */
+    bool steered = s->input.enabled == 1 || s->input.replay_file[0];
+    if (s->input.replay_file[0] && s->input.enabled != 1 && s->path_file[0]) {
+        cli_error("--path and --replay-input both steer the camera: give one");
+        goto done;
+    }
+    p = cli_pipeline_create(s, &cs);
     if (!p)
         goto done;
-    if (s->path_file[0]) {
+    if (steered) {
+        /* the camera moves only by input transactions (and the tour) */
+    } else if (s->path_file[0]) {
         if (!camera_path_load(s->path_file, &player.path, &err)) {
             cli_error("%s", err.msg);
             goto done;
@@ -138,9 +148,14 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     }
     if (s->record_file[0])
         cli_recorder_start(p, &recorder, s->record_file);
+    if (cli_input_wanted(&s->input) &&
+        !(input = cli_input_start(&s->input, p, &cs, s->input.enabled == 1 ? s->path_file : NULL)))
+        goto done;
     catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
     bool ran = pipeline_run(p, &err);
     catch_stop_signals(NULL);
+    cli_input_finish(input);
+    input = NULL;
     if (!ran) {
         cli_error("%s", err.msg);
         goto done;
@@ -183,6 +198,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     cli_pipeline_report(p, s);
     code = 0;
 done:
+    cli_input_finish(input);
     pipeline_destroy(p);
     cli_pipeline_release_outputs(); /* a DRM card: the CRTCs as they were */
     camera_path_free(&player.path);
@@ -220,6 +236,12 @@ int cli_render(int argc, char **argv)
     int code = 0;
     if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code))
         return code;
+    if (s.input.enabled == 1) {
+        cli_error("--input on: 'tessera render' reads no input devices (use 'tessera run'; render can --replay-input)");
+        return 2;
+    }
+    if (!s.input.replay_speed_given)
+        s.input.replay_speed = INPUT_REPLAY_ALL;
     return run_job(&s, scene_path, false);
 }
 
@@ -267,6 +289,8 @@ int cli_run(int argc, char **argv)
             s.frames = 0;
         if (!s.time_given)
             s.time_mode = PIPELINE_TIME_REAL;
+        if (s.input.enabled < 0) /* the kiosk: people steer it */
+            s.input.enabled = 1;
     }
     /* the default output directory is ours to create */
     if (!strcmp(s.channels[0].display, "dump") && !strcmp(s.channels[0].out, "out/frame_####.png") &&

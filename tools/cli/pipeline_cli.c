@@ -43,6 +43,7 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     s->channels[0].height_px = 720;
     snprintf(s->channels[0].display, sizeof s->channels[0].display, "%s", display);
     snprintf(s->channels[0].out, sizeof s->channels[0].out, "%s", out ? out : "");
+    cli_input_spec_default(&s->input);
 }
 
 /* ---------------------------------------------------------------- the config file */
@@ -263,7 +264,7 @@ static bool load_channels(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
 bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
 {
     static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
-                                         "camera", "display", "path", "channels", NULL};
+                                         "camera", "display", "path", "channels", "input", NULL};
     tess_error err = {{0}};
     size_t len = 0;
     char *text = jr_read_file(file, CONFIG_MAX_BYTES, "a pipeline config", &len, &err);
@@ -277,7 +278,8 @@ bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
          load_traverser(&c, root, s) && load_sampler(&c, root, s) && load_renderer(&c, root, s) &&
          opt_size(&c, root, &s->channels[0].width_px, &s->channels[0].height_px) &&
          opt_camera(&c, root, &s->channels[0]) && opt_display(&c, root, &s->channels[0]) &&
-         opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s);
+         opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s) &&
+         cli_input_config_load(&c, root, file, &s->input);
     if (ok && path[0] && !resolve_relative(file, path, s->path_file, sizeof s->path_file))
         ok = jr_member_fail(&c, "path", "path too long");
     json_object *given;
@@ -406,8 +408,7 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--record")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->record_file, sizeof s->record_file);
     }
-    *handled = false;
-    return true;
+    return cli_input_option(argc, argv, i, &s->input, handled);
 }
 
 void cli_pipeline_usage(FILE *f)
@@ -435,6 +436,7 @@ void cli_pipeline_usage(FILE *f)
           "                   display each output's image goes beside --out (NAME-CONNECTOR.png) and\n"
           "                   --out gets the stitched wall with the bezels black\n",
           f);
+    cli_input_usage(f);
 }
 
 /* ---------------------------------------------------------------- making the pipeline */
@@ -444,12 +446,41 @@ void cli_pipeline_usage(FILE *f)
 static drm_card *active_card;
 static session *active_session;
 
+/* The wall cli_pipeline_create laid out (for input: where each output is). */
+static struct {
+    bool valid;
+    float plane_aspect;
+    int count;
+    input_output_area areas[WALL_MAX_OUTPUTS];
+} active_layout;
+
+session *cli_pipeline_session(void) { return active_session; }
+
+int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_area *areas, int max)
+{
+    if (active_layout.valid) {
+        int n = active_layout.count < max ? active_layout.count : max;
+        memcpy(areas, active_layout.areas, (size_t)n * sizeof *areas);
+        *plane_aspect = active_layout.plane_aspect;
+        return n;
+    }
+    int n = pipeline_channel_count(p) < max ? pipeline_channel_count(p) : max;
+    for (int i = 0; i < n; i++) {
+        snprintf(areas[i].name, sizeof areas[i].name, "channel-%d", i);
+        areas[i].window = CAMERA_WINDOW_FULL;
+    }
+    camera_basis b = pipeline_channel_basis(p, 0);
+    *plane_aspect = (float)b.width_px / (float)b.height_px;
+    return n;
+}
+
 void cli_pipeline_release_outputs(void)
 {
     drm_card_close(active_card);
     active_card = NULL;
     session_close(active_session);
     active_session = NULL;
+    active_layout.valid = false;
 }
 
 /* Open the card, match the wall's outputs to its connectors (which resolves
@@ -520,6 +551,15 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
     }
     for (int i = added + (ok ? 0 : 1); i < wall.count; i++)
         image_display_destroy(displays[i]);
+    if (ok) {
+        active_layout.valid = true;
+        active_layout.plane_aspect = wall_plane_aspect(&wall);
+        active_layout.count = wall.count;
+        for (int i = 0; i < wall.count; i++) {
+            snprintf(active_layout.areas[i].name, sizeof active_layout.areas[i].name, "%s", wall.outputs[i].connector);
+            active_layout.areas[i].window = wall_output_window(&wall, i);
+        }
+    }
     if (ok && on_device)
         drm_wall_attach(active_card, p, first_channel); /* hotplug switches the outputs' channels */
     if (!ok)

@@ -12,6 +12,8 @@
 #include "cli.h"
 #include "engine/camera_path.h"
 #include "engine/pipeline.h"
+#include "input_cli.h"
+#include "input/source.h"
 
 #define CLI_PATTERN_BYTES 4096
 
@@ -43,6 +45,7 @@ typedef struct cli_pipeline_spec {
     char wall_file[CLI_PATTERN_BYTES];   /* --wall: the channels are a wall's outputs, "" for none */
     char card_path[CLI_PATTERN_BYTES];   /* --card: the DRM card for display drm, "" = the first connected */
     bool display_given, frames_given, time_given; /* on the command line or in --config */
+    cli_input_spec input;        /* --input ..., the config's "input" object */
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
@@ -74,6 +77,14 @@ pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene 
  * display, per-output images beside the stitched wall image. NULL after
  * printing the error. */
 pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs);
+
+/* The image plane the pipeline's channels show: its aspect (width / height)
+ * in *plane_aspect, and per channel its output's name (a wall: the
+ * connector; else "channel-N") and window; returns the count (<= max). */
+int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_area *areas, int max);
+
+/* The seat cli_pipeline_create opened for a DRM wall, else NULL. */
+struct session *cli_pipeline_session(void);
 
 /* Release what cli_pipeline_create opened besides the pipeline (a DRM card:
  * its CRTCs are restored): after pipeline_destroy. */

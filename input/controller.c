@@ -1,0 +1,736 @@
+/* controller.c - input events to input transactions (controller.h). */
+#include "input/controller.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "input/navigate.h"
+
+#define TOUCH_SLOTS 20            /* touches tracked at once, over all devices */
+#define TAP_MAX_S 0.30            /* a tap is shorter than this ... */
+#define TAP_SLOP 0.02             /* ... and moves less than this (plane units) */
+#define DOUBLE_TAP_S 0.40         /* second tap within this of the first's end ... */
+#define DOUBLE_TAP_DIST 0.06      /* ... and this close to it */
+#define CLICK_SLOP 0.01           /* a button released having moved less than this is a click */
+#define DOLLY_PER_UNIT 2.0        /* a dolly drag of one plane unit up scales distances by e^-2 */
+#define WHEEL_DRAG_UNITS 0.05     /* a wheel click bound to orbit/pan acts as this much drag */
+#define SPEED_STEP 1.5
+#define FLY_TO_DISTANCE 0.5       /* fly-to ends at this fraction of the distance to the point */
+#define MAX_TICK_S 0.1            /* flight never jumps more than this much time at once */
+
+typedef struct touch {
+    bool active;
+    int device, slot;
+    double x, y;       /* now */
+    double x0, y0;     /* where it went down */
+} touch;
+
+struct input_controller {
+    input_controller_config cfg;
+    input_controller_hooks hooks;
+
+    camera_desc cam;           /* the camera being steered */
+    bool cam_dirty;            /* changed since the last emitted camera */
+    double fly_speed;          /* world units per second */
+
+    /* cursor (plane coordinates) */
+    double cur_x, cur_y;
+    bool cursor_visible, cursor_dirty;
+
+    /* a pointer button drag */
+    bool dragging;
+    int drag_code, drag_device;
+    input_action drag_action;
+    vec3 drag_point;           /* the picked point the drag turns about / keeps under the cursor */
+    double drag_travel;        /* plane units moved since the press */
+
+    /* keys and buttons held: count per code, and the device that pressed it last */
+    unsigned char held[INPUT_CODE_COUNT];
+    int held_device[INPUT_CODE_COUNT];
+    bool chord_fired;
+
+    /* flight and animations */
+    uint64_t last_tick_us;     /* the last input_controller_tick */
+    uint64_t last_flight_us;
+    bool animating;
+    camera_desc anim_from, anim_to;
+    uint64_t anim_start_us;
+
+    /* touch */
+    touch touches[TOUCH_SLOTS];
+    int fingers_prev;          /* fingers at the end of the previous touch frame */
+    vec3 touch_point;          /* anchor picked when the finger count last changed */
+    double prev_x, prev_y;     /* one finger: its position; two: their centre */
+    double prev_spread;        /* two fingers: their distance */
+    bool one_drag_started;     /* one finger moved beyond the tap slop */
+    /* the current touch sequence (from the first finger down to the last up) */
+    uint64_t seq_start_us;
+    int seq_max_fingers;
+    double seq_x0, seq_y0, seq_travel;
+    bool have_last_tap;
+    uint64_t last_tap_us;
+    double last_tap_x, last_tap_y;
+
+    /* touchpad gestures */
+    vec3 gesture_point;
+    double pinch_prev_scale;
+
+    /* kiosk */
+    bool touring, started;
+    uint64_t last_input_us;
+};
+
+void input_controller_config_default(input_controller_config *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    input_bindings_default(&cfg->bindings);
+    cfg->plane_aspect = 16.f / 9.f;
+    cfg->home = (camera_desc){v3(0.f, 0.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), CAMERA_DEFAULT_FOV_DEG};
+    cfg->scene_size = 1.0;
+}
+
+input_controller *input_controller_create(const input_controller_config *cfg, const input_controller_hooks *hooks)
+{
+    input_controller *c = calloc(1, sizeof *c);
+    if (!c)
+        return NULL;
+    c->cfg = *cfg;
+    c->hooks = *hooks;
+    if (!(c->cfg.scene_size > 0.0) || !isfinite(c->cfg.scene_size))
+        c->cfg.scene_size = 1.0;
+    if (!(c->cfg.plane_aspect > 0.f))
+        c->cfg.plane_aspect = 1.f;
+    if (c->cfg.orbit_rad_per_unit <= 0.0)
+        c->cfg.orbit_rad_per_unit = 3.14159265358979323846;
+    if (c->cfg.wheel_factor <= 0.0 || c->cfg.wheel_factor >= 1.0)
+        c->cfg.wheel_factor = 0.85;
+    if (c->cfg.fly_to_s <= 0.0)
+        c->cfg.fly_to_s = 0.6;
+    c->fly_speed = c->cfg.fly_speed > 0.0 ? c->cfg.fly_speed : c->cfg.scene_size / 4.0;
+    c->cam = c->cfg.home;
+    return c;
+}
+
+void input_controller_destroy(input_controller *c) { free(c); }
+
+camera_desc input_controller_camera(const input_controller *c) { return c->cam; }
+double input_controller_fly_speed(const input_controller *c) { return c->fly_speed; }
+bool input_controller_touring(const input_controller *c) { return c->touring; }
+
+/* ---- output -------------------------------------------------------------- */
+
+static void emit(input_controller *c, input_txn *t) { c->hooks.emit(c->hooks.ctx, t); }
+
+static void emit_status(input_controller *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void emit_status(input_controller *c, const char *fmt, ...)
+{
+    input_txn t = {.kind = INPUT_TXN_STATUS};
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(t.text, sizeof t.text, fmt, ap);
+    va_end(ap);
+    emit(c, &t);
+}
+
+/* End of an input frame or tick: at most one camera and one cursor. */
+static void flush(input_controller *c)
+{
+    if (c->cam_dirty) {
+        input_txn t = {.kind = INPUT_TXN_CAMERA, .camera = c->cam};
+        emit(c, &t);
+        c->cam_dirty = false;
+    }
+    if (c->cursor_dirty) {
+        input_txn t = {.kind = INPUT_TXN_CURSOR, .on = c->cursor_visible, .sx = (float)c->cur_x, .sy = (float)c->cur_y};
+        emit(c, &t);
+        c->cursor_dirty = false;
+    }
+}
+
+static void set_camera(input_controller *c, camera_desc next)
+{
+    if (memcmp(&next, &c->cam, sizeof next) != 0) {
+        c->cam = next;
+        c->cam_dirty = true;
+    }
+}
+
+static void show_cursor(input_controller *c, bool visible)
+{
+    if (c->cursor_visible != visible) {
+        c->cursor_visible = visible;
+        c->cursor_dirty = true;
+    }
+}
+
+/* ---- picking ---------------------------------------------------------------- */
+
+static double view_distance(const camera_desc *cam)
+{
+    return v3_length(v3_sub(cam->look_at, cam->eye));
+}
+
+/* The point under plane point (sx, sy): the first surface, else the cursor
+ * ray at the depth of the look-at point. */
+static vec3 point_under(input_controller *c, double sx, double sy, input_hit *hit_out)
+{
+    vec3 origin, dir;
+    navigate_plane_ray(&c->cam, c->cfg.plane_aspect, sx, sy, &origin, &dir);
+    input_hit hit = {.hit = false};
+    c->hooks.pick(c->hooks.ctx, origin, dir, &hit);
+    if (hit_out)
+        *hit_out = hit;
+    if (hit.hit)
+        return hit.point;
+    vec3 view = v3_normalize(v3_sub(c->cam.look_at, c->cam.eye));
+    double cosine = v3_dot(dir, view);
+    double t = view_distance(&c->cam) / (cosine > 0.05 ? cosine : 0.05);
+    return v3_add(origin, v3_scale(dir, (float)t));
+}
+
+/* ---- motions ---------------------------------------------------------------- */
+
+/* A drag of (dx, dy) plane units with `action` about `point`. */
+static void drag(input_controller *c, input_action action, vec3 point, double dx, double dy)
+{
+    if (dx == 0.0 && dy == 0.0)
+        return;
+    switch (action) {
+    case INPUT_ACTION_ORBIT: {
+        /* the same turn per physical length across and up the plane */
+        double k = c->cfg.orbit_rad_per_unit;
+        set_camera(c, navigate_orbit(&c->cam, point, -dx * k, -dy * k / c->cfg.plane_aspect));
+        break;
+    }
+    case INPUT_ACTION_PAN: {
+        vec3 view = v3_normalize(v3_sub(c->cam.look_at, c->cam.eye));
+        double depth = v3_dot(v3_sub(point, c->cam.eye), view);
+        if (depth > 0.0)
+            set_camera(c, navigate_pan(&c->cam, c->cfg.plane_aspect, depth, dx, dy));
+        break;
+    }
+    case INPUT_ACTION_DOLLY:
+        set_camera(c, navigate_dolly(&c->cam, point, exp(-dy * DOLLY_PER_UNIT)));
+        break;
+    default:
+        break;
+    }
+}
+
+static void animate_to(input_controller *c, camera_desc target, uint64_t now_us)
+{
+    c->animating = true;
+    c->anim_from = c->cam;
+    c->anim_to = target;
+    c->anim_start_us = now_us;
+}
+
+static bool flight_held(const input_controller *c)
+{
+    for (int a = INPUT_ACTION_FLY_FORWARD; a <= INPUT_ACTION_FLY_DOWN; a++)
+        for (int code = 0; code < INPUT_CODE_COUNT; code++)
+            if (c->held[code] && c->cfg.bindings.code_action[code] == a)
+                return true;
+    return false;
+}
+
+/* A command action at plane point (sx, sy). */
+static void command(input_controller *c, input_action action, double sx, double sy, uint64_t now_us)
+{
+    input_hit hit;
+    switch (action) {
+    case INPUT_ACTION_PICK:
+        point_under(c, sx, sy, &hit);
+        if (hit.hit)
+            emit_status(c, "picked %s at (%.4g, %.4g, %.4g)", hit.what, (double)hit.point.x, (double)hit.point.y,
+                        (double)hit.point.z);
+        else
+            emit_status(c, "picked nothing (background)");
+        break;
+    case INPUT_ACTION_HIDE_OBJECT:
+        point_under(c, sx, sy, &hit);
+        if (hit.hit) {
+            input_txn t = {.kind = INPUT_TXN_HIDE, .geom_id = hit.geom_id};
+            emit(c, &t);
+            emit_status(c, "hidden: %s", hit.what);
+        } else {
+            emit_status(c, "nothing to hide there");
+        }
+        break;
+    case INPUT_ACTION_UNHIDE_ALL: {
+        input_txn t = {.kind = INPUT_TXN_UNHIDE_ALL};
+        emit(c, &t);
+        emit_status(c, "all objects shown");
+        break;
+    }
+    case INPUT_ACTION_FLY_TO: {
+        vec3 p = point_under(c, sx, sy, &hit);
+        if (!hit.hit) {
+            emit_status(c, "nothing there to fly to");
+            break;
+        }
+        double d = v3_length(v3_sub(p, c->cam.eye)) * FLY_TO_DISTANCE;
+        if (d < c->cfg.scene_size * 1e-4)
+            d = c->cfg.scene_size * 1e-4;
+        animate_to(c, navigate_look_at_point(&c->cam, p, d), now_us);
+        break;
+    }
+    case INPUT_ACTION_HOME:
+        animate_to(c, c->cfg.home, now_us);
+        break;
+    case INPUT_ACTION_SPEED_UP:
+    case INPUT_ACTION_SPEED_DOWN:
+        c->fly_speed = action == INPUT_ACTION_SPEED_UP ? c->fly_speed * SPEED_STEP : c->fly_speed / SPEED_STEP;
+        emit_status(c, "flight speed %.3g units/s", c->fly_speed);
+        break;
+    default:
+        break;
+    }
+}
+
+/* ---- kiosk -------------------------------------------------------------------- */
+
+/* A person touched something: the tour hands over (steering starts from the
+ * camera it showed) and the idle clock restarts. */
+static void user_input(input_controller *c, uint64_t now_us)
+{
+    c->last_input_us = now_us;
+    c->started = true;
+    if (!c->touring)
+        return;
+    c->touring = false;
+    c->cam = c->hooks.current_camera(c->hooks.ctx);
+    c->cam_dirty = false;
+    input_txn t = {.kind = INPUT_TXN_TOUR, .on = false};
+    emit(c, &t);
+}
+
+static void start_tour(input_controller *c)
+{
+    c->touring = true;
+    c->animating = false;
+    c->dragging = false;
+    c->cam_dirty = false;
+    show_cursor(c, false);
+    flush(c);
+    emit_status(c, "%s", "");
+    input_txn t = {.kind = INPUT_TXN_TOUR, .on = true};
+    emit(c, &t);
+}
+
+/* ---- keys and buttons ------------------------------------------------------------ */
+
+static bool chord_held(const input_controller *c)
+{
+    const input_bindings *b = &c->cfg.bindings;
+    if (b->quit_chord_len <= 0)
+        return false;
+    for (int i = 0; i < b->quit_chord_len; i++)
+        if (!c->held[b->quit_chord[i]])
+            return false;
+    return true;
+}
+
+static void key_or_button(input_controller *c, const input_event *e)
+{
+    if (e->code < 0 || e->code >= INPUT_CODE_COUNT)
+        return;
+    int code = e->code;
+    if (e->pressed) {
+        if (c->held[code] < 255)
+            c->held[code]++;
+        c->held_device[code] = e->device;
+    } else if (c->held[code] > 0) {
+        c->held[code]--;
+    } else {
+        return; /* a release we never saw pressed (held before we started) */
+    }
+    if (chord_held(c)) {
+        if (!c->chord_fired) {
+            c->chord_fired = true;
+            input_txn t = {.kind = INPUT_TXN_QUIT};
+            emit(c, &t);
+        }
+    } else {
+        c->chord_fired = false;
+    }
+
+    input_action action = (input_action)c->cfg.bindings.code_action[code];
+    if (input_action_is_drag(action)) {
+        if (e->kind != INPUT_BUTTON)
+            return;
+        if (e->pressed && !c->dragging) {
+            c->animating = false;
+            c->dragging = true;
+            c->drag_code = code;
+            c->drag_device = e->device;
+            c->drag_action = action;
+            c->drag_travel = 0.0;
+            c->drag_point = point_under(c, c->cur_x, c->cur_y, NULL);
+        } else if (!e->pressed && c->dragging && c->drag_code == code) {
+            c->dragging = false;
+            if (c->drag_travel < CLICK_SLOP)
+                command(c, (input_action)c->cfg.bindings.gesture_action[INPUT_GESTURE_CLICK], c->cur_x, c->cur_y,
+                        e->time_us);
+        }
+        return;
+    }
+    if (action >= INPUT_ACTION_FLY_FORWARD && action <= INPUT_ACTION_FLY_DOWN) {
+        if (e->pressed) {
+            if (!flight_held(c) || c->held[code] == 1)
+                c->last_flight_us = e->time_us;
+            c->animating = false;
+        }
+        return;
+    }
+    if (e->pressed && action != INPUT_ACTION_NONE)
+        command(c, action, c->cur_x, c->cur_y, e->time_us);
+}
+
+/* ---- pointer ------------------------------------------------------------------------ */
+
+static void pointer_moved(input_controller *c, double nx, double ny)
+{
+    double dx = nx - c->cur_x, dy = ny - c->cur_y;
+    c->cur_x = nx;
+    c->cur_y = ny;
+    if (dx != 0.0 || dy != 0.0)
+        c->cursor_dirty = true;
+    show_cursor(c, true);
+    if (c->dragging) {
+        c->drag_travel += sqrt(dx * dx + dy * dy);
+        drag(c, c->drag_action, c->drag_point, dx, dy);
+    }
+}
+
+static double clamp_plane(double v) { return v < -1.0 ? -1.0 : v > 1.0 ? 1.0 : v; }
+
+/* ---- touch ---------------------------------------------------------------------------- */
+
+static touch *find_touch(input_controller *c, int device, int slot)
+{
+    for (int i = 0; i < TOUCH_SLOTS; i++)
+        if (c->touches[i].active && c->touches[i].device == device && c->touches[i].slot == slot)
+            return &c->touches[i];
+    return NULL;
+}
+
+/* The first two fingers down (in slot-table order), for the two-finger gestures. */
+static int active_touches(input_controller *c, touch **first, touch **second)
+{
+    int n = 0;
+    *first = *second = NULL;
+    for (int i = 0; i < TOUCH_SLOTS; i++) {
+        if (!c->touches[i].active)
+            continue;
+        if (n == 0)
+            *first = &c->touches[i];
+        else if (n == 1)
+            *second = &c->touches[i];
+        n++;
+    }
+    return n;
+}
+
+static void touch_sequence_ended(input_controller *c, uint64_t now_us)
+{
+    double dt_s = (double)(now_us - c->seq_start_us) * 1e-6;
+    bool tap = c->seq_max_fingers == 1 && dt_s <= TAP_MAX_S && c->seq_travel < TAP_SLOP;
+    if (!tap)
+        return;
+    double ddx = c->seq_x0 - c->last_tap_x, ddy = c->seq_y0 - c->last_tap_y;
+    bool second = c->have_last_tap && (double)(c->seq_start_us - c->last_tap_us) * 1e-6 <= DOUBLE_TAP_S &&
+                  sqrt(ddx * ddx + ddy * ddy) <= DOUBLE_TAP_DIST;
+    const unsigned char *g = c->cfg.bindings.gesture_action;
+    if (second) {
+        c->have_last_tap = false;
+        command(c, (input_action)g[INPUT_GESTURE_DOUBLE_TAP], c->seq_x0, c->seq_y0, now_us);
+    } else {
+        c->have_last_tap = true;
+        c->last_tap_us = now_us;
+        c->last_tap_x = c->seq_x0;
+        c->last_tap_y = c->seq_y0;
+        command(c, (input_action)g[INPUT_GESTURE_TAP], c->seq_x0, c->seq_y0, now_us);
+    }
+}
+
+static void touch_frame(input_controller *c, uint64_t now_us)
+{
+    touch *a, *b;
+    int n = active_touches(c, &a, &b);
+    const unsigned char *g = c->cfg.bindings.gesture_action;
+    if (n == 0) {
+        if (c->fingers_prev > 0)
+            touch_sequence_ended(c, now_us);
+        c->fingers_prev = 0;
+        return;
+    }
+    if (n > c->seq_max_fingers)
+        c->seq_max_fingers = n;
+    if (n != c->fingers_prev) { /* fingers came or went: anchor again, move nothing */
+        if (n == 1) {
+            c->prev_x = a->x;
+            c->prev_y = a->y;
+            c->one_drag_started = false;
+            c->touch_point = point_under(c, a->x, a->y, NULL);
+        } else {
+            c->prev_x = 0.5 * (a->x + b->x);
+            c->prev_y = 0.5 * (a->y + b->y);
+            c->prev_spread = hypot(a->x - b->x, (a->y - b->y) / c->cfg.plane_aspect);
+            c->touch_point = point_under(c, c->prev_x, c->prev_y, NULL);
+        }
+        c->fingers_prev = n;
+        return;
+    }
+    if (n == 1) {
+        if (!c->one_drag_started) { /* within the tap slop nothing moves */
+            if (hypot(a->x - a->x0, a->y - a->y0) < TAP_SLOP)
+                return;
+            c->one_drag_started = true;
+        }
+        drag(c, (input_action)g[INPUT_GESTURE_ONE_FINGER_DRAG], c->touch_point, a->x - c->prev_x,
+             a->y - c->prev_y);
+        c->prev_x = a->x;
+        c->prev_y = a->y;
+        return;
+    }
+    double cx = 0.5 * (a->x + b->x), cy = 0.5 * (a->y + b->y);
+    /* spread measured in width units both ways, so it does not depend on the direction of the fingers */
+    double spread = hypot(a->x - b->x, (a->y - b->y) / c->cfg.plane_aspect);
+    input_action pinch = (input_action)g[INPUT_GESTURE_TWO_FINGER_PINCH];
+    if (spread > 0.0 && c->prev_spread > 0.0 && spread != c->prev_spread) {
+        if (pinch == INPUT_ACTION_DOLLY)
+            set_camera(c, navigate_dolly(&c->cam, c->touch_point, c->prev_spread / spread));
+        else
+            drag(c, pinch, c->touch_point, 0.0, spread - c->prev_spread);
+    }
+    drag(c, (input_action)g[INPUT_GESTURE_TWO_FINGER_DRAG], c->touch_point, cx - c->prev_x, cy - c->prev_y);
+    c->prev_x = cx;
+    c->prev_y = cy;
+    if (spread > 0.0)
+        c->prev_spread = spread;
+}
+
+static void touch_event(input_controller *c, const input_event *e)
+{
+    touch *t = find_touch(c, e->device, e->slot);
+    switch (e->kind) {
+    case INPUT_TOUCH_DOWN:
+        if (!t) {
+            for (int i = 0; i < TOUCH_SLOTS && !t; i++)
+                if (!c->touches[i].active)
+                    t = &c->touches[i];
+            if (!t)
+                return; /* more fingers than we track: ignored */
+        }
+        {
+            int down = 0;
+            for (int i = 0; i < TOUCH_SLOTS; i++)
+                down += c->touches[i].active;
+            if (down == 0) { /* the first finger: a new sequence */
+                c->seq_start_us = e->time_us;
+                c->seq_max_fingers = 0;
+                c->seq_x0 = e->x;
+                c->seq_y0 = e->y;
+                c->seq_travel = 0.0;
+                c->animating = false;
+            }
+        }
+        *t = (touch){.active = true, .device = e->device, .slot = e->slot, .x = e->x, .y = e->y, .x0 = e->x,
+                     .y0 = e->y};
+        show_cursor(c, false);
+        break;
+    case INPUT_TOUCH_MOTION:
+        if (t) {
+            t->x = e->x;
+            t->y = e->y;
+            double travel = hypot(t->x - t->x0, t->y - t->y0);
+            if (travel > c->seq_travel)
+                c->seq_travel = travel;
+        }
+        break;
+    case INPUT_TOUCH_UP:
+        if (t)
+            t->active = false;
+        break;
+    case INPUT_TOUCH_CANCEL:
+        for (int i = 0; i < TOUCH_SLOTS; i++)
+            if (c->touches[i].device == e->device)
+                c->touches[i].active = false;
+        c->seq_max_fingers = 99; /* no tap from a cancelled sequence */
+        break;
+    default:
+        break;
+    }
+}
+
+/* ---- devices ---------------------------------------------------------------------------- */
+
+static void device_removed(input_controller *c, int device)
+{
+    for (int code = 0; code < INPUT_CODE_COUNT; code++)
+        if (c->held[code] && c->held_device[code] == device)
+            c->held[code] = 0;
+    if (c->dragging && c->drag_device == device)
+        c->dragging = false;
+    for (int i = 0; i < TOUCH_SLOTS; i++)
+        if (c->touches[i].active && c->touches[i].device == device) {
+            c->touches[i].active = false;
+            c->seq_max_fingers = 99;
+        }
+    c->chord_fired = chord_held(c);
+}
+
+/* ---- events ------------------------------------------------------------------------------- */
+
+void input_controller_event(input_controller *c, const input_event *e)
+{
+    switch (e->kind) {
+    case INPUT_DEVICE_ADDED:
+        return;
+    case INPUT_DEVICE_REMOVED:
+        device_removed(c, e->device);
+        return;
+    case INPUT_FRAME:
+        flush(c);
+        return;
+    case INPUT_TOUCH_FRAME:
+        touch_frame(c, e->time_us);
+        flush(c);
+        return;
+    default:
+        break;
+    }
+    user_input(c, e->time_us);
+    const unsigned char *g = c->cfg.bindings.gesture_action;
+    switch (e->kind) {
+    case INPUT_KEY:
+    case INPUT_BUTTON:
+        key_or_button(c, e);
+        break;
+    case INPUT_POINTER_MOTION:
+        pointer_moved(c, clamp_plane(c->cur_x + e->dx), clamp_plane(c->cur_y + e->dy));
+        break;
+    case INPUT_POINTER_ABS:
+        pointer_moved(c, clamp_plane(e->x), clamp_plane(e->y));
+        break;
+    case INPUT_SCROLL: {
+        c->animating = false;
+        input_action a = (input_action)g[INPUT_GESTURE_WHEEL];
+        vec3 p = point_under(c, c->cur_x, c->cur_y, NULL);
+        if (a == INPUT_ACTION_DOLLY)
+            set_camera(c, navigate_dolly(&c->cam, p, pow(c->cfg.wheel_factor, e->dy)));
+        else
+            drag(c, a, p, 0.0, e->dy * WHEEL_DRAG_UNITS);
+        break;
+    }
+    case INPUT_TOUCH_DOWN:
+    case INPUT_TOUCH_MOTION:
+    case INPUT_TOUCH_UP:
+    case INPUT_TOUCH_CANCEL:
+        touch_event(c, e);
+        break;
+    case INPUT_PINCH_BEGIN:
+    case INPUT_SWIPE_BEGIN:
+        c->animating = false;
+        c->gesture_point = point_under(c, c->cur_x, c->cur_y, NULL);
+        c->pinch_prev_scale = 1.0;
+        break;
+    case INPUT_PINCH_UPDATE: {
+        input_action a = (input_action)g[INPUT_GESTURE_TOUCHPAD_PINCH];
+        if (a == INPUT_ACTION_DOLLY) {
+            if (e->scale > 0.0 && c->pinch_prev_scale > 0.0)
+                set_camera(c, navigate_dolly(&c->cam, c->gesture_point, c->pinch_prev_scale / e->scale));
+        } else {
+            drag(c, a, c->gesture_point, e->dx, e->dy);
+        }
+        if (e->scale > 0.0)
+            c->pinch_prev_scale = e->scale;
+        break;
+    }
+    case INPUT_SWIPE_UPDATE:
+        drag(c, (input_action)g[INPUT_GESTURE_TOUCHPAD_SWIPE], c->gesture_point, e->dx, e->dy);
+        break;
+    default:
+        break;
+    }
+}
+
+/* ---- time ----------------------------------------------------------------------------------- */
+
+void input_controller_tick(input_controller *c, uint64_t now_us)
+{
+    c->last_tick_us = now_us;
+    if (!c->started) { /* the first tick: nobody is there yet */
+        c->started = true;
+        c->last_input_us = now_us;
+        if (c->cfg.have_tour && c->cfg.idle_timeout_s > 0.0)
+            start_tour(c);
+        return;
+    }
+    if (c->touring)
+        return;
+    if (c->cfg.have_tour && c->cfg.idle_timeout_s > 0.0 && !c->dragging &&
+        (double)(now_us - c->last_input_us) * 1e-6 >= c->cfg.idle_timeout_s) {
+        bool fingers = false;
+        for (int i = 0; i < TOUCH_SLOTS; i++)
+            fingers |= c->touches[i].active;
+        if (!fingers && !flight_held(c)) {
+            start_tour(c);
+            return;
+        }
+    }
+    if (c->animating) {
+        double s = (double)(now_us - c->anim_start_us) * 1e-6 / c->cfg.fly_to_s;
+        if (s >= 1.0) {
+            set_camera(c, c->anim_to);
+            c->animating = false;
+        } else {
+            set_camera(c, navigate_blend(&c->anim_from, &c->anim_to, navigate_ease(s)));
+        }
+    }
+    if (flight_held(c)) {
+        double dt_s = (double)(now_us - c->last_flight_us) * 1e-6;
+        if (dt_s > MAX_TICK_S)
+            dt_s = MAX_TICK_S;
+        c->last_flight_us = now_us;
+        double f = 0, r = 0, u = 0;
+        for (int code = 0; code < INPUT_CODE_COUNT; code++) {
+            if (!c->held[code])
+                continue;
+            switch ((input_action)c->cfg.bindings.code_action[code]) {
+            case INPUT_ACTION_FLY_FORWARD: f = 1.0; break;
+            case INPUT_ACTION_FLY_BACK: f = -1.0; break;
+            case INPUT_ACTION_FLY_RIGHT: r = 1.0; break;
+            case INPUT_ACTION_FLY_LEFT: r = -1.0; break;
+            case INPUT_ACTION_FLY_UP: u = 1.0; break;
+            case INPUT_ACTION_FLY_DOWN: u = -1.0; break;
+            default: break;
+            }
+        }
+        double step = c->fly_speed * dt_s;
+        if (step > 0.0)
+            set_camera(c, navigate_fly(&c->cam, f * step, r * step, u * step));
+    }
+    flush(c);
+}
+
+uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us)
+{
+    if (!c->started)
+        return now_us;
+    if (c->animating || (!c->touring && flight_held(c))) {
+        /* the next tick of the animation clock; a new flight or animation starts with one now */
+        uint64_t next = c->last_tick_us + INPUT_TICK_US;
+        return next > now_us ? next : now_us;
+    }
+    if (!c->touring && c->cfg.have_tour && c->cfg.idle_timeout_s > 0.0) {
+        uint64_t idle_end = c->last_input_us + (uint64_t)(c->cfg.idle_timeout_s * 1e6);
+        /* past it but a button or finger is still down: look again in a second */
+        return idle_end > now_us ? idle_end : now_us + 1000000;
+    }
+    return UINT64_MAX;
+}

@@ -1,0 +1,136 @@
+/* controller.h - the mapping layer: input events (event.h) in, input
+ * transactions out. It holds what a person is doing (buttons held, fingers
+ * down, keys held, the cursor, the idle clock) and the camera it is steering,
+ * and says what should change as input_txn records; the embedding
+ * (input/sink.h) turns each into a pipeline transaction and records it.
+ * Nothing here touches renderer state, a pipeline or a device: tests drive it
+ * with synthetic events and a synthetic clock.
+ *
+ * WHAT IT DOES (bindings.h names the actions; the defaults in brackets):
+ *  - a button bound to a drag action [left: orbit, right/middle: pan] picks
+ *    the point under the cursor when pressed (the pick callback: a ray into
+ *    the scene; on a miss the point on the cursor ray at the view distance)
+ *    and drags about it: orbit turns about the point, pan keeps the point
+ *    under the cursor, dolly scales the view about it. Released without
+ *    moving: the "click" gesture [pick];
+ *  - wheel [dolly]: towards the point under the cursor, x0.85 per click;
+ *  - keys: flight while held at a speed that scales with the scene (its
+ *    bounding-box diagonal / 4 per second by default), speed x / 1.5, home
+ *    (flies back to the home view), pick / hide / fly-to at the cursor;
+ *  - touch: one finger [orbit] about the point it landed on; two fingers:
+ *    the spread [dolly by the spread's ratio about the point between them,
+ *    so a pinch's effect depends only on how much the spread changed, never
+ *    on its size or the scene's scale] and the centre's motion [pan]; a tap
+ *    [pick], a double tap [fly-to the tapped point];
+ *  - touchpad gestures: pinch [dolly by libinput's scale about the cursor's
+ *    point], swipe [pan];
+ *  - the quit chord (all its keys held together);
+ *  - kiosk: after idle_timeout_s without input it starts the attract tour
+ *    (INPUT_TXN_TOUR on; the tour player eases into the path); the first
+ *    event afterwards stops it (TOUR off) and steering starts from the
+ *    camera the tour showed (the current_camera callback). With a tour it
+ *    starts in tour mode (nobody is there yet).
+ *
+ * COALESCING. Camera changes accumulate while one input frame (up to
+ * INPUT_FRAME or INPUT_TOUCH_FRAME) is handled and go out as at most one
+ * INPUT_TXN_CAMERA at its end; the same for the cursor. Animations (flight,
+ * fly-to, home) advance in input_controller_tick, one camera per tick.
+ *
+ * Threading: one thread (the input thread) calls everything; the callbacks
+ * run on it. */
+#ifndef TESSERA_INPUT_CONTROLLER_H
+#define TESSERA_INPUT_CONTROLLER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "engine/camera.h"
+#include "engine/vec3.h"
+#include "input/bindings.h"
+#include "input/event.h"
+
+#define INPUT_TEXT_BYTES 128 /* status text, as PIPELINE_STATUS_BYTES */
+
+/* What input asks the renderer to do; one becomes one transaction. */
+typedef enum input_txn_kind {
+    INPUT_TXN_CAMERA,     /* camera: the wall's camera (every channel) */
+    INPUT_TXN_CURSOR,     /* on, sx, sy: the cursor shown at plane point (sx, sy), or hidden */
+    INPUT_TXN_STATUS,     /* text: the status line ("" hides it) */
+    INPUT_TXN_HIDE,       /* geom_id: hide that geometry */
+    INPUT_TXN_UNHIDE_ALL,
+    INPUT_TXN_TOUR,       /* on: start (easing in from the current camera) or stop the tour */
+    INPUT_TXN_QUIT,       /* stop the pipeline */
+    INPUT_TXN_KIND_COUNT
+} input_txn_kind;
+
+typedef struct input_txn {
+    input_txn_kind kind;
+    camera_desc camera;
+    bool on;
+    float sx, sy;
+    uint32_t geom_id;
+    char text[INPUT_TEXT_BYTES];
+} input_txn;
+
+/* A pick: the first visible surface along a ray. */
+typedef struct input_hit {
+    bool hit;
+    vec3 point;            /* world position of the hit */
+    uint32_t geom_id, prim_id;
+    char what[128];        /* e.g. "mesh 'bunny' triangle 1234", for the status line */
+} input_hit;
+
+typedef struct input_controller_config {
+    input_bindings bindings;
+    float plane_aspect;          /* the wall's image plane, width / height */
+    camera_desc home;            /* the home view (the scene's camera); also the starting camera */
+    double scene_size;           /* bounding-box diagonal in world units, > 0 */
+    double fly_speed;            /* world units per second; 0: scene_size / 4 */
+    double orbit_rad_per_unit;   /* orbit per plane unit of drag; 0: pi (a drag across the plane: a full turn) */
+    double wheel_factor;         /* dolly per wheel click towards the scene; 0: 0.85 */
+    double idle_timeout_s;       /* 0: no tour */
+    bool have_tour;              /* a tour is configured (the tour player runs it) */
+    double fly_to_s;             /* duration of fly-to and home animations; 0: 0.6 */
+} input_controller_config;
+
+/* Defaults for the fields a caller need not set (bindings = the defaults). */
+void input_controller_config_default(input_controller_config *cfg);
+
+typedef struct input_controller_hooks {
+    void *ctx;
+    /* The first visible surface along the ray (origin, unit dir); fills *out. */
+    void (*pick)(void *ctx, vec3 origin, vec3 dir, input_hit *out);
+    /* Queue one transaction (called in the order they must apply). */
+    void (*emit)(void *ctx, const input_txn *t);
+    /* The camera the wall shows now (asked when the tour hands over). */
+    camera_desc (*current_camera)(void *ctx);
+} input_controller_hooks;
+
+typedef struct input_controller input_controller;
+
+/* NULL when out of memory. The config is copied. */
+input_controller *input_controller_create(const input_controller_config *cfg, const input_controller_hooks *hooks);
+void input_controller_destroy(input_controller *c);
+
+/* Handle one event (emits at frame ends). */
+void input_controller_event(input_controller *c, const input_event *e);
+
+/* Time passes (same clock as the events' time_us): advances flight and
+ * fly-to animations, starts the tour when idle. Call at least every
+ * input_controller_tick_interval_us while that is nonzero, and at the idle
+ * deadline (input_controller_deadline_us). */
+void input_controller_tick(input_controller *c, uint64_t now_us);
+
+/* When tick must next be called: an absolute time_us, or UINT64_MAX when
+ * nothing waits (no animation, no tour pending). */
+uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us);
+
+/* The camera the controller steers, the flight speed, whether touring. */
+camera_desc input_controller_camera(const input_controller *c);
+double input_controller_fly_speed(const input_controller *c);
+bool input_controller_touring(const input_controller *c);
+
+/* Interval between animation ticks (about 60 Hz). */
+#define INPUT_TICK_US 16000
+
+#endif

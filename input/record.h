@@ -1,0 +1,49 @@
+/* record.h - input transactions in a file (--record-input, --replay-input).
+ *
+ * FORMAT. Text, one transaction per line, after the header line
+ * "tessera-input-record 1"; blank lines and lines starting with '#' are
+ * skipped. Each line: TIME KIND ARGS, TIME in seconds since recording
+ * started (non-decreasing), floats in C99 hexadecimal (%a) so that a replay
+ * reproduces every camera bit for bit:
+ *   T camera EX EY EZ LX LY LZ UX UY UZ FOV   eye, look_at, up, fov_deg
+ *   T cursor ON SX SY                         ON 0 or 1, plane coordinates
+ *   T status "TEXT"                           \" \\ and \xHH escapes
+ *   T hide GEOM_ID
+ *   T unhide-all
+ *   T tour ON
+ *   T quit
+ * Errors name the file, the line and the problem. */
+#ifndef TESSERA_INPUT_RECORD_H
+#define TESSERA_INPUT_RECORD_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+
+#include "engine/err.h"
+#include "input/controller.h"
+
+#define INPUT_RECORD_HEADER "tessera-input-record 1"
+
+typedef struct input_record_entry {
+    double time_s;
+    input_txn txn;
+} input_record_entry;
+
+typedef struct input_record {
+    input_record_entry *entries; /* malloc'ed */
+    size_t count, capacity;
+} input_record;
+
+/* Write one line (no header); false when the write failed. */
+bool input_record_write(FILE *f, double time_s, const input_txn *t);
+
+/* Read a whole record file. *out owns its entries (input_record_free). */
+bool input_record_load(const char *file, input_record *out, tess_error *err);
+bool input_record_parse(const char *name, const char *text, size_t len, input_record *out, tess_error *err);
+void input_record_free(input_record *r);
+
+/* The name of a transaction kind as in the file ("camera", ...). */
+const char *input_txn_kind_name(input_txn_kind k);
+
+#endif

@@ -1,0 +1,145 @@
+/* runner.c - the input thread (runner.h). */
+#include "input/runner.h"
+
+#include <errno.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/eventfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "engine/log.h"
+
+struct input_runner {
+    input_source *source;
+    input_controller *controller;
+    input_sink *sink;
+    input_pick_fn pick;
+    void *pick_ctx;
+    int wake_fd;
+    atomic_bool stop;
+    pthread_t thread;
+    bool started;
+};
+
+static uint64_t now_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
+
+static void hook_pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
+{
+    input_runner *r = ctx;
+    r->pick(r->pick_ctx, origin, dir, out);
+}
+
+static void hook_emit(void *ctx, const input_txn *t)
+{
+    input_runner *r = ctx;
+    input_sink_emit(r->sink, t);
+}
+
+static camera_desc hook_current_camera(void *ctx)
+{
+    input_runner *r = ctx;
+    return input_sink_current_camera(r->sink);
+}
+
+static void on_event(void *ctx, const input_event *e)
+{
+    input_runner *r = ctx;
+    input_controller_event(r->controller, e);
+}
+
+static void *input_main(void *arg)
+{
+    input_runner *r = arg;
+    input_controller_tick(r->controller, now_us());
+    while (!atomic_load(&r->stop)) {
+        uint64_t now = now_us();
+        uint64_t deadline = input_controller_deadline_us(r->controller, now);
+        int timeout_ms = 1000; /* also how often missing path devices are tried again */
+        if (deadline != UINT64_MAX) {
+            uint64_t wait_us = deadline > now ? deadline - now : 0;
+            if (wait_us < 1000000u)
+                timeout_ms = (int)((wait_us + 999u) / 1000u);
+        }
+        struct pollfd fds[2] = {{.fd = input_source_fd(r->source), .events = POLLIN},
+                                {.fd = r->wake_fd, .events = POLLIN}};
+        int n = poll(fds, 2, timeout_ms);
+        if (n < 0 && errno != EINTR) {
+            log_error("input: poll failed: %s; input stops", strerror(errno));
+            break;
+        }
+        if (atomic_load(&r->stop))
+            break;
+        if (!input_source_dispatch(r->source, on_event, r)) {
+            log_error("input: libinput failed; input stops (the wall goes on)");
+            break;
+        }
+        now = now_us();
+        if (now >= deadline) /* the deadline asked for before the wait has come */
+            input_controller_tick(r->controller, now);
+    }
+    return NULL;
+}
+
+input_runner *input_runner_start(const input_source_config *source, const input_controller_config *controller,
+                                 input_pick_fn pick, void *pick_ctx, input_sink *sink, struct session *sn,
+                                 tess_error *err)
+{
+    input_runner *r = calloc(1, sizeof *r);
+    if (!r) {
+        tess_error_set(err, "input: out of memory");
+        return NULL;
+    }
+    r->sink = sink;
+    r->pick = pick;
+    r->pick_ctx = pick_ctx;
+    r->wake_fd = -1;
+    atomic_init(&r->stop, false);
+    input_controller_hooks hooks = {
+        .ctx = r, .pick = hook_pick, .emit = hook_emit, .current_camera = hook_current_camera};
+    r->controller = input_controller_create(controller, &hooks);
+    r->wake_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    if (!r->controller || r->wake_fd < 0) {
+        tess_error_set(err, "input: out of memory or file descriptors");
+        goto fail;
+    }
+    r->source = input_source_open(source, sn, err);
+    if (!r->source)
+        goto fail;
+    if (pthread_create(&r->thread, NULL, input_main, r) != 0) {
+        tess_error_set(err, "input: cannot start the input thread");
+        goto fail;
+    }
+    r->started = true;
+    return r;
+fail:
+    input_runner_stop(r);
+    return NULL;
+}
+
+void input_runner_stop(input_runner *r)
+{
+    if (!r)
+        return;
+    if (r->started) {
+        atomic_store(&r->stop, true);
+        uint64_t one = 1;
+        if (write(r->wake_fd, &one, sizeof one) < 0)
+            log_warn("input: waking the input thread failed: %s", strerror(errno));
+        pthread_join(r->thread, NULL);
+    }
+    input_source_close(r->source);
+    input_controller_destroy(r->controller);
+    if (r->wake_fd >= 0)
+        close(r->wake_fd);
+    free(r);
+}

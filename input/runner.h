@@ -1,0 +1,32 @@
+/* runner.h - the input thread: polls libinput (source.h), feeds the mapping
+ * layer (controller.h) and its clock, and hands what it says to the sink
+ * (sink.h), which queues pipeline transactions. Nothing here touches
+ * renderer state.
+ *
+ * The thread waits in poll(2) on libinput's fd and a wake-up eventfd, with
+ * the controller's deadline as time-out (animation ticks at ~60 Hz while
+ * something moves, the idle deadline otherwise). */
+#ifndef TESSERA_INPUT_RUNNER_H
+#define TESSERA_INPUT_RUNNER_H
+
+#include "engine/err.h"
+#include "input/controller.h"
+#include "input/sink.h"
+#include "input/source.h"
+
+struct session;
+
+typedef struct input_runner input_runner;
+
+/* Pick callback as in controller.h (called on the input thread). */
+typedef void (*input_pick_fn)(void *ctx, vec3 origin, vec3 dir, input_hit *out);
+
+/* Open the devices and start the thread. NULL with err. */
+input_runner *input_runner_start(const input_source_config *source, const input_controller_config *controller,
+                                 input_pick_fn pick, void *pick_ctx, input_sink *sink, struct session *sn,
+                                 tess_error *err);
+
+/* Stop the thread and close the devices (before the sink goes). NULL is fine. */
+void input_runner_stop(input_runner *r);
+
+#endif

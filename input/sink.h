@@ -1,0 +1,76 @@
+/* sink.h - input transactions (controller.h's input_txn) into a running
+ * pipeline: each becomes a pipeline transaction, recorded to a file when
+ * asked (record.h); recorded ones play back through the same path; the
+ * attract tour runs here as a serial animation.
+ *
+ * COALESCING. Camera and cursor changes go through a one-slot mailbox: the
+ * first change queues one transaction and later ones only overwrite the slot
+ * until that transaction runs at the barrier and empties it. So however fast
+ * input arrives, at most one camera transaction waits at a time, and the one
+ * that runs applies the newest camera. Everything else (status, hide,
+ * unhide, tour, quit) is queued in order as its own transaction.
+ *
+ * THE TOUR. TOUR on: from the next frame the wall's camera follows the tour
+ * path (looping, from its first key), eased in from the camera shown when it
+ * starts over tour_ease_s of pipeline time; TOUR off: the camera stays where
+ * the tour left it. input_sink_current_camera tells the input thread which
+ * camera the wall shows, for the hand-over.
+ *
+ * Threading: input_sink_emit from one thread at a time besides the pipeline
+ * (the input thread, or the replay thread); `lock` guards the mailbox and
+ * the shown camera and is never held across anything that blocks; the
+ * record file has its own lock. Tour state is touched only in the serial
+ * section. */
+#ifndef TESSERA_INPUT_SINK_H
+#define TESSERA_INPUT_SINK_H
+
+#include <stdbool.h>
+
+#include "engine/camera_path.h"
+#include "engine/err.h"
+#include "engine/pipeline.h"
+#include "input/controller.h"
+#include "input/record.h"
+
+typedef struct input_sink_config {
+    const camera_path *tour;  /* NULL: no tour; kept by the caller while the sink lives */
+    double tour_ease_s;       /* easing into the tour; 0: 2 s */
+    const char *record_file;  /* NULL or "": no recording */
+    bool print_status;        /* status texts also to stdout */
+} input_sink_config;
+
+typedef struct input_sink input_sink;
+
+/* Before pipeline_run (registers the tour animation). NULL with err. */
+input_sink *input_sink_create(pipeline *p, const input_sink_config *cfg, tess_error *err);
+
+/* After pipeline_run has returned (joins a replay thread). */
+void input_sink_destroy(input_sink *s);
+
+/* Queue (and record) one transaction. */
+void input_sink_emit(input_sink *s, const input_txn *t);
+
+/* The camera the wall shows (the last set by the sink or the tour; before
+ * any, the pipeline's channel 0 camera at creation). */
+camera_desc input_sink_current_camera(input_sink *s);
+
+typedef enum input_replay_speed {
+    INPUT_REPLAY_RECORDED, /* at the recorded times, from the call (a thread) */
+    INPUT_REPLAY_FRAMES,   /* one transaction per frame, from the next frame */
+    INPUT_REPLAY_ALL,      /* all queued now: they apply before the next frame */
+} input_replay_speed;
+
+#define INPUT_REPLAY_SPEED_NAMES "recorded, frames, all"
+bool input_replay_speed_from_name(const char *name, input_replay_speed *out);
+
+/* Play a record back through the sink (the record is copied). Before
+ * pipeline_run, or while running for RECORDED. False with err. */
+bool input_sink_replay(input_sink *s, const input_record *rec, input_replay_speed speed, tess_error *err);
+
+/* Transactions emitted, and those the pipeline refused (queue full, stopped). */
+typedef struct input_sink_stats {
+    uint64_t emitted, refused, camera_transactions, coalesced;
+} input_sink_stats;
+input_sink_stats input_sink_get_stats(input_sink *s);
+
+#endif

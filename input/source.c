@@ -1,0 +1,419 @@
+/* source.c - libinput devices as input events (source.h). */
+#include "input/source.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <libinput.h>
+#include <libudev.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "engine/log.h"
+#include "wall/session.h"
+
+#define PATH_RETRY_S 1.0
+#define SCROLL_FINGER_PX_PER_CLICK 15.0 /* touchpad two-finger scroll: pixels that make one wheel click */
+
+/* What we keep per device (libinput's user data). */
+typedef struct device_info {
+    int id;                  /* the event's device number */
+    camera_window area;      /* where an absolute device lands on the plane */
+    char name[INPUT_NAME_BYTES];
+} device_info;
+
+struct input_source {
+    input_source_config cfg;
+    session *sn;
+    struct udev *udev;
+    struct libinput *li;
+    int next_device_id;
+    int device_count;
+    bool path_open[INPUT_MAX_PATHS];
+    struct libinput_device *path_device[INPUT_MAX_PATHS];
+    double next_path_retry_s;
+};
+
+static double mono_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+/* ---- opening device nodes: through the seat when there is one ---------------- */
+
+static int open_restricted(const char *path, int flags, void *user_data)
+{
+    input_source *s = user_data;
+    if (s->sn && session_has_seat(s->sn)) {
+        tess_error err = {{0}};
+        int fd = session_open_device(s->sn, path, &err);
+        if (fd < 0) {
+            log_warn("input: %s", err.msg);
+            return -EACCES;
+        }
+        return fd;
+    }
+    int fd = open(path, flags | O_CLOEXEC);
+    return fd < 0 ? -errno : fd;
+}
+
+static void close_restricted(int fd, void *user_data)
+{
+    input_source *s = user_data;
+    if (s->sn && session_has_seat(s->sn))
+        session_close_device(s->sn, fd);
+    else
+        close(fd);
+}
+
+static const struct libinput_interface interface = {
+    .open_restricted = open_restricted,
+    .close_restricted = close_restricted,
+};
+
+/* ---- devices -------------------------------------------------------------------- */
+
+static bool find_output(const input_source_config *cfg, const char *name, camera_window *out)
+{
+    for (int i = 0; i < cfg->output_count; i++)
+        if (strcmp(cfg->outputs[i].name, name) == 0) {
+            *out = cfg->outputs[i].window;
+            return true;
+        }
+    return false;
+}
+
+/* The area an absolute device covers: its rule's output, else the plane. */
+static camera_window device_area(const input_source *s, struct libinput_device *dev, const char *name)
+{
+    const char *node = NULL;
+    struct udev_device *ud = libinput_device_get_udev_device(dev);
+    if (ud)
+        node = udev_device_get_devnode(ud);
+    camera_window area = CAMERA_WINDOW_FULL;
+    for (int i = 0; i < s->cfg.rule_count; i++) {
+        const input_device_rule *r = &s->cfg.rules[i];
+        if (strcmp(r->device, name) == 0 || (node && strcmp(r->device, node) == 0)) {
+            find_output(&s->cfg, r->output, &area); /* checked at open */
+            log_info("input: '%s' covers output %s", name, r->output);
+            break;
+        }
+    }
+    if (ud)
+        udev_device_unref(ud);
+    return area;
+}
+
+static void device_added(input_source *s, struct libinput_device *dev, input_event *e)
+{
+    device_info *info = calloc(1, sizeof *info);
+    if (!info) {
+        log_error("input: out of memory for a device");
+        return;
+    }
+    info->id = s->next_device_id++;
+    snprintf(info->name, sizeof info->name, "%s", libinput_device_get_name(dev));
+    info->area = device_area(s, dev, info->name);
+    libinput_device_set_user_data(dev, info);
+    s->device_count++;
+    static const struct {
+        enum libinput_device_capability cap;
+        const char *name;
+    } caps[] = {{LIBINPUT_DEVICE_CAP_KEYBOARD, "keyboard"}, {LIBINPUT_DEVICE_CAP_POINTER, "pointer"},
+                {LIBINPUT_DEVICE_CAP_TOUCH, "touch"},       {LIBINPUT_DEVICE_CAP_GESTURE, "gestures"},
+                {LIBINPUT_DEVICE_CAP_TABLET_TOOL, "tablet"}};
+    char what[96] = "";
+    for (size_t i = 0; i < sizeof caps / sizeof caps[0]; i++)
+        if (libinput_device_has_capability(dev, caps[i].cap))
+            snprintf(what + strlen(what), sizeof what - strlen(what), "%s%s", what[0] ? ", " : "", caps[i].name);
+    log_info("input: device %d added: '%s' (%s) %s", info->id, info->name, libinput_device_get_sysname(dev),
+             what[0] ? what : "no capability we use");
+    e->kind = INPUT_DEVICE_ADDED;
+    e->device = info->id;
+}
+
+static device_info *info_of(struct libinput_device *dev) { return libinput_device_get_user_data(dev); }
+
+static void device_removed(input_source *s, struct libinput_device *dev, input_event *e)
+{
+    device_info *info = info_of(dev);
+    for (int i = 0; i < s->cfg.path_count; i++)
+        if (s->path_device[i] == dev) {
+            s->path_open[i] = false;
+            s->path_device[i] = NULL;
+            libinput_device_unref(dev);
+        }
+    e->kind = INPUT_DEVICE_REMOVED;
+    e->device = info ? info->id : -1;
+    if (info) {
+        log_info("input: device %d removed: '%s'", info->id, info->name);
+        libinput_device_set_user_data(dev, NULL);
+        free(info);
+        s->device_count--;
+    }
+}
+
+static void retry_paths(input_source *s)
+{
+    double now = mono_s();
+    if (now < s->next_path_retry_s)
+        return;
+    s->next_path_retry_s = now + PATH_RETRY_S;
+    for (int i = 0; i < s->cfg.path_count; i++) {
+        if (s->path_open[i])
+            continue;
+        struct libinput_device *dev = libinput_path_add_device(s->li, s->cfg.paths[i]);
+        if (dev) {
+            s->path_open[i] = true;
+            s->path_device[i] = libinput_device_ref(dev);
+        }
+    }
+}
+
+/* ---- opening ---------------------------------------------------------------------- */
+
+input_source *input_source_open(const input_source_config *cfg, struct session *sn, tess_error *err)
+{
+    for (int i = 0; i < cfg->rule_count; i++) {
+        camera_window w;
+        if (!find_output(cfg, cfg->rules[i].output, &w)) {
+            tess_error_set(err, "input: device '%s' is mapped to output '%s', which the wall does not have",
+                           cfg->rules[i].device, cfg->rules[i].output);
+            return NULL;
+        }
+    }
+    input_source *s = calloc(1, sizeof *s);
+    if (!s) {
+        tess_error_set(err, "input: out of memory");
+        return NULL;
+    }
+    s->cfg = *cfg;
+    s->sn = sn;
+    if (cfg->path_count > 0) {
+        s->li = libinput_path_create_context(&interface, s);
+        if (!s->li) {
+            tess_error_set(err, "input: libinput: cannot create a path context");
+            goto fail;
+        }
+        for (int i = 0; i < cfg->path_count; i++) {
+            struct libinput_device *dev = libinput_path_add_device(s->li, cfg->paths[i]);
+            if (dev) {
+                s->path_open[i] = true;
+                s->path_device[i] = libinput_device_ref(dev);
+            } else {
+                log_warn("input: %s: cannot open it as an input device now; trying again every second",
+                         cfg->paths[i]);
+            }
+        }
+        s->next_path_retry_s = mono_s() + PATH_RETRY_S;
+    } else {
+        s->udev = udev_new();
+        if (!s->udev) {
+            tess_error_set(err, "input: cannot create a udev context");
+            goto fail;
+        }
+        s->li = libinput_udev_create_context(&interface, s, s->udev);
+        const char *seat = cfg->seat[0] ? cfg->seat : "seat0";
+        if (!s->li || libinput_udev_assign_seat(s->li, seat) != 0) {
+            tess_error_set(err, "input: libinput could not take seat '%s' through udev", seat);
+            goto fail;
+        }
+    }
+    return s;
+fail:
+    input_source_close(s);
+    return NULL;
+}
+
+void input_source_close(input_source *s)
+{
+    if (!s)
+        return;
+    if (s->li) {
+        for (int i = 0; i < s->cfg.path_count; i++)
+            if (s->path_device[i])
+                libinput_device_unref(s->path_device[i]);
+        libinput_suspend(s->li); /* removes every device: their infos are freed by the events */
+        struct libinput_event *ev;
+        libinput_dispatch(s->li);
+        while ((ev = libinput_get_event(s->li))) {
+            if (libinput_event_get_type(ev) == LIBINPUT_EVENT_DEVICE_REMOVED) {
+                struct libinput_device *dev = libinput_event_get_device(ev);
+                free(info_of(dev));
+                libinput_device_set_user_data(dev, NULL);
+            }
+            libinput_event_destroy(ev);
+        }
+        libinput_unref(s->li);
+    }
+    if (s->udev)
+        udev_unref(s->udev);
+    free(s);
+}
+
+int input_source_fd(const input_source *s) { return libinput_get_fd(s->li); }
+int input_source_device_count(const input_source *s) { return s->device_count; }
+
+/* ---- events ------------------------------------------------------------------------- */
+
+/* A fraction (0..1 across the device) inside an area, as plane coordinates. */
+void input_area_point(const camera_window *a, double fx, double fy, double *sx, double *sy)
+{
+    *sx = (double)a->center_x + (2.0 * fx - 1.0) * (double)a->half_width;
+    *sy = (double)a->center_y - (2.0 * fy - 1.0) * (double)a->half_height;
+}
+
+/* Convert one libinput event; returns how many input events it made (0..1),
+ * and whether a frame must close after it (non-touch events are one frame). */
+static bool convert(input_source *s, struct libinput_event *ev, input_event *e, bool *frame)
+{
+    enum libinput_event_type type = libinput_event_get_type(ev);
+    struct libinput_device *dev = libinput_event_get_device(ev);
+    *e = (input_event){0};
+    *frame = true;
+    if (type == LIBINPUT_EVENT_DEVICE_ADDED) {
+        device_added(s, dev, e);
+        *frame = false;
+        return true;
+    }
+    if (type == LIBINPUT_EVENT_DEVICE_REMOVED) {
+        device_removed(s, dev, e);
+        *frame = false;
+        return true;
+    }
+    device_info *info = info_of(dev);
+    if (!info)
+        return false;
+    e->device = info->id;
+    switch (type) {
+    case LIBINPUT_EVENT_KEYBOARD_KEY: {
+        struct libinput_event_keyboard *k = libinput_event_get_keyboard_event(ev);
+        e->kind = INPUT_KEY;
+        e->time_us = libinput_event_keyboard_get_time_usec(k);
+        e->code = (int)libinput_event_keyboard_get_key(k);
+        e->pressed = libinput_event_keyboard_get_key_state(k) == LIBINPUT_KEY_STATE_PRESSED;
+        return true;
+    }
+    case LIBINPUT_EVENT_POINTER_MOTION: {
+        struct libinput_event_pointer *p = libinput_event_get_pointer_event(ev);
+        e->kind = INPUT_POINTER_MOTION;
+        e->time_us = libinput_event_pointer_get_time_usec(p);
+        e->dx = libinput_event_pointer_get_dx(p) / s->cfg.px_per_unit_x;
+        e->dy = -libinput_event_pointer_get_dy(p) / s->cfg.px_per_unit_y;
+        return true;
+    }
+    case LIBINPUT_EVENT_POINTER_MOTION_ABSOLUTE: {
+        struct libinput_event_pointer *p = libinput_event_get_pointer_event(ev);
+        e->kind = INPUT_POINTER_ABS;
+        e->time_us = libinput_event_pointer_get_time_usec(p);
+        input_area_point(&info->area, libinput_event_pointer_get_absolute_x_transformed(p, 1),
+                   libinput_event_pointer_get_absolute_y_transformed(p, 1), &e->x, &e->y);
+        return true;
+    }
+    case LIBINPUT_EVENT_POINTER_BUTTON: {
+        struct libinput_event_pointer *p = libinput_event_get_pointer_event(ev);
+        e->kind = INPUT_BUTTON;
+        e->time_us = libinput_event_pointer_get_time_usec(p);
+        e->code = (int)libinput_event_pointer_get_button(p);
+        e->pressed = libinput_event_pointer_get_button_state(p) == LIBINPUT_BUTTON_STATE_PRESSED;
+        return true;
+    }
+    case LIBINPUT_EVENT_POINTER_SCROLL_WHEEL:
+    case LIBINPUT_EVENT_POINTER_SCROLL_FINGER: {
+        struct libinput_event_pointer *p = libinput_event_get_pointer_event(ev);
+        if (!libinput_event_pointer_has_axis(p, LIBINPUT_POINTER_AXIS_SCROLL_VERTICAL))
+            return false;
+        e->kind = INPUT_SCROLL;
+        e->time_us = libinput_event_pointer_get_time_usec(p);
+        /* libinput: positive is down (towards the user); ours: positive is away */
+        if (type == LIBINPUT_EVENT_POINTER_SCROLL_WHEEL)
+            e->dy = -libinput_event_pointer_get_scroll_value_v120(p, LIBINPUT_POINTER_AXIS_SCROLL_VERTICAL) / 120.0;
+        else
+            e->dy = -libinput_event_pointer_get_scroll_value(p, LIBINPUT_POINTER_AXIS_SCROLL_VERTICAL) /
+                    SCROLL_FINGER_PX_PER_CLICK;
+        return e->dy != 0.0;
+    }
+    case LIBINPUT_EVENT_TOUCH_DOWN:
+    case LIBINPUT_EVENT_TOUCH_MOTION: {
+        struct libinput_event_touch *t = libinput_event_get_touch_event(ev);
+        e->kind = type == LIBINPUT_EVENT_TOUCH_DOWN ? INPUT_TOUCH_DOWN : INPUT_TOUCH_MOTION;
+        e->time_us = libinput_event_touch_get_time_usec(t);
+        e->slot = libinput_event_touch_get_slot(t);
+        input_area_point(&info->area, libinput_event_touch_get_x_transformed(t, 1),
+                   libinput_event_touch_get_y_transformed(t, 1), &e->x, &e->y);
+        *frame = false;
+        return e->slot >= 0;
+    }
+    case LIBINPUT_EVENT_TOUCH_UP:
+    case LIBINPUT_EVENT_TOUCH_CANCEL: {
+        struct libinput_event_touch *t = libinput_event_get_touch_event(ev);
+        e->kind = type == LIBINPUT_EVENT_TOUCH_UP ? INPUT_TOUCH_UP : INPUT_TOUCH_CANCEL;
+        e->time_us = libinput_event_touch_get_time_usec(t);
+        e->slot = type == LIBINPUT_EVENT_TOUCH_UP ? libinput_event_touch_get_slot(t) : 0;
+        *frame = false;
+        return true;
+    }
+    case LIBINPUT_EVENT_TOUCH_FRAME: {
+        struct libinput_event_touch *t = libinput_event_get_touch_event(ev);
+        e->kind = INPUT_TOUCH_FRAME;
+        e->time_us = libinput_event_touch_get_time_usec(t);
+        *frame = false;
+        return true;
+    }
+    case LIBINPUT_EVENT_GESTURE_PINCH_BEGIN:
+    case LIBINPUT_EVENT_GESTURE_PINCH_UPDATE:
+    case LIBINPUT_EVENT_GESTURE_PINCH_END:
+    case LIBINPUT_EVENT_GESTURE_SWIPE_BEGIN:
+    case LIBINPUT_EVENT_GESTURE_SWIPE_UPDATE:
+    case LIBINPUT_EVENT_GESTURE_SWIPE_END: {
+        struct libinput_event_gesture *g = libinput_event_get_gesture_event(ev);
+        e->time_us = libinput_event_gesture_get_time_usec(g);
+        bool pinch = type == LIBINPUT_EVENT_GESTURE_PINCH_BEGIN || type == LIBINPUT_EVENT_GESTURE_PINCH_UPDATE ||
+                     type == LIBINPUT_EVENT_GESTURE_PINCH_END;
+        if (type == LIBINPUT_EVENT_GESTURE_PINCH_BEGIN || type == LIBINPUT_EVENT_GESTURE_SWIPE_BEGIN) {
+            e->kind = pinch ? INPUT_PINCH_BEGIN : INPUT_SWIPE_BEGIN;
+            e->fingers = libinput_event_gesture_get_finger_count(g);
+        } else if (type == LIBINPUT_EVENT_GESTURE_PINCH_END || type == LIBINPUT_EVENT_GESTURE_SWIPE_END) {
+            e->kind = pinch ? INPUT_PINCH_END : INPUT_SWIPE_END;
+            e->cancelled = libinput_event_gesture_get_cancelled(g) != 0;
+        } else {
+            e->kind = pinch ? INPUT_PINCH_UPDATE : INPUT_SWIPE_UPDATE;
+            e->dx = libinput_event_gesture_get_dx(g) / s->cfg.px_per_unit_x;
+            e->dy = -libinput_event_gesture_get_dy(g) / s->cfg.px_per_unit_y;
+            if (pinch)
+                e->scale = libinput_event_gesture_get_scale(g);
+        }
+        return true;
+    }
+    default:
+        return false;
+    }
+}
+
+bool input_source_dispatch(input_source *s, input_event_fn fn, void *ctx)
+{
+    if (s->cfg.path_count > 0)
+        retry_paths(s);
+    if (libinput_dispatch(s->li) != 0) {
+        log_error("input: libinput could not read its devices: %s", strerror(errno));
+        return false;
+    }
+    struct libinput_event *ev;
+    while ((ev = libinput_get_event(s->li))) {
+        input_event e;
+        bool frame;
+        if (convert(s, ev, &e, &frame)) {
+            fn(ctx, &e);
+            if (frame) {
+                input_event f = {.kind = INPUT_FRAME, .time_us = e.time_us, .device = e.device};
+                fn(ctx, &f);
+            }
+        }
+        libinput_event_destroy(ev);
+    }
+    return true;
+}

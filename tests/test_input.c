@@ -1,0 +1,896 @@
+/* test_input.c - the input mapping layer (input/controller.h) fed synthetic
+ * libinput-like events, the placement of absolute devices on the wall's plane
+ * (input/source.h), the record file (input/record.h), and record -> replay
+ * through a running pipeline giving the same camera bit for bit
+ * (input/sink.h). */
+#include <criterion/criterion.h>
+#include <linux/input-event-codes.h>
+#include <math.h>
+#include <pthread.h>
+#include <time.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/accel.h"
+#include "engine/camera.h"
+#include "engine/pipeline.h"
+#include "engine/scene.h"
+#include "input/controller.h"
+#include "input/navigate.h"
+#include "input/record.h"
+#include "input/sink.h"
+#include "input/source.h"
+#include "support.h"
+#include "wall/display.h"
+#include "wall/wall_config.h"
+#include "wall/wall_headless.h"
+
+#define ASPECT (16.f / 9.f)
+#define MAX_TXNS 8192
+
+/* ---- a world to pick in: a unit sphere at the origin (geometry 0) on a
+ * floor y = -1 (geometry 1), scaled by `scale` ---------------------------- */
+typedef struct rig {
+    input_txn txns[MAX_TXNS];
+    int count;
+    camera_desc shown;  /* what "the wall" shows: the last camera emitted */
+    double scale;
+    input_controller *c;
+    uint64_t now_us;
+} rig;
+
+static void rig_pick(void *ctx, vec3 o, vec3 d, input_hit *out)
+{
+    rig *r = ctx;
+    double s = r->scale;
+    *out = (input_hit){.hit = false};
+    /* sphere |p| = s (d is unit) */
+    double b = v3_dot(o, d), cc = v3_dot(o, o) - s * s, disc = b * b - cc;
+    if (disc >= 0.0) {
+        double t = -b - sqrt(disc);
+        if (t > 0.0) {
+            out->hit = true;
+            out->point = v3_add(o, v3_scale(d, (float)t));
+            out->geom_id = 0;
+            snprintf(out->what, sizeof out->what, "sphere");
+            return;
+        }
+    }
+    if (d.y < 0.f && o.y > -s) {
+        double t = (-s - o.y) / d.y;
+        out->hit = true;
+        out->point = v3_add(o, v3_scale(d, (float)t));
+        out->geom_id = 1;
+        snprintf(out->what, sizeof out->what, "floor");
+    }
+}
+
+static void rig_emit(void *ctx, const input_txn *t)
+{
+    rig *r = ctx;
+    cr_assert(r->count < MAX_TXNS);
+    r->txns[r->count++] = *t;
+    if (t->kind == INPUT_TXN_CAMERA)
+        r->shown = t->camera;
+}
+
+static camera_desc rig_current(void *ctx) { return ((rig *)ctx)->shown; }
+
+static camera_desc home_camera(double s)
+{
+    return (camera_desc){v3(0.f, (float)(0.5 * s), (float)(6.0 * s)), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+}
+
+static rig *rig_make(double scale, bool tour, double idle_s)
+{
+    rig *r = calloc(1, sizeof *r);
+    cr_assert(r);
+    r->scale = scale;
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.plane_aspect = ASPECT;
+    cfg.home = home_camera(scale);
+    cfg.scene_size = 4.0 * scale;
+    cfg.have_tour = tour;
+    cfg.idle_timeout_s = idle_s;
+    r->shown = cfg.home;
+    input_controller_hooks hooks = {.ctx = r, .pick = rig_pick, .emit = rig_emit, .current_camera = rig_current};
+    r->c = input_controller_create(&cfg, &hooks);
+    cr_assert(r->c);
+    r->now_us = 1000000;
+    input_controller_tick(r->c, r->now_us); /* the first tick (starts a tour when there is one) */
+    return r;
+}
+
+static void rig_free(rig *r)
+{
+    input_controller_destroy(r->c);
+    free(r);
+}
+
+static void send(rig *r, input_event e)
+{
+    e.time_us = r->now_us;
+    input_controller_event(r->c, &e);
+}
+
+static void frame(rig *r)
+{
+    send(r, (input_event){.kind = INPUT_FRAME});
+    r->now_us += 8000;
+}
+
+static void key(rig *r, int code, bool down)
+{
+    send(r, (input_event){.kind = INPUT_KEY, .code = code, .pressed = down});
+    frame(r);
+}
+
+static void button(rig *r, int code, bool down)
+{
+    send(r, (input_event){.kind = INPUT_BUTTON, .code = code, .pressed = down});
+    frame(r);
+}
+
+static void move_to(rig *r, double x, double y)
+{
+    send(r, (input_event){.kind = INPUT_POINTER_ABS, .x = x, .y = y});
+    frame(r);
+}
+
+static void touch(rig *r, input_event_kind kind, int slot, double x, double y)
+{
+    send(r, (input_event){.kind = kind, .slot = slot, .x = x, .y = y});
+}
+
+static void touch_frame(rig *r)
+{
+    send(r, (input_event){.kind = INPUT_TOUCH_FRAME});
+    r->now_us += 10000;
+}
+
+/* Time passes as the input thread lets it (input/runner.c): ticks at the
+ * controller's own deadlines only, so a deadline that never comes due fails. */
+static void tick_for(rig *r, double seconds)
+{
+    uint64_t end = r->now_us + (uint64_t)(seconds * 1e6);
+    for (int guard = 0;; guard++) {
+        cr_assert(guard < 100000, "the controller's deadline never moves on");
+        uint64_t due = input_controller_deadline_us(r->c, r->now_us);
+        if (due > end)
+            break;
+        if (due > r->now_us)
+            r->now_us = due;
+        input_controller_tick(r->c, r->now_us);
+        cr_assert(input_controller_deadline_us(r->c, r->now_us) > r->now_us || guard < 3,
+                  "the controller wants a tick now, again");
+    }
+    r->now_us = end;
+}
+
+static int count_kind(const rig *r, input_txn_kind k)
+{
+    int n = 0;
+    for (int i = 0; i < r->count; i++)
+        n += r->txns[i].kind == k;
+    return n;
+}
+
+static const input_txn *last_kind(const rig *r, input_txn_kind k)
+{
+    for (int i = r->count - 1; i >= 0; i--)
+        if (r->txns[i].kind == k)
+            return &r->txns[i];
+    return NULL;
+}
+
+/* Plane coordinates of world point p seen by c (camera_basis_window's basis). */
+static void project(const camera_desc *c, vec3 p, double *sx, double *sy)
+{
+    camera_basis b = camera_basis_window(c, ASPECT, CAMERA_WINDOW_FULL, 1600, 900);
+    vec3 d = v3_sub(p, b.eye);
+    double a = v3_dot(d, b.forward) / v3_dot(b.forward, b.forward);
+    *sx = v3_dot(d, b.right) / v3_dot(b.right, b.right) / a;
+    *sy = v3_dot(d, b.up) / v3_dot(b.up, b.up) / a;
+}
+
+static double dist(vec3 a, vec3 b) { return v3_length(v3_sub(a, b)); }
+
+/* ---- pointer -------------------------------------------------------------------- */
+
+Test(input, left_drag_orbits_about_the_picked_point_keeping_its_distance)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    move_to(r, 0.02, 0.03); /* over the sphere */
+    input_hit h;
+    vec3 o, d;
+    navigate_plane_ray(&r->shown, ASPECT, 0.02, 0.03, &o, &d);
+    rig_pick(r, o, d, &h);
+    cr_assert(h.hit && h.geom_id == 0);
+    vec3 pivot = h.point;
+    double d0 = dist(r->shown.eye, pivot);
+    button(r, BTN_LEFT, true);
+    int cams_before = count_kind(r, INPUT_TXN_CAMERA);
+    for (int i = 0; i < 60; i++)
+        move_to(r, 0.02 + 0.01 * i, 0.03 + 0.004 * i);
+    button(r, BTN_LEFT, false);
+    /* one camera per frame that moved */
+    cr_expect_eq(count_kind(r, INPUT_TXN_CAMERA) - cams_before, 59);
+    camera_desc c = r->shown;
+    cr_expect(fabs(dist(c.eye, pivot) - d0) < 1e-5 * d0, "pivot distance %g -> %g", d0, dist(c.eye, pivot));
+    cr_expect(dist(c.eye, home_camera(1.0).eye) > 0.5, "the camera did not turn");
+    double sx, sy, sx0, sy0;
+    camera_desc home = home_camera(1.0);
+    project(&home, pivot, &sx0, &sy0);
+    project(&c, pivot, &sx, &sy);
+    cr_expect(fabs(sx - sx0) < 1e-4 && fabs(sy - sy0) < 1e-4, "pivot moved in the image: (%g %g) -> (%g %g)", sx0,
+              sy0, sx, sy);
+    /* a drag is no click: nothing was picked */
+    cr_expect_eq(count_kind(r, INPUT_TXN_STATUS), 0);
+    rig_free(r);
+}
+
+Test(input, one_frame_of_many_motions_gives_one_camera_transaction)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    move_to(r, 0.0, 0.0);
+    button(r, BTN_LEFT, true);
+    int before = count_kind(r, INPUT_TXN_CAMERA), cursors = count_kind(r, INPUT_TXN_CURSOR);
+    for (int i = 1; i <= 25; i++) /* a fast mouse: 25 reports, one frame */
+        send(r, (input_event){.kind = INPUT_POINTER_MOTION, .dx = 0.004, .dy = 0.001});
+    frame(r);
+    cr_expect_eq(count_kind(r, INPUT_TXN_CAMERA) - before, 1);
+    cr_expect_eq(count_kind(r, INPUT_TXN_CURSOR) - cursors, 1);
+    const input_txn *cur = last_kind(r, INPUT_TXN_CURSOR);
+    cr_expect(cur->on && fabsf(cur->sx - 0.1f) < 1e-5f && fabsf(cur->sy - 0.025f) < 1e-5f);
+    rig_free(r);
+}
+
+Test(input, right_drag_pans_so_the_grabbed_point_follows_the_cursor)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    move_to(r, -0.05, 0.0);
+    input_hit h;
+    vec3 o, d;
+    navigate_plane_ray(&r->shown, ASPECT, -0.05, 0.0, &o, &d);
+    rig_pick(r, o, d, &h);
+    cr_assert(h.hit);
+    button(r, BTN_RIGHT, true);
+    move_to(r, 0.3, -0.2);
+    move_to(r, 0.45, -0.3);
+    button(r, BTN_RIGHT, false);
+    double sx, sy;
+    project(&r->shown, h.point, &sx, &sy);
+    cr_expect(fabs(sx - 0.45) < 1e-4 && fabs(sy + 0.3) < 1e-4, "grabbed point at (%g, %g), cursor (0.45, -0.3)", sx,
+              sy);
+    cr_expect(fabs(dist(r->shown.eye, r->shown.look_at) - dist(home_camera(1).eye, home_camera(1).look_at)) < 1e-5);
+    rig_free(r);
+}
+
+Test(input, wheel_dollies_towards_the_point_under_the_cursor)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    move_to(r, 0.3, -0.35); /* over the floor */
+    input_hit h;
+    vec3 o, d;
+    navigate_plane_ray(&r->shown, ASPECT, 0.3, -0.35, &o, &d);
+    rig_pick(r, o, d, &h);
+    cr_assert(h.hit && h.geom_id == 1);
+    double d0 = dist(r->shown.eye, h.point);
+    send(r, (input_event){.kind = INPUT_SCROLL, .dy = 2.0});
+    frame(r);
+    double d1 = dist(r->shown.eye, h.point);
+    cr_expect(fabs(d1 / d0 - 0.85 * 0.85) < 1e-5, "distance ratio %g, expected 0.7225", d1 / d0);
+    double sx, sy;
+    project(&r->shown, h.point, &sx, &sy);
+    cr_expect(fabs(sx - 0.3) < 1e-4 && fabs(sy + 0.35) < 1e-4, "the point left the cursor: (%g, %g)", sx, sy);
+    rig_free(r);
+}
+
+Test(input, click_picks_and_reports_the_object)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    move_to(r, 0.0, 0.0);
+    button(r, BTN_LEFT, true);
+    button(r, BTN_LEFT, false);
+    const input_txn *st = last_kind(r, INPUT_TXN_STATUS);
+    cr_assert(st, "no status after a click");
+    cr_expect(strstr(st->text, "picked sphere at ("), "status '%s'", st->text);
+    move_to(r, 0.95, 0.95); /* background */
+    button(r, BTN_LEFT, true);
+    button(r, BTN_LEFT, false);
+    cr_expect(strstr(last_kind(r, INPUT_TXN_STATUS)->text, "nothing"), "status '%s'", last_kind(r, INPUT_TXN_STATUS)->text);
+    /* hide the object under the cursor, then unhide all */
+    move_to(r, 0.0, 0.0);
+    key(r, KEY_H, true);
+    key(r, KEY_H, false);
+    const input_txn *hide = last_kind(r, INPUT_TXN_HIDE);
+    cr_assert(hide);
+    cr_expect_eq(hide->geom_id, 0u);
+    key(r, KEY_U, true);
+    cr_expect_eq(count_kind(r, INPUT_TXN_UNHIDE_ALL), 1);
+    rig_free(r);
+}
+
+/* ---- keyboard --------------------------------------------------------------------- */
+
+Test(input, flight_speed_scales_with_the_scene_and_with_plus_minus)
+{
+    for (int k = 0; k < 2; k++) {
+        double scale = k ? 10.0 : 1.0;
+        rig *r = rig_make(scale, false, 0.0);
+        camera_desc start = r->shown;
+        key(r, KEY_W, true);
+        tick_for(r, 1.0);
+        key(r, KEY_W, false);
+        double moved = dist(r->shown.eye, start.eye);
+        double expected = 4.0 * scale / 4.0; /* scene_size / 4 per second */
+        cr_expect(fabs(moved - expected) < 0.03 * expected, "scale %g: moved %g in 1 s, expected %g", scale, moved,
+                  expected);
+        /* along the view, look_at carried along */
+        vec3 view = v3_normalize(v3_sub(start.look_at, start.eye));
+        cr_expect(fabs(v3_dot(v3_sub(r->shown.eye, start.eye), view) - moved) < 1e-4 * expected);
+        cr_expect(fabs(dist(r->shown.eye, r->shown.look_at) - dist(start.eye, start.look_at)) < 1e-4 * scale);
+        key(r, KEY_EQUAL, true);
+        key(r, KEY_EQUAL, false);
+        cr_expect(fabs(input_controller_fly_speed(r->c) - 1.5 * scale) < 1e-9 * scale);
+        key(r, KEY_MINUS, true);
+        key(r, KEY_MINUS, false);
+        key(r, KEY_MINUS, true);
+        key(r, KEY_MINUS, false);
+        cr_expect(fabs(input_controller_fly_speed(r->c) - scale / 1.5) < 1e-9 * scale);
+        /* PageUp: up along the up hint */
+        camera_desc before = r->shown;
+        key(r, KEY_PAGEUP, true);
+        tick_for(r, 0.5);
+        key(r, KEY_PAGEUP, false);
+        vec3 dv = v3_sub(r->shown.eye, before.eye);
+        cr_expect(dv.y > 0.9f * v3_length(dv) && v3_length(dv) > 0.2 * scale / 1.5, "PageUp moved (%g %g %g)",
+                  (double)dv.x, (double)dv.y, (double)dv.z);
+        /* Home: back to the home view exactly */
+        key(r, KEY_HOME, true);
+        tick_for(r, 1.0);
+        cr_expect(memcmp(&r->shown, &start, sizeof start) == 0, "Home did not end at the home view");
+        rig_free(r);
+    }
+}
+
+Test(input, quit_chord_fires_once_and_only_with_all_keys)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    key(r, KEY_LEFTCTRL, true);
+    key(r, KEY_Q, true);
+    cr_expect_eq(count_kind(r, INPUT_TXN_QUIT), 0);
+    key(r, KEY_LEFTALT, true);
+    cr_expect_eq(count_kind(r, INPUT_TXN_QUIT), 1);
+    key(r, KEY_Q, false);
+    key(r, KEY_Q, true);
+    cr_expect_eq(count_kind(r, INPUT_TXN_QUIT), 2);
+    rig_free(r);
+}
+
+Test(input, a_vanished_device_leaves_no_key_held)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    send(r, (input_event){.kind = INPUT_KEY, .code = KEY_W, .pressed = true, .device = 3});
+    frame(r);
+    tick_for(r, 0.1);
+    send(r, (input_event){.kind = INPUT_DEVICE_REMOVED, .device = 3});
+    camera_desc after_removal = r->shown;
+    tick_for(r, 0.5);
+    cr_expect(memcmp(&after_removal, &r->shown, sizeof after_removal) == 0, "flight went on after the keyboard left");
+    cr_expect_eq(input_controller_deadline_us(r->c, r->now_us), UINT64_MAX);
+    rig_free(r);
+}
+
+/* ---- touch ----------------------------------------------------------------------------- */
+
+/* Spread two fingers around (cx, cy) from radius r0 to r1 in `steps` frames; returns the camera. */
+static camera_desc pinch(double r0, double r1, int steps, double scale)
+{
+    rig *r = rig_make(scale, false, 0.0);
+    double cx = 0.1, cy = -0.05;
+    touch(r, INPUT_TOUCH_DOWN, 0, cx - r0, cy);
+    touch(r, INPUT_TOUCH_DOWN, 1, cx + r0, cy);
+    touch_frame(r);
+    for (int i = 1; i <= steps; i++) {
+        double rad = r0 + (r1 - r0) * i / steps;
+        touch(r, INPUT_TOUCH_MOTION, 0, cx - rad, cy);
+        touch(r, INPUT_TOUCH_MOTION, 1, cx + rad, cy);
+        touch_frame(r);
+    }
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch(r, INPUT_TOUCH_UP, 1, 0, 0);
+    touch_frame(r);
+    cr_expect_eq(count_kind(r, INPUT_TXN_CAMERA), steps, "one camera per touch frame");
+    cr_expect_eq(count_kind(r, INPUT_TXN_STATUS), 0, "a pinch is no tap");
+    camera_desc c = r->shown;
+    rig_free(r);
+    return c;
+}
+
+Test(input, pinch_depends_only_on_the_spread_ratio)
+{
+    camera_desc home = home_camera(1.0);
+    camera_desc one = pinch(0.1, 0.2, 1, 1.0), many = pinch(0.1, 0.2, 17, 1.0), wide = pinch(0.3, 0.6, 5, 1.0);
+    /* doubling the spread halves every distance to the point between the fingers */
+    vec3 o, d;
+    navigate_plane_ray(&home, ASPECT, 0.1, -0.05, &o, &d);
+    input_hit h;
+    rig tmp = {.scale = 1.0};
+    rig_pick(&tmp, o, d, &h);
+    cr_assert(h.hit);
+    double ratio = dist(one.eye, h.point) / dist(home.eye, h.point);
+    cr_expect(fabs(ratio - 0.5) < 1e-5, "distance ratio %g for a doubled spread", ratio);
+    cr_expect(dist(one.eye, many.eye) < 1e-5, "1 step vs 17 steps differ by %g", dist(one.eye, many.eye));
+    cr_expect(dist(one.eye, wide.eye) < 1e-5, "spread 0.1->0.2 vs 0.3->0.6 differ by %g", dist(one.eye, wide.eye));
+    /* the scene 10 times larger: the same pinch, the camera 10 times farther */
+    camera_desc big = pinch(0.1, 0.2, 4, 10.0);
+    cr_expect(dist(v3_scale(one.eye, 10.f), big.eye) < 1e-4 * 10, "not scale invariant: %g",
+              dist(v3_scale(one.eye, 10.f), big.eye));
+}
+
+Test(input, two_finger_drag_pans_and_one_finger_orbits)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    /* one finger orbits about the point it landed on */
+    touch(r, INPUT_TOUCH_DOWN, 0, 0.0, 0.0);
+    touch_frame(r);
+    vec3 pivot;
+    {
+        vec3 o, d;
+        input_hit h;
+        navigate_plane_ray(&r->shown, ASPECT, 0.0, 0.0, &o, &d);
+        rig_pick(r, o, d, &h);
+        pivot = h.point;
+    }
+    double d0 = dist(r->shown.eye, pivot);
+    for (int i = 1; i <= 20; i++) {
+        touch(r, INPUT_TOUCH_MOTION, 0, 0.02 * i, 0.0);
+        touch_frame(r);
+    }
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch_frame(r);
+    cr_expect(fabs(dist(r->shown.eye, pivot) - d0) < 1e-5 * d0);
+    cr_expect(dist(r->shown.eye, home_camera(1).eye) > 0.3);
+    /* two fingers moving together: the point between them follows */
+    camera_desc before = r->shown;
+    touch(r, INPUT_TOUCH_DOWN, 0, -0.1, 0.0);
+    touch(r, INPUT_TOUCH_DOWN, 1, 0.1, 0.0);
+    touch_frame(r);
+    vec3 o, d;
+    input_hit h;
+    navigate_plane_ray(&before, ASPECT, 0.0, 0.0, &o, &d);
+    rig_pick(r, o, d, &h);
+    for (int i = 1; i <= 10; i++) {
+        touch(r, INPUT_TOUCH_MOTION, 0, -0.1 + 0.03 * i, 0.02 * i);
+        touch(r, INPUT_TOUCH_MOTION, 1, 0.1 + 0.03 * i, 0.02 * i);
+        touch_frame(r);
+    }
+    double sx, sy;
+    project(&r->shown, h.point, &sx, &sy);
+    cr_expect(fabs(sx - 0.3) < 1e-4 && fabs(sy - 0.2) < 1e-4, "panned point at (%g, %g), fingers' centre (0.3, 0.2)",
+              sx, sy);
+    rig_free(r);
+}
+
+Test(input, tap_picks_and_double_tap_flies_to_the_point)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    touch(r, INPUT_TOUCH_DOWN, 0, 0.0, 0.0);
+    touch_frame(r);
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch_frame(r);
+    cr_expect_eq(count_kind(r, INPUT_TXN_STATUS), 1);
+    cr_expect(strstr(last_kind(r, INPUT_TXN_STATUS)->text, "sphere"));
+    cr_expect_eq(count_kind(r, INPUT_TXN_CAMERA), 0, "a tap moved the camera");
+    r->now_us += 100000;
+    touch(r, INPUT_TOUCH_DOWN, 0, 0.005, 0.004);
+    touch_frame(r);
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch_frame(r);
+    cr_expect_eq(count_kind(r, INPUT_TXN_STATUS), 1, "the second tap of a double tap is no pick");
+    vec3 o, d;
+    input_hit h;
+    navigate_plane_ray(&r->shown, ASPECT, 0.005, 0.004, &o, &d);
+    rig_pick(r, o, d, &h);
+    double d0 = dist(r->shown.eye, h.point);
+    tick_for(r, 1.0);
+    cr_expect(memcmp(&r->shown.look_at, &h.point, sizeof h.point) == 0, "fly-to does not look at the tapped point");
+    cr_expect(fabs(dist(r->shown.eye, h.point) - 0.5 * d0) < 1e-4 * d0);
+    /* two slow taps far apart are two picks */
+    r->now_us += 2000000;
+    touch(r, INPUT_TOUCH_DOWN, 0, 0.5, 0.5);
+    touch_frame(r);
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch_frame(r);
+    cr_expect_eq(count_kind(r, INPUT_TXN_STATUS), 2);
+    rig_free(r);
+}
+
+Test(input, touchpad_pinch_and_swipe)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    move_to(r, 0.0, 0.0);
+    vec3 o, d;
+    input_hit h;
+    navigate_plane_ray(&r->shown, ASPECT, 0.0, 0.0, &o, &d);
+    rig_pick(r, o, d, &h);
+    double d0 = dist(r->shown.eye, h.point);
+    send(r, (input_event){.kind = INPUT_PINCH_BEGIN, .fingers = 2});
+    frame(r);
+    for (int i = 1; i <= 8; i++) {
+        send(r, (input_event){.kind = INPUT_PINCH_UPDATE, .scale = 1.0 + 0.25 * i});
+        frame(r);
+    }
+    send(r, (input_event){.kind = INPUT_PINCH_END});
+    frame(r);
+    cr_expect(fabs(dist(r->shown.eye, h.point) / d0 - 1.0 / 3.0) < 1e-5, "scale 3 gave distance ratio %g",
+              dist(r->shown.eye, h.point) / d0);
+    camera_desc before = r->shown;
+    send(r, (input_event){.kind = INPUT_SWIPE_BEGIN, .fingers = 3});
+    frame(r);
+    send(r, (input_event){.kind = INPUT_SWIPE_UPDATE, .dx = 0.1, .dy = 0.0});
+    frame(r);
+    cr_expect(dist(before.eye, r->shown.eye) > 1e-3, "a swipe did not pan");
+    cr_expect(fabs(dist(before.eye, before.look_at) - dist(r->shown.eye, r->shown.look_at)) < 1e-5);
+    rig_free(r);
+}
+
+/* ---- kiosk --------------------------------------------------------------------------- */
+
+Test(input, idle_tour_starts_stops_on_input_and_comes_back)
+{
+    rig *r = rig_make(1.0, true, 5.0);
+    cr_assert(input_controller_touring(r->c), "a kiosk with a tour starts touring");
+    const input_txn *t = last_kind(r, INPUT_TXN_TOUR);
+    cr_assert(t && t->on);
+    /* the tour shows some other camera; a touch hands over from it */
+    camera_desc tour_cam = {v3(3.f, 1.f, 3.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    r->shown = tour_cam;
+    touch(r, INPUT_TOUCH_DOWN, 0, 0.0, 0.0);
+    cr_expect(!input_controller_touring(r->c));
+    cr_expect(!last_kind(r, INPUT_TXN_TOUR)->on);
+    touch_frame(r);
+    for (int i = 1; i <= 5; i++) {
+        touch(r, INPUT_TOUCH_MOTION, 0, 0.05 * i, 0.0);
+        touch_frame(r);
+    }
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch_frame(r);
+    /* steering started from the tour's camera, not from home */
+    cr_expect(fabs(dist(r->shown.eye, v3(0, 0, 0)) - dist(tour_cam.eye, v3(0, 0, 0))) < 0.5,
+              "steering did not start from the tour camera");
+    /* idle for less than the timeout: no tour; after it: the tour again */
+    uint64_t deadline = input_controller_deadline_us(r->c, r->now_us);
+    cr_expect(deadline > r->now_us && deadline <= r->now_us + 5000000);
+    tick_for(r, 4.0);
+    cr_expect(!input_controller_touring(r->c));
+    tick_for(r, 1.2);
+    cr_expect(input_controller_touring(r->c));
+    cr_expect(last_kind(r, INPUT_TXN_TOUR)->on);
+    cr_expect_eq(count_kind(r, INPUT_TXN_TOUR), 3);
+    /* a held button keeps the tour away */
+    button(r, BTN_LEFT, true);
+    cr_expect(!input_controller_touring(r->c));
+    tick_for(r, 7.0);
+    cr_expect(!input_controller_touring(r->c), "the tour started under a held button");
+    rig_free(r);
+}
+
+/* ---- placement of absolute devices on the wall ---------------------------------------- */
+
+Test(input, a_touch_on_the_third_output_lands_on_that_place_of_the_wall)
+{
+    tess_error err = {{0}};
+    wall_config wall;
+    cr_assert(wall_config_load("../configs/walls/vm_2x2.json", &wall, &err), "%s", err.msg);
+    cr_assert(wall_config_headless_sizes(&wall, &err), "%s", err.msg);
+    camera_desc cam = home_camera(1.0);
+    float aspect = wall_plane_aspect(&wall);
+    camera_window w = wall_output_window(&wall, 2); /* Virtual-3: bottom left */
+    camera_basis b = camera_basis_window(&cam, aspect, w, wall.outputs[2].width_px, wall.outputs[2].height_px);
+    /* the touchscreen on Virtual-3 touched at the centre of its pixel (100, 300) of 640x480 */
+    for (int k = 0; k < 3; k++) {
+        int px = k == 0 ? 100 : k == 1 ? 0 : 639, py = k == 0 ? 300 : k == 1 ? 0 : 479;
+        double sx, sy;
+        input_area_point(&w, (px + 0.5) / 640.0, (py + 0.5) / 480.0, &sx, &sy);
+        vec3 o, d;
+        navigate_plane_ray(&cam, aspect, sx, sy, &o, &d);
+        vec3 want = v3_normalize(camera_pixel_direction(&b, px, py));
+        cr_expect(v3_length(v3_sub(d, want)) < 1e-5, "pixel (%d, %d): ray off by %g", px, py,
+                  (double)v3_length(v3_sub(d, want)));
+    }
+    /* and it is the bottom-left quarter of the plane */
+    double sx, sy;
+    input_area_point(&w, 0.5, 0.5, &sx, &sy);
+    cr_expect(sx < -0.3 && sy < -0.3, "centre of Virtual-3 at (%g, %g)", sx, sy);
+}
+
+/* ---- the record file -------------------------------------------------------------------- */
+
+Test(input, record_lines_read_back_bit_for_bit)
+{
+    input_txn in[7] = {
+        {.kind = INPUT_TXN_CAMERA,
+         .camera = {v3(0.1f, -1e-7f, 3.4028235e38f), v3(1.f / 3.f, 2.f, -7.f), v3(0.f, 1.f, 1e-20f), 39.99999f}},
+        {.kind = INPUT_TXN_CURSOR, .on = true, .sx = -0.3f, .sy = 0.7f},
+        {.kind = INPUT_TXN_STATUS, .text = "picked mesh 0 'a \"q\" \\ b' \x01\xe9"},
+        {.kind = INPUT_TXN_HIDE, .geom_id = 4000000000u},
+        {.kind = INPUT_TXN_UNHIDE_ALL},
+        {.kind = INPUT_TXN_TOUR, .on = true},
+        {.kind = INPUT_TXN_QUIT},
+    };
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    cr_assert(f);
+    fprintf(f, "%s\n", INPUT_RECORD_HEADER);
+    for (int i = 0; i < 7; i++)
+        cr_assert(input_record_write(f, 0.25 * i, &in[i]));
+    fclose(f);
+    input_record rec;
+    tess_error err = {{0}};
+    cr_assert(input_record_parse("rec.txt", buf, len, &rec, &err), "%s\n%s", err.msg, buf);
+    cr_assert_eq(rec.count, 7u);
+    for (int i = 0; i < 7; i++) {
+        const input_txn *a = &in[i], *b = &rec.entries[i].txn;
+        cr_expect_eq(a->kind, b->kind);
+        cr_expect(fabs(rec.entries[i].time_s - 0.25 * i) < 1e-9);
+        if (a->kind == INPUT_TXN_CAMERA)
+            cr_expect(memcmp(&a->camera, &b->camera, sizeof a->camera) == 0, "camera not bit for bit");
+        if (a->kind == INPUT_TXN_CURSOR)
+            cr_expect(a->on == b->on && a->sx == b->sx && a->sy == b->sy);
+        if (a->kind == INPUT_TXN_STATUS)
+            cr_expect_str_eq(a->text, b->text);
+        if (a->kind == INPUT_TXN_HIDE)
+            cr_expect_eq(a->geom_id, b->geom_id);
+        if (a->kind == INPUT_TXN_TOUR)
+            cr_expect(b->on);
+    }
+    input_record_free(&rec);
+    free(buf);
+}
+
+Test(input, bad_record_files_name_the_line_and_the_problem)
+{
+    static const struct {
+        const char *text, *expect;
+    } cases[] = {
+        {"", "rec.txt: empty file"},
+        {"hello\n", "rec.txt:1: not an input record"},
+        {INPUT_RECORD_HEADER "\n0.1 camera 1 2 3\n", "rec.txt:2: camera look_at.x is missing"},
+        {INPUT_RECORD_HEADER "\n0.1 camera 0 0 0 0 0 0 0 1 0 40\n", "rec.txt:2: camera"},
+        {INPUT_RECORD_HEADER "\n\n# c\n0.1 zoom 3\n", "rec.txt:4: unknown transaction kind 'zoom'"},
+        {INPUT_RECORD_HEADER "\n0.5 quit\n0.25 quit\n", "rec.txt:3: time 0.250000 is before"},
+        {INPUT_RECORD_HEADER "\n0.1 cursor 2 0 0\n", "rec.txt:2: cursor visibility: expected 0 or 1"},
+        {INPUT_RECORD_HEADER "\n0.1 cursor 1 nan 0\n", "rec.txt:2: cursor x: expected a finite number"},
+        {INPUT_RECORD_HEADER "\n0.1 cursor 1 0.1 0\n", "rec.txt:2: cursor x: 0.10000000000000001 is not exactly a float"},
+        {INPUT_RECORD_HEADER "\n0.1 status \"abc\n", "rec.txt:2: status: the text has no closing quote"},
+        {INPUT_RECORD_HEADER "\n0.1 status \"a\\q\"\n", "rec.txt:2: status: unknown escape"},
+        {INPUT_RECORD_HEADER "\n0.1 hide -1\n", "rec.txt:2: hide: the geometry id must be a whole number"},
+        {INPUT_RECORD_HEADER "\n0.1 tour 1 extra\n", "rec.txt:2: unexpected text after the transaction"},
+        {INPUT_RECORD_HEADER "\n-1 quit\n", "rec.txt:2: the time is negative"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        input_record rec = {0};
+        tess_error err = {{0}};
+        cr_expect(!input_record_parse("rec.txt", cases[i].text, strlen(cases[i].text), &rec, &err), "case %zu parsed",
+                  i);
+        cr_expect(strstr(err.msg, cases[i].expect), "case %zu: '%s' does not contain '%s'", i, err.msg,
+                  cases[i].expect);
+    }
+    tess_error err = {{0}};
+    input_record rec;
+    cr_expect(!input_record_load("/nonexistent/rec.txt", &rec, &err));
+    cr_expect(strstr(err.msg, "/nonexistent/rec.txt: cannot open"), "%s", err.msg);
+}
+
+/* ---- record -> replay through a pipeline ------------------------------------------------ */
+
+typedef struct live {
+    scene *scene;
+    accel *accel;
+    pipeline *p;
+    input_sink *sink;
+} live;
+
+static live live_make(const char *record_file, int frames)
+{
+    live l = {0};
+    tess_error err = {{0}};
+    l.scene = scene_create_default(&err);
+    cr_assert(l.scene, "%s", err.msg);
+    l.accel = accel_build(l.scene, 1, &err);
+    cr_assert(l.accel, "%s", err.msg);
+    pipeline_config cfg = pipeline_config_default(l.scene, l.accel);
+    cfg.threads = 2;
+    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
+    cfg.max_frames = (uint64_t)frames;
+    l.p = pipeline_create(&cfg, &err);
+    cr_assert(l.p, "%s", err.msg);
+    camera_desc cam = home_camera(3.0);
+    image_display *d = display_create("null", NULL, false, &err);
+    cr_assert(d, "%s", err.msg);
+    cr_assert(pipeline_add_channel(l.p, &cam, 32, 18, d, &err) >= 0, "%s", err.msg);
+    input_sink_config sc = {.record_file = record_file};
+    l.sink = input_sink_create(l.p, &sc, &err);
+    cr_assert(l.sink, "%s", err.msg);
+    return l;
+}
+
+static void live_free(live *l)
+{
+    input_sink_destroy(l->sink);
+    pipeline_destroy(l->p);
+    accel_destroy(l->accel);
+    scene_destroy(l->scene);
+}
+
+static void drive_emit(void *ctx, const input_txn *t) { input_sink_emit(ctx, t); }
+static camera_desc drive_current(void *ctx) { return input_sink_current_camera(ctx); }
+static void drive_pick(void *ctx, vec3 o, vec3 d, input_hit *out)
+{
+    (void)ctx;
+    rig tmp = {.scale = 1.0};
+    rig_pick(&tmp, o, d, out);
+}
+
+typedef struct run_args {
+    pipeline *p;
+    bool ok;
+    tess_error err;
+} run_args;
+
+static void *run_pipeline(void *arg)
+{
+    run_args *a = arg;
+    a->ok = pipeline_run(a->p, &a->err);
+    return NULL;
+}
+
+static void sleep_ms(int ms)
+{
+    struct timespec ts = {0, ms * 1000000L};
+    nanosleep(&ts, NULL);
+}
+
+/* Replay `file` into a fresh pipeline at `speed`; its camera when done. */
+static camera_desc replayed_camera(const char *file, input_replay_speed speed, size_t *entries)
+{
+    input_record rec;
+    tess_error err = {{0}};
+    cr_assert(input_record_load(file, &rec, &err), "%s", err.msg);
+    *entries = rec.count;
+    live b = live_make(NULL, speed == INPUT_REPLAY_ALL ? 1 : (int)rec.count + 2);
+    cr_assert(input_sink_replay(b.sink, &rec, speed, &err), "%s", err.msg);
+    input_record_free(&rec);
+    cr_assert(pipeline_run(b.p, &err), "%s", err.msg);
+    camera_desc c = pipeline_camera(b.p, 0);
+    live_free(&b);
+    return c;
+}
+
+Test(input, a_recorded_session_replays_to_the_same_camera_bit_for_bit, .timeout = 60)
+{
+    char dir[256], file[300];
+    support_make_tmp_dir(dir, sizeof dir, "input-replay");
+    snprintf(file, sizeof file, "%s/rec.txt", dir);
+    /* a live session: the controller's transactions go through the sink while frames render */
+    live a = live_make(file, 0);
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.plane_aspect = 32.f / 18.f;
+    cfg.home = home_camera(3.0);
+    cfg.scene_size = 8.0;
+    input_controller_hooks hooks = {.ctx = a.sink, .pick = drive_pick, .emit = drive_emit, .current_camera = drive_current};
+    input_controller *c = input_controller_create(&cfg, &hooks);
+    cr_assert(c);
+    run_args ra = {.p = a.p};
+    pthread_t th;
+    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+    uint64_t t = 1000000;
+    input_controller_tick(c, t);
+    input_event e = {0};
+#define SEND(...) (e = (input_event){__VA_ARGS__}, e.time_us = t, input_controller_event(c, &e))
+#define FRAME() (SEND(.kind = INPUT_FRAME), t += 7000, sleep_ms(1))
+    SEND(.kind = INPUT_POINTER_ABS, .x = 0.1, .y = 0.05);
+    FRAME();
+    SEND(.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = true);
+    FRAME();
+    for (int i = 0; i < 40; i++) { /* orbit */
+        SEND(.kind = INPUT_POINTER_MOTION, .dx = 0.013, .dy = 0.004);
+        SEND(.kind = INPUT_POINTER_MOTION, .dx = 0.006, .dy = -0.001);
+        FRAME();
+    }
+    SEND(.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = false);
+    FRAME();
+    SEND(.kind = INPUT_SCROLL, .dy = 1.0); /* dolly */
+    FRAME();
+    SEND(.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = true); /* click: pick */
+    FRAME();
+    SEND(.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = false);
+    FRAME();
+    SEND(.kind = INPUT_KEY, .code = KEY_A, .pressed = true); /* flight */
+    FRAME();
+    for (int i = 0; i < 20; i++) {
+        t += INPUT_TICK_US;
+        input_controller_tick(c, t);
+        sleep_ms(1);
+    }
+    SEND(.kind = INPUT_KEY, .code = KEY_A, .pressed = false);
+    FRAME();
+#undef FRAME
+#undef SEND
+    camera_desc steered = input_controller_camera(c);
+    /* wait until the wall shows the last camera, then stop */
+    for (int i = 0; i < 5000; i++) {
+        camera_desc shown = input_sink_current_camera(a.sink);
+        if (memcmp(&shown, &steered, sizeof shown) == 0)
+            break;
+        sleep_ms(2);
+    }
+    pipeline_stop(a.p);
+    pthread_join(th, NULL);
+    cr_assert(ra.ok, "%s", ra.err.msg);
+    camera_desc live_cam = pipeline_camera(a.p, 0);
+    cr_assert(memcmp(&live_cam, &steered, sizeof live_cam) == 0, "the live pipeline did not end at the steered camera");
+    input_sink_stats st = input_sink_get_stats(a.sink);
+    cr_expect(st.emitted > 60, "only %llu transactions", (unsigned long long)st.emitted);
+    cr_expect_eq(st.refused, 0u);
+    input_controller_destroy(c);
+    live_free(&a);
+
+    size_t n_all, n_frames;
+    camera_desc all = replayed_camera(file, INPUT_REPLAY_ALL, &n_all);
+    camera_desc frames = replayed_camera(file, INPUT_REPLAY_FRAMES, &n_frames);
+    cr_expect_eq(n_all, (size_t)st.emitted, "the record holds %zu of %llu transactions", n_all,
+                 (unsigned long long)st.emitted);
+    cr_expect(memcmp(&all, &live_cam, sizeof all) == 0, "replay (all) differs from the live camera");
+    cr_expect(memcmp(&frames, &live_cam, sizeof frames) == 0, "replay (frames) differs from the live camera");
+    support_remove_tmp_dir(dir);
+}
+
+Test(input, replay_at_the_recorded_times_applies_each_when_due, .timeout = 60)
+{
+    char dir[256], file[300];
+    support_make_tmp_dir(dir, sizeof dir, "input-timed");
+    snprintf(file, sizeof file, "%s/rec.txt", dir);
+    FILE *f = fopen(file, "w");
+    cr_assert(f);
+    fprintf(f, "%s\n", INPUT_RECORD_HEADER);
+    camera_desc cams[3];
+    for (int i = 0; i < 3; i++) {
+        cams[i] = home_camera(3.0 + i);
+        input_txn t = {.kind = INPUT_TXN_CAMERA, .camera = cams[i]};
+        cr_assert(input_record_write(f, 0.3 * (i + 1), &t));
+    }
+    fclose(f);
+    input_record rec;
+    tess_error err = {{0}};
+    cr_assert(input_record_load(file, &rec, &err), "%s", err.msg);
+    live l = live_make(NULL, 0);
+    cr_assert(input_sink_replay(l.sink, &rec, INPUT_REPLAY_RECORDED, &err), "%s", err.msg);
+    input_record_free(&rec);
+    run_args ra = {.p = l.p};
+    pthread_t th;
+    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+    sleep_ms(150); /* before the first entry is due: the start camera */
+    camera_desc shown = input_sink_current_camera(l.sink), start = home_camera(3.0);
+    cr_expect(memcmp(&shown, &start, sizeof shown) == 0, "an entry applied before its time");
+    sleep_ms(1200); /* all three are due (even on a slow machine they are queued by now) */
+    for (int i = 0; i < 500; i++) {
+        shown = input_sink_current_camera(l.sink);
+        if (memcmp(&shown, &cams[2], sizeof shown) == 0)
+            break;
+        sleep_ms(10);
+    }
+    pipeline_stop(l.p);
+    pthread_join(th, NULL);
+    cr_assert(ra.ok, "%s", ra.err.msg);
+    camera_desc last = pipeline_camera(l.p, 0);
+    cr_expect(memcmp(&last, &cams[2], sizeof last) == 0, "the timed replay did not end at the last entry");
+    live_free(&l);
+    support_remove_tmp_dir(dir);
+}

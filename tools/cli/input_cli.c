@@ -1,0 +1,381 @@
+/* input_cli.c - input options, config section and start-up (input_cli.h). */
+#include "input_cli.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/accel.h"
+#include "engine/camera_path.h"
+#include "engine/log.h"
+#include "engine/scene.h"
+#include "input/bindings.h"
+#include "input/controller.h"
+#include "input/record.h"
+#include "input/runner.h"
+#include "pipeline_cli.h"
+
+void cli_input_spec_default(cli_input_spec *s)
+{
+    memset(s, 0, sizeof *s);
+    s->enabled = -1;
+    s->idle_timeout_s = 60.0;
+    s->tour_ease_s = 2.0;
+    s->replay_speed = INPUT_REPLAY_RECORDED;
+}
+
+bool cli_input_wanted(const cli_input_spec *s)
+{
+    return s->enabled == 1 || s->record_file[0] || s->replay_file[0];
+}
+
+/* ---- options ------------------------------------------------------------------- */
+
+static bool copy_text(const char *what, const char *value, char *out, size_t size)
+{
+    if (strlen(value) >= size) {
+        cli_error("%s: value longer than %zu bytes", what, size - 1);
+        return false;
+    }
+    snprintf(out, size, "%s", value);
+    return true;
+}
+
+/* "DEVICE=OUTPUT" */
+static bool parse_map(const char *what, const char *value, cli_input_spec *s)
+{
+    const char *eq = strrchr(value, '=');
+    if (!eq || eq == value || !eq[1]) {
+        cli_error("%s: '%s' is not DEVICE=OUTPUT (a device name or /dev/input node, an output's connector)", what,
+                  value);
+        return false;
+    }
+    if (s->map_count == INPUT_MAX_RULES) {
+        cli_error("%s: more than %d device mappings", what, INPUT_MAX_RULES);
+        return false;
+    }
+    input_device_rule *r = &s->map[s->map_count];
+    size_t n = (size_t)(eq - value);
+    if (n >= sizeof r->device || strlen(eq + 1) >= sizeof r->output) {
+        cli_error("%s: '%s': device or output name too long", what, value);
+        return false;
+    }
+    memcpy(r->device, value, n);
+    r->device[n] = '\0';
+    snprintf(r->output, sizeof r->output, "%s", eq + 1);
+    s->map_count++;
+    return true;
+}
+
+static bool parse_seconds(const char *what, const char *value, double lo, double *out)
+{
+    char *end;
+    double v = strtod(value, &end);
+    if (end == value || *end || !isfinite(v) || v < lo || v > 1e6) {
+        cli_error("%s: '%s' is not a number of seconds in [%g, 1e6]", what, value, lo);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+bool cli_input_option(int argc, char **argv, int *i, cli_input_spec *s, bool *handled)
+{
+    const char *a = argv[*i], *val;
+    *handled = true;
+    if (!strcmp(a, "--input")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (strcmp(val, "on") && strcmp(val, "off")) {
+            cli_error("--input: '%s' (expected on or off)", val);
+            return false;
+        }
+        s->enabled = !strcmp(val, "on");
+        return true;
+    } else if (!strcmp(a, "--bindings")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_text(a, val, s->bindings_file, sizeof s->bindings_file);
+    } else if (!strcmp(a, "--seat")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_text(a, val, s->seat, sizeof s->seat);
+    } else if (!strcmp(a, "--input-device")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (s->device_count == INPUT_MAX_PATHS) {
+            cli_error("--input-device: more than %d devices", INPUT_MAX_PATHS);
+            return false;
+        }
+        return copy_text(a, val, s->devices[s->device_count++], sizeof s->devices[0]);
+    } else if (!strcmp(a, "--map-input")) {
+        return (val = cli_option_value(argc, argv, i)) && parse_map(a, val, s);
+    } else if (!strcmp(a, "--idle-timeout")) {
+        return (val = cli_option_value(argc, argv, i)) && parse_seconds(a, val, 0.0, &s->idle_timeout_s);
+    } else if (!strcmp(a, "--tour")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_text(a, val, s->tour_file, sizeof s->tour_file);
+    } else if (!strcmp(a, "--record-input")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_text(a, val, s->record_file, sizeof s->record_file);
+    } else if (!strcmp(a, "--replay-input")) {
+        return (val = cli_option_value(argc, argv, i)) && copy_text(a, val, s->replay_file, sizeof s->replay_file);
+    } else if (!strcmp(a, "--replay-speed")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (!input_replay_speed_from_name(val, &s->replay_speed)) {
+            cli_error("--replay-speed: '%s' (expected one of: %s)", val, INPUT_REPLAY_SPEED_NAMES);
+            return false;
+        }
+        s->replay_speed_given = true;
+        return true;
+    }
+    *handled = false;
+    return true;
+}
+
+void cli_input_usage(FILE *f)
+{
+    fputs("input options (a config's \"input\" object sets the same; docs/pipeline-config.md):\n"
+          "  --input on|off   libinput devices steer the camera (default: on for `run` on a DRM wall)\n"
+          "  --bindings FILE  keys, buttons and gestures (configs/bindings.json; default: its contents)\n"
+          "  --seat NAME      libinput's udev seat (default seat0)\n"
+          "  --input-device PATH  use only these devices (libinput's path backend; repeatable)\n"
+          "  --map-input DEVICE=OUTPUT  a touchscreen or tablet (name or /dev/input node) covers that\n"
+          "                   output of the wall (repeatable; default: the whole wall)\n"
+          "  --idle-timeout S seconds without input before the attract tour starts (0: never; default 60)\n"
+          "  --tour FILE      the tour's camera path (default: --path, if given)\n"
+          "  --record-input FILE  write the transactions input makes, with their times\n"
+          "  --replay-input FILE  play recorded input transactions back\n"
+          "  --replay-speed recorded|frames|all  at their times, one per frame, or all before the\n"
+          "                   first frame (default: recorded for run, all for render)\n",
+          f);
+}
+
+/* ---- the config's "input" object --------------------------------------------------- */
+
+static bool config_text(jr_ctx *c, json_object *obj, const char *key, const char *config_file, bool path, char *out,
+                        size_t size)
+{
+    const char *v = NULL;
+    if (!jr_opt_string(c, obj, key, &v))
+        return false;
+    if (!v)
+        return true;
+    char resolved[CLI_INPUT_PATH_BYTES];
+    if (path && v[0] != '/') { /* relative to the config file */
+        const char *slash = strrchr(config_file, '/');
+        int dir_len = slash ? (int)(slash - config_file + 1) : 0;
+        if (snprintf(resolved, sizeof resolved, "%.*s%s", dir_len, config_file, v) >= (int)sizeof resolved)
+            return jr_member_fail(c, key, "path too long");
+        v = resolved;
+    }
+    if (strlen(v) >= size)
+        return jr_member_fail(c, key, "too long");
+    snprintf(out, size, "%s", v);
+    return true;
+}
+
+static bool config_devices(jr_ctx *c, json_object *obj, cli_input_spec *s)
+{
+    json_object *arr;
+    if (!jr_get_member(obj, "devices", &arr))
+        return true;
+    size_t saved = jr_field_key(c, "devices");
+    bool ok = jr_expect_array(c, arr);
+    size_t n = ok ? json_object_array_length(arr) : 0;
+    if (ok && n > INPUT_MAX_PATHS)
+        ok = jr_field_fail(c, "at most %d devices, got %zu", INPUT_MAX_PATHS, n);
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t at = jr_field_index(c, i);
+        json_object *v = json_object_array_get_idx(arr, i);
+        if (!v || !json_object_is_type(v, json_type_string) || !json_object_get_string_len(v))
+            ok = jr_field_fail(c, "expected a device path (a non-empty string), got %s", jr_kind(v));
+        else if ((size_t)json_object_get_string_len(v) >= sizeof s->devices[0])
+            ok = jr_field_fail(c, "path too long");
+        else
+            snprintf(s->devices[i], sizeof s->devices[0], "%s", json_object_get_string(v));
+        jr_field_leave(c, at);
+    }
+    jr_field_leave(c, saved);
+    if (ok)
+        s->device_count = (int)n;
+    return ok;
+}
+
+static bool config_map(jr_ctx *c, json_object *obj, cli_input_spec *s)
+{
+    static const char *const fields[] = {"device", "output", NULL};
+    json_object *arr;
+    if (!jr_get_member(obj, "map", &arr))
+        return true;
+    size_t saved = jr_field_key(c, "map");
+    bool ok = jr_expect_array(c, arr);
+    size_t n = ok ? json_object_array_length(arr) : 0;
+    if (ok && n > INPUT_MAX_RULES)
+        ok = jr_field_fail(c, "at most %d mappings, got %zu", INPUT_MAX_RULES, n);
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t at = jr_field_index(c, i);
+        json_object *v = json_object_array_get_idx(arr, i);
+        input_device_rule *r = &s->map[i];
+        ok = jr_expect_object(c, v) && jr_check_fields(c, v, fields) && jr_require_member(c, v, "device") &&
+             jr_require_member(c, v, "output") &&
+             config_text(c, v, "device", "", false, r->device, sizeof r->device) &&
+             config_text(c, v, "output", "", false, r->output, sizeof r->output);
+        jr_field_leave(c, at);
+    }
+    jr_field_leave(c, saved);
+    if (ok)
+        s->map_count = (int)n;
+    return ok;
+}
+
+bool cli_input_config_load(jr_ctx *c, json_object *root, const char *config_file, cli_input_spec *s)
+{
+    static const char *const fields[] = {"enabled", "bindings", "seat", "devices", "map", "idle_timeout_s",
+                                         "tour", "tour_ease_s", NULL};
+    json_object *obj;
+    if (!jr_get_member(root, "input", &obj))
+        return true;
+    size_t saved = jr_field_key(c, "input");
+    bool enabled = s->enabled == 1;
+    json_object *given;
+    bool had_enabled = obj && json_object_is_type(obj, json_type_object) && jr_get_member(obj, "enabled", &given);
+    static const jr_range timeout = {0.0, 1e6, false, false};
+    static const jr_range ease = {0.0, 600.0, true, false};
+    bool ok = jr_expect_object(c, obj) && jr_check_fields(c, obj, fields) && jr_opt_bool(c, obj, "enabled", &enabled) &&
+              config_text(c, obj, "bindings", config_file, true, s->bindings_file, sizeof s->bindings_file) &&
+              config_text(c, obj, "seat", config_file, false, s->seat, sizeof s->seat) && config_devices(c, obj, s) &&
+              config_map(c, obj, s) && jr_opt_double(c, obj, "idle_timeout_s", timeout, &s->idle_timeout_s) &&
+              config_text(c, obj, "tour", config_file, true, s->tour_file, sizeof s->tour_file) &&
+              jr_opt_double(c, obj, "tour_ease_s", ease, &s->tour_ease_s);
+    if (ok && had_enabled)
+        s->enabled = enabled ? 1 : 0;
+    jr_field_leave(c, saved);
+    return ok;
+}
+
+/* ---- running ----------------------------------------------------------------------------- */
+
+struct cli_input {
+    input_sink *sink;
+    input_runner *runner;
+    camera_path tour;
+    const cli_scene *cs;
+    char record_file[CLI_INPUT_PATH_BYTES];
+};
+
+/* The first surface along a ray (the input thread; the accel is read-only but
+ * for the hidden flags, which it reads atomically). */
+static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
+{
+    const cli_scene *cs = ctx;
+    ray r = {.org = origin, .dir = dir, .t_near = 0.f, .t_far = INFINITY};
+    hit h;
+    *out = (input_hit){.hit = false};
+    if (!accel_intersect(cs->accel, &r, &h))
+        return;
+    out->hit = true;
+    out->point = v3_add(origin, v3_scale(dir, h.t));
+    out->geom_id = h.geom_id;
+    out->prim_id = h.prim_id;
+    const scene *s = cs->scene;
+    if (h.geom_id < s->mesh_count)
+        snprintf(out->what, sizeof out->what, "mesh %u '%s' triangle %u", h.geom_id, s->meshes[h.geom_id].name,
+                 h.prim_id);
+    else
+        snprintf(out->what, sizeof out->what, "sphere %u", h.prim_id);
+}
+
+static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs)
+{
+    tess_error err = {{0}};
+    input_controller_config cc;
+    input_controller_config_default(&cc);
+    if (s->bindings_file[0] && !input_bindings_load(s->bindings_file, &cc.bindings, &err)) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    input_source_config sc = {0};
+    snprintf(sc.seat, sizeof sc.seat, "%s", s->seat);
+    for (int i = 0; i < s->device_count; i++)
+        snprintf(sc.paths[i], sizeof sc.paths[i], "%s", s->devices[i]);
+    sc.path_count = s->device_count;
+    memcpy(sc.rules, s->map, sizeof s->map);
+    sc.rule_count = s->map_count;
+    sc.output_count = cli_pipeline_layout(p, &cc.plane_aspect, sc.outputs, INPUT_MAX_OUTPUTS);
+    camera_basis b0 = pipeline_channel_basis(p, 0);
+    const camera_window *w0 = &sc.outputs[0].window;
+    sc.px_per_unit_x = (double)b0.width_px / (2.0 * (double)w0->half_width);
+    sc.px_per_unit_y = (double)b0.height_px / (2.0 * (double)w0->half_height);
+    cc.home = pipeline_camera(p, 0);
+    vec3 lo, hi;
+    if (scene_bounds(cs->scene, &lo, &hi))
+        cc.scene_size = v3_length(v3_sub(hi, lo));
+    cc.idle_timeout_s = s->idle_timeout_s;
+    cc.have_tour = in->tour.count > 0;
+    in->runner = input_runner_start(&sc, &cc, pick, (void *)cs, in->sink, cli_pipeline_session(), &err);
+    if (!in->runner) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    return true;
+}
+
+cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, const char *tour_path)
+{
+    cli_input *in = calloc(1, sizeof *in);
+    if (!in) {
+        cli_error("input: out of memory");
+        return NULL;
+    }
+    in->cs = cs;
+    tess_error err = {{0}};
+    const char *tour_file = s->tour_file[0] ? s->tour_file : tour_path;
+    if (s->enabled == 1 && tour_file && tour_file[0] && !camera_path_load(tour_file, &in->tour, &err)) {
+        cli_error("%s", err.msg);
+        goto fail;
+    }
+    input_sink_config sk = {.tour = in->tour.count ? &in->tour : NULL,
+                            .tour_ease_s = s->tour_ease_s,
+                            .record_file = s->record_file,
+                            .print_status = true};
+    in->sink = input_sink_create(p, &sk, &err);
+    if (!in->sink) {
+        cli_error("%s", err.msg);
+        goto fail;
+    }
+    if (s->replay_file[0]) {
+        input_record rec;
+        if (!input_record_load(s->replay_file, &rec, &err)) {
+            cli_error("--replay-input %s", err.msg);
+            goto fail;
+        }
+        bool ok = input_sink_replay(in->sink, &rec, s->replay_speed, &err);
+        fprintf(stderr, "tessera: replaying %zu input transactions from %s\n", rec.count, s->replay_file);
+        input_record_free(&rec);
+        if (!ok) {
+            cli_error("%s", err.msg);
+            goto fail;
+        }
+    }
+    if (s->enabled == 1 && !start_devices(in, s, p, cs))
+        goto fail;
+    return in;
+fail:
+    cli_input_finish(in);
+    return NULL;
+}
+
+void cli_input_finish(cli_input *in)
+{
+    if (!in)
+        return;
+    input_runner_stop(in->runner);
+    if (in->sink) {
+        input_sink_stats st = input_sink_get_stats(in->sink);
+        if (st.emitted)
+            fprintf(stderr,
+                    "tessera: input: %llu transactions (%llu camera transactions queued, %llu camera changes "
+                    "coalesced into them, %llu refused)\n",
+                    (unsigned long long)st.emitted, (unsigned long long)st.camera_transactions,
+                    (unsigned long long)st.coalesced, (unsigned long long)st.refused);
+    }
+    input_sink_destroy(in->sink);
+    camera_path_free(&in->tour);
+    free(in);
+}

@@ -1,0 +1,62 @@
+/* input_cli.h - the command line's side of input: options and the "input"
+ * section of a pipeline config, and starting the input thread (input/runner.h),
+ * the transaction sink with its tour (input/sink.h), recording and replay for
+ * a pipeline the commands made. */
+#ifndef TESSERA_CLI_INPUT_H
+#define TESSERA_CLI_INPUT_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "cli.h"
+#include "engine/json_read.h"
+#include "engine/pipeline.h"
+#include "input/sink.h"
+#include "input/source.h"
+
+#define CLI_INPUT_PATH_BYTES 4096
+
+typedef struct cli_input_spec {
+    int enabled;                 /* -1: the command's default, 0 off, 1 on */
+    char bindings_file[CLI_INPUT_PATH_BYTES]; /* "" = the built-in bindings (configs/bindings.json) */
+    char seat[64];               /* "" = seat0 */
+    char devices[INPUT_MAX_PATHS][INPUT_NAME_BYTES]; /* the path backend with these, else udev */
+    int device_count;
+    input_device_rule map[INPUT_MAX_RULES]; /* absolute device -> output */
+    int map_count;
+    double idle_timeout_s;       /* before the tour starts; 0: never */
+    char tour_file[CLI_INPUT_PATH_BYTES]; /* "" = the pipeline's --path, if any */
+    double tour_ease_s;
+    char record_file[CLI_INPUT_PATH_BYTES];
+    char replay_file[CLI_INPUT_PATH_BYTES];
+    input_replay_speed replay_speed;
+    bool replay_speed_given;
+} cli_input_spec;
+
+/* Input off unless asked, bindings built in, seat0, idle timeout 60 s, tour ease 2 s. */
+void cli_input_spec_default(cli_input_spec *s);
+
+/* Like cli_pipeline_option, for the input options. */
+bool cli_input_option(int argc, char **argv, int *i, cli_input_spec *s, bool *handled);
+
+/* The "input" member of a pipeline config (the current field of c is the
+ * config's top level); relative paths are resolved against config_file. */
+bool cli_input_config_load(jr_ctx *c, json_object *root, const char *config_file, cli_input_spec *s);
+
+void cli_input_usage(FILE *f);
+
+/* Whether the spec needs anything started for a pipeline. */
+bool cli_input_wanted(const cli_input_spec *s);
+
+typedef struct cli_input cli_input;
+
+/* Before pipeline_run: the sink (tour, recording), replay, and with
+ * s->enabled == 1 the input thread on the devices. `tour_path` is the
+ * pipeline's --path, used as the tour when the spec names none. NULL after
+ * printing the error. */
+cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, const char *tour_path);
+
+/* After pipeline_run: stops the input thread, reports, frees. NULL is fine. */
+void cli_input_finish(cli_input *in);
+
+#endif
