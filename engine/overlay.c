@@ -187,7 +187,7 @@ bool overlay_plan_make(overlay_plan *plan, const overlay_state *s, camera_window
     plan->text[plan->text_len] = '\0';
     if (plan->text_len > 0) {
         double px, py;
-        plane_to_pixel(window, width_px, height_px, -1.0, -1.0, &px, &py);
+        plane_to_pixel(window, width_px, height_px, (double)s->anchor_sx, (double)s->anchor_sy, &px, &py);
         int x0 = (int)floor(px + 0.5), y1 = (int)floor(py + 0.5);
         int band_w = (plan->text_len * OVERLAY_CELL_W - 1 + 2 * OVERLAY_PAD) * scale;
         int band_h = (OVERLAY_CELL_H + 2 * OVERLAY_PAD) * scale;

@@ -20,9 +20,11 @@
  * that crosses outputs has a different size on each.
  *
  * STATUS LINE: white text on a dark translucent band (every pixel under it is
- * multiplied by OVERLAY_BAND_KEEP), anchored at the plane's bottom-left
- * corner (-1, -1): the band's bottom-left corner is the pixel corner nearest
- * to that point. Band, in font pixels: OVERLAY_PAD, then the glyph cells
+ * multiplied by OVERLAY_BAND_KEEP), anchored at the bottom-left corner of
+ * what the outputs show (state.anchor_*: the least left and least bottom edge
+ * of the channels' windows; (-1, -1) for windows covering the plane; on a wall
+ * with bezels the plane's own corner lies behind one): the band's bottom-left
+ * corner is the pixel corner nearest to that point. Band, in font pixels: OVERLAY_PAD, then the glyph cells
  * (OVERLAY_CELL_W x OVERLAY_CELL_H each, the last cell without its spacing
  * column), then OVERLAY_PAD, on every side; so in channel pixels it is
  *     width  (len * OVERLAY_CELL_W - 1 + 2 * OVERLAY_PAD) * scale
@@ -67,6 +69,9 @@
  * serial section). */
 typedef struct overlay_state {
     char status[OVERLAY_TEXT_BYTES]; /* printable ASCII only; "": no status line */
+    float anchor_sx, anchor_sy;      /* the status line's bottom-left corner, a plane point: the
+                                        bottom-left corner of the outputs' windows (the plane's
+                                        corner itself may lie behind a bezel) */
     bool cursor_visible;
     float cursor_sx, cursor_sy;      /* the tip, a plane point; finite */
 } overlay_state;

@@ -359,6 +359,12 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     c->plane_aspect = plane_aspect;
     c->window = window;
     c->display = display;
+    /* the status line's corner: the bottom-left of every window so far */
+    float left = window.center_x - window.half_width, bottom = window.center_y - window.half_height;
+    if (p->channel_count == 0 || left < p->overlay.anchor_sx)
+        p->overlay.anchor_sx = left;
+    if (p->channel_count == 0 || bottom < p->overlay.anchor_sy)
+        p->overlay.anchor_sy = bottom;
     size_t floats = (size_t)width_px * (size_t)height_px * 3;
     /* cache-line aligned, so a tile row shares lines with a neighbour tile only where the
      * image width makes it (16-pixel float RGB rows are whole lines) */

@@ -485,6 +485,7 @@ Test(overlay, images_with_an_overlay_are_identical_for_threads_tile_sizes_and_or
     render_image(&v, 1, ref, NULL);
     overlay_state st;
     memset(&st, 0, sizeof st);
+    st.anchor_sx = st.anchor_sy = -1.f; /* one channel showing the whole plane */
     overlay_set_status(&st, ov.status);
     st.cursor_visible = true;
     st.cursor_sx = ov.sx;
@@ -824,6 +825,7 @@ Test(hide, frames_stay_whole_while_another_thread_picks_and_moves_the_cursor, .t
             refs[hidden][c] = render_plain(&fx, RACE_W, RACE_H);
             overlay_state st;
             memset(&st, 0, sizeof st);
+            st.anchor_sx = st.anchor_sy = -1.f;
             overlay_set_status(&st, "racing");
             st.cursor_visible = true;
             st.cursor_sx = race_cursor[c][0];
@@ -877,5 +879,39 @@ Test(hide, frames_stay_whole_while_another_thread_picks_and_moves_the_cursor, .t
         for (int c = 0; c < RACE_CURSORS; c++)
             free(refs[hidden][c]);
     grabbed_free(&g);
+    fixture_free(&fx);
+}
+
+/* A wall with bezels: the windows leave a margin around the plane, so the
+ * plane's corner (-1, -1) is behind a bezel. The status line sits at the
+ * bottom-left corner of the bottom-left output instead, fully visible. */
+Test(overlay, the_status_line_starts_at_the_bottom_left_output_not_behind_a_bezel, .timeout = 60)
+{
+    fixture fx = fixture_default();
+    const int w = 64, h = 48;
+    const float aspect = 2.f * (float)w / (float)h / 0.9f;
+    /* two outputs side by side, each 0.9 of its half in x and 0.9 of the height, gaps between */
+    channel_spec wall[2] = {{{-0.5f, 0.f, 0.45f, 0.9f}, aspect, w, h}, {{0.5f, 0.f, 0.45f, 0.9f}, aspect, w, h}};
+    overlay_setup ov = {"bezel", false, 0.f, 0.f};
+    grabbed plain[2], drawn[2];
+    pipeline_config cfg = config(&fx, 2);
+    run_channels(&fx, cfg, wall, 2, no_overlay, NULL, NULL, plain);
+    run_channels(&fx, cfg, wall, 2, ov, NULL, NULL, drawn);
+    /* the band: from the left output's bottom-left pixel, (5 * 6 - 1 + 4) x 13 pixels at scale 1 */
+    const int band_w = 5 * OVERLAY_CELL_W - 1 + 2 * OVERLAY_PAD, band_h = OVERLAY_CELL_H + 2 * OVERLAY_PAD;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            size_t i = 3 * ((size_t)y * w + x);
+            bool in_band = x < band_w && y >= h - band_h;
+            bool changed = !same_pixel(&plain[0].frames[0][i], &drawn[0].frames[0][i]);
+            cr_assert_eq(changed, in_band, "left output pixel (%d, %d): %s", x, y,
+                         in_band ? "not darkened by the band" : "changed outside the band");
+            cr_assert(same_pixel(&plain[1].frames[0][i], &drawn[1].frames[0][i]), "right output pixel (%d, %d) changed",
+                      x, y);
+        }
+    for (int i = 0; i < 2; i++) {
+        grabbed_free(&plain[i]);
+        grabbed_free(&drawn[i]);
+    }
     fixture_free(&fx);
 }
