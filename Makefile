@@ -81,11 +81,13 @@ run: deps
 	./tessera run
 
 # the whole suite (Criterion prints its summary line), then the DRM/KMS wall end to end in a
-# qemu guest (tests/vm_wall.sh: its own summary line; SKIPPED, said so, when qemu cannot be installed)
+# qemu guest (tests/vm_wall.sh) and input driving it there (tests/vm_input.sh): each its own
+# summary line; SKIPPED, said so, when qemu cannot be installed
 test: deps
 	$(MAKE) $(TEST_BIN) tessera check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
 	sh tests/vm_wall.sh
+	sh tests/vm_input.sh
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan: deps
@@ -96,7 +98,7 @@ test-asan: deps
 # the threaded tests under ThreadSanitizer; any report fails the run. Criterion
 # cannot start under TSan (its issue #274), so these files are compiled against
 # tests/tsan/criterion/criterion.h, a stand-in that runs the same Test() bodies.
-TSAN_TESTS := tests/test_pipeline.c
+TSAN_TESTS := tests/test_pipeline.c tests/test_overlay.c tests/test_input.c
 TSAN_BIN := build-tsan/tessera_tsan_tests
 test-tsan: deps
 	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)

@@ -9,7 +9,9 @@
  * message and exits 1; a test's .timeout (default 600 s) is an alarm that
  * kills the run, so a deadlock fails instead of hanging.
  * Supports only what those files use: Test(suite, name[, .timeout = N]),
- * cr_assert, cr_assert_not, cr_assert_eq, cr_assert_null. */
+ * cr_assert, cr_assert_not, cr_assert_eq, cr_assert_null, cr_expect*,
+ * cr_expect_str_eq. Several test files link into one binary: the registry and
+ * main() are weak definitions, so each file's copy is the same one. */
 #ifndef TESSERA_TSAN_CRITERION_SHIM_H
 #define TESSERA_TSAN_CRITERION_SHIM_H
 
@@ -32,8 +34,8 @@ typedef struct shim_options {
 } shim_options;
 
 #define SHIM_MAX_TESTS 256
-static shim_test shim_tests[SHIM_MAX_TESTS];
-static int shim_test_count;
+__attribute__((weak)) shim_test shim_tests[SHIM_MAX_TESTS];
+__attribute__((weak)) int shim_test_count;
 
 static inline void shim_register(const char *suite, const char *name, void (*fn)(void), shim_options o)
 {
@@ -76,9 +78,11 @@ static inline void shim_check(bool ok, const char *file, int line, const char *e
 #define cr_expect(cond, ...) cr_assert(cond, __VA_ARGS__)
 #define cr_expect_not(cond, ...) cr_assert_not(cond, __VA_ARGS__)
 #define cr_expect_eq(a, b, ...) cr_assert_eq(a, b, __VA_ARGS__)
+#define cr_expect_str_eq(a, b, ...) shim_check(strcmp((a), (b)) == 0, __FILE__, __LINE__, #a " == " #b, " " __VA_ARGS__)
 
 /* Run every test whose "suite/name" starts with argv[1] (all without one). */
-int main(int argc, char **argv)
+int main(int argc, char **argv);
+__attribute__((weak)) int main(int argc, char **argv)
 {
     const char *prefix = argc > 1 ? argv[1] : "";
     int ran = 0;
