@@ -13,8 +13,12 @@
 #include <unistd.h>
 
 #include "engine/log.h"
+#include "wall/session.h"
+
+#define SEAT_CHECK_MS 200 /* with a seat: how often the input thread looks whether it is still ours */
 
 struct input_runner {
+    struct session *sn;       /* the seat (NULL: none): its devices are revoked on a VT switch */
     input_source *source;
     input_controller *controller;
     input_sink *sink;
@@ -65,6 +69,9 @@ static void *input_main(void *arg)
         uint64_t now = now_us();
         uint64_t deadline = input_controller_deadline_us(r->controller, now);
         int timeout_ms = 1000; /* also how often missing path devices are tried again */
+        bool seat = r->sn && session_has_seat(r->sn);
+        if (seat)
+            timeout_ms = SEAT_CHECK_MS;
         if (deadline != UINT64_MAX) {
             uint64_t wait_us = deadline > now ? deadline - now : 0;
             if (wait_us < 1000000u)
@@ -79,6 +86,12 @@ static void *input_main(void *arg)
         }
         if (atomic_load(&r->stop))
             break;
+        /* a VT switch: the seat revokes our devices; release them in libinput and take them back
+         * on return (the display thread acknowledges the switch; this thread only follows it) */
+        if (seat && !session_active(r->sn))
+            input_source_suspend(r->source);
+        else if (seat && input_source_suspended(r->source))
+            input_source_resume(r->source);
         if (!input_source_dispatch(r->source, on_event, r)) {
             log_error("input: libinput failed; input stops (the wall goes on)");
             break;
@@ -112,6 +125,7 @@ input_runner *input_runner_start(const input_source_config *source, const input_
         tess_error_set(err, "input: out of memory or file descriptors");
         goto fail;
     }
+    r->sn = sn;
     r->source = input_source_open(source, sn, err);
     if (!r->source)
         goto fail;

@@ -1,10 +1,12 @@
 /* source.c - libinput devices as input events (source.h). */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "input/source.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <libinput.h>
 #include <libudev.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +22,7 @@
 /* What we keep per device (libinput's user data). */
 typedef struct device_info {
     int id;                  /* the event's device number */
+    int path_index;          /* path backend: which configured path it is, else -1 */
     camera_window area;      /* where an absolute device lands on the plane */
     char name[INPUT_NAME_BYTES];
 } device_info;
@@ -31,9 +34,10 @@ struct input_source {
     struct libinput *li;
     int next_device_id;
     int device_count;
-    bool path_open[INPUT_MAX_PATHS];
-    struct libinput_device *path_device[INPUT_MAX_PATHS];
+    bool path_open[INPUT_MAX_PATHS];    /* that configured path is a device of the context */
+    char path_real[INPUT_MAX_PATHS][INPUT_NAME_BYTES]; /* realpath of each, "" if unresolved */
     double next_path_retry_s;
+    bool suspended;                     /* libinput_suspend'ed (the seat is switched away) */
 };
 
 static double mono_s(void)
@@ -108,6 +112,37 @@ static camera_window device_area(const input_source *s, struct libinput_device *
     return area;
 }
 
+/* realpath of p into out ("" when it does not resolve). */
+static void real_path(const char *p, char *out, size_t size)
+{
+    char buf[PATH_MAX];
+    if (realpath(p, buf) && strlen(buf) < size)
+        snprintf(out, size, "%s", buf);
+    else
+        out[0] = '\0';
+}
+
+/* Which configured path a device is (its node, symlinks resolved), or -1. */
+static int path_index_of(input_source *s, struct libinput_device *dev)
+{
+    struct udev_device *ud = libinput_device_get_udev_device(dev);
+    const char *node = ud ? udev_device_get_devnode(ud) : NULL;
+    char real[INPUT_NAME_BYTES];
+    int found = -1;
+    if (node) {
+        real_path(node, real, sizeof real);
+        for (int i = 0; i < s->cfg.path_count && found < 0; i++) {
+            if (!s->path_real[i][0])
+                real_path(s->cfg.paths[i], s->path_real[i], sizeof s->path_real[i]);
+            if (strcmp(s->cfg.paths[i], node) == 0 || (real[0] && strcmp(s->path_real[i], real) == 0))
+                found = i;
+        }
+    }
+    if (ud)
+        udev_device_unref(ud);
+    return found;
+}
+
 static void device_added(input_source *s, struct libinput_device *dev, input_event *e)
 {
     device_info *info = calloc(1, sizeof *info);
@@ -118,6 +153,9 @@ static void device_added(input_source *s, struct libinput_device *dev, input_eve
     info->id = s->next_device_id++;
     snprintf(info->name, sizeof info->name, "%s", libinput_device_get_name(dev));
     info->area = device_area(s, dev, info->name);
+    info->path_index = path_index_of(s, dev);
+    if (info->path_index >= 0)
+        s->path_open[info->path_index] = true;
     libinput_device_set_user_data(dev, info);
     s->device_count++;
     static const struct {
@@ -141,12 +179,9 @@ static device_info *info_of(struct libinput_device *dev) { return libinput_devic
 static void device_removed(input_source *s, struct libinput_device *dev, input_event *e)
 {
     device_info *info = info_of(dev);
-    for (int i = 0; i < s->cfg.path_count; i++)
-        if (s->path_device[i] == dev) {
-            s->path_open[i] = false;
-            s->path_device[i] = NULL;
-            libinput_device_unref(dev);
-        }
+    /* a vanished path device is tried again; one removed by a suspend comes back with the resume */
+    if (info && info->path_index >= 0 && !s->suspended)
+        s->path_open[info->path_index] = false;
     e->kind = INPUT_DEVICE_REMOVED;
     e->device = info ? info->id : -1;
     if (info) {
@@ -166,11 +201,8 @@ static void retry_paths(input_source *s)
     for (int i = 0; i < s->cfg.path_count; i++) {
         if (s->path_open[i])
             continue;
-        struct libinput_device *dev = libinput_path_add_device(s->li, s->cfg.paths[i]);
-        if (dev) {
-            s->path_open[i] = true;
-            s->path_device[i] = libinput_device_ref(dev);
-        }
+        if (libinput_path_add_device(s->li, s->cfg.paths[i]))
+            s->path_open[i] = true; /* its DEVICE_ADDED event follows */
     }
 }
 
@@ -200,10 +232,8 @@ input_source *input_source_open(const input_source_config *cfg, struct session *
             goto fail;
         }
         for (int i = 0; i < cfg->path_count; i++) {
-            struct libinput_device *dev = libinput_path_add_device(s->li, cfg->paths[i]);
-            if (dev) {
+            if (libinput_path_add_device(s->li, cfg->paths[i])) {
                 s->path_open[i] = true;
-                s->path_device[i] = libinput_device_ref(dev);
             } else {
                 log_warn("input: %s: cannot open it as an input device now; trying again every second",
                          cfg->paths[i]);
@@ -234,9 +264,6 @@ void input_source_close(input_source *s)
     if (!s)
         return;
     if (s->li) {
-        for (int i = 0; i < s->cfg.path_count; i++)
-            if (s->path_device[i])
-                libinput_device_unref(s->path_device[i]);
         libinput_suspend(s->li); /* removes every device: their infos are freed by the events */
         struct libinput_event *ev;
         libinput_dispatch(s->li);
@@ -256,6 +283,29 @@ void input_source_close(input_source *s)
 }
 
 int input_source_fd(const input_source *s) { return libinput_get_fd(s->li); }
+
+void input_source_suspend(input_source *s)
+{
+    if (s->suspended)
+        return;
+    s->suspended = true;
+    libinput_suspend(s->li); /* every device is removed: DEVICE_REMOVED events follow */
+    log_info("input: devices released (the seat is switched away)");
+}
+
+void input_source_resume(input_source *s)
+{
+    if (!s->suspended)
+        return;
+    if (libinput_resume(s->li) != 0) {
+        log_warn("input: libinput could not take the devices back; trying again");
+        return;
+    }
+    s->suspended = false;
+    log_info("input: devices taken back");
+}
+
+bool input_source_suspended(const input_source *s) { return s->suspended; }
 int input_source_device_count(const input_source *s) { return s->device_count; }
 
 /* ---- events ------------------------------------------------------------------------- */
@@ -396,7 +446,7 @@ static bool convert(input_source *s, struct libinput_event *ev, input_event *e, 
 
 bool input_source_dispatch(input_source *s, input_event_fn fn, void *ctx)
 {
-    if (s->cfg.path_count > 0)
+    if (s->cfg.path_count > 0 && !s->suspended)
         retry_paths(s);
     if (libinput_dispatch(s->li) != 0) {
         log_error("input: libinput could not read its devices: %s", strerror(errno));

@@ -73,6 +73,12 @@ bool input_source_dispatch(input_source *s, input_event_fn fn, void *ctx);
  * covers `area` (an output's window). */
 void input_area_point(const camera_window *area, double fx, double fy, double *sx, double *sy);
 
+/* A VT switch: release every device (libinput_suspend), and take them back
+ * when the seat is ours again (resume; retried by the caller on failure). */
+void input_source_suspend(input_source *s);
+void input_source_resume(input_source *s);
+bool input_source_suspended(const input_source *s);
+
 /* Devices currently open. */
 int input_source_device_count(const input_source *s);
 

@@ -696,7 +696,7 @@ typedef struct live {
     input_sink *sink;
 } live;
 
-static live live_make(const char *record_file, int frames)
+static live live_make_tour(const char *record_file, int frames, const camera_path *tour, double ease_s)
 {
     live l = {0};
     tess_error err = {{0}};
@@ -714,11 +714,13 @@ static live live_make(const char *record_file, int frames)
     image_display *d = display_create("null", NULL, false, &err);
     cr_assert(d, "%s", err.msg);
     cr_assert(pipeline_add_channel(l.p, &cam, 32, 18, d, &err) >= 0, "%s", err.msg);
-    input_sink_config sc = {.record_file = record_file};
+    input_sink_config sc = {.record_file = record_file, .tour = tour, .tour_ease_s = ease_s};
     l.sink = input_sink_create(l.p, &sc, &err);
     cr_assert(l.sink, "%s", err.msg);
     return l;
 }
+
+static live live_make(const char *record_file, int frames) { return live_make_tour(record_file, frames, NULL, 0.0); }
 
 static void live_free(live *l)
 {
@@ -893,4 +895,68 @@ Test(input, replay_at_the_recorded_times_applies_each_when_due, .timeout = 60)
     cr_expect(memcmp(&last, &cams[2], sizeof last) == 0, "the timed replay did not end at the last entry");
     live_free(&l);
     support_remove_tmp_dir(dir);
+}
+
+/* ---- the attract tour (the sink's serial animation) ------------------------------------------ */
+
+#define TOUR_FRAMES 40
+typedef struct tour_watch {
+    input_sink *sink;
+    camera_desc cams[TOUR_FRAMES];
+    double times[TOUR_FRAMES];
+} tour_watch;
+
+/* registered after the tour: sees the camera the tour set for each frame */
+static void watch_camera(pipeline *p, void *ctx, const frame_info *fi)
+{
+    tour_watch *w = ctx;
+    if (fi->frame < TOUR_FRAMES) {
+        w->cams[fi->frame] = pipeline_camera(p, 0);
+        w->times[fi->frame] = fi->time_s;
+    }
+}
+
+static void tour_off(pipeline *p, void *args)
+{
+    (void)p;
+    input_txn t = {.kind = INPUT_TXN_TOUR, .on = false};
+    input_sink_emit(*(input_sink **)args, &t);
+}
+
+Test(input, the_tour_eases_in_from_the_shown_camera_loops_and_stops_where_it_is, .timeout = 60)
+{
+    camera_path path = {0};
+    tess_error err = {{0}};
+    camera_desc k0 = {v3(10.f, 2.f, 0.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    camera_desc k1 = {v3(0.f, 2.f, 10.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    path.interp = CAMERA_PATH_LINEAR;
+    cr_assert(camera_path_append(&path, 1.0, &k0, &err) && camera_path_append(&path, 2.0, &k1, &err), "%s", err.msg);
+    /* 30 Hz fixed: frame f at f/30 s; ease over 0.5 s; the tour starts at frame 0, stops at 31 */
+    live l = live_make_tour(NULL, TOUR_FRAMES, &path, 0.5);
+    tour_watch w = {.sink = l.sink};
+    cr_assert(pipeline_add_serial_animation(l.p, "watch", watch_camera, &w));
+    input_txn on = {.kind = INPUT_TXN_TOUR, .on = true};
+    input_sink_emit(l.sink, &on);
+    cr_assert(pipeline_at_frame(l.p, 30, "tour off", tour_off, &l.sink, sizeof l.sink));
+    cr_assert(pipeline_run(l.p, &err), "%s", err.msg);
+    camera_desc home = home_camera(3.0);
+    /* frame 0: eased in from the shown camera, which is exactly the start */
+    cr_expect(memcmp(&w.cams[0], &home, sizeof home) == 0, "frame 0 is not the camera shown before the tour");
+    /* half way through the easing: between the two, neither */
+    camera_desc mid = w.cams[7]; /* t = 7/30 s */
+    cr_expect(dist(mid.eye, home.eye) > 0.1 && dist(mid.eye, camera_path_eval(&path, 1.0 + 7.0 / 30.0).eye) > 0.1,
+              "frame 7 is not a blend");
+    /* after the easing: the path, from its first key, looping every second */
+    for (int f = 15; f < 30; f++) {
+        camera_desc want = camera_path_eval(&path, 1.0 + fmod(w.times[f], 1.0));
+        cr_expect(memcmp(&w.cams[f], &want, sizeof want) == 0, "frame %d is not the path at %g s", f, w.times[f]);
+    }
+    cr_expect(dist(w.cams[29].eye, w.cams[15].eye) > 1.0, "the tour did not move");
+    /* stopped at frame 31 (queued during frame 30's serial section): the camera stays where the tour left it */
+    for (int f = 31; f < TOUR_FRAMES; f++)
+        cr_expect(memcmp(&w.cams[f], &w.cams[30], sizeof w.cams[30]) == 0, "frame %d moved after the tour stopped", f);
+    camera_desc shown = input_sink_current_camera(l.sink);
+    cr_expect(memcmp(&shown, &w.cams[30], sizeof shown) == 0, "the hand-over camera is not the last tour camera");
+    live_free(&l);
+    camera_path_free(&path);
 }

@@ -16,6 +16,8 @@
 #             (pick: status line), right drag (pan)
 #   touch     (uinput in the guest, on Virtual-3): one-finger drag (orbit),
 #             pinch (dolly), tap (pick), double tap (fly-to)
+#   hotplug   the touchscreen unplugged, another plugged in (tap on it)
+#   VT switch chvt 2, chvt 1, then a key (the devices were revoked and taken back)
 #   quit chord Ctrl+Alt+Q at the end.
 # After each gesture, once rec.txt has stopped growing, the host copies it,
 # renders the wall natively with `tessera render --replay-input` (all recorded
@@ -139,7 +141,7 @@ else
     wait $pid
     echo $? > tessera.rc
 fi
-echo quit > /tmp/touch.fifo
+alive $tpid && echo quit > /tmp/touch.fifo
 wait $tpid
 EOF
 tests/vm/run-guest.sh -c "$CACHE/vm-input" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 500 -- 'sh guest.sh' \
@@ -282,6 +284,26 @@ else
     for _i in 1 2 3; do qmp abs $((20000 + _i * 1500)) $((12000 + _i * 800)); sleep 0.2; done
     qmp click right up
     check "tablet: right drag (pan)"
+
+    # a touchscreen unplugged and another plugged in while tessera runs
+    guest_step "echo quit > /tmp/touch.fifo; sleep 1"
+    n_added=$(grep -c "input: device .* added: 'tessera-test-touch'" "$W/tessera.log")
+    if ! grep -q "input: device .* removed: 'tessera-test-touch'" "$W/tessera.log"; then
+        bad "hotplug: tessera did not report the touchscreen removed: $(tail -n 3 "$W/tessera.log")"
+    fi
+    guest_step "mkfifo /tmp/touch2.fifo; uinput_touch -n tessera-test-touch -s 640x480 -f /tmp/touch2.fifo > touch2.log 2>&1 3<&- & i=0; while ! grep -q ready touch2.log && [ \$i -lt 100 ]; do sleep 0.1; i=\$((i + 1)); done; sleep 1"
+    if [ "$(grep -c "input: device .* added: 'tessera-test-touch'" "$W/tessera.log")" -gt "$n_added" ]; then
+        guest_step "echo 'tap 120 120' > /tmp/touch2.fifo"
+        check "touch: a touchscreen plugged in while running (tap: pick)"
+    else
+        bad "hotplug: tessera did not pick up the new touchscreen: $(tail -n 3 "$W/tessera.log")"
+    fi
+    guest_step "echo quit > /tmp/touch2.fifo"
+
+    # a VT switch away and back: the seat revokes the input devices, tessera takes them back
+    guest_step "chvt 2; sleep 2; chvt 1; sleep 2"
+    qmp key home
+    check "keyboard after a VT switch away and back (Home)"
 
     # the quit chord
     qmp key ctrl+alt+q
