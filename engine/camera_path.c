@@ -3,6 +3,8 @@
  * camera_path.h (and docs/camera-path-format.md). */
 #include "camera_path.h"
 
+#include "dvec3.h"
+
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -193,19 +195,7 @@ double camera_path_duration(const camera_path *p)
 
 /* ---- evaluation ---------------------------------------------------------- */
 
-/* Points and velocities in double precision. */
-typedef struct dvec3 {
-    double x, y, z;
-} dvec3;
-
-static dvec3 dv(vec3 a) { return (dvec3){a.x, a.y, a.z}; }
-static dvec3 dv_add(dvec3 a, dvec3 b) { return (dvec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
-static dvec3 dv_sub(dvec3 a, dvec3 b) { return (dvec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
-static dvec3 dv_scale(dvec3 a, double s) { return (dvec3){a.x * s, a.y * s, a.z * s}; }
-static vec3 dv_to_float(dvec3 a) { return v3((float)a.x, (float)a.y, (float)a.z); }
-
-/* a + s (b - a) */
-static dvec3 dv_lerp(dvec3 a, dvec3 b, double s) { return dv_add(a, dv_scale(dv_sub(b, a), s)); }
+/* Points and velocities in double precision: dvec3.h. */
 
 /* The two interpolated points of a camera. */
 typedef enum path_point { POINT_EYE, POINT_LOOK_AT } path_point;

@@ -10,39 +10,14 @@
  * so plane coordinates here and pixels of the renderer agree. */
 #include "input/navigate.h"
 
+#include "engine/dvec3.h"
+
 #include <math.h>
 #include <stddef.h>
 
 static const double pi = 3.14159265358979323846;
 
-/* ---- double vectors ------------------------------------------------------ */
-
-typedef struct dvec3 {
-    double x, y, z;
-} dvec3;
-
-static dvec3 dv(vec3 a) { return (dvec3){a.x, a.y, a.z}; }
-static vec3 dv_to_float(dvec3 a) { return v3((float)a.x, (float)a.y, (float)a.z); }
-static dvec3 dv_add(dvec3 a, dvec3 b) { return (dvec3){a.x + b.x, a.y + b.y, a.z + b.z}; }
-static dvec3 dv_sub(dvec3 a, dvec3 b) { return (dvec3){a.x - b.x, a.y - b.y, a.z - b.z}; }
-static dvec3 dv_scale(dvec3 a, double s) { return (dvec3){a.x * s, a.y * s, a.z * s}; }
-static double dv_dot(dvec3 a, dvec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static dvec3 dv_cross(dvec3 a, dvec3 b)
-{
-    return (dvec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-static double dv_length(dvec3 a) { return sqrt(dv_dot(a, a)); }
-/* Unit vector along a; false (and *out untouched) for a zero or non-finite a. */
-static bool dv_unit(dvec3 a, dvec3 *out)
-{
-    double len = dv_length(a);
-    if (!(len > 0.0 && isfinite(len)))
-        return false;
-    *out = dv_scale(a, 1.0 / len);
-    return true;
-}
-/* a + (b - a) * s */
-static dvec3 dv_lerp(dvec3 a, dvec3 b, double s) { return dv_add(a, dv_scale(dv_sub(b, a), s)); }
+/* ---- double vectors (engine/dvec3.h) ------------------------------------ */
 
 /* Rodrigues: v turned by angle_rad about the unit axis (right-handed). */
 static dvec3 dv_rotate(dvec3 v, dvec3 axis, double angle_rad)

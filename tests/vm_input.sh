@@ -58,53 +58,18 @@ if ! gcc -std=c11 -O2 -Wall -Wextra -o "$W/bin/uinput_touch" tests/vm/uinput_tou
     echo "vm_input: FAIL: tests/vm/uinput_touch.c does not build"
     exit 1
 fi
-if ! VM_OUT="$CACHE/vm-input" tests/vm/build-guest.sh "$CACHE" ./tessera "$W/bin/uinput_touch" > "$W/build.log" 2>&1; then
-    if ! command -v qemu-system-x86_64 > /dev/null 2>&1 || grep -q "cannot download\|Unable to locate\|Could not resolve" "$W/build.log"; then
-        tail -n 3 "$W/build.log"
-        echo "vm_input: SKIPPED: qemu or the guest packages cannot be installed here (see above)"
-        exit 0
-    fi
-    tail -n 20 "$W/build.log"
-    echo "vm_input: FAIL: building the guest failed"
-    exit 1
-fi
+NAME=vm_input
+. tests/vm/host_lib.sh
+vm_build "$CACHE/vm-input" ./tessera "$W/bin/uinput_touch"
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
-# spheres without a floor (cheap background pixels: a frame in 1-2 s under TCG)
-cat > "$W/scene.json" <<'EOF'
-{
-  "background": [0.05, 0.06, 0.09],
-  "ambient": [0.08, 0.08, 0.1],
-  "camera": {"eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  "materials": {
-    "red":   {"model": "phong", "diffuse": [0.7, 0.08, 0.06], "specular": [0.5, 0.5, 0.5], "shininess": 48},
-    "blue":  {"model": "lambert", "diffuse": [0.1, 0.2, 0.7]},
-    "white": {"model": "phong", "diffuse": [0.8, 0.8, 0.8], "specular": [0.9, 0.9, 0.9], "shininess": 200},
-    "gold":  {"model": "phong", "diffuse": [0.75, 0.55, 0.1], "specular": [0.8, 0.7, 0.4], "shininess": 24}
-  },
-  "lights": [
-    {"type": "directional", "direction": [0.5, 1, 0.4], "color": [1, 0.97, 0.9], "intensity": 0.9, "shadows": true},
-    {"type": "point", "position": [-3, 4, 3], "color": [0.6, 0.7, 1], "intensity": 12, "shadows": false}
-  ],
-  "spheres": [
-    {"center": [0, 1, 0], "radius": 1, "material": "red"},
-    {"center": [2.2, 0.6, 0.5], "radius": 0.6, "material": "blue"},
-    {"center": [-2.1, 0.75, -0.4], "radius": 0.75, "material": "white"},
-    {"center": [0.9, 0.3, 1.8], "radius": 0.3, "material": "gold"},
-    {"center": [-0.8, 0.25, 1.9], "radius": 0.25, "material": "gold"},
-    {"center": [1.5, 0.4, -2.0], "radius": 0.4, "material": "blue"}
-  ]
-}
-EOF
+cp tests/data/vm_spheres.json "$W/scene.json"
 
 # the guest (busybox sh in the share): the touchscreen, then tessera, then the
 # steps the host drops in (cmd-N.sh, run in order; output cmd-N.log, status cmd-N.done)
+cp tests/vm/guest_lib.sh "$W/"
 cat > "$W/guest.sh" <<'EOF'
-alive() {
-    [ -r "/proc/$1/stat" ] && read -r st < "/proc/$1/stat" 2>/dev/null || return 1
-    st=${st##*") "}
-    [ "${st%% *}" != Z ]
-}
+. ./guest_lib.sh
 echo 0 > /sys/class/graphics/fbcon/cursor_blink 2>/dev/null
 [ -e /dev/dri/renderD128 ] && exec 3< /dev/dri/renderD128
 mkfifo /tmp/touch.fifo
@@ -115,32 +80,8 @@ while ! grep -q ready touch.log 2>/dev/null && [ $i -lt 100 ]; do sleep 0.1; i=$
 tessera run --wall wall.json --scene scene.json --threads 2 --idle-timeout 0 --record-input rec.txt \
     --map-input tessera-test-touch=Virtual-3 > tessera.log 2>&1 3<&- &
 pid=$!
-n=1 i=0
-while [ ! -e done ] && [ $i -lt 3000 ] && alive $pid; do
-    if [ -e cmd-$n.sh ]; then
-        sh cmd-$n.sh > cmd-$n.log 2>&1 3<&-
-        echo $? > cmd-$n.tmp
-        mv cmd-$n.tmp cmd-$n.done
-        n=$((n + 1))
-    else
-        sleep 0.1
-        i=$((i + 1))
-    fi
-done
-i=0
-while alive $pid && [ $i -lt 300 ]; do [ -e done ] || [ -e quit ] || break; sleep 0.1; i=$((i + 1)); done
-if alive $pid; then
-    kill -TERM $pid
-    i=0
-    while alive $pid && [ $i -lt 300 ]; do sleep 0.1; i=$((i + 1)); done
-fi
-if alive $pid; then
-    kill -KILL $pid
-    echo "none (killed)" > tessera.rc
-else
-    wait $pid
-    echo $? > tessera.rc
-fi
+run_steps $pid 300
+stop_program $pid
 alive $tpid && echo quit > /tmp/touch.fifo
 wait $tpid
 EOF
@@ -148,20 +89,9 @@ tests/vm/run-guest.sh -c "$CACHE/vm-input" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x
     > "$W/guest.console" 2>&1 &
 GPID=$!
 
-wait_for() { # FILE SECS (in the share)
-    _n=0
-    while [ ! -e "$W/$1" ]; do
-        kill -0 "$GPID" 2>/dev/null && [ $_n -lt $(($2 * 10)) ] || return 1
-        sleep 0.1
-        _n=$((_n + 1))
-    done
-}
 N=0
-guest_step() { # 'COMMAND' [SECS]: the guest runs COMMAND while tessera runs
-    N=$((N + 1))
-    printf '%s\n' "$1" > "$W/cmd-$N.tmp" && mv "$W/cmd-$N.tmp" "$W/cmd-$N.sh" && wait_for "cmd-$N.done" "${2:-30}"
-}
-touch_cmd() { guest_step "echo '$1' > /tmp/touch.fifo"; }
+step() { N=$((N + 1)); guest_step $N "$@"; } # 'COMMAND' [SECS]: the next guest step
+touch_cmd() { step "echo '$1' > /tmp/touch.fifo"; }
 qmp() { python3 tests/vm/qmp.py "$W/qmp.sock" "$@" > "$W/qmp.out" 2>&1; }
 key_event() { # QCODE down|up
     qmp raw "{\"execute\": \"input-send-event\", \"arguments\": {\"events\": [{\"type\": \"key\", \"data\": {\"down\": $([ "$2" = down ] && echo true || echo false), \"key\": {\"type\": \"qcode\", \"data\": \"$1\"}}}]}}"
@@ -286,28 +216,27 @@ else
     check "tablet: right drag (pan)"
 
     # a touchscreen unplugged and another plugged in while tessera runs
-    guest_step "echo quit > /tmp/touch.fifo; sleep 1"
+    step "echo quit > /tmp/touch.fifo; sleep 1"
     n_added=$(grep -c "input: device .* added: 'tessera-test-touch'" "$W/tessera.log")
     if ! grep -q "input: device .* removed: 'tessera-test-touch'" "$W/tessera.log"; then
         bad "hotplug: tessera did not report the touchscreen removed: $(tail -n 3 "$W/tessera.log")"
     fi
-    guest_step "mkfifo /tmp/touch2.fifo; uinput_touch -n tessera-test-touch -s 640x480 -f /tmp/touch2.fifo > touch2.log 2>&1 3<&- & i=0; while ! grep -q ready touch2.log && [ \$i -lt 100 ]; do sleep 0.1; i=\$((i + 1)); done; sleep 1"
+    step "mkfifo /tmp/touch2.fifo; uinput_touch -n tessera-test-touch -s 640x480 -f /tmp/touch2.fifo > touch2.log 2>&1 3<&- & i=0; while ! grep -q ready touch2.log && [ \$i -lt 100 ]; do sleep 0.1; i=\$((i + 1)); done; sleep 1"
     if [ "$(grep -c "input: device .* added: 'tessera-test-touch'" "$W/tessera.log")" -gt "$n_added" ]; then
-        guest_step "echo 'tap 120 120' > /tmp/touch2.fifo"
+        step "echo 'tap 120 120' > /tmp/touch2.fifo"
         check "touch: a touchscreen plugged in while running (tap: pick)"
     else
         bad "hotplug: tessera did not pick up the new touchscreen: $(tail -n 3 "$W/tessera.log")"
     fi
-    guest_step "echo quit > /tmp/touch2.fifo"
+    step "echo quit > /tmp/touch2.fifo"
 
     # a VT switch away and back: the seat revokes the input devices, tessera takes them back
-    guest_step "chvt 2; sleep 2; chvt 1; sleep 2"
+    step "chvt 2; sleep 2; chvt 1; sleep 2"
     qmp key home
     check "keyboard after a VT switch away and back (Home)"
 
     # the quit chord
     qmp key ctrl+alt+q
-    : > "$W/quit"
     if wait_for tessera.rc 60 && [ "$(cat "$W/tessera.rc")" = 0 ] && grep -q "input: quit" "$W/tessera.log"; then
         ok "the quit chord Ctrl+Alt+Q ended tessera with exit 0"
     else

@@ -81,42 +81,12 @@ RATE=4  # also in guest.sh's tessera run
 MIN_FRAMES=3
 
 mkdir -p "$CACHE"
-if ! tests/vm/build-guest.sh "$CACHE" ./tessera > "$W/build.log" 2>&1; then
-    if ! command -v qemu-system-x86_64 > /dev/null 2>&1 || grep -q "cannot download\|Unable to locate\|Could not resolve" "$W/build.log"; then
-        tail -n 3 "$W/build.log"
-        echo "vm_wall: SKIPPED: qemu or the guest packages cannot be installed here (see above)"
-        exit 0
-    fi
-    tail -n 20 "$W/build.log"
-    echo "vm_wall: FAIL: building the guest failed"
-    exit 1
-fi
+NAME=vm_wall
+. tests/vm/host_lib.sh
+vm_build "$CACHE" ./tessera
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
-cat > "$W/scene.json" <<'EOF'
-{
-  "background": [0.05, 0.06, 0.09],
-  "ambient": [0.08, 0.08, 0.1],
-  "materials": {
-    "red":   {"model": "phong", "diffuse": [0.7, 0.08, 0.06], "specular": [0.5, 0.5, 0.5], "shininess": 48},
-    "blue":  {"model": "lambert", "diffuse": [0.1, 0.2, 0.7]},
-    "white": {"model": "phong", "diffuse": [0.8, 0.8, 0.8], "specular": [0.9, 0.9, 0.9], "shininess": 200},
-    "gold":  {"model": "phong", "diffuse": [0.75, 0.55, 0.1], "specular": [0.8, 0.7, 0.4], "shininess": 24}
-  },
-  "lights": [
-    {"type": "directional", "direction": [0.5, 1, 0.4], "color": [1, 0.97, 0.9], "intensity": 0.9, "shadows": true},
-    {"type": "point", "position": [-3, 4, 3], "color": [0.6, 0.7, 1], "intensity": 12, "shadows": false}
-  ],
-  "spheres": [
-    {"center": [0, 1, 0], "radius": 1, "material": "red"},
-    {"center": [2.2, 0.6, 0.5], "radius": 0.6, "material": "blue"},
-    {"center": [-2.1, 0.75, -0.4], "radius": 0.75, "material": "white"},
-    {"center": [0.9, 0.3, 1.8], "radius": 0.3, "material": "gold"},
-    {"center": [-0.8, 0.25, 1.9], "radius": 0.25, "material": "gold"},
-    {"center": [1.5, 0.4, -2.0], "radius": 0.4, "material": "blue"}
-  ]
-}
-EOF
+cp tests/data/vm_spheres.json "$W/scene.json"
 # every other key of configs/paths/orbit.json, twice as fast: one turn in 4 s
 cat > "$W/loop.json" <<'EOF'
 {"format": "tessera-camera-path", "version": 1, "interpolation": "catmull-rom", "loop": true,
@@ -133,17 +103,9 @@ cat > "$W/loop.json" <<'EOF'
 EOF
 
 # the guest (busybox sh in the share); the protocol is in the header
+cp tests/vm/guest_lib.sh "$W/"
 cat > "$W/guest.sh" <<'EOF'
-alive() { # a process that has not ended (a zombie has)
-    [ -r "/proc/$1/stat" ] && read -r st < "/proc/$1/stat" 2>/dev/null || return 1
-    st=${st##*") "}
-    [ "${st%% *}" != Z ]
-}
-wait_for() { # FILE SECS
-    i=0
-    while [ ! -e "$1" ] && [ $i -lt $(($2 * 10)) ]; do sleep 0.1; i=$((i + 1)); done
-    [ -e "$1" ]
-}
+. ./guest_lib.sh
 # a steady console for the screendumps: no blinking, cursor hidden, a line of text
 echo 0 > /sys/class/graphics/fbcon/cursor_blink 2>/dev/null
 printf '\033[?25l\nvm_wall: the console before tessera runs\n' > /dev/tty0
@@ -159,29 +121,8 @@ wait_for console-before.done 60
 tessera run --wall wall.json --scene scene.json --path loop.json --time fixed --rate 4 --threads 2 \
     > tessera.log 2>&1 3<&- &
 pid=$!
-n=1 i=0
-while [ ! -e done ] && [ $i -lt 2400 ] && alive $pid; do
-    if [ -e cmd-$n.sh ]; then
-        sh cmd-$n.sh > cmd-$n.log 2>&1 3<&-
-        echo $? > cmd-$n.tmp
-        mv cmd-$n.tmp cmd-$n.done
-        n=$((n + 1))
-    else
-        sleep 0.1
-        i=$((i + 1))
-    fi
-done
-kill -TERM $pid 2>/dev/null
-i=0
-while alive $pid && [ $i -lt 300 ]; do sleep 0.1; i=$((i + 1)); done
-if alive $pid; then
-    kill -KILL $pid
-    wait $pid
-    echo "none (still running 30 s after SIGTERM; killed)" > tessera.rc
-else
-    wait $pid
-    echo $? > tessera.rc
-fi
+run_steps $pid 240
+stop_program $pid
 tessera outputs > outputs-after.txt 2>&1 3<&-
 touch console-after
 wait_for console-after.done 60
@@ -191,20 +132,6 @@ tests/vm/run-guest.sh -c "$CACHE" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 40
     > "$W/guest.console" 2>&1 &
 GPID=$!
 
-# wait_for FILE SECS: until FILE is in the share; 1 when the guest is gone or time ran out
-wait_for() {
-    _n=0
-    while [ ! -e "$W/$1" ]; do
-        kill -0 "$GPID" 2>/dev/null && [ $_n -lt $(($2 * 10)) ] || return 1
-        sleep 0.1
-        _n=$((_n + 1))
-    done
-}
-# guest_step N 'COMMAND' [SECS]: the guest runs COMMAND (sh) while tessera runs; waits
-# for it (default 30 s). Its output is in $W/cmd-N.log, its exit status in $W/cmd-N.done.
-guest_step() {
-    printf '%s\n' "$2" > "$W/cmd-$1.tmp" && mv "$W/cmd-$1.tmp" "$W/cmd-$1.sh" && wait_for "cmd-$1.done" "${3:-30}"
-}
 qmp() { python3 tests/vm/qmp.py "$W/qmp.sock" "$@"; }
 dump() { qmp screendump "$2" "$1" > "$W/dump.err" 2>&1; } # HEAD FILE
 
