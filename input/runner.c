@@ -65,6 +65,7 @@ static void *input_main(void *arg)
 {
     input_runner *r = arg;
     input_controller_tick(r->controller, now_us());
+    bool said_devices = false;
     while (!atomic_load(&r->stop)) {
         uint64_t now = now_us();
         uint64_t deadline = input_controller_deadline_us(r->controller, now);
@@ -95,6 +96,12 @@ static void *input_main(void *arg)
         if (!input_source_dispatch(r->source, on_event, r)) {
             log_error("input: libinput failed; input stops (the wall goes on)");
             break;
+        }
+        if (!said_devices && !input_source_suspended(r->source)) { /* the first events are the devices */
+            said_devices = true;
+            if (input_source_device_count(r->source) == 0)
+                log_warn("input: no input device found (a wrong --seat or --input-device?); they are picked up "
+                         "when they appear");
         }
         now = now_us();
         if (now >= deadline) /* the deadline asked for before the wait has come */

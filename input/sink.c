@@ -162,8 +162,13 @@ static void queue_mail(input_sink *s, const input_txn *t)
     }
 }
 
+/* Queue one transaction (live or replayed; a status text is also printed). */
 static void queue(input_sink *s, const input_txn *t)
 {
+    if (s->cfg.print_status && t->kind == INPUT_TXN_STATUS && t->text[0]) {
+        printf("status: %s\n", t->text);
+        fflush(stdout);
+    }
     switch (t->kind) {
     case INPUT_TXN_CAMERA:
     case INPUT_TXN_CURSOR:
@@ -202,10 +207,6 @@ void input_sink_emit(input_sink *s, const input_txn *t)
             s->record = NULL;
         }
         pthread_mutex_unlock(&s->record_lock);
-    }
-    if (s->cfg.print_status && t->kind == INPUT_TXN_STATUS && t->text[0]) {
-        printf("status: %s\n", t->text);
-        fflush(stdout);
     }
     queue(s, t);
 }

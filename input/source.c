@@ -7,6 +7,7 @@
 #include <libinput.h>
 #include <libudev.h>
 #include <limits.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,6 +38,7 @@ struct input_source {
     bool path_open[INPUT_MAX_PATHS];    /* that configured path is a device of the context */
     char path_real[INPUT_MAX_PATHS][INPUT_NAME_BYTES]; /* realpath of each, "" if unresolved */
     double next_path_retry_s;
+    bool path_missing_said[INPUT_MAX_PATHS]; /* its absence was logged (once until it is back) */
     bool suspended;                     /* libinput_suspend'ed (the seat is switched away) */
 };
 
@@ -72,6 +74,24 @@ static void close_restricted(int fd, void *user_data)
         session_close_device(s->sn, fd);
     else
         close(fd);
+}
+
+/* libinput's own messages, in our log (its errors as warnings: a device
+ * that cannot be opened is ours to report, once). */
+static void libinput_message(struct libinput *li, enum libinput_log_priority priority, const char *fmt, va_list args)
+    __attribute__((format(printf, 3, 0)));
+static void libinput_message(struct libinput *li, enum libinput_log_priority priority, const char *fmt, va_list args)
+{
+    (void)li;
+    char msg[512];
+    vsnprintf(msg, sizeof msg, fmt, args);
+    size_t n = strlen(msg);
+    while (n > 0 && msg[n - 1] == '\n')
+        msg[--n] = '\0';
+    if (priority >= LIBINPUT_LOG_PRIORITY_ERROR)
+        log_warn("libinput: %s", msg);
+    else
+        log_info("libinput: %s", msg);
 }
 
 static const struct libinput_interface interface = {
@@ -192,6 +212,8 @@ static void device_removed(input_source *s, struct libinput_device *dev, input_e
     }
 }
 
+/* Path backend: add the configured devices that are not (or no longer)
+ * there, when their node exists; a missing one is said once until it is back. */
 static void retry_paths(input_source *s)
 {
     double now = mono_s();
@@ -201,8 +223,20 @@ static void retry_paths(input_source *s)
     for (int i = 0; i < s->cfg.path_count; i++) {
         if (s->path_open[i])
             continue;
-        if (libinput_path_add_device(s->li, s->cfg.paths[i]))
+        if (access(s->cfg.paths[i], F_OK) != 0) {
+            if (!s->path_missing_said[i])
+                log_warn("input: %s: no such device now; waiting for it", s->cfg.paths[i]);
+            s->path_missing_said[i] = true;
+            continue;
+        }
+        if (libinput_path_add_device(s->li, s->cfg.paths[i])) {
             s->path_open[i] = true; /* its DEVICE_ADDED event follows */
+            s->path_missing_said[i] = false;
+        } else if (!s->path_missing_said[i]) {
+            log_warn("input: %s: not usable as an input device (libinput's message above); trying again every "
+                     "second", s->cfg.paths[i]);
+            s->path_missing_said[i] = true;
+        }
     }
 }
 
@@ -213,8 +247,12 @@ input_source *input_source_open(const input_source_config *cfg, struct session *
     for (int i = 0; i < cfg->rule_count; i++) {
         camera_window w;
         if (!find_output(cfg, cfg->rules[i].output, &w)) {
-            tess_error_set(err, "input: device '%s' is mapped to output '%s', which the wall does not have",
-                           cfg->rules[i].device, cfg->rules[i].output);
+            char names[INPUT_MAX_OUTPUTS * 34] = "";
+            for (int k = 0; k < cfg->output_count; k++)
+                snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", k ? ", " : "",
+                         cfg->outputs[k].name);
+            tess_error_set(err, "input: device '%s' is mapped to output '%s', which is not one of the outputs (%s)",
+                           cfg->rules[i].device, cfg->rules[i].output, names);
             return NULL;
         }
     }
@@ -231,15 +269,8 @@ input_source *input_source_open(const input_source_config *cfg, struct session *
             tess_error_set(err, "input: libinput: cannot create a path context");
             goto fail;
         }
-        for (int i = 0; i < cfg->path_count; i++) {
-            if (libinput_path_add_device(s->li, cfg->paths[i])) {
-                s->path_open[i] = true;
-            } else {
-                log_warn("input: %s: cannot open it as an input device now; trying again every second",
-                         cfg->paths[i]);
-            }
-        }
-        s->next_path_retry_s = mono_s() + PATH_RETRY_S;
+        libinput_log_set_handler(s->li, libinput_message);
+        retry_paths(s); /* at once: next_path_retry_s is 0 */
     } else {
         s->udev = udev_new();
         if (!s->udev) {
@@ -247,6 +278,8 @@ input_source *input_source_open(const input_source_config *cfg, struct session *
             goto fail;
         }
         s->li = libinput_udev_create_context(&interface, s, s->udev);
+        if (s->li)
+            libinput_log_set_handler(s->li, libinput_message);
         const char *seat = cfg->seat[0] ? cfg->seat : "seat0";
         if (!s->li || libinput_udev_assign_seat(s->li, seat) != 0) {
             tess_error_set(err, "input: libinput could not take seat '%s' through udev", seat);

@@ -210,11 +210,12 @@ Test(input_cli, a_broken_record_names_the_file_the_line_and_the_problem)
 Test(input_cli, path_and_replay_together_are_refused)
 {
     write_record("ok.rec", "");
-    EXPECT_ERROR(FAILED_CLEANLY,
+    EXPECT_ERROR(2,
                  "run --path ../configs/paths/flythrough.json --replay-input %s/ok.rec --display null --frames 1 "
                  "--size 32x18 --threads 1",
                  "--path", "--replay-input");
-    EXPECT_ERROR(FAILED_CLEANLY,
+    cr_expect(strstr(err_text, "scene (") == NULL, "the scene was loaded before refusing: %s", err_text);
+    EXPECT_ERROR(2,
                  "render --path ../configs/paths/flythrough.json --replay-input %s/ok.rec --out %s/a.exr "
                  "--size 32x18 --threads 1",
                  "--path", "--replay-input");
@@ -237,7 +238,7 @@ Test(input_cli, config_input_errors_name_the_file_and_the_field)
          "expected an array"},
         {"mapfield.json", "{\"input\": {\"map\": [{\"device\": \"a\", \"output\": \"b\", \"screen\": 1}]}}",
          "'input.map[0].screen'", "unknown field"},
-        {"devs.json", "{\"input\": {\"devices\": [\"\"]}}", "'input.devices[0]'", "non-empty"},
+        {"devs.json", "{\"input\": {\"devices\": [\"\"]}}", "'input.devices[0]'", "empty path"},
         {"devnum.json", "{\"input\": {\"devices\": [\"/dev/input/event0\", 3]}}", "'input.devices[1]'", "number"},
         {"enabled.json", "{\"input\": {\"enabled\": \"yes\"}}", "'input.enabled'", "boolean"},
         {"ease.json", "{\"input\": {\"tour_ease_s\": 0}}", "'input.tour_ease_s'", "(0, 600]"},
@@ -266,13 +267,13 @@ Test(input_cli, a_mapping_to_an_output_the_wall_lacks_is_refused)
 {
     EXPECT_ERROR(1, "run --wall ../configs/walls/vm_2x2.json --display null --input on --map-input dev=HDMI-A-9 "
                     "--frames 2 --threads 2",
-                 "HDMI-A-9", "'dev'", "does not have");
+                 "HDMI-A-9", "'dev'", "not one of the outputs (Virtual-1, Virtual-2, Virtual-3, Virtual-4)");
     /* the same from a config */
     write_file("map.json", "{\"input\": {\"enabled\": true, \"map\": [{\"device\": \"touch\", \"output\": "
                            "\"DP-7\"}]}}");
     EXPECT_ERROR(1, "run --config %s/map.json --wall ../configs/walls/vm_2x2.json --display null --frames 2 "
                     "--threads 2",
-                 "DP-7", "'touch'", "does not have");
+                 "DP-7", "'touch'", "not one of the outputs");
     /* an output it has is fine, and the run goes on with no devices */
     int code = run("run --wall ../configs/walls/vm_2x2.json --display null --input on " NO_DEVICES
                    " --map-input dev=Virtual-3 --frames 1 --threads 2 --renderer eyelight");
@@ -338,7 +339,7 @@ Test(input_cli, record_input_writes_the_header_and_invents_nothing)
     cr_expect(strstr(err_text, "replaying 0 input transactions") != NULL, "%s", err_text);
     /* a record file that cannot be written */
     EXPECT_ERROR(1, "run --record-input %s/no/dir/x.rec --frames 1 --display null --size 32x18 --threads 1",
-                 "--record-input", "no/dir/x.rec", "cannot write");
+                 "no/dir/x.rec", "cannot write", "does not exist");
 }
 
 Test(input_cli, run_help_lists_the_input_options)
@@ -348,4 +349,34 @@ Test(input_cli, run_help_lists_the_input_options)
                                           "--map-input",    "--input-device", "--idle-timeout", "--bindings"};
     for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
         cr_expect(strstr(out_text, options[i]) != NULL, "run --help lacks %s: %s", options[i], out_text);
+}
+
+/* The command line's lists replace the config's (it overrides the file), and
+ * an empty device path is refused as the config refuses it. */
+Test(input_cli, command_line_lists_replace_the_configs)
+{
+    write_file("map.json", "{\"input\": {\"map\": [{\"device\": \"touch\", \"output\": \"DP-7\"}]}}");
+    int code = run("run --config %s/map.json --wall ../configs/walls/vm_2x2.json --display null --input on "
+                   NO_DEVICES " --map-input touch=Virtual-1 --frames 1 --threads 2 --renderer eyelight");
+    cr_expect_eq(code, 0, "the config's mapping to DP-7 survived --map-input: %s", err_text);
+    EXPECT_ERROR(1, "run --config %s/map.json --wall ../configs/walls/vm_2x2.json --display null --input on "
+                    NO_DEVICES " --frames 1 --threads 2",
+                 "DP-7");
+    EXPECT_ERROR(2, "run --input-device '' --display null --frames 1 --size 32x18", "--input-device", "empty path");
+}
+
+/* Early checks: a bindings or tour file that cannot be read stops the run
+ * before the scene loads, naming the option. */
+Test(input_cli, bindings_and_tour_files_are_checked_before_the_scene_loads)
+{
+    EXPECT_ERROR(1, "run --input on --bindings %s/nope.json --display null --frames 1 --size 32x18 --threads 1",
+                 "--bindings", "nope.json", "cannot open");
+    cr_expect(strstr(err_text, "scene (") == NULL, "the scene was loaded first: %s", err_text);
+    EXPECT_ERROR(1, "run --input on --tour %s/nope.json --display null --frames 1 --size 32x18 --threads 1",
+                 "--tour", "nope.json", "cannot open");
+    cr_expect(strstr(err_text, "scene (") == NULL, "the scene was loaded first: %s", err_text);
+    /* with input off the same options are said to be ignored, and the run goes on */
+    cr_expect_eq(run("run --input off --bindings %s/nope.json --display null --frames 1 --size 32x18 --threads 1"), 0,
+                 "%s", err_text);
+    cr_expect(strstr(err_text, "input is off") != NULL, "%s", err_text);
 }

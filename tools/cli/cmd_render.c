@@ -81,7 +81,19 @@ static bool check_outputs(const cli_pipeline_spec *s)
     for (int i = 0; i < s->channel_count; i++)
         if (!strcmp(s->channels[i].display, "dump") && !check_output_dir(s->channels[i].out))
             return false;
-    return !s->record_file[0] || check_output_dir(s->record_file);
+    return (!s->record_file[0] || check_output_dir(s->record_file)) &&
+           (!s->input.record_file[0] || check_output_dir(s->input.record_file)) &&
+           cli_input_check(&s->input, s->path_file);
+}
+
+/* Options that cannot go together; false after printing why (exit 2). */
+static bool check_option_conflicts(const cli_pipeline_spec *s)
+{
+    if (s->input.replay_file[0] && s->input.enabled != 1 && s->path_file[0]) {
+        cli_error("--path and --replay-input both steer the camera: give one");
+        return false;
+    }
+    return true;
 }
 
 /* The running pipeline, for SIGINT/SIGTERM: pipeline_stop only stores to a
@@ -126,10 +138,6 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     tess_error err = {{0}};
     /* live input steers the camera (a --path becomes its idle tour); a replay steers it alone */
     bool steered = s->input.enabled == 1 || s->input.replay_file[0];
-    if (s->input.replay_file[0] && s->input.enabled != 1 && s->path_file[0]) {
-        cli_error("--path and --replay-input both steer the camera: give one");
-        goto done;
-    }
     p = cli_pipeline_create(s, &cs);
     if (!p)
         goto done;
@@ -237,9 +245,12 @@ int cli_render(int argc, char **argv)
     if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code))
         return code;
     if (s.input.enabled == 1) {
-        cli_error("--input on: 'tessera render' reads no input devices (use 'tessera run'; render can --replay-input)");
+        cli_error("%s: 'tessera render' reads no input devices (use 'tessera run'; render can --replay-input)",
+                  s.input.enabled_from_config ? "input.enabled in the config" : "--input on");
         return 2;
     }
+    if (!check_option_conflicts(&s))
+        return 2;
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
     return run_job(&s, scene_path, false);
@@ -292,6 +303,8 @@ int cli_run(int argc, char **argv)
         if (s.input.enabled < 0) /* the kiosk: people steer it */
             s.input.enabled = 1;
     }
+    if (!check_option_conflicts(&s))
+        return 2;
     /* the default output directory is ours to create */
     if (!strcmp(s.channels[0].display, "dump") && !strcmp(s.channels[0].out, "out/frame_####.png") &&
         mkdir("out", 0777) != 0 && errno != EEXIST) {

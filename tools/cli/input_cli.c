@@ -50,6 +50,10 @@ static bool parse_map(const char *what, const char *value, cli_input_spec *s)
                   value);
         return false;
     }
+    if (!s->map_from_cmdline) { /* the command line's mappings replace the config's */
+        s->map_from_cmdline = true;
+        s->map_count = 0;
+    }
     if (s->map_count == INPUT_MAX_RULES) {
         cli_error("%s: more than %d device mappings", what, INPUT_MAX_RULES);
         return false;
@@ -91,6 +95,7 @@ bool cli_input_option(int argc, char **argv, int *i, cli_input_spec *s, bool *ha
             return false;
         }
         s->enabled = !strcmp(val, "on");
+        s->enabled_from_config = false;
         return true;
     } else if (!strcmp(a, "--bindings")) {
         return (val = cli_option_value(argc, argv, i)) && copy_text(a, val, s->bindings_file, sizeof s->bindings_file);
@@ -99,6 +104,14 @@ bool cli_input_option(int argc, char **argv, int *i, cli_input_spec *s, bool *ha
     } else if (!strcmp(a, "--input-device")) {
         if (!(val = cli_option_value(argc, argv, i)))
             return false;
+        if (!val[0]) {
+            cli_error("--input-device: empty path (expected a device node such as /dev/input/event3)");
+            return false;
+        }
+        if (!s->devices_from_cmdline) { /* the command line's devices replace the config's */
+            s->devices_from_cmdline = true;
+            s->device_count = 0;
+        }
         if (s->device_count == INPUT_MAX_PATHS) {
             cli_error("--input-device: more than %d devices", INPUT_MAX_PATHS);
             return false;
@@ -183,8 +196,10 @@ static bool config_devices(jr_ctx *c, json_object *obj, cli_input_spec *s)
     for (size_t i = 0; ok && i < n; i++) {
         size_t at = jr_field_index(c, i);
         json_object *v = json_object_array_get_idx(arr, i);
-        if (!v || !json_object_is_type(v, json_type_string) || !json_object_get_string_len(v))
-            ok = jr_field_fail(c, "expected a device path (a non-empty string), got %s", jr_kind(v));
+        if (!v || !json_object_is_type(v, json_type_string))
+            ok = jr_field_fail(c, "expected a device path (a string), got %s", jr_kind(v));
+        else if (!json_object_get_string_len(v))
+            ok = jr_field_fail(c, "empty path (expected a device node such as /dev/input/event3)");
         else if ((size_t)json_object_get_string_len(v) >= sizeof s->devices[0])
             ok = jr_field_fail(c, "path too long");
         else
@@ -243,10 +258,39 @@ bool cli_input_config_load(jr_ctx *c, json_object *root, const char *config_file
               config_map(c, obj, s) && jr_opt_double(c, obj, "idle_timeout_s", timeout, &s->idle_timeout_s) &&
               config_text(c, obj, "tour", config_file, true, s->tour_file, sizeof s->tour_file) &&
               jr_opt_double(c, obj, "tour_ease_s", ease, &s->tour_ease_s);
-    if (ok && had_enabled)
+    if (ok && had_enabled) {
         s->enabled = enabled ? 1 : 0;
+        s->enabled_from_config = true;
+    }
     jr_field_leave(c, saved);
     return ok;
+}
+
+/* ---- before the scene loads ------------------------------------------------------------ */
+
+bool cli_input_check(const cli_input_spec *s, const char *tour_path)
+{
+    tess_error err = {{0}};
+    if (s->enabled == 1) {
+        input_bindings b;
+        if (s->bindings_file[0] && !input_bindings_load(s->bindings_file, &b, &err)) {
+            cli_error("--bindings %s", err.msg);
+            return false;
+        }
+        const char *tour_file = s->tour_file[0] ? s->tour_file : tour_path;
+        camera_path tour = {0};
+        if (tour_file && tour_file[0] && !camera_path_load(tour_file, &tour, &err)) {
+            cli_error("%s%s", s->tour_file[0] ? "--tour " : "", err.msg);
+            return false;
+        }
+        camera_path_free(&tour);
+    } else if (s->bindings_file[0] || s->map_count || s->device_count || s->tour_file[0] || s->seat[0]) {
+        fprintf(stderr, "tessera: input is off: --bindings, --map-input, --input-device, --tour and --seat are "
+                        "ignored (--input on reads the devices)\n");
+    }
+    if (s->replay_speed_given && !s->replay_file[0])
+        fprintf(stderr, "tessera: --replay-speed without --replay-input is ignored\n");
+    return true;
 }
 
 /* ---- running ----------------------------------------------------------------------------- */
@@ -287,7 +331,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     input_controller_config cc;
     input_controller_config_default(&cc);
     if (s->bindings_file[0] && !input_bindings_load(s->bindings_file, &cc.bindings, &err)) {
-        cli_error("%s", err.msg);
+        cli_error("--bindings %s", err.msg);
         return false;
     }
     input_source_config sc = {0};
@@ -346,12 +390,13 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
             goto fail;
         }
         bool ok = input_sink_replay(in->sink, &rec, s->replay_speed, &err);
-        fprintf(stderr, "tessera: replaying %zu input transactions from %s\n", rec.count, s->replay_file);
+        size_t count = rec.count;
         input_record_free(&rec);
         if (!ok) {
             cli_error("%s", err.msg);
             goto fail;
         }
+        fprintf(stderr, "tessera: replaying %zu input transactions from %s\n", count, s->replay_file);
     }
     if (s->enabled == 1 && !start_devices(in, s, p, cs))
         goto fail;

@@ -31,6 +31,8 @@ typedef struct cli_input_spec {
     char replay_file[CLI_INPUT_PATH_BYTES];
     input_replay_speed replay_speed;
     bool replay_speed_given;
+    bool enabled_from_config;    /* enabled came from a config's input.enabled (for messages) */
+    bool devices_from_cmdline, map_from_cmdline; /* the command line's lists replace the config's */
 } cli_input_spec;
 
 /* Input off unless asked, bindings built in, seat0, idle timeout 60 s, tour ease 2 s. */
@@ -44,6 +46,11 @@ bool cli_input_option(int argc, char **argv, int *i, cli_input_spec *s, bool *ha
 bool cli_input_config_load(jr_ctx *c, json_object *root, const char *config_file, cli_input_spec *s);
 
 void cli_input_usage(FILE *f);
+
+/* Before the scene loads: the bindings, tour and record files are usable
+ * (loaded once and dropped), and settings that input off ignores are said.
+ * False after printing the error. */
+bool cli_input_check(const cli_input_spec *s, const char *tour_path);
 
 /* Whether the spec needs anything started for a pipeline. */
 bool cli_input_wanted(const cli_input_spec *s);
