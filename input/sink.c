@@ -98,8 +98,7 @@ static void apply_tour(pipeline *p, void *args)
 static void apply_quit(pipeline *p, void *args)
 {
     (void)args;
-    log_info("input: quit");
-    pipeline_stop(p);
+    pipeline_stop(p); /* (logged when queued: no I/O at the barrier) */
 }
 
 /* The tour player: a serial animation. */
@@ -189,6 +188,7 @@ static void queue(input_sink *s, const input_txn *t)
         break;
     }
     case INPUT_TXN_QUIT:
+        log_info("input: quit");
         count_refused(s, pipeline_transaction(s->p, "input quit", apply_quit, NULL, 0));
         break;
     default:
