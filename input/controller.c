@@ -255,7 +255,7 @@ static void command(input_controller *c, input_action action, double sx, double 
         if (hit.hit) {
             input_txn t = {.kind = INPUT_TXN_HIDE, .geom_id = hit.geom_id};
             emit(c, &t);
-            emit_status(c, "hidden: %s", hit.what);
+            emit_status(c, "hidden: %s", hit.object[0] ? hit.object : hit.what);
         } else {
             emit_status(c, "nothing to hide there");
         }

@@ -77,7 +77,9 @@ typedef struct input_hit {
     bool hit;
     vec3 point;            /* world position of the hit */
     uint32_t geom_id, prim_id;
-    char what[128];        /* e.g. "mesh 'bunny' triangle 1234", for the status line */
+    char what[128];        /* the primitive, e.g. "mesh 0 'bunny' triangle 1234", for the status line */
+    char object[128];      /* what hiding hides: the whole geometry, e.g. "mesh 0 'bunny'" or
+                              "the sphere set (6 spheres)" */
 } input_hit;
 
 typedef struct input_controller_config {

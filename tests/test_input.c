@@ -54,6 +54,7 @@ static void rig_pick(void *ctx, vec3 o, vec3 d, input_hit *out)
             out->point = v3_add(o, v3_scale(d, (float)t));
             out->geom_id = 0;
             snprintf(out->what, sizeof out->what, "sphere");
+            snprintf(out->object, sizeof out->object, "the sphere set");
             return;
         }
     }
@@ -308,6 +309,7 @@ Test(input, click_picks_and_reports_the_object)
     const input_txn *hide = last_kind(r, INPUT_TXN_HIDE);
     cr_assert(hide);
     cr_expect_eq(hide->geom_id, 0u);
+    cr_expect_str_eq(last_kind(r, INPUT_TXN_STATUS)->text, "hidden: the sphere set");
     key(r, KEY_U, true);
     cr_expect_eq(count_kind(r, INPUT_TXN_UNHIDE_ALL), 1);
     rig_free(r);

@@ -318,11 +318,15 @@ static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
     out->geom_id = h.geom_id;
     out->prim_id = h.prim_id;
     const scene *s = cs->scene;
-    if (h.geom_id < s->mesh_count)
+    if (h.geom_id < s->mesh_count) {
         snprintf(out->what, sizeof out->what, "mesh %u '%s' triangle %u", h.geom_id, s->meshes[h.geom_id].name,
                  h.prim_id);
-    else
+        snprintf(out->object, sizeof out->object, "mesh %u '%s'", h.geom_id, s->meshes[h.geom_id].name);
+    } else {
+        /* spheres are one geometry: hiding one hides the set (per-sphere hiding is not there yet) */
         snprintf(out->what, sizeof out->what, "sphere %u", h.prim_id);
+        snprintf(out->object, sizeof out->object, "the sphere set (%u spheres)", s->spheres.count);
+    }
 }
 
 static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs)
