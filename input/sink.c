@@ -41,7 +41,9 @@ struct input_sink {
     bool replay_thread_started;
     atomic_bool replay_stop;
 
-    atomic_uint_fast64_t emitted, refused, camera_txns, coalesced;
+    atomic_uint_fast64_t emitted, refused;
+    atomic_uint_fast64_t camera_changes;  /* cameras put into the mailbox */
+    atomic_uint_fast64_t camera_applied;  /* mailbox transactions that applied a camera */
 };
 
 static double since_s(const struct timespec *t0)
@@ -73,8 +75,10 @@ static void apply_mail(pipeline *p, void *args)
     s->mail_has_camera = s->mail_has_cursor = false;
     s->mail_queued = false;
     pthread_mutex_unlock(&s->lock);
-    if (has_camera)
+    if (has_camera) {
         show_camera(s, p, &cam);
+        atomic_fetch_add(&s->camera_applied, 1);
+    }
     if (has_cursor)
         pipeline_set_cursor(p, on, sx, sy);
 }
@@ -136,8 +140,7 @@ static void queue_mail(input_sink *s, const input_txn *t)
 {
     pthread_mutex_lock(&s->lock);
     if (t->kind == INPUT_TXN_CAMERA) {
-        if (s->mail_has_camera)
-            atomic_fetch_add(&s->coalesced, 1);
+        atomic_fetch_add(&s->camera_changes, 1);
         s->mail_has_camera = true;
         s->mail_camera = t->camera;
     } else {
@@ -151,8 +154,6 @@ static void queue_mail(input_sink *s, const input_txn *t)
     pthread_mutex_unlock(&s->lock);
     if (!need_queue)
         return;
-    if (t->kind == INPUT_TXN_CAMERA)
-        atomic_fetch_add(&s->camera_txns, 1);
     if (!pipeline_transaction(s->p, "input camera/cursor", apply_mail, &s, sizeof s)) {
         count_refused(s, false);
         pthread_mutex_lock(&s->lock);
@@ -221,8 +222,8 @@ camera_desc input_sink_current_camera(input_sink *s)
 
 input_sink_stats input_sink_get_stats(input_sink *s)
 {
-    return (input_sink_stats){atomic_load(&s->emitted), atomic_load(&s->refused), atomic_load(&s->camera_txns),
-                              atomic_load(&s->coalesced)};
+    uint64_t changes = atomic_load(&s->camera_changes), applied = atomic_load(&s->camera_applied);
+    return (input_sink_stats){atomic_load(&s->emitted), atomic_load(&s->refused), changes, applied};
 }
 
 /* ---- life ------------------------------------------------------------------------------ */

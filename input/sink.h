@@ -67,9 +67,12 @@ bool input_replay_speed_from_name(const char *name, input_replay_speed *out);
  * pipeline_run, or while running for RECORDED. False with err. */
 bool input_sink_replay(input_sink *s, const input_record *rec, input_replay_speed speed, tess_error *err);
 
-/* Transactions emitted, and those the pipeline refused (queue full, stopped). */
+/* Transactions emitted, those the pipeline refused (queue full, stopped);
+ * camera changes put into the mailbox, and mailbox transactions that applied
+ * one (the rest were overwritten by newer ones before a barrier: coalesced). */
 typedef struct input_sink_stats {
-    uint64_t emitted, refused, camera_transactions, coalesced;
+    uint64_t emitted, refused;
+    uint64_t camera_changes, camera_applied;
 } input_sink_stats;
 input_sink_stats input_sink_get_stats(input_sink *s);
 

@@ -842,6 +842,7 @@ Test(input, a_recorded_session_replays_to_the_same_camera_bit_for_bit, .timeout 
     cr_assert(memcmp(&live_cam, &steered, sizeof live_cam) == 0, "the live pipeline did not end at the steered camera");
     input_sink_stats st = input_sink_get_stats(a.sink);
     cr_expect(st.emitted > 60, "only %llu transactions", (unsigned long long)st.emitted);
+    cr_expect(st.camera_applied <= st.camera_changes);
     cr_expect_eq(st.refused, 0u);
     input_controller_destroy(c);
     live_free(&a);
@@ -961,4 +962,58 @@ Test(input, the_tour_eases_in_from_the_shown_camera_loops_and_stops_where_it_is,
     cr_expect(memcmp(&shown, &w.cams[30], sizeof shown) == 0, "the hand-over camera is not the last tour camera");
     live_free(&l);
     camera_path_free(&path);
+}
+
+/* ---- a flood of input never floods the frame barrier -------------------------------------- */
+
+typedef struct flood {
+    input_sink *sink;
+    int count;
+    camera_desc last;
+} flood;
+
+static void *flood_main(void *arg)
+{
+    flood *f = arg;
+    for (int i = 0; i < f->count; i++) {
+        camera_desc c = home_camera(3.0 + 1e-4 * i);
+        input_txn t = {.kind = INPUT_TXN_CAMERA, .camera = c};
+        input_sink_emit(f->sink, &t);
+        input_txn cur = {.kind = INPUT_TXN_CURSOR, .on = true, .sx = (float)(i % 100) * 0.01f, .sy = 0.f};
+        input_sink_emit(f->sink, &cur);
+        f->last = c;
+    }
+    return NULL;
+}
+
+Test(input, a_flood_of_camera_changes_waits_as_one_transaction_at_a_time, .timeout = 60)
+{
+    live l = live_make(NULL, 0);
+    run_args ra = {.p = l.p};
+    pthread_t th, producer;
+    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+    flood f = {.sink = l.sink, .count = 20000};
+    cr_assert_eq(pthread_create(&producer, NULL, flood_main, &f), 0);
+    pthread_join(producer, NULL);
+    for (int i = 0; i < 5000; i++) { /* until the newest camera is shown */
+        camera_desc shown = input_sink_current_camera(l.sink);
+        if (memcmp(&shown, &f.last, sizeof shown) == 0)
+            break;
+        sleep_ms(1);
+    }
+    pipeline_stop(l.p);
+    pthread_join(th, NULL);
+    cr_assert(ra.ok, "%s", ra.err.msg);
+    input_sink_stats st = input_sink_get_stats(l.sink);
+    pipeline_stats ps = pipeline_get_stats(l.p);
+    camera_desc final = pipeline_camera(l.p, 0);
+    cr_expect(memcmp(&final, &f.last, sizeof final) == 0, "the newest camera was not applied");
+    /* one mailbox transaction per barrier at most: never more than frames + 1, whatever the rate */
+    cr_expect_eq(st.camera_changes, 20000u);
+    cr_expect(st.camera_applied >= 1 && st.camera_applied <= ps.frames_rendered + 1,
+              "%llu camera transactions applied for %llu frames", (unsigned long long)st.camera_applied,
+              (unsigned long long)ps.frames_rendered);
+    cr_expect_eq(st.refused, 0u);
+    cr_expect_eq(ps.transactions_rejected, 0u);
+    live_free(&l);
 }

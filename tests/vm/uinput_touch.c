@@ -1,22 +1,39 @@
-/* uinput_touch: a multitouch touchscreen made with /dev/uinput, driven by
- * one text command per line (guest-side helper of the VM tests).
+/* uinput_touch: a multitouch touchscreen, or with -p a touchpad (clickpad),
+ * made with /dev/uinput, driven by one text command per line (guest-side
+ * helper of the VM tests).
  *
- * The device: INPUT_PROP_DIRECT, BTN_TOUCH, BTN_TOOL_FINGER/DOUBLETAP/
- * TRIPLETAP/QUADTAP, ABS_X/ABS_Y and ABS_MT_POSITION_X/Y over 0..W-1 and
- * 0..H-1 (so a coordinate is a pixel of the output the screen is mapped to:
- * libinput's x_transformed(W) gives it back exactly), ABS_MT_SLOT 0..9,
- * ABS_MT_TRACKING_ID 0..65535, resolution -R units/mm on every axis. udev's
- * input_id calls it ID_INPUT_TOUCHSCREEN. Events follow the multitouch
- * protocol B: a new contact gets a new tracking id in its slot, a lifted one
- * tracking id -1; at each frame ABS_X/ABS_Y follow the oldest contact,
- * BTN_TOUCH and the BTN_TOOL_* of the number of contacts are updated, then
- * SYN_REPORT.
+ * The touchscreen (default): INPUT_PROP_DIRECT, BTN_TOUCH, BTN_TOOL_FINGER/
+ * DOUBLETAP/TRIPLETAP/QUADTAP, ABS_X/ABS_Y and ABS_MT_POSITION_X/Y over
+ * 0..W-1 and 0..H-1 (so a coordinate is a pixel of the output the screen is
+ * mapped to: libinput's x_transformed(W) gives it back exactly), ABS_MT_SLOT
+ * 0..9, ABS_MT_TRACKING_ID 0..65535, resolution -R units/mm on every axis.
+ * udev's input_id calls it ID_INPUT_TOUCHSCREEN.
  *
- * usage: uinput_touch [-n NAME] [-s WxH] [-R RES] [-i MS] [-f FIFO]
- *   -n  device name                                 (default tessera-test-touch)
- *   -s  size: coordinates are 0..W-1, 0..H-1        (default 640x480)
- *   -R  resolution in units per mm of every axis    (default 10)
- *   -i  milliseconds between the frames of drag, pinch and pan2 (default 10)
+ * The touchpad (-p): the same axes and keys plus BTN_LEFT, with
+ * INPUT_PROP_POINTER and INPUT_PROP_BUTTONPAD instead of INPUT_PROP_DIRECT:
+ * a clickpad as on most laptops. udev's input_id calls it ID_INPUT_TOUCHPAD
+ * (BTN_TOOL_FINGER, absolute axes, no INPUT_PROP_DIRECT), libinput makes it a
+ * touchpad with the capabilities pointer and gesture. Defaults -s 4000x2400
+ * -R 40: 100 x 60 mm, coordinates in device units (40 = 1 mm). A touchpad
+ * has no pressure or touch size axes here, so libinput's palm and thumb
+ * detection use positions only (see README.md, "Touchpad gestures", for what
+ * a gesture needs to be recognised).
+ *
+ * Events follow the multitouch protocol B: a new contact gets a new tracking
+ * id in its slot, a lifted one tracking id -1; at each frame ABS_X/ABS_Y
+ * follow the oldest contact, BTN_TOUCH and the BTN_TOOL_* of the number of
+ * contacts are updated, then SYN_REPORT.
+ *
+ * usage: uinput_touch [-p] [-n NAME] [-s WxH] [-R RES] [-i MS] [-g GAP] [-f FIFO]
+ *   -p  a touchpad (clickpad) instead of a touchscreen
+ *   -n  device name       (default tessera-test-touch, with -p tessera-test-touchpad)
+ *   -s  size: coordinates are 0..W-1, 0..H-1     (default 640x480, with -p 4000x2400)
+ *   -R  resolution in units per mm of every axis (default 10, with -p 40)
+ *   -i  milliseconds between the frames of drag, pinch, pan2 and swipe3
+ *       (default 10; a frame is never sent less than MS/2 after the previous
+ *       one, even when the program is late: no bursts after a stall)
+ *   -g  distance between neighbouring fingers of pan2 and swipe3, in units
+ *       (default 80, with -p 20 mm: 20 * RES)
  *   -f  read the commands from this FIFO (made if missing), opened read-write
  *       so that writers may come and go (`echo "tap 10 20" > FIFO`) without
  *       an end of file: only `quit` (or SIGTERM/SIGINT) ends the program.
@@ -39,11 +56,15 @@
  *                     motion to X1,Y1 (-i ms apart), then up (all frames)
  *   pinch CX CY R0 R1 STEPS  two fingers at CX-R,CY and CX+R,CY; R goes from
  *                     R0 to R1 in STEPS frames; both down and up in one frame
- *   pan2 X0 Y0 X1 Y1 STEPS   two fingers 80 px apart (X-40 and X+40) moving
- *                     together from X0,Y0 to X1,Y1 in STEPS frames
+ *   pan2 X0 Y0 X1 Y1 STEPS   two fingers GAP apart (X-GAP/2 and X+GAP/2)
+ *                     moving together from X0,Y0 to X1,Y1 in STEPS frames
+ *   swipe3 X0 Y0 X1 Y1 STEPS three fingers in a row GAP apart (X-GAP, X,
+ *                     X+GAP) moving together from X0,Y0 to X1,Y1
  *   sleep MS          wait
  *   quit              lift every contact, remove the device, exit 0
- * Gestures take the lowest free slots. Exit status 0, 1 on a setup error.
+ * Gestures take the lowest free slots; all their fingers go down in one
+ * frame and up in one frame, the last motion frame and the up frame are -i ms
+ * apart. Exit status 0, 1 on a setup error.
  *
  * build: gcc -std=c11 -O2 -Wall -Wextra -Werror -o uinput_touch uinput_touch.c
  */

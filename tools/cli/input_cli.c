@@ -419,10 +419,10 @@ void cli_input_finish(cli_input *in)
         input_sink_stats st = input_sink_get_stats(in->sink);
         if (st.emitted)
             fprintf(stderr,
-                    "tessera: input: %llu transactions (%llu camera transactions queued, %llu camera changes "
-                    "coalesced into them, %llu refused)\n",
-                    (unsigned long long)st.emitted, (unsigned long long)st.camera_transactions,
-                    (unsigned long long)st.coalesced, (unsigned long long)st.refused);
+                    "tessera: input: %llu transactions (%llu camera changes applied in %llu camera transactions, "
+                    "%llu refused)\n",
+                    (unsigned long long)st.emitted, (unsigned long long)st.camera_changes,
+                    (unsigned long long)st.camera_applied, (unsigned long long)st.refused);
     }
     input_sink_destroy(in->sink);
     camera_path_free(&in->tour);
