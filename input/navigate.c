@@ -10,6 +10,7 @@
  * so plane coordinates here and pixels of the renderer agree. */
 #include "input/navigate.h"
 
+#include "engine/camera_path.h"
 #include "engine/dvec3.h"
 
 #include <math.h>
@@ -187,4 +188,26 @@ double navigate_ease(double s)
     if (s >= 1.0)
         return 1.0;
     return s * s * (3.0 - 2.0 * s);
+}
+
+bool navigate_orbit_path(const camera_desc *c, double period_s, int keys, camera_path *out, tess_error *err)
+{
+    *out = (camera_path){0};
+    if (keys < 3 || !(period_s > 0.0) || !isfinite(period_s))
+        return tess_error_set(err, "orbit tour: needs 3 or more keys and a positive period");
+    tess_error why = {{0}};
+    if (!camera_validate(c, &why))
+        return tess_error_set(err, "orbit tour: %s", why.msg);
+    out->interp = CAMERA_PATH_CATMULL_ROM;
+    out->loop = true;
+    const double two_pi = 6.283185307179586;
+    for (int k = 0; k <= keys; k++) {
+        /* the last key repeats the first exactly, so the loop closes */
+        camera_desc key = k == 0 || k == keys ? *c : navigate_orbit(c, c->look_at, two_pi * k / keys, 0.0);
+        if (!camera_path_append(out, period_s * k / keys, &key, err)) {
+            camera_path_free(out);
+            return false;
+        }
+    }
+    return true;
 }

@@ -19,6 +19,7 @@
 #include <stdbool.h>
 
 #include "engine/camera.h"
+#include "engine/err.h"
 #include "engine/vec3.h"
 
 /* Highest elevation an orbit reaches above or below the plane normal to the
@@ -69,6 +70,13 @@ camera_desc navigate_look_at_point(const camera_desc *c, vec3 point, double dist
  * [0, 1] (s <= 0 and NaN give a, s >= 1 gives b, bit for bit); where the blend
  * is not a valid camera, the nearer of a and b (a for s < 0.5, else b). */
 camera_desc navigate_blend(const camera_desc *a, const camera_desc *b, double s);
+
+/* An attract tour for any scene: `keys` cameras (>= 3) evenly around the
+ * up hint through c's look_at (navigate_orbit of c), one turn per period_s,
+ * a looping Catmull-Rom camera path whose first and last key are c bit for
+ * bit. Replaces *out (free it with camera_path_free). False with err. */
+struct camera_path;
+bool navigate_orbit_path(const camera_desc *c, double period_s, int keys, struct camera_path *out, tess_error *err);
 
 /* Smoothstep easing 3s^2 - 2s^3 of s clamped to [0, 1] (NaN gives 0). */
 double navigate_ease(double s);

@@ -14,6 +14,7 @@
 
 #include "engine/accel.h"
 #include "engine/camera.h"
+#include "engine/camera_path.h"
 #include "engine/pipeline.h"
 #include "engine/scene.h"
 #include "input/controller.h"
@@ -1016,4 +1017,37 @@ Test(input, a_flood_of_camera_changes_waits_as_one_transaction_at_a_time, .timeo
     cr_expect_eq(st.refused, 0u);
     cr_expect_eq(ps.transactions_rejected, 0u);
     live_free(&l);
+}
+
+Test(input, the_default_tour_orbits_the_home_view_and_closes_its_loop)
+{
+    camera_desc home = home_camera(2.0);
+    camera_path path;
+    tess_error err = {{0}};
+    cr_assert(navigate_orbit_path(&home, 24.0, 8, &path, &err), "%s", err.msg);
+    cr_expect_eq(path.count, 9u);
+    cr_expect(path.loop);
+    camera_desc at0 = camera_path_eval(&path, 0.0), at_end = camera_path_eval(&path, 24.0),
+                again = camera_path_eval(&path, 48.0);
+    cr_expect(memcmp(&at0, &home, sizeof home) == 0, "the tour does not start at the home view");
+    cr_expect(memcmp(&at_end, &home, sizeof home) == 0 && memcmp(&again, &home, sizeof home) == 0,
+              "the loop does not close on the home view");
+    double r0 = dist(home.eye, home.look_at);
+    for (int i = 0; i < 48; i++) { /* between the keys too: about the same distance and height, all around */
+        camera_desc c = camera_path_eval(&path, 0.5 * i);
+        tess_error why = {{0}};
+        cr_expect(camera_validate(&c, &why), "t = %g: %s", 0.5 * i, why.msg);
+        cr_expect(fabs(dist(c.eye, home.look_at) - r0) < 0.02 * r0, "t = %g: distance %g vs %g", 0.5 * i,
+                  dist(c.eye, home.look_at), r0);
+        cr_expect(fabsf(c.eye.y - home.eye.y) < 1e-4f);
+    }
+    camera_desc half = camera_path_eval(&path, 12.0);
+    cr_expect(dist(half.eye, v3(-home.eye.x, home.eye.y, -home.eye.z)) < 1e-4 * r0, "half way is not opposite");
+    char dir[256], file[300];
+    support_make_tmp_dir(dir, sizeof dir, "input-tour");
+    snprintf(file, sizeof file, "%s/tour.json", dir);
+    cr_expect(camera_path_save(&path, file, &err), "the tour is not a valid path file: %s", err.msg);
+    support_remove_tmp_dir(dir);
+    camera_path_free(&path);
+    cr_expect(!navigate_orbit_path(&home, 0.0, 8, &path, &err));
 }

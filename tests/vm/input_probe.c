@@ -27,14 +27,21 @@
  *   event6 TOUCH_UP slot=0 seat_slot=0 t=..     (also TOUCH_CANCEL)
  *   event6 TOUCH_FRAME t=..
  *   event7 TABLET_TOOL_AXIS tool=pen x=.. y=.. tip=up t=..  (PROXIMITY, TIP, BUTTON)
- *   event8 GESTURE_PINCH_UPDATE fingers=2 dx=.. dy=.. scale=.. angle=.. t=..
+ *   event8 GESTURE_PINCH_UPDATE fingers=2 dx=.. dy=.. udx=.. udy=.. scale=1.234 angle=.. t=..
+ *   event8 GESTURE_PINCH_END fingers=2 dx=0.00 dy=0.00 udx=.. udy=.. scale=.. angle=..
+ *         cancelled=0 t=..       (SWIPE_* and HOLD_* alike, without scale and angle)
+ *   event8 POINTER_SCROLL_FINGER v=2.50 h=0.00 t=..   (two-finger scrolling; the
+ *         end of a scroll is one event with v=0.00 or h=0.00)
  *   removed event6 "tessera-test-touch"
  *   log: <libinput's own messages>
  *   probe: end after 10.0 s, 42 events
  * caps: keyboard pointer touch tablet-tool tablet-pad gesture switch (those
  * the device has, comma separated); touchscreen: udev's ID_INPUT_TOUCHSCREEN;
  * udev: the ID_INPUT_* properties set to 1; path: ID_PATH; uniq: the kernel's
- * uniq of the device (only if set; qemu: virtio-*-pci,serial=...).
+ * uniq of the device (only if set; qemu: virtio-*-pci,serial=...); size: as
+ * libinput computes it from the resolution (only if the device has one);
+ * tp (touchpads only): libinput's configuration, e.g.
+ * tp=tap:off/3fg,scroll:2fg,click:areas,dwt:on,natural:off.
  *
  * build: gcc -std=c11 -O2 -Wall -Wextra -Werror -o input_probe input_probe.c \
  *            $(pkg-config --cflags --libs libinput libudev)
@@ -187,6 +194,23 @@ static void print_device(const char *what, struct libinput_device *dev)
     double w, h;
     if (libinput_device_get_size(dev, &w, &h) == 0)
         printf(" size=%.1fx%.1fmm", w, h);
+    /* touchpads (the only devices that can tap): libinput's default setup */
+    int tap_fingers = libinput_device_config_tap_get_finger_count(dev);
+    if (tap_fingers > 0) {
+        enum libinput_config_scroll_method sm = libinput_device_config_scroll_get_method(dev);
+        enum libinput_config_click_method cm = libinput_device_config_click_get_method(dev);
+        printf(" tp=tap:%s/%dfg,scroll:%s,click:%s,dwt:%s,natural:%s",
+               libinput_device_config_tap_get_enabled(dev) ? "on" : "off", tap_fingers,
+               sm == LIBINPUT_CONFIG_SCROLL_2FG           ? "2fg"
+               : sm == LIBINPUT_CONFIG_SCROLL_EDGE        ? "edge"
+               : sm == LIBINPUT_CONFIG_SCROLL_ON_BUTTON_DOWN ? "button"
+                                                          : "none",
+               cm == LIBINPUT_CONFIG_CLICK_METHOD_BUTTON_AREAS  ? "areas"
+               : cm == LIBINPUT_CONFIG_CLICK_METHOD_CLICKFINGER ? "clickfinger"
+                                                                : "none",
+               libinput_device_config_dwt_get_enabled(dev) ? "on" : "off",
+               libinput_device_config_scroll_get_natural_scroll_enabled(dev) ? "on" : "off");
+    }
     printf("\n");
     if (ud)
         udev_device_unref(ud);
@@ -325,11 +349,16 @@ static uint64_t print_fields(struct libinput_event *ev)
     case LIBINPUT_EVENT_GESTURE_HOLD_BEGIN:
     case LIBINPUT_EVENT_GESTURE_HOLD_END: {
         struct libinput_event_gesture *g = libinput_event_get_gesture_event(ev);
-        printf(" fingers=%d dx=%.2f dy=%.2f", libinput_event_gesture_get_finger_count(g),
-               libinput_event_gesture_get_dx(g), libinput_event_gesture_get_dy(g));
+        printf(" fingers=%d dx=%.2f dy=%.2f udx=%.2f udy=%.2f",
+               libinput_event_gesture_get_finger_count(g), libinput_event_gesture_get_dx(g),
+               libinput_event_gesture_get_dy(g), libinput_event_gesture_get_dx_unaccelerated(g),
+               libinput_event_gesture_get_dy_unaccelerated(g));
         if (type >= LIBINPUT_EVENT_GESTURE_PINCH_BEGIN && type <= LIBINPUT_EVENT_GESTURE_PINCH_END)
             printf(" scale=%.3f angle=%.2f", libinput_event_gesture_get_scale(g),
                    libinput_event_gesture_get_angle_delta(g));
+        if (type == LIBINPUT_EVENT_GESTURE_SWIPE_END || type == LIBINPUT_EVENT_GESTURE_PINCH_END ||
+            type == LIBINPUT_EVENT_GESTURE_HOLD_END)
+            printf(" cancelled=%d", libinput_event_gesture_get_cancelled(g));
         return libinput_event_gesture_get_time_usec(g);
     }
     case LIBINPUT_EVENT_SWITCH_TOGGLE: {

@@ -88,7 +88,9 @@
 
 #define SLOTS 10
 #define MAX_ID 65535
-#define PAN2_GAP 80        /* px between the two fingers of pan2 */
+#define GAP 80             /* touchscreen: px between the fingers of pan2, swipe3 */
+#define PAD_GAP_MM 20      /* touchpad: mm between the fingers of pan2, swipe3 */
+#define MAX_FINGERS 3      /* of a gesture command */
 #define TAP_MS 50          /* how long a tap's finger stays down */
 #define DOUBLETAP_MS 120   /* from the first tap's down to the second's */
 
@@ -101,8 +103,11 @@ struct contact {
 
 struct touch {
     int fd;
+    int pad;        /* a touchpad (clickpad), not a touchscreen */
     int w, h;
     int interval_ms;
+    int gap;        /* between neighbouring fingers of pan2 and swipe3 */
+    struct timespec last_frame; /* when the last frame of a gesture went out */
     int next_id;
     unsigned long next_seq;
     int tool;       /* BTN_TOOL_* key currently down, 0 if none */
@@ -164,6 +169,18 @@ static void sleep_until(const struct timespec *start, long ms)
     }
     while (!stop && clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL) == EINTR) {
     }
+}
+
+/* the frame I of a gesture that began at START: at START + I * interval, but
+ * never less than interval/2 after the previous frame (when the program was
+ * late, the frames after it would otherwise go out back to back; libinput's
+ * touchpad jump detection scales a motion by 12 ms / the time since the
+ * previous frame and drops it as a "jump" when that exceeds 20 mm) */
+static void pace(struct touch *t, const struct timespec *start, int i)
+{
+    sleep_until(start, (long)i * t->interval_ms);
+    sleep_until(&t->last_frame, t->interval_ms / 2);
+    clock_gettime(CLOCK_MONOTONIC, &t->last_frame);
 }
 
 static int touch_down(struct touch *t, int slot, int x, int y, char *err, size_t errlen)
@@ -306,31 +323,37 @@ fail:
 }
 
 /* the path of a gesture: its centre moves from x0,y0 to x1,y1; one finger is
- * at the centre, two are at centre -+ r (horizontally), r from r0 to r1 */
+ * at the centre, two are at centre -+ r, three at centre - r, centre and
+ * centre + r (in a horizontal row), r from r0 to r1 */
 struct path {
-    int fingers;
+    int fingers;        /* 1..MAX_FINGERS */
     int x0, y0, x1, y1; /* centre */
-    int r0, r1;         /* half distance between two fingers (horizontal) */
+    int r0, r1;         /* two fingers: half their distance; three: the distance
+                           between neighbours */
 };
 
 static void path_at(const struct path *p, int i, int n, int *x, int *y)
 {
     int cx = lerp(p->x0, p->x1, i, n), cy = lerp(p->y0, p->y1, i, n);
     int r = lerp(p->r0, p->r1, i, n);
+    for (int f = 0; f < p->fingers; f++)
+        y[f] = cy;
     if (p->fingers == 1) {
         x[0] = cx;
-        y[0] = cy;
-    } else {
+    } else if (p->fingers == 2) {
         x[0] = cx - r;
         x[1] = cx + r;
-        y[0] = y[1] = cy;
+    } else {
+        x[0] = cx - r;
+        x[1] = cx;
+        x[2] = cx + r;
     }
 }
 
 /* down at step 0, then a frame per step every interval, up after the last one */
 static int gesture(struct touch *t, const struct path *p, int steps, char *err, size_t errlen)
 {
-    int slots[2], x[2], y[2];
+    int slots[MAX_FINGERS], x[MAX_FINGERS], y[MAX_FINGERS];
     if (steps < 1) {
         snprintf(err, errlen, "STEPS must be >= 1");
         return -1;
@@ -339,6 +362,7 @@ static int gesture(struct touch *t, const struct path *p, int steps, char *err, 
         return -1;
     struct timespec start;
     clock_gettime(CLOCK_MONOTONIC, &start);
+    t->last_frame = start;
     path_at(p, 0, steps, x, y);
     for (int f = 0; f < p->fingers; f++)
         if (touch_down(t, slots[f], x[f], y[f], err, errlen))
@@ -346,7 +370,7 @@ static int gesture(struct touch *t, const struct path *p, int steps, char *err, 
     if (touch_frame(t, err, errlen))
         goto fail;
     for (int i = 1; i <= steps && !stop; i++) {
-        sleep_until(&start, (long)i * t->interval_ms);
+        pace(t, &start, i);
         path_at(p, i, steps, x, y);
         for (int f = 0; f < p->fingers; f++)
             if (touch_move(t, slots[f], x[f], y[f], err, errlen))
@@ -354,7 +378,7 @@ static int gesture(struct touch *t, const struct path *p, int steps, char *err, 
         if (touch_frame(t, err, errlen))
             goto fail;
     }
-    sleep_until(&start, (long)(steps + 1) * t->interval_ms);
+    pace(t, &start, steps + 1);
     for (int f = 0; f < p->fingers; f++)
         if (touch_up(t, slots[f], err, errlen))
             goto fail;
@@ -448,7 +472,12 @@ static int command(struct touch *t, char *line, char *err, size_t errlen)
     }
     if (!strcmp(word, "pan2")) {
         ARGS(5);
-        struct path p = {2, v[0], v[1], v[2], v[3], PAN2_GAP / 2, PAN2_GAP / 2};
+        struct path p = {2, v[0], v[1], v[2], v[3], t->gap / 2, t->gap / 2};
+        return gesture(t, &p, v[4], err, errlen);
+    }
+    if (!strcmp(word, "swipe3")) {
+        ARGS(5);
+        struct path p = {3, v[0], v[1], v[2], v[3], t->gap, t->gap};
         return gesture(t, &p, v[4], err, errlen);
     }
     if (!strcmp(word, "sleep")) {
@@ -500,14 +529,23 @@ static int create_device(struct touch *t, const char *name, int res)
         fprintf(stderr, "uinput_touch: /dev/uinput: %s\n", strerror(errno));
         return -1;
     }
-    static const int keys[] = {BTN_TOUCH, BTN_TOOL_FINGER, BTN_TOOL_DOUBLETAP, BTN_TOOL_TRIPLETAP,
-                               BTN_TOOL_QUADTAP};
+    /* BTN_LEFT last: only the touchpad has it */
+    static const int keys[] = {BTN_TOUCH,          BTN_TOOL_FINGER,  BTN_TOOL_DOUBLETAP,
+                               BTN_TOOL_TRIPLETAP, BTN_TOOL_QUADTAP, BTN_LEFT};
+    size_t nkeys = sizeof keys / sizeof keys[0] - (t->pad ? 0 : 1);
     if (ioctl_int(t->fd, UI_SET_EVBIT, EV_SYN, "UI_SET_EVBIT") ||
         ioctl_int(t->fd, UI_SET_EVBIT, EV_KEY, "UI_SET_EVBIT") ||
-        ioctl_int(t->fd, UI_SET_EVBIT, EV_ABS, "UI_SET_EVBIT") ||
-        ioctl_int(t->fd, UI_SET_PROPBIT, INPUT_PROP_DIRECT, "UI_SET_PROPBIT"))
+        ioctl_int(t->fd, UI_SET_EVBIT, EV_ABS, "UI_SET_EVBIT"))
         return -1;
-    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++)
+    /* a touchscreen is a direct device; a touchpad is an indirect pointer,
+     * and a clickpad (BTN_LEFT under the whole surface, no BTN_RIGHT): with
+     * BTN_LEFT only and no INPUT_PROP_BUTTONPAD libinput logs a kernel bug
+     * ("missing right button, assuming it is a clickpad") */
+    if (t->pad ? ioctl_int(t->fd, UI_SET_PROPBIT, INPUT_PROP_POINTER, "UI_SET_PROPBIT") ||
+                     ioctl_int(t->fd, UI_SET_PROPBIT, INPUT_PROP_BUTTONPAD, "UI_SET_PROPBIT")
+               : ioctl_int(t->fd, UI_SET_PROPBIT, INPUT_PROP_DIRECT, "UI_SET_PROPBIT"))
+        return -1;
+    for (size_t i = 0; i < nkeys; i++)
         if (ioctl_int(t->fd, UI_SET_KEYBIT, keys[i], "UI_SET_KEYBIT"))
             return -1;
     static const int axes[] = {ABS_X, ABS_Y, ABS_MT_SLOT, ABS_MT_TRACKING_ID, ABS_MT_POSITION_X,
@@ -524,7 +562,7 @@ static int create_device(struct touch *t, const char *name, int res)
     memset(&setup, 0, sizeof setup);
     setup.id.bustype = BUS_VIRTUAL;
     setup.id.vendor = 0x7e55; /* arbitrary: "tess" */
-    setup.id.product = 0x0001;
+    setup.id.product = t->pad ? 0x0002 : 0x0001;
     setup.id.version = 1;
     snprintf(setup.name, sizeof setup.name, "%s", name);
     if (ioctl(t->fd, UI_DEV_SETUP, &setup) < 0) {
@@ -604,36 +642,53 @@ static int parse_size(const char *s, int *w, int *h)
 
 static void usage(void)
 {
-    fprintf(stderr, "usage: uinput_touch [-n NAME] [-s WxH] [-R RES] [-i MS] [-f FIFO]\n"
+    fprintf(stderr, "usage: uinput_touch [-p] [-n NAME] [-s WxH] [-R RES] [-i MS] [-g GAP] [-f FIFO]\n"
+                    "  -p: a touchpad (clickpad, default 4000x2400 at 40 units/mm) instead of a\n"
+                    "      touchscreen (default 640x480 at 10 units/mm)\n"
                     "commands, one per line: down SLOT X Y | move SLOT X Y | up SLOT | frame |\n"
                     "  tap X Y [MS] | doubletap X Y | drag X0 Y0 X1 Y1 STEPS |\n"
-                    "  pinch CX CY R0 R1 STEPS | pan2 X0 Y0 X1 Y1 STEPS | sleep MS | quit\n");
+                    "  pinch CX CY R0 R1 STEPS | pan2 X0 Y0 X1 Y1 STEPS |\n"
+                    "  swipe3 X0 Y0 X1 Y1 STEPS | sleep MS | quit\n");
     exit(2);
 }
 
 int main(int argc, char **argv)
 {
-    const char *name = "tessera-test-touch", *fifo = NULL;
+    const char *name = NULL, *fifo = NULL, *size = NULL;
     struct touch t;
     memset(&t, 0, sizeof t);
-    t.w = 640;
-    t.h = 480;
     t.interval_ms = 10;
-    int res = 10, opt;
-    while ((opt = getopt(argc, argv, "n:s:R:i:f:h")) != -1) {
+    t.gap = -1;
+    int res = -1, opt;
+    while ((opt = getopt(argc, argv, "pn:s:R:i:g:f:h")) != -1) {
         switch (opt) {
+        case 'p': t.pad = 1; break;
         case 'n': name = optarg; break;
-        case 's':
-            if (parse_size(optarg, &t.w, &t.h))
+        case 's': size = optarg; break;
+        case 'R':
+            res = atoi(optarg);
+            if (res < 0)
                 usage();
             break;
-        case 'R': res = atoi(optarg); break;
         case 'i': t.interval_ms = atoi(optarg); break;
+        case 'g':
+            t.gap = atoi(optarg);
+            if (t.gap < 0)
+                usage();
+            break;
         case 'f': fifo = optarg; break;
         default: usage();
         }
     }
-    if (optind != argc || res < 0 || t.interval_ms < 0 || strlen(name) >= UINPUT_MAX_NAME_SIZE)
+    if (!name)
+        name = t.pad ? "tessera-test-touchpad" : "tessera-test-touch";
+    if (parse_size(size ? size : t.pad ? "4000x2400" : "640x480", &t.w, &t.h))
+        usage();
+    if (res < 0)
+        res = t.pad ? 40 : 10;
+    if (t.gap < 0)
+        t.gap = t.pad ? PAD_GAP_MM * (res ? res : 1) : GAP;
+    if (optind != argc || t.interval_ms < 0 || strlen(name) >= UINPUT_MAX_NAME_SIZE)
         usage();
 
     struct sigaction sa;

@@ -11,9 +11,12 @@
 #include "engine/scene.h"
 #include "input/bindings.h"
 #include "input/controller.h"
+#include "input/navigate.h"
 #include "input/record.h"
 #include "input/runner.h"
 #include "pipeline_cli.h"
+
+#define CLI_TOUR_ORBIT_PERIOD_S 24.0 /* the default tour: one turn around the home view */
 
 void cli_input_spec_default(cli_input_spec *s)
 {
@@ -151,7 +154,8 @@ void cli_input_usage(FILE *f)
           "  --map-input DEVICE=OUTPUT  a touchscreen or tablet (name or /dev/input node) covers that\n"
           "                   output of the wall (repeatable; default: the whole wall)\n"
           "  --idle-timeout S seconds without input before the attract tour starts (0: never; default 60)\n"
-          "  --tour FILE      the tour's camera path (default: --path, if given)\n"
+          "  --tour FILE      the tour's camera path (default: --path, else one turn around the home view\n"
+          "                   every 24 s)\n"
           "  --record-input FILE  write the transactions input makes, with their times\n"
           "  --replay-input FILE  play recorded input transactions back\n"
           "  --replay-speed recorded|frames|all  at their times, one per frame, or all before the\n"
@@ -377,6 +381,14 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
     if (s->enabled == 1 && tour_file && tour_file[0] && !camera_path_load(tour_file, &in->tour, &err)) {
         cli_error("%s", err.msg);
         goto fail;
+    }
+    /* no tour given: every scene gets one, a slow orbit around its home view */
+    if (s->enabled == 1 && !in->tour.count && s->idle_timeout_s > 0.0) {
+        camera_desc home = pipeline_camera(p, 0);
+        if (!navigate_orbit_path(&home, CLI_TOUR_ORBIT_PERIOD_S, 8, &in->tour, &err)) {
+            cli_error("%s", err.msg);
+            goto fail;
+        }
     }
     input_sink_config sk = {.tour = in->tour.count ? &in->tour : NULL,
                             .tour_ease_s = s->tour_ease_s,
