@@ -19,6 +19,9 @@
 #   hotplug   the touchscreen unplugged, another plugged in (tap on it)
 #   VT switch chvt 2, chvt 1, then a key (the devices were revoked and taken back)
 #   quit chord Ctrl+Alt+Q at the end.
+# Then a second run, with --idle-timeout 8 and the default tour (an orbit of
+# the home view): the picture moves with nobody there, holds still after a
+# key, and moves again 8 s later.
 # After each gesture, once rec.txt has stopped growing, the host copies it,
 # renders the wall natively with `tessera render --replay-input` (all recorded
 # transactions applied, then one frame) and waits until the screendump of every
@@ -82,6 +85,13 @@ tessera run --wall wall.json --scene scene.json --threads 2 --idle-timeout 0 --r
 pid=$!
 run_steps $pid 300
 stop_program $pid
+# the kiosk left alone: its attract tour (the default orbit) after 8 s without input
+if [ ! -e done ]; then
+    tessera run --wall wall.json --scene scene.json --threads 2 --idle-timeout 8 > tessera2.log 2>&1 3<&- &
+    pid=$!
+    run_steps $pid 300
+    stop_program $pid tessera2.rc
+fi
 alive $tpid && echo quit > /tmp/touch.fifo
 wait $tpid
 EOF
@@ -241,6 +251,42 @@ else
         ok "the quit chord Ctrl+Alt+Q ended tessera with exit 0"
     else
         bad "the quit chord: tessera status '$(cat "$W/tessera.rc" 2>/dev/null)', log: $(tail -n 3 "$W/tessera.log" 2>/dev/null)"
+    fi
+
+    # the attract tour, in a second run with --idle-timeout 8 (and the default tour: an orbit)
+    differ() { ! python3 tests/vm/qmp.py compare "$1" "$2" 0 > /dev/null 2>&1; }
+    _n=0
+    until grep -q "outputs up" "$W/tessera2.log" 2>/dev/null; do
+        [ $_n -lt 90 ] && kill -0 "$GPID" 2>/dev/null || break
+        sleep 1
+        _n=$((_n + 1))
+    done
+    sleep 4
+    if ! grep -q "outputs up" "$W/tessera2.log" 2>/dev/null; then
+        bad "the kiosk's second run did not come up: $(tail -n 3 "$W/tessera2.log" 2>/dev/null)"
+    elif dump 0 "$W/tour-a.ppm" && sleep 3 && dump 0 "$W/tour-b.ppm" && differ "$W/tour-a.ppm" "$W/tour-b.ppm"; then
+        ok "kiosk: with nobody there the attract tour plays (head 0 changes over 3 s)"
+        qmp key shift
+        sleep 3
+        dump 0 "$W/tour-c.ppm"
+        sleep 3
+        dump 0 "$W/tour-d.ppm"
+        if ! differ "$W/tour-c.ppm" "$W/tour-d.ppm"; then
+            ok "kiosk: a key stops the tour (the picture holds still)"
+        else
+            bad "kiosk: the picture still moves after a key press"
+        fi
+        sleep 7
+        dump 0 "$W/tour-e.ppm"
+        sleep 3
+        dump 0 "$W/tour-f.ppm"
+        if differ "$W/tour-e.ppm" "$W/tour-f.ppm" && differ "$W/tour-d.ppm" "$W/tour-f.ppm"; then
+            ok "kiosk: 8 s after the last input the tour comes back"
+        else
+            bad "kiosk: the tour did not come back after the idle timeout"
+        fi
+    else
+        bad "kiosk: head 0 did not change over 3 s with nobody there (no tour): $(tail -n 3 "$W/tessera2.log" 2>/dev/null)"
     fi
 fi
 : > "$W/done"

@@ -17,11 +17,11 @@ wait_for() {
 }
 
 # run_steps PID SECS: while PID runs, run each cmd-N.sh (N = 1, 2, ... in
-# order) the host drops in, output to cmd-N.log, exit status to cmd-N.done
-# (fd 3 closed for them); until the host creates `done`, PID ends, or SECS
-# pass without a step.
+# order, going on from an earlier run_steps) the host drops in, output to
+# cmd-N.log, exit status to cmd-N.done (fd 3 closed for them); until the host
+# creates `done`, PID ends, or SECS pass without a step.
 run_steps() {
-    n=1 i=0
+    n=${n:-1} i=0
     while [ ! -e done ] && [ $i -lt $(($2 * 10)) ] && alive "$1"; do
         if [ -e cmd-$n.sh ]; then
             sh cmd-$n.sh > cmd-$n.log 2>&1 3<&-
@@ -36,8 +36,8 @@ run_steps() {
     done
 }
 
-# stop_program PID: SIGTERM if it still runs, SIGKILL 30 s later; its exit
-# status (or why there is none) to tessera.rc
+# stop_program PID [RCFILE]: SIGTERM if it still runs, SIGKILL 30 s later; its
+# exit status (or why there is none) to RCFILE (default tessera.rc)
 stop_program() {
     alive "$1" && kill -TERM "$1" 2>/dev/null
     i=0
@@ -45,9 +45,9 @@ stop_program() {
     if alive "$1"; then
         kill -KILL "$1"
         wait "$1"
-        echo "none (still running 30 s after SIGTERM; killed)" > tessera.rc
+        echo "none (still running 30 s after SIGTERM; killed)" > "${2:-tessera.rc}"
     else
         wait "$1"
-        echo $? > tessera.rc
+        echo $? > "${2:-tessera.rc}"
     fi
 }
