@@ -3,23 +3,29 @@
 #
 # Self-test of the input side of the VM harness: libinput (udev backend, seat0)
 # in the guest sees what the host sends over QMP and what a uinput touchscreen
-# made in the guest sends. One boot (~30 s in all here):
+# and a uinput touchpad made in the guest send. One boot (~30 s in all here):
 #   1. builds tests/vm/uinput_touch.c and tests/vm/input_probe.c and a guest
 #      with them (in $VM_OUT, default CACHE/input; downloads stay in CACHE)
 #   2. boots 2 heads at 640x480 with a second virtio tablet bound to head 1
 #      (serial=head1); in the guest input_probe logs every libinput device and
 #      event to probe.log in the share (transform 640x480), uinput_touch makes
 #      the touchscreen "tessera-test-touch" (640x480: coordinates are pixels)
+#      and, with -p, the touchpad "tessera-test-touchpad" (a clickpad of
+#      100 x 60 mm, 4000x2400 units)
 #   3. host, over QMP (qmp.py expect: send, then wait for the probe's line, so
 #      each step also measures QMP -> guest kernel -> libinput -> share file):
 #      key a, key shift+b, rel 20 10, clicks (default routing, then after
 #      `qmp.py mouse mouse`), absolute positions on the default tablet and on
 #      head 1's, a click on head 1
-#   4. guest (steps the host drops in): uinput_touch tap, drag and pinch
+#   4. guest (steps the host drops in): uinput_touch tap, drag and pinch on
+#      the touchscreen; on the touchpad a pinch out and in, three-finger
+#      swipes right and left, two-finger drags down and up, a one-finger drag
 #   5. checks probe.log: devices and capabilities, key codes, unaccelerated
 #      motion, buttons and the device that got them, transformed absolute
-#      coordinates, touch slots, coordinates and frames, the touchscreen's
-#      removal; run-guest's status; no qemu left
+#      coordinates, touch slots, coordinates and frames, the touchpad's
+#      gestures (PINCH begin/update/end and its scale, SWIPE and its direction,
+#      POINTER_SCROLL_FINGER and its sign, POINTER_MOTION), the removal of
+#      both; run-guest's status; no qemu left
 # Prints PASS/FAIL lines, the latencies, and "N passed, M failed"; exit status
 # 0 only if nothing failed. VM_KEEP=1 keeps the work folder (probe.log, logs).
 set -uo pipefail
@@ -83,17 +89,19 @@ fi
 
 # ---- 2. the guest's side -----------------------------------------------------
 # touch.sh CMD...: each CMD to uinput_touch through its FIFO; waits for its
-# "ok N" (exit 1 on "err N" or after 10 s)
+# "ok N" (exit 1 on "err N" or after 10 s). The touchscreen's FIFO and log by
+# default; the touchpad's with FIFO=/tmp/pad.fifo LOG=pad.log
 cat >"$S/touch.sh" <<'EOF'
+fifo=${FIFO:-/tmp/touch.fifo} log=${LOG:-touch.log}
 for c in "$@"; do
-  n=$(($(grep -cE '^(ok|err) ' touch.log) + 1))
-  echo "$c" > /tmp/touch.fifo
+  n=$(($(grep -cE '^(ok|err) ' "$log") + 1))
+  echo "$c" > "$fifo"
   i=0
-  until grep -qE "^(ok|err) $n(:|\$)" touch.log; do
+  until grep -qE "^(ok|err) $n(:|\$)" "$log"; do
     [ $i -lt 100 ] || { echo "touch.sh: no answer to '$c'"; exit 1; }
     sleep 0.1; i=$((i + 1))
   done
-  if grep -q "^err $n:" touch.log; then grep "^err $n:" touch.log; exit 1; fi
+  if grep -q "^err $n:" "$log"; then grep "^err $n:" "$log"; exit 1; fi
 done
 EOF
 cat >"$S/guest.sh" <<'EOF'
@@ -111,6 +119,9 @@ wait_for '^probe: ready' probe.log 30 || exit 1
 uinput_touch -f /tmp/touch.fifo -n tessera-test-touch -s 640x480 > touch.log 2>&1 &
 wait_for '^uinput_touch: ready' touch.log 10 || exit 1
 wait_for '^added .*"tessera-test-touch"' probe.log 10 || exit 1
+uinput_touch -p -f /tmp/pad.fifo > pad.log 2>&1 &
+wait_for '^uinput_touch: ready' pad.log 10 || exit 1
+wait_for '^added .*"tessera-test-touchpad"' probe.log 10 || exit 1
 touch ready
 # the host's steps: cmd-N.sh -> cmd-N.log, status in cmd-N.done
 n=1 i=0
@@ -124,7 +135,9 @@ while [ ! -e done ] && [ $i -lt 1000 ]; do
   fi
 done
 sh touch.sh quit
-wait_for '^removed .*"tessera-test-touch"' probe.log 10
+FIFO=/tmp/pad.fifo LOG=pad.log sh touch.sh quit
+wait_for '^removed .*"tessera-test-touch"' probe.log 10 &&
+  wait_for '^removed .*"tessera-test-touchpad"' probe.log 10
 rc=$?
 kill $probe
 wait
@@ -174,9 +187,9 @@ node_of() { # REGEX of an "added" line -> its event node (eventN)
 }
 
 if wait_file "$S/ready" 120; then
-  ok "guest up, input_probe ready and the touchscreen added ($(since "$T") s after start)"
+  ok "guest up, input_probe ready and the touchscreen and touchpad added ($(since "$T") s after start)"
 else
-  bad "the guest never got ready (no ready marker): $(tail -n 3 "$P" "$S/touch.log" 2>/dev/null | tr '\n' ' ')"
+  bad "the guest never got ready (no ready marker): $(tail -n 3 "$P" "$S/touch.log" "$S/pad.log" 2>/dev/null | tr '\n' ' ')"
   tail -n 30 "$W/console.log"
   summary
 fi
@@ -194,6 +207,16 @@ if [ -n "$KBD" ] && [ -n "$MOUSE" ] && [ -n "$TAB0" ] && [ -n "$TAB1" ] && [ -n 
 else
   bad "libinput devices (keyboard '$KBD' mouse '$MOUSE' tablets '$TAB0' '$TAB1' touch '$TOUCH' / uinput '$TNODE'):"
   grep '^added' "$P"
+fi
+# the touchpad: a touchpad to udev, pointer + gesture to libinput, 100 x 60 mm,
+# two-finger scrolling, no tapping (it has a button), areas of a clickpad
+PAD=$(node_of '[a-z0-9]+ "tessera-test-touchpad" caps=pointer,gesture touchscreen=no udev=[A-Z_,]*ID_INPUT_TOUCHPAD')
+PNODE=$(sed -n 's|^uinput_touch: ready /dev/input/||p' "$S/pad.log")
+pad_line=$(grep -E '^added [a-z0-9]+ "tessera-test-touchpad"' "$P")
+if [ -n "$PAD" ] && [ "$PAD" = "$PNODE" ] && [[ $pad_line == *" size=100.0x60.0mm tp=tap:off/"*",scroll:2fg,click:areas,"* ]]; then
+  ok "touchpad $PAD: caps=pointer,gesture, ID_INPUT_TOUCHPAD, ${pad_line##* size=}"
+else
+  bad "touchpad: expected caps=pointer,gesture, ID_INPUT_TOUCHPAD, 100x60 mm, 2fg scrolling, click areas on $PNODE; got: ${pad_line:-no device}"
 fi
 
 # ---- 4. QMP input --------------------------------------------------------------
@@ -337,15 +360,135 @@ touch_lag=$(grep -E "^$TOUCH TOUCH_" "$P" | sed -nE 's/.* lag=([0-9.]+)ms$/\1/p'
 frame_gap=$(grep -E "^$TOUCH TOUCH_FRAME" "$P" | sed -n '3,9p' | sed -E 's/.* t=([0-9.]+) .*/\1/' |
   awk 'NR > 1 { d = ($1 - p) * 1000; s += d; if (d > m) m = d } { p = $1 } END { if (NR > 1) printf "%.1f ms mean, %.1f ms max", s / (NR - 1), m }')
 
+# ---- 5b. the touchpad: gestures ------------------------------------------------
+# pad NAME END_REGEX CMD...: the guest sends the CMDs to the touchpad; the
+# probe's lines of the touchpad from then on, until one matches
+# "^eventN END_REGEX" (at most 3 s after the commands were done; an empty
+# END_REGEX: 0.5 s), go to $W/NAME.seq
+pad() {
+  local name=$1 end=$2 from i=0 args=''
+  shift 2
+  from=$(wc -l <"$P")
+  for c in "$@"; do args="$args \"$c\""; done
+  if ! guest_step "FIFO=/tmp/pad.fifo LOG=pad.log sh touch.sh$args"; then
+    echo "pad $name: $(cat "$S/cmd-$STEP.log" 2>/dev/null)" >"$W/$name.seq"
+    return 1
+  fi
+  if [ -z "$end" ]; then sleep 0.5; fi
+  until [ -z "$end" ] || tail -n +"$((from + 1))" "$P" | grep -qE "^$PAD $end"; do
+    [ $i -lt 30 ] || break
+    sleep 0.1; i=$((i + 1))
+  done
+  tail -n +"$((from + 1))" "$P" | grep -E "^$PAD " >"$W/$name.seq"
+}
+# gesture_check KIND FINGERS SEQ: KIND's (PINCH or SWIPE) events in SEQ must be
+# BEGIN, UPDATE..., END cancelled=0, all with FINGERS fingers (HOLD_* before
+# them is allowed: a hold begins when the fingers rest 40 ms); prints
+# "ok UPDATES SUM_DX SUM_DY FIRST_SCALE LAST_SCALE MONOTONY" or "bad REASON"
+gesture_check() {
+  awk -v kind="$1" -v fingers="$2" '
+    function val(key,   i, kv) {
+      for (i = 3; i <= NF; i++) { split($i, kv, "="); if (kv[1] == key) return kv[2] }
+      return ""
+    }
+    $2 !~ "^GESTURE_" kind "_" { next }
+    { n++; type = substr($2, length("GESTURE_" kind "_") + 1) }
+    val("fingers") != fingers { bad = bad " " $2 " with fingers=" val("fingers") }
+    n == 1 && type != "BEGIN" { bad = bad " first is " $2 }
+    type == "BEGIN" && n != 1 { bad = bad " a second BEGIN" }
+    type == "END" { ends++; cancelled = val("cancelled"); endscale = val("scale") }
+    type == "UPDATE" {
+      if (ends) bad = bad " UPDATE after END"
+      u++; dx += val("dx"); dy += val("dy"); s = val("scale") + 0
+      if (u == 1) first = s
+      if (u > 1 && s > prev) up++
+      if (u > 1 && s < prev) down++
+      prev = s
+    }
+    END {
+      if (n == 0) { print "bad no GESTURE_" kind "_* event"; exit }
+      if (type != "END") bad = bad " last is GESTURE_" kind "_" type
+      if (ends != 1) bad = bad " " ends + 0 " ENDs"
+      if (cancelled != "0") bad = bad " END cancelled=" cancelled
+      if (u == 0) bad = bad " no UPDATE"
+      if (bad != "") { print "bad" bad; exit }
+      printf "ok %d %.2f %.2f %s %s %s\n", u, dx, dy, first, endscale,
+        (down == 0 && up > 0) ? "growing" : (up == 0 && down > 0) ? "shrinking" : "mixed"
+    }' "$3"
+}
+pad_seq() { tr '\n' '|' <"$W/$1.seq" | cut -c1-600; }
+
+# pinch: fingers 15 mm apart spreading to 60 mm (and back) in 20 frames of 10 ms
+pad pinch_out 'GESTURE_PINCH_END' "pinch 2000 1200 300 1200 20"
+read -r res u dx dy first last mono <<<"$(gesture_check PINCH 2 "$W/pinch_out.seq")"
+if [ "$res" = ok ] && [ "$mono" = growing ] && awk -v s="$last" 'BEGIN { exit !(s > 1.3) }'; then
+  ok "touchpad pinch out (15 -> 60 mm): PINCH_BEGIN, $u PINCH_UPDATEs with the scale growing $first -> $last, PINCH_END (fingers=2)"
+else
+  bad "touchpad pinch out: want BEGIN, UPDATEs growing, END with scale > 1.3: $res $u $dx $dy $first $last $mono; $(pad_seq pinch_out)"
+fi
+pad pinch_in 'GESTURE_PINCH_END' "pinch 2000 1200 1200 300 20"
+read -r res u dx dy first last mono <<<"$(gesture_check PINCH 2 "$W/pinch_in.seq")"
+if [ "$res" = ok ] && [ "$mono" = shrinking ] && awk -v s="$last" 'BEGIN { exit !(s < 0.8) }'; then
+  ok "touchpad pinch in (60 -> 15 mm): PINCH_BEGIN, $u PINCH_UPDATEs with the scale shrinking $first -> $last, PINCH_END"
+else
+  bad "touchpad pinch in: want BEGIN, UPDATEs shrinking, END with scale < 0.8: $res $u $dx $dy $first $last $mono; $(pad_seq pinch_in)"
+fi
+# three fingers 20 mm apart in a row, 20 mm to the right, then back
+pad swipe_right 'GESTURE_SWIPE_END' "swipe3 1600 1200 2400 1200 20"
+read -r res u dx dy _ <<<"$(gesture_check SWIPE 3 "$W/swipe_right.seq")"
+pad swipe_left 'GESTURE_SWIPE_END' "swipe3 2400 1200 1600 1200 20"
+read -r res2 u2 dx2 dy2 _ <<<"$(gesture_check SWIPE 3 "$W/swipe_left.seq")"
+if [ "$res" = ok ] && [ "$res2" = ok ] &&
+  awk -v a="$dx" -v b="$dy" -v c="$dx2" -v d="$dy2" \
+    'BEGIN { exit !(a > 0 && c < 0 && 4 * (b < 0 ? -b : b) < a && 4 * (d < 0 ? -d : d) < -c) }'; then
+  ok "touchpad swipe3 right / left: SWIPE_BEGIN, UPDATEs, SWIPE_END (fingers=3); dx sums $dx ($u updates) / $dx2 ($u2), dy $dy / $dy2"
+else
+  bad "touchpad swipe3: want BEGIN, UPDATEs, END, dx > 0 then < 0: right: $res $u dx=$dx dy=$dy; left: $res2 $u2 dx=$dx2 dy=$dy2; $(pad_seq swipe_right) $(pad_seq swipe_left)"
+fi
+# two fingers 20 mm apart dragged 20 mm down, then up: two-finger scrolling
+# (POINTER_SCROLL_FINGER, and the legacy POINTER_AXIS source=finger); the
+# scroll ends with an event of value 0
+scroll_check() { # SEQ: "ok EVENTS SUM_V" or "bad REASON"
+  awk '
+    $2 ~ /^GESTURE_(PINCH|SWIPE)/ { bad = bad " " $2 }
+    $2 != "POINTER_SCROLL_FINGER" { next }
+    { n++; split($3, v, "="); split($4, h, "="); sum += v[2]; last = $3 " " $4 }
+    h[2] != "0.00" { bad = bad " h=" h[2] }
+    END {
+      if (n < 3) bad = bad " " n + 0 " POINTER_SCROLL_FINGER events"
+      else if (last != "v=0.00 h=0.00") bad = bad " no end of scroll (last " last ")"
+      if (bad != "") print "bad" bad; else printf "ok %d %.2f\n", n, sum
+    }' "$1"
+}
+pad scroll_down 'POINTER_SCROLL_FINGER v=0\.00 h=0\.00' "pan2 2000 600 2000 1400 20"
+read -r res n v <<<"$(scroll_check "$W/scroll_down.seq")"
+pad scroll_up 'POINTER_SCROLL_FINGER v=0\.00 h=0\.00' "pan2 2000 1400 2000 600 20"
+read -r res2 n2 v2 <<<"$(scroll_check "$W/scroll_up.seq")"
+if [ "$res" = ok ] && [ "$res2" = ok ] && awk -v a="$v" -v b="$v2" 'BEGIN { exit !(a > 0 && b < 0) }'; then
+  ok "touchpad pan2 down / up: POINTER_SCROLL_FINGER, vertical only, v sums $v / $v2 ($n / $n2 events, the last v=0: the end)"
+else
+  bad "touchpad pan2: want POINTER_SCROLL_FINGER v > 0 (down) then < 0 (up), h=0, an end: down: $res $n $v; up: $res2 $n2 $v2; $(pad_seq scroll_down) $(pad_seq scroll_up)"
+fi
+# one finger: pointer motion (accelerated; unaccelerated in device units)
+pad drag '' "drag 1000 1000 2000 1000 10"
+read -r n udx udy other <<<"$(awk '$2 == "POINTER_MOTION" { n++; split($5, a, "="); split($6, b, "="); x += a[2]; y += b[2] }
+  $2 != "POINTER_MOTION" && $2 !~ /^GESTURE_HOLD/ { o = o $2 "," } END { printf "%d %.2f %.2f %s\n", n, x, y, o "-" }' "$W/drag.seq")"
+if [ "$n" -ge 5 ] && [ "$other" = - ] && awk -v x="$udx" -v y="$udy" 'BEGIN { exit !(x >= 500 && x <= 1000 && y == 0) }'; then
+  ok "touchpad drag (1 finger, 25 mm right): $n POINTER_MOTIONs, unaccelerated $udx,$udy device units"
+else
+  bad "touchpad drag: want >= 5 POINTER_MOTION, unaccelerated x 500..1000, y 0, nothing else: $n $udx $udy $other; $(pad_seq drag)"
+fi
+
 # ---- 6. the end ----------------------------------------------------------------
 touch "$S/done"
 wait "$GPID"
 RC=$?
 GPID=
-if [ "$RC" = 0 ] && has '^removed [a-z0-9]+ "tessera-test-touch"'; then
-  ok "uinput_touch quit: libinput removed the touchscreen; guest status 0"
+if [ "$RC" = 0 ] && has '^removed [a-z0-9]+ "tessera-test-touch"$' &&
+  has '^removed [a-z0-9]+ "tessera-test-touchpad"$'; then
+  ok "uinput_touch quit: libinput removed the touchscreen and the touchpad; guest status 0"
 else
-  bad "end of the run: guest status $RC (0 wanted), touchscreen removal seen: $(grep -c '^removed.*tessera-test-touch' "$P")"
+  bad "end of the run: guest status $RC (0 wanted), removals seen: touchscreen $(grep -c '^removed.*"tessera-test-touch"$' "$P"), touchpad $(grep -c '^removed.*"tessera-test-touchpad"$' "$P")"
 fi
 left=''
 for p in /proc/[0-9]*; do

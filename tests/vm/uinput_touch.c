@@ -175,7 +175,8 @@ static void sleep_until(const struct timespec *start, long ms)
  * never less than interval/2 after the previous frame (when the program was
  * late, the frames after it would otherwise go out back to back; libinput's
  * touchpad jump detection scales a motion by 12 ms / the time since the
- * previous frame and drops it as a "jump" when that exceeds 20 mm) */
+ * previous frame and drops it as a "jump" when that exceeds 20 mm, or the
+ * previous frame's by 7 mm) */
 static void pace(struct touch *t, const struct timespec *start, int i)
 {
     sleep_until(start, (long)i * t->interval_ms);
