@@ -16,6 +16,8 @@
 #             (pick: status line), right drag (pan)
 #   touch     (uinput in the guest, on Virtual-3): one-finger drag (orbit),
 #             pinch (dolly), tap (pick), double tap (fly-to)
+#   touchpad  (uinput in the guest, `uinput_touch -p`): pinch (dolly), three-finger
+#             swipe (pan), two-finger scroll (the wheel)
 #   hotplug   the touchscreen unplugged, another plugged in (tap on it)
 #   VT switch chvt 2, chvt 1, then a key (the devices were revoked and taken back)
 #   quit chord Ctrl+Alt+Q at the end.
@@ -224,6 +226,21 @@ else
     for _i in 1 2 3; do qmp abs $((20000 + _i * 1500)) $((12000 + _i * 800)); sleep 0.2; done
     qmp click right up
     check "tablet: right drag (pan)"
+
+    # touchpad gestures: a uinput touchpad in the guest (100 x 60 mm, 40 units a mm; what
+    # libinput needs to see a pinch, a swipe or a scroll: tests/vm/README.md)
+    step "mkfifo /tmp/pad.fifo; uinput_touch -p -f /tmp/pad.fifo > pad.log 2>&1 3<&- & i=0; while ! grep -q ready pad.log && [ \$i -lt 100 ]; do sleep 0.1; i=\$((i + 1)); done; sleep 1"
+    if grep -q "input: device .* added: 'tessera-test-touchpad'.*gestures" "$W/tessera.log"; then
+        step "echo 'pinch 2000 1200 300 1200 20' > /tmp/pad.fifo"
+        check "touchpad: pinch (dolly towards the cursor's point)"
+        step "echo 'swipe3 600 1200 1600 1200 20' > /tmp/pad.fifo"
+        check "touchpad: three-finger swipe (pan)"
+        step "echo 'pan2 2000 600 2000 1800 20' > /tmp/pad.fifo"
+        check "touchpad: two-finger scroll (the wheel: dolly)"
+    else
+        bad "touchpad: tessera did not add the touchpad with gestures: $(grep touchpad "$W/tessera.log" | tail -n 2)"
+    fi
+    step "echo quit > /tmp/pad.fifo"
 
     # a touchscreen unplugged and another plugged in while tessera runs
     step "echo quit > /tmp/touch.fifo; sleep 1"
