@@ -41,30 +41,16 @@
 # downloads are shared with vm_wall.sh. VM_KEEP=1 keeps the work folder.
 set -u
 cd "$(dirname "$0")/.." || exit 1
-CACHE=${TESSERA_VM_CACHE:-/tmp/tessera-vm-cache}
+NAME=vm_input
 W=$(mktemp -d /tmp/tessera-vm-input.XXXXXX)
-GPID=
-cleanup() {
-    [ -n "$GPID" ] && kill "$GPID" 2>/dev/null
-    if [ -n "${VM_KEEP:-}" ]; then echo "vm_input: kept $W"; else rm -rf "$W"; fi
-}
-trap cleanup EXIT
-trap 'exit 130' INT
-trap 'exit 143' TERM
-PASS=0 FAIL=0
-ok() { echo "vm_input: PASS: $*"; PASS=$((PASS + 1)); }
-bad() { echo "vm_input: FAIL: $*"; FAIL=$((FAIL + 1)); }
-T0=$(date +%s)
-elapsed() { echo $(($(date +%s) - T0)); }
+. tests/vm/host_lib.sh
 
-mkdir -p "$CACHE" "$W/bin"
+mkdir -p "$W/bin"
 if ! gcc -std=c11 -O2 -Wall -Wextra -o "$W/bin/uinput_touch" tests/vm/uinput_touch.c > "$W/cc.log" 2>&1; then
     cat "$W/cc.log"
     echo "vm_input: FAIL: tests/vm/uinput_touch.c does not build"
     exit 1
 fi
-NAME=vm_input
-. tests/vm/host_lib.sh
 vm_build "$CACHE/vm-input" ./tessera "$W/bin/uinput_touch"
 
 cp configs/walls/vm_2x2.json "$W/wall.json"

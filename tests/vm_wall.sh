@@ -60,29 +60,14 @@
 # VM_KEEP=1 keeps the work folder (screendumps, references, logs).
 set -u
 cd "$(dirname "$0")/.." || exit 1
-CACHE=${TESSERA_VM_CACHE:-/tmp/tessera-vm-cache}
+NAME=vm_wall
 W=$(mktemp -d /tmp/tessera-vm-wall.XXXXXX)
-GPID=
-cleanup() {
-    [ -n "$GPID" ] && kill "$GPID" 2>/dev/null
-    if [ -n "${VM_KEEP:-}" ]; then echo "vm_wall: kept $W"; else rm -rf "$W"; fi
-}
-trap cleanup EXIT
-trap 'exit 130' INT
-trap 'exit 143' TERM
-PASS=0 FAIL=0
-ok() { echo "vm_wall: PASS: $*"; PASS=$((PASS + 1)); }
-bad() { echo "vm_wall: FAIL: $*"; FAIL=$((FAIL + 1)); }
-T0=$(date +%s)
-elapsed() { echo $(($(date +%s) - T0)); }
+. tests/vm/host_lib.sh
 
 K=16    # frames per loop: period 4 s x rate 4 Hz
 RATE=4  # also in guest.sh's tessera run
 MIN_FRAMES=3
 
-mkdir -p "$CACHE"
-NAME=vm_wall
-. tests/vm/host_lib.sh
 vm_build "$CACHE" ./tessera
 
 cp configs/walls/vm_2x2.json "$W/wall.json"

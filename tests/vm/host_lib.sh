@@ -1,6 +1,24 @@
 # tests/vm/host_lib.sh - what the end-to-end tests (tests/vm_*.sh) share on the
-# host; `. tests/vm/host_lib.sh` after setting NAME (the test's name for
-# messages), W (the share), CACHE, and GPID (run-guest.sh's pid) once it runs.
+# host; `. tests/vm/host_lib.sh` from the repository root after setting NAME
+# (the test's name for messages) and W (the work folder, shared with the
+# guest). It sets CACHE, GPID (empty; the test stores run-guest.sh's pid
+# there), the counters and clock behind ok / bad / elapsed, and the traps that
+# stop the guest and remove W on exit (VM_KEEP=1 keeps it).
+CACHE=${TESSERA_VM_CACHE:-/tmp/tessera-vm-cache}
+GPID=
+cleanup() {
+    [ -n "$GPID" ] && kill "$GPID" 2>/dev/null
+    if [ -n "${VM_KEEP:-}" ]; then echo "$NAME: kept $W"; else rm -rf "$W"; fi
+}
+trap cleanup EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
+PASS=0 FAIL=0
+ok() { echo "$NAME: PASS: $*"; PASS=$((PASS + 1)); }
+bad() { echo "$NAME: FAIL: $*"; FAIL=$((FAIL + 1)); }
+T0=$(date +%s)
+elapsed() { echo $(($(date +%s) - T0)); }
+mkdir -p "$CACHE"
 
 # vm_build OUT FILE...: the guest with FILEs in OUT (VM_OUT; downloads in
 # CACHE). On failure: SKIPPED (exit 0) when qemu or the packages cannot be
