@@ -39,6 +39,7 @@ struct input_controller {
     /* cursor (plane coordinates) */
     double cur_x, cur_y;
     bool cursor_visible, cursor_dirty;
+    bool status_shown;         /* the last status emitted was not "" */
 
     /* a pointer button drag */
     bool dragging;
@@ -132,6 +133,7 @@ static void emit_status(input_controller *c, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(t.text, sizeof t.text, fmt, ap);
     va_end(ap);
+    c->status_shown = t.text[0] != '\0';
     emit(c, &t);
 }
 
@@ -316,7 +318,8 @@ static void start_tour(input_controller *c)
     c->cam_dirty = false;
     show_cursor(c, false);
     flush(c);
-    emit_status(c, "%s", "");
+    if (c->status_shown) /* the tour shows no status line */
+        emit_status(c, "%s", "");
     input_txn t = {.kind = INPUT_TXN_TOUR, .on = true};
     emit(c, &t);
 }

@@ -549,6 +549,7 @@ Test(input, idle_tour_starts_stops_on_input_and_comes_back)
     cr_assert(input_controller_touring(r->c), "a kiosk with a tour starts touring");
     const input_txn *t = last_kind(r, INPUT_TXN_TOUR);
     cr_assert(t && t->on);
+    cr_expect_eq(count_kind(r, INPUT_TXN_STATUS), 0, "no status line to clear, none cleared");
     /* the tour shows some other camera; a touch hands over from it */
     camera_desc tour_cam = {v3(3.f, 1.f, 3.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
     r->shown = tour_cam;
@@ -565,6 +566,9 @@ Test(input, idle_tour_starts_stops_on_input_and_comes_back)
     /* steering started from the tour's camera, not from home */
     cr_expect(fabs(dist(r->shown.eye, v3(0, 0, 0)) - dist(tour_cam.eye, v3(0, 0, 0))) < 0.5,
               "steering did not start from the tour camera");
+    key(r, KEY_P, true); /* a pick puts up a status line */
+    key(r, KEY_P, false);
+    cr_expect(last_kind(r, INPUT_TXN_STATUS)->text[0] != '\0');
     /* idle for less than the timeout: no tour; after it: the tour again */
     uint64_t deadline = input_controller_deadline_us(r->c, r->now_us);
     cr_expect(deadline > r->now_us && deadline <= r->now_us + 5000000);
@@ -573,6 +577,7 @@ Test(input, idle_tour_starts_stops_on_input_and_comes_back)
     tick_for(r, 1.2);
     cr_expect(input_controller_touring(r->c));
     cr_expect(last_kind(r, INPUT_TXN_TOUR)->on);
+    cr_expect_str_eq(last_kind(r, INPUT_TXN_STATUS)->text, "", "the tour left the status line up");
     cr_expect_eq(count_kind(r, INPUT_TXN_TOUR), 3);
     /* a held button keeps the tour away */
     button(r, BTN_LEFT, true);
