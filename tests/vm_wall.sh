@@ -1,7 +1,10 @@
 #!/bin/sh
 # tests/vm_wall.sh - end-to-end: tessera drives a 2x2 wall (configs/walls/vm_2x2.json)
 # on the 4 heads of a virtio-gpu in a qemu guest (tests/vm/), through DRM/KMS,
-# playing a looping camera path. One guest boot for the whole scenario.
+# playing a looping camera path. One guest boot for the whole scenario. Input
+# is off (--input off): on a DRM wall it is on by default, and the kiosk would
+# play the path as its attract tour, eased in from the start camera at a time
+# that depends on the input thread; tests/vm_input.sh covers input.
 #
 # The animation: a scene of spheres without a floor (background pixels are
 # cheap; under TCG the guest shows a new frame every 1-2 s, 3 s with a CPU hog
@@ -103,7 +106,7 @@ fi
 tessera outputs > outputs-before.txt 2>&1 3<&-
 touch console-before
 wait_for console-before.done 60
-tessera run --wall wall.json --scene scene.json --path loop.json --time fixed --rate 4 --threads 2 \
+tessera run --wall wall.json --scene scene.json --path loop.json --time fixed --rate 4 --threads 2 --input off \
     > tessera.log 2>&1 3<&- &
 pid=$!
 run_steps $pid 240
