@@ -16,6 +16,7 @@
 #include "accel.h"
 #include "log.h"
 #include "overlay.h"
+#include "clock.h"
 
 _Static_assert(PIPELINE_STATUS_BYTES == OVERLAY_TEXT_BYTES, "the status line is the overlay's text");
 
@@ -174,12 +175,7 @@ struct pipeline {
 /* The pipeline whose serial section this thread is running, if any. */
 static _Thread_local const pipeline *tls_serial_owner;
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+static double now_s(void) { return clock_monotonic_s(); }
 
 /* ---------------------------------------------------------------- barrier */
 

@@ -230,14 +230,35 @@ static void animate_to(input_controller *c, camera_desc target, uint64_t now_us)
     c->anim_start_us = now_us;
 }
 
-static bool flight_held(const input_controller *c)
+/* The held flight keys as a direction (each -1, 0 or +1 along forward, right,
+ * up; of two opposite keys held together the one with the higher code wins);
+ * whether any is held. One pass over the held codes. */
+static bool flight_direction(const input_controller *c, double *forward, double *right, double *up)
 {
-    for (int a = INPUT_ACTION_FLY_FORWARD; a <= INPUT_ACTION_FLY_DOWN; a++)
-        for (int code = 0; code < INPUT_CODE_COUNT; code++)
-            if (c->held[code] && c->cfg.bindings.code_action[code] == a)
-                return true;
-    return false;
+    double f = 0.0, r = 0.0, u = 0.0;
+    bool any = false;
+    for (int code = 0; code < INPUT_CODE_COUNT; code++) {
+        if (!c->held[code])
+            continue;
+        switch ((input_action)c->cfg.bindings.code_action[code]) {
+        case INPUT_ACTION_FLY_FORWARD: f = 1.0; any = true; break;
+        case INPUT_ACTION_FLY_BACK: f = -1.0; any = true; break;
+        case INPUT_ACTION_FLY_RIGHT: r = 1.0; any = true; break;
+        case INPUT_ACTION_FLY_LEFT: r = -1.0; any = true; break;
+        case INPUT_ACTION_FLY_UP: u = 1.0; any = true; break;
+        case INPUT_ACTION_FLY_DOWN: u = -1.0; any = true; break;
+        default: break;
+        }
+    }
+    if (forward) {
+        *forward = f;
+        *right = r;
+        *up = u;
+    }
+    return any;
 }
+
+static bool flight_held(const input_controller *c) { return flight_direction(c, NULL, NULL, NULL); }
 
 /* A command action at plane point (sx, sy). */
 static void command(input_controller *c, input_action action, double sx, double sy, uint64_t now_us)
@@ -695,25 +716,12 @@ void input_controller_tick(input_controller *c, uint64_t now_us)
             set_camera(c, navigate_blend(&c->anim_from, &c->anim_to, navigate_ease(s)));
         }
     }
-    if (flight_held(c)) {
+    double f, r, u;
+    if (flight_direction(c, &f, &r, &u)) {
         double dt_s = (double)(now_us - c->last_flight_us) * 1e-6;
         if (dt_s > MAX_TICK_S)
             dt_s = MAX_TICK_S;
         c->last_flight_us = now_us;
-        double f = 0, r = 0, u = 0;
-        for (int code = 0; code < INPUT_CODE_COUNT; code++) {
-            if (!c->held[code])
-                continue;
-            switch ((input_action)c->cfg.bindings.code_action[code]) {
-            case INPUT_ACTION_FLY_FORWARD: f = 1.0; break;
-            case INPUT_ACTION_FLY_BACK: f = -1.0; break;
-            case INPUT_ACTION_FLY_RIGHT: r = 1.0; break;
-            case INPUT_ACTION_FLY_LEFT: r = -1.0; break;
-            case INPUT_ACTION_FLY_UP: u = 1.0; break;
-            case INPUT_ACTION_FLY_DOWN: u = -1.0; break;
-            default: break;
-            }
-        }
         double step = c->fly_speed * dt_s;
         if (step > 0.0)
             set_camera(c, navigate_fly(&c->cam, f * step, r * step, u * step));

@@ -12,6 +12,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "engine/clock.h"
 #include "engine/log.h"
 #include "wall/session.h"
 
@@ -29,13 +30,6 @@ struct input_runner {
     pthread_t thread;
     bool started;
 };
-
-static uint64_t now_us(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
-}
 
 static void hook_pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
 {
@@ -64,10 +58,10 @@ static void on_event(void *ctx, const input_event *e)
 static void *input_main(void *arg)
 {
     input_runner *r = arg;
-    input_controller_tick(r->controller, now_us());
+    input_controller_tick(r->controller, clock_monotonic_us());
     bool said_devices = false;
     while (!atomic_load(&r->stop)) {
-        uint64_t now = now_us();
+        uint64_t now = clock_monotonic_us();
         uint64_t deadline = input_controller_deadline_us(r->controller, now);
         int timeout_ms = 1000; /* also how often missing path devices are tried again */
         bool seat = r->sn && session_has_seat(r->sn);
@@ -103,7 +97,7 @@ static void *input_main(void *arg)
                 log_warn("input: no input device found (a wrong --seat or --input-device?); they are picked up "
                          "when they appear");
         }
-        now = now_us();
+        now = clock_monotonic_us();
         if (now >= deadline) /* the deadline asked for before the wait has come */
             input_controller_tick(r->controller, now);
     }

@@ -10,13 +10,14 @@
 #include <string.h>
 #include <time.h>
 
+#include "engine/clock.h"
 #include "engine/log.h"
 #include "input/navigate.h"
 
 struct input_sink {
     pipeline *p;
     input_sink_config cfg;
-    struct timespec t0;            /* recording time 0 */
+    double t0_s;                   /* recording time 0 (clock_monotonic_s) */
 
     pthread_mutex_t lock;          /* guards the mailbox and `shown` */
     bool mail_queued;              /* a mailbox transaction waits for the barrier */
@@ -45,13 +46,6 @@ struct input_sink {
     atomic_uint_fast64_t camera_changes;  /* cameras put into the mailbox */
     atomic_uint_fast64_t camera_applied;  /* mailbox transactions that applied a camera */
 };
-
-static double since_s(const struct timespec *t0)
-{
-    struct timespec now;
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    return (double)(now.tv_sec - t0->tv_sec) + (double)(now.tv_nsec - t0->tv_nsec) * 1e-9;
-}
 
 /* ---- serial section: applying ------------------------------------------------------ */
 
@@ -202,7 +196,7 @@ void input_sink_emit(input_sink *s, const input_txn *t)
     atomic_fetch_add(&s->emitted, 1);
     if (s->record) {
         pthread_mutex_lock(&s->record_lock);
-        if (s->record && !input_record_write(s->record, since_s(&s->t0), t)) {
+        if (s->record && !input_record_write(s->record, clock_monotonic_s() - s->t0_s, t)) {
             log_error("--record-input %s: write failed; recording stopped", s->cfg.record_file);
             fclose(s->record);
             s->record = NULL;
@@ -243,7 +237,7 @@ input_sink *input_sink_create(pipeline *p, const input_sink_config *cfg, tess_er
         s->cfg.tour = NULL;
     pthread_mutex_init(&s->lock, NULL);
     pthread_mutex_init(&s->record_lock, NULL);
-    clock_gettime(CLOCK_MONOTONIC, &s->t0);
+    s->t0_s = clock_monotonic_s();
     s->shown = pipeline_camera(p, 0);
     atomic_init(&s->replay_stop, false);
     if (cfg->record_file && cfg->record_file[0]) {
@@ -302,13 +296,12 @@ static void replay_frame(pipeline *p, void *ctx, const frame_info *fi)
 static void *replay_main(void *arg)
 {
     input_sink *s = arg;
-    struct timespec t0;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
+    double t0_s = clock_monotonic_s();
     for (size_t i = 0; i < s->replay.count; i++) {
         for (;;) {
             if (atomic_load(&s->replay_stop) || pipeline_stop_requested(s->p))
                 return NULL;
-            double wait_s = s->replay.entries[i].time_s - since_s(&t0);
+            double wait_s = s->replay.entries[i].time_s - (clock_monotonic_s() - t0_s);
             if (wait_s <= 0.0)
                 break;
             if (wait_s > 0.02)

@@ -14,6 +14,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "engine/clock.h"
 #include "engine/log.h"
 #include "wall/session.h"
 
@@ -41,13 +42,6 @@ struct input_source {
     bool path_missing_said[INPUT_MAX_PATHS]; /* its absence was logged (once until it is back) */
     bool suspended;                     /* libinput_suspend'ed (the seat is switched away) */
 };
-
-static double mono_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
 /* ---- opening device nodes: through the seat when there is one ---------------- */
 
@@ -216,7 +210,7 @@ static void device_removed(input_source *s, struct libinput_device *dev, input_e
  * there, when their node exists; a missing one is said once until it is back. */
 static void retry_paths(input_source *s)
 {
-    double now = mono_s();
+    double now = clock_monotonic_s();
     if (now < s->next_path_retry_s)
         return;
     s->next_path_retry_s = now + PATH_RETRY_S;

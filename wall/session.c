@@ -14,6 +14,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "engine/clock.h"
 #include "engine/log.h"
 
 #define SESSION_MAX_DEVICES 64
@@ -63,12 +64,7 @@ static void libseat_message(enum libseat_log_level level, const char *fmt, va_li
     vsnprintf(last_libseat_error, sizeof last_libseat_error, fmt, args);
 }
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
+static double now_ms(void) { return 1e3 * clock_monotonic_s(); }
 
 session *session_open(void)
 {

@@ -82,8 +82,7 @@ static bool check_outputs(const cli_pipeline_spec *s)
         if (!strcmp(s->channels[i].display, "dump") && !check_output_dir(s->channels[i].out))
             return false;
     return (!s->record_file[0] || check_output_dir(s->record_file)) &&
-           (!s->input.record_file[0] || check_output_dir(s->input.record_file)) &&
-           cli_input_check(&s->input, s->path_file);
+           (!s->input.record_file[0] || check_output_dir(s->input.record_file));
 }
 
 /* Options that cannot go together; false after printing why (exit 2). */
@@ -122,11 +121,14 @@ static void catch_stop_signals(pipeline *p)
 /* Run the pipeline for a command; `orbit` animates channel 0 when no path is given. */
 static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
 {
-    if (!check_outputs(s))
+    cli_input_files input_files; /* with input on, a --path is the tour */
+    if (!check_outputs(s) || !cli_input_load_files(&s->input, s->input.enabled == 1 ? s->path_file : NULL,
+                                                   &input_files))
         return 1;
     cli_scene cs;
     if (!cli_scene_prepare(scene_path, s->threads, &cs)) {
         cli_scene_finish(&cs);
+        cli_input_files_free(&input_files);
         return 1;
     }
     int code = 1;
@@ -157,7 +159,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     if (s->record_file[0])
         cli_recorder_start(p, &recorder, s->record_file);
     if (cli_input_wanted(&s->input) &&
-        !(input = cli_input_start(&s->input, p, &cs, s->input.enabled == 1 ? s->path_file : NULL)))
+        !(input = cli_input_start(&s->input, p, &cs, &input_files)))
         goto done;
     catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
     bool ran = pipeline_run(p, &err);
@@ -207,6 +209,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     code = 0;
 done:
     cli_input_finish(input);
+    cli_input_files_free(&input_files);
     pipeline_destroy(p);
     cli_pipeline_release_outputs(); /* a DRM card: the CRTCs as they were */
     camera_path_free(&player.path);

@@ -272,22 +272,23 @@ bool cli_input_config_load(jr_ctx *c, json_object *root, const char *config_file
 
 /* ---- before the scene loads ------------------------------------------------------------ */
 
-bool cli_input_check(const cli_input_spec *s, const char *tour_path)
+bool cli_input_load_files(const cli_input_spec *s, const char *tour_path, cli_input_files *files)
 {
     tess_error err = {{0}};
+    *files = (cli_input_files){.have_bindings = false};
     if (s->enabled == 1) {
-        input_bindings b;
-        if (s->bindings_file[0] && !input_bindings_load(s->bindings_file, &b, &err)) {
-            cli_error("--bindings %s", err.msg);
-            return false;
+        if (s->bindings_file[0]) {
+            if (!input_bindings_load(s->bindings_file, &files->bindings, &err)) {
+                cli_error("--bindings %s", err.msg);
+                return false;
+            }
+            files->have_bindings = true;
         }
         const char *tour_file = s->tour_file[0] ? s->tour_file : tour_path;
-        camera_path tour = {0};
-        if (tour_file && tour_file[0] && !camera_path_load(tour_file, &tour, &err)) {
+        if (tour_file && tour_file[0] && !camera_path_load(tour_file, &files->tour, &err)) {
             cli_error("%s%s", s->tour_file[0] ? "--tour " : "", err.msg);
             return false;
         }
-        camera_path_free(&tour);
     } else if (s->bindings_file[0] || s->map_count || s->device_count || s->tour_file[0] || s->seat[0]) {
         fprintf(stderr, "tessera: input is off: --bindings, --map-input, --input-device, --tour and --seat are "
                         "ignored (--input on reads the devices)\n");
@@ -296,6 +297,8 @@ bool cli_input_check(const cli_input_spec *s, const char *tour_path)
         fprintf(stderr, "tessera: --replay-speed without --replay-input is ignored\n");
     return true;
 }
+
+void cli_input_files_free(cli_input_files *files) { camera_path_free(&files->tour); }
 
 /* ---- running ----------------------------------------------------------------------------- */
 
@@ -333,15 +336,14 @@ static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
     }
 }
 
-static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs)
+static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs,
+                          const cli_input_files *files)
 {
     tess_error err = {{0}};
     input_controller_config cc;
     input_controller_config_default(&cc);
-    if (s->bindings_file[0] && !input_bindings_load(s->bindings_file, &cc.bindings, &err)) {
-        cli_error("--bindings %s", err.msg);
-        return false;
-    }
+    if (files->have_bindings)
+        cc.bindings = files->bindings;
     input_source_config sc = {0};
     snprintf(sc.seat, sizeof sc.seat, "%s", s->seat);
     for (int i = 0; i < s->device_count; i++)
@@ -368,7 +370,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     return true;
 }
 
-cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, const char *tour_path)
+cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files)
 {
     cli_input *in = calloc(1, sizeof *in);
     if (!in) {
@@ -377,11 +379,8 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
     }
     in->cs = cs;
     tess_error err = {{0}};
-    const char *tour_file = s->tour_file[0] ? s->tour_file : tour_path;
-    if (s->enabled == 1 && tour_file && tour_file[0] && !camera_path_load(tour_file, &in->tour, &err)) {
-        cli_error("%s", err.msg);
-        goto fail;
-    }
+    in->tour = files->tour; /* taken over */
+    files->tour = (camera_path){0};
     /* no tour given: every scene gets one, a slow orbit around its home view */
     if (s->enabled == 1 && !in->tour.count && s->idle_timeout_s > 0.0) {
         camera_desc home = pipeline_camera(p, 0);
@@ -414,7 +413,7 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
         }
         fprintf(stderr, "tessera: replaying %zu input transactions from %s\n", count, s->replay_file);
     }
-    if (s->enabled == 1 && !start_devices(in, s, p, cs))
+    if (s->enabled == 1 && !start_devices(in, s, p, cs, files))
         goto fail;
     return in;
 fail:

@@ -9,8 +9,10 @@
 #include <stdio.h>
 
 #include "cli.h"
+#include "engine/camera_path.h"
 #include "engine/json_read.h"
 #include "engine/pipeline.h"
+#include "input/bindings.h"
 #include "input/sink.h"
 #include "input/source.h"
 
@@ -47,10 +49,18 @@ bool cli_input_config_load(jr_ctx *c, json_object *root, const char *config_file
 
 void cli_input_usage(FILE *f);
 
-/* Before the scene loads: the bindings, tour and record files are usable
- * (loaded once and dropped), and settings that input off ignores are said.
- * False after printing the error. */
-bool cli_input_check(const cli_input_spec *s, const char *tour_path);
+/* The files input reads, read once before the scene loads (so a bad one
+ * stops the run early) and handed to cli_input_start. */
+typedef struct cli_input_files {
+    bool have_bindings;          /* --bindings given: `bindings` holds it, else the built-in ones */
+    input_bindings bindings;
+    camera_path tour;            /* --tour, else the pipeline's --path; empty: none given */
+} cli_input_files;
+
+/* Read the bindings and tour files (with input on) into *files, and say
+ * which settings input off ignores. False after printing the error. */
+bool cli_input_load_files(const cli_input_spec *s, const char *tour_path, cli_input_files *files);
+void cli_input_files_free(cli_input_files *files);
 
 /* Whether the spec needs anything started for a pipeline. */
 bool cli_input_wanted(const cli_input_spec *s);
@@ -58,10 +68,10 @@ bool cli_input_wanted(const cli_input_spec *s);
 typedef struct cli_input cli_input;
 
 /* Before pipeline_run: the sink (tour, recording), replay, and with
- * s->enabled == 1 the input thread on the devices. `tour_path` is the
- * pipeline's --path, used as the tour when the spec names none. NULL after
- * printing the error. */
-cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, const char *tour_path);
+ * s->enabled == 1 the input thread on the devices, with the files read by
+ * cli_input_load_files (their tour is taken over: files->tour is left empty).
+ * NULL after printing the error. */
+cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files);
 
 /* After pipeline_run: stops the input thread, reports, frees. NULL is fine. */
 void cli_input_finish(cli_input *in);

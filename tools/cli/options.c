@@ -1,4 +1,5 @@
 #include "cli.h"
+#include "engine/clock.h"
 
 #include <errno.h>
 #include <math.h>
@@ -20,12 +21,7 @@ void cli_error(const char *fmt, ...)
     fprintf(stderr, "tessera: error: %s\n", msg);
 }
 
-double cli_now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+double cli_now_s(void) { return clock_monotonic_s(); }
 
 const char *cli_option_value(int argc, char **argv, int *i)
 {
