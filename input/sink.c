@@ -178,6 +178,10 @@ static void queue(input_sink *s, const input_txn *t)
         count_refused(s, pipeline_queue_unhide_all(s->p));
         break;
     case INPUT_TXN_TOUR: {
+        /* logged here, when queued (no I/O at the barrier): the tour then starts or stops at
+         * the next frame; tests/vm_input.sh waits for these lines */
+        if (s->cfg.tour)
+            log_info(t->on ? "input: the attract tour starts" : "input: the attract tour stops (input)");
         tour_args a = {s, t->on};
         count_refused(s, pipeline_transaction(s->p, "input tour", apply_tour, &a, sizeof a));
         break;

@@ -87,6 +87,8 @@ struct drm_card {
     int output_count;
     wall_config wall;             /* as matched at drm_wall_start: hotplug plans against it */
     int pending_flips;            /* flip events still to come; display thread only */
+    uint64_t ready_frame;         /* the newest frame show() handed us (display thread) */
+    uint64_t flipping_frame;      /* the frame the last commit flips to (display thread) */
     int flip_timeouts;            /* flip time-outs and refusals since flips last completed */
     /* hotplug (display thread): udev's connector-change events for this card */
     struct udev *udev;
@@ -672,6 +674,9 @@ static void wait_flips(drm_card *c)
         drmHandleEvent(c->fd, &ev);
     }
     c->flip_timeouts = 0; /* flips complete again */
+    /* what the end-to-end tests (tests/vm_*.sh) wait for: from now on every output shows
+     * this frame or a later one */
+    log_debug("%s: frame %llu on screen", c->path, (unsigned long long)c->flipping_frame);
 }
 
 /* Flip every live output that has a new frame, in one commit (atomic) or one
@@ -707,6 +712,8 @@ static void flip_ready(drm_card *c)
     /* a failed atomic commit changed nothing: no events come; legacy flips queued before one
      * failed still send theirs */
     c->pending_flips = ok || !c->atomic ? count : 0;
+    if (c->pending_flips > 0)
+        c->flipping_frame = c->ready_frame;
     if (!ok) {
         log_warn("%s: page flip refused: %s; probing the connectors", c->path, strerror(errno));
         c->flip_timeouts++;
@@ -885,6 +892,7 @@ static bool drm_show(image_display *d, const frame_image *img, tess_error *err)
     (void)err;
     drm_display *dd = (drm_display *)d;
     dd->card->outputs[dd->output].ready = (int)(img->frame % DRM_FRAME_BUFFERS);
+    dd->card->ready_frame = img->frame;
     return true;
 }
 

@@ -50,8 +50,60 @@ wait_for() {
 }
 
 # guest_step N 'COMMAND' [SECS]: the guest runs COMMAND (sh; guest_lib.sh's
-# run_steps) while the program runs; waits for it (default 30 s). Its output
-# is in $W/cmd-N.log, its exit status in $W/cmd-N.done.
+# run_steps) while the program runs; waits for it (default: 4 frames' time, frames_s
+# below: the guest's CPUs are busy rendering). Its output is in $W/cmd-N.log, its exit
+# status in $W/cmd-N.done.
 guest_step() {
-    printf '%s\n' "$2" > "$W/cmd-$1.tmp" && mv "$W/cmd-$1.tmp" "$W/cmd-$1.sh" && wait_for "cmd-$1.done" "${3:-30}"
+    printf '%s\n' "$2" > "$W/cmd-$1.tmp" && mv "$W/cmd-$1.tmp" "$W/cmd-$1.sh" && wait_for "cmd-$1.done" "${3:-$(frames_s 4)}"
+}
+
+# ---- frames: the tests wait for frames the guest's tessera reports, never for
+# seconds. Run tessera in the guest with TESSERA_LOG=debug: the DRM display then
+# logs "CARD: frame N on screen" when the flips to frame N completed (every output
+# shows frame N or a later one from then on). Under TCG a frame takes 0.3-8 s
+# depending on the host's CPU model, so every time-out below is a number of
+# frames times FRAME_MS, the slowest frame time seen so far.
+FRAME_MS=1000
+now_ms() { date +%s%3N; }
+# last_frame LOG: the newest frame on screen in $W/LOG; -1 before the first
+last_frame() {
+    _lf=$(grep -o 'frame [0-9]* on screen' "$W/$1" 2>/dev/null | tail -n 1 | cut -d' ' -f2)
+    echo "${_lf:--1}"
+}
+# frames_s K: seconds to allow for K frames: 4 times the slowest frame time, plus 30 s
+frames_s() { echo $((30 + 4 * $1 * FRAME_MS / 1000)); }
+# wait_frame LOG N [K]: until frame N or a later one is on screen (time-out: K frames'
+# worth, default N - the frame on screen now); 1 when the guest is gone or time ran
+# out. Updates FRAME_MS from the frames it saw go by.
+wait_frame() {
+    _wf0=$(last_frame "$1")
+    _wft0=$(now_ms)
+    _wfk=${3:-$(($2 - _wf0))}
+    [ "$_wfk" -ge 1 ] || _wfk=1
+    _wfmax=$(frames_s "$_wfk")
+    _wft=$(elapsed)
+    while :; do
+        _wf=$(last_frame "$1")
+        [ "$_wf" -ge "$2" ] && break
+        kill -0 "$GPID" 2>/dev/null && [ $(($(elapsed) - _wft)) -lt "$_wfmax" ] || return 1
+        sleep 0.2
+    done
+    if [ "$_wf0" -ge 0 ] && [ "$_wf" -gt "$_wf0" ]; then
+        _wfms=$((($(now_ms) - _wft0) / (_wf - _wf0)))
+        [ "$_wfms" -gt "$FRAME_MS" ] && FRAME_MS=$_wfms
+    fi
+    return 0
+}
+# log_count LOG TEXT: how many lines of $W/LOG have TEXT (fixed string)
+log_count() {
+    _lc=$(grep -cF "$2" "$W/$1" 2>/dev/null)
+    echo "${_lc:-0}"
+}
+# log_wait LOG TEXT SECS [N]: until $W/LOG has more than N (default 0) lines with TEXT
+log_wait() {
+    _lwt=$(elapsed)
+    while [ "$(log_count "$1" "$2")" -le "${4:-0}" ]; do
+        kill -0 "$GPID" 2>/dev/null && [ $(($(elapsed) - _lwt)) -lt "$3" ] || return 1
+        sleep 0.2
+    done
 }
