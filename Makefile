@@ -3,7 +3,7 @@
 
 CC  ?= gcc
 CXX ?= g++
-PKGS := libdrm libudev libseat libinput libevdev OpenImageIO json-c assimp
+PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp
 TEST_PKGS := criterion
 
 BUILD := build

@@ -25,7 +25,7 @@
 #define DRM_FLIP_TIMEOUT_MS 1000   /* a flip event later than this: probe the connectors */
 #define DRM_FLIP_TIMEOUTS_FATAL 5  /* ... and this many in a row with nothing unplugged is an error */
 #define DRM_HOTPLUG_PASSES 3       /* a monitor that moved connectors: gone, then back */
-#define DRM_SEAT_WAIT_MS 200       /* while switched away: how often to look for a stop */
+#define DRM_SEAT_WAIT_MS 200       /* while switched away: how often to look for a stop (and tell the pause hook) */
 #define DRM_IDLE_WAIT_MS 100       /* every monitor unplugged: wait this long for a hotplug event per step */
 #define DRM_IDLE_PROBE_MS 1000     /* ... and without udev, probe the connectors this often */
 /* Frame f is written into buffer f % DRM_FRAME_BUFFERS by the render threads
@@ -97,6 +97,8 @@ struct drm_card {
     bool probe_needed;            /* read the connectors again at the next end_stage */
     pipeline *pipeline;           /* whose channels first_channel.. are the outputs (drm_wall_attach) */
     int first_channel;
+    drm_pause_fn pause_fn;        /* told while a VT switch pauses the wall (display thread) */
+    void *pause_ctx;
     /* property ids by (object, name), looked up once: a flip then costs no property ioctls
      * (display thread, and drm_wall_start before it) */
     drm_prop_entry prop_cache[DRM_PROP_CACHE];
@@ -857,10 +859,15 @@ static void follow_seat(drm_card *c)
     wait_flips(c);
     session_ack_disable(c->session);
     log_info("%s: switched away from our VT: the wall pauses", c->path);
-    while (!session_active(c->session) && !(c->pipeline && pipeline_stop_requested(c->pipeline)))
+    while (!session_active(c->session) && !(c->pipeline && pipeline_stop_requested(c->pipeline))) {
+        if (c->pause_fn)
+            c->pause_fn(c->pause_ctx, true);
         session_dispatch(c->session, DRM_SEAT_WAIT_MS);
+    }
     if (!session_active(c->session))
         return;
+    if (c->pause_fn)
+        c->pause_fn(c->pause_ctx, false);
     log_info("%s: back on our VT: the wall goes on", c->path);
     restore_wall(c);
     c->probe_needed = true; /* monitors may have come and gone meanwhile */
@@ -1000,6 +1007,12 @@ void drm_wall_attach(drm_card *c, pipeline *p, int first_channel)
 {
     c->pipeline = p;
     c->first_channel = first_channel;
+}
+
+void drm_card_set_pause_hook(drm_card *c, drm_pause_fn fn, void *ctx)
+{
+    c->pause_fn = fn;
+    c->pause_ctx = ctx;
 }
 
 /* ---------------------------------------------------------------- tessera outputs */

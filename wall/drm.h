@@ -67,6 +67,14 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
 struct pipeline;
 void drm_wall_attach(drm_card *c, struct pipeline *p, int first_channel);
 
+/* Told on the display thread while the wall is paused because the seat took
+ * the card away (a VT switch): paused true when the pause starts and then at
+ * least every 200 ms while it lasts, false when the wall goes on. The frame
+ * loop waits meanwhile, healthy: a service watchdog is fed from here
+ * (wall/service.h). NULL fn: nobody is told. Before pipeline_run. */
+typedef void (*drm_pause_fn)(void *ctx, bool paused);
+void drm_card_set_pause_hook(drm_card *c, drm_pause_fn fn, void *ctx);
+
 /* CRTCs for outputs: masks[o] has bit k set when output o's encoders can
  * drive CRTC k (of `crtcs`, at most 32). Fills crtc_of_output[o] with distinct
  * CRTC indices by a maximum bipartite matching (augmenting paths: an earlier

@@ -16,7 +16,9 @@
 #include "engine/accel.h"
 #include "engine/scene.h"
 #include "pipeline_cli.h"
+#include "wall/drm.h"
 #include "wall/dump.h"
+#include "wall/service.h"
 
 /* Parse the options both commands take (after loading --config). Returns
  * false when the command should stop: after --help (*exit_code 0) or a bad
@@ -118,8 +120,15 @@ static void catch_stop_signals(pipeline *p)
     sigaction(SIGTERM, &sa, NULL);
 }
 
-/* Run the pipeline for a command; `orbit` animates channel 0 when no path is given. */
-static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
+/* The wall paused for a VT switch: a healthy wait, the watchdog is fed (wall/service.h). */
+static void wall_paused(void *ctx, bool paused)
+{
+    service_notifier_paused(ctx, paused ? "switched away from our VT, waiting for the seat" : NULL);
+}
+
+/* Run the pipeline for a command; `orbit` animates channel 0 when no path is
+ * given; `service`: tell systemd how it goes (NULL when not started by it). */
+static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, service_notifier *service)
 {
     cli_input_files input_files; /* with input on, a --path is the tour */
     if (!check_outputs(s) || !cli_input_load_files(&s->input, s->input.enabled == 1 ? s->path_file : NULL,
@@ -158,6 +167,12 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit)
     }
     if (s->record_file[0])
         cli_recorder_start(p, &recorder, s->record_file);
+    if (!service_notifier_attach(service, p)) {
+        cli_error("service notifier: too many pipeline callbacks");
+        goto done;
+    }
+    if (service && cli_pipeline_card())
+        drm_card_set_pause_hook(cli_pipeline_card(), wall_paused, service);
     if (cli_input_wanted(&s->input) &&
         !(input = cli_input_start(&s->input, p, &cs, &input_files)))
         goto done;
@@ -256,7 +271,7 @@ int cli_render(int argc, char **argv)
         return 2;
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
-    return run_job(&s, scene_path, false);
+    return run_job(&s, scene_path, false, NULL);
 }
 
 static void run_usage(FILE *f)
@@ -314,5 +329,8 @@ int cli_run(int argc, char **argv)
         cli_error("out: cannot create directory: %s", strerror(errno));
         return 1;
     }
-    return run_job(&s, scene_path, true);
+    service_notifier *service = service_notifier_create(); /* NULL unless started by systemd */
+    code = run_job(&s, scene_path, true, service);
+    service_notifier_destroy(service);
+    return code;
 }

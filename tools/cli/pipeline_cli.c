@@ -455,6 +455,7 @@ static struct {
 } active_layout;
 
 session *cli_pipeline_session(void) { return active_session; }
+drm_card *cli_pipeline_card(void) { return active_card; }
 
 int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_area *areas, int max)
 {

@@ -85,6 +85,8 @@ int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_are
 
 /* The seat cli_pipeline_create opened for a DRM wall, else NULL. */
 struct session *cli_pipeline_session(void);
+/* The DRM card cli_pipeline_create opened for a wall, else NULL. */
+struct drm_card *cli_pipeline_card(void);
 
 /* Release what cli_pipeline_create opened besides the pipeline (a DRM card:
  * its CRTCs are restored): after pipeline_destroy. */
