@@ -109,10 +109,19 @@ static bool check_obj_numbers(const char *path, tess_error *err)
     size_t capacity = 0;
     unsigned long line_no = 0;
     bool ok = true;
+    errno = 0;
     while (ok && getline(&line, &capacity, file) >= 0)
         ok = check_obj_line(line, ++line_no, path, err);
-    if (ok && ferror(file))
-        ok = tess_error_set(err, "%s: read error", path);
+    /* getline's -1 is the end, a read error, or (without the error flag)
+     * no memory for a longer line: anything but the end stops the load */
+    if (ok && !feof(file)) {
+        int e = errno ? errno : EIO;
+        char text[128];
+        if (strerror_r(e, text, sizeof text) != 0)
+            snprintf(text, sizeof text, "error %d", e);
+        ok = e == ENOMEM ? tess_error_set(err, "%s:%lu: out of memory reading the line", path, line_no + 1)
+                         : tess_error_set(err, "%s: read error: %s", path, text);
+    }
     free(line);
     fclose(file);
     return ok;

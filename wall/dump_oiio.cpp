@@ -311,13 +311,22 @@ bool write_rgb(const char *path, int width_px, int height_px, const float *rgb_l
         if (!out->set_ioproxy(&file))
             return tess_error_set(err, "%s: cannot write through a checked file: %s", path, oiio_error(*out).c_str());
     }
+    /* A write through `file` that failed is the cause of whatever OIIO then
+     * says (OpenEXR writes its header in open() and says only "File output
+     * failed"): name the system's error first. */
+    auto failed = [&](const char *what) {
+        if (checked && file.first_errno() != 0)
+            return tess_error_set(err, "%s: write failed (file incomplete): %s (%s: %s)", path,
+                                  std::strerror(file.first_errno()), what, oiio_error(*out).c_str());
+        return tess_error_set(err, "%s: %s: %s", path, what, oiio_error(*out).c_str());
+    };
     if (!out->open(path, spec))
-        return tess_error_set(err, "%s: cannot open for writing: %s", path, oiio_error(*out).c_str());
+        return failed("cannot open for writing");
     partial.keep = false;
     if (!out->write_image(spec.format, pixels))
-        return tess_error_set(err, "%s: write failed: %s", path, oiio_error(*out).c_str());
+        return failed("write failed");
     if (!out->close())
-        return tess_error_set(err, "%s: close failed (file incomplete): %s", path, oiio_error(*out).c_str());
+        return failed("close failed (file incomplete)");
     if (checked) {
         file.close();
         if (file.first_errno() != 0)
