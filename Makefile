@@ -44,7 +44,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-tsan bench bench-pipeline bench-wall clean check-headers
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-pipeline bench-wall clean check-headers
 
 all: tessera
 
@@ -75,6 +75,25 @@ tessera: $(CLI_OBJ) $(LIB)
 $(TEST_BIN): $(TEST_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 
+# fault injection (tests/fault/, README "Tests"): a Criterion binary of its own whose link
+# routes every allocation call in our objects (engine, wall, input, the CLI but main.o, the
+# tests) through tests/fault/fault_alloc.c, so the n-th allocation of one operation can be
+# made to fail, and their pwrite/close through fault_io.c (EIO on demand); the libraries'
+# own calls are untouched
+FAULT_SRC := $(wildcard tests/fault/*.c)
+FAULT_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(FAULT_SRC))
+FAULT_BIN := $(BUILD)/tessera_fault_tests
+FAULT_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=aligned_alloc,--wrap=posix_memalign \
+              -Wl,--wrap=strdup,--wrap=strndup,--wrap=getline,--wrap=open_memstream,--wrap=fopen \
+              -Wl,--wrap=pwrite,--wrap=close
+$(FAULT_BIN): $(FAULT_OBJ) $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ)) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) $(FAULT_WRAP) -o $@ $^ $(LDLIBS) $(TEST_LDLIBS)
+
+# the fault tests alone, without sanitizers (make test-asan runs them with LeakSanitizer)
+test-fault:
+	$(MAKE) $(FAULT_BIN)
+	cd tests && ../$(FAULT_BIN) --jobs 2
+
 # the main job on the built-in default scene (headless: frames to out/)
 run: deps
 	$(MAKE) tessera
@@ -92,8 +111,9 @@ test: deps
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan: deps
 	$(MAKE) BUILD=build-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
-	    build-asan/tessera_tests tessera-asan
+	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests
 	cd tests && TESSERA_BIN=../tessera-asan ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
+	cd tests && ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_fault_tests --jobs 2
 
 # the threaded tests under ThreadSanitizer; any report fails the run. Criterion
 # cannot start under TSan (its issue #274), so these files are compiled against
