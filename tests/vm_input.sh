@@ -24,11 +24,18 @@
 # Then a second run, with --idle-timeout 8 and the default tour (an orbit of
 # the home view): the picture moves with nobody there, holds still after a
 # key, and moves again 8 s later.
-# After each gesture, once rec.txt has stopped growing, the host copies it,
-# renders the wall natively with `tessera render --replay-input` (all recorded
+# Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
+# to 8 s depending on the host's CPU model. tessera in the guest runs with
+# TESSERA_LOG=debug and logs each frame on screen; the host waits for those
+# lines, for the tour's start/stop lines and for the uinput device's ack of a
+# gesture, with time-outs in frames (host_lib.sh: frames_s, wait_frame).
+# After each gesture (all of it sent), the host copies rec.txt, renders the
+# wall natively with `tessera render --replay-input` (all recorded
 # transactions applied, then one frame) and waits until the screendump of every
 # head equals its output's native image pixel for pixel (tolerance 0; the
-# status line, the cursor and hidden objects are part of both pictures).
+# status line, the cursor and hidden objects are part of both pictures), and
+# still does, the record unchanged, 3 frames later; a record that grew
+# meanwhile is rendered again.
 # Checks (PASS/FAIL): the wall comes up showing the start camera; each gesture
 # changed the camera (or the status line / cursor / hidden set) and the 4 heads
 # equal the native replay; the quit chord ends tessera with exit 0. (Replay at
