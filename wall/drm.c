@@ -22,8 +22,7 @@
 #include "xrgb.h"
 
 #define DRM_MAX_CARDS 16
-#define DRM_FLIP_TIMEOUT_MS 1000   /* a flip event later than this: probe the connectors */
-#define DRM_FLIP_TIMEOUTS_FATAL 5  /* ... and this many in a row with nothing unplugged is an error */
+#define DRM_FLIP_TIMEOUT_MS 1000   /* a flip event later than this: probe the connectors (and see drm_flip_judge) */
 #define DRM_HOTPLUG_PASSES 3       /* a monitor that moved connectors: gone, then back */
 #define DRM_SEAT_WAIT_MS 200       /* while switched away: how often to look for a stop (and tell the pause hook) */
 #define DRM_IDLE_WAIT_MS 100       /* every monitor unplugged: wait this long for a hotplug event per step */
@@ -53,6 +52,10 @@ typedef struct drm_output {
     drm_buffer blank;            /* black: what a modeset shows before the first frame */
     bool live;                   /* being driven (false once its monitor is unplugged) */
     int ready;                   /* buffer of a finished frame to flip to at end_stage, -1 if none */
+    bool flip_pending;           /* its flip was queued and its event has not come yet */
+    drm_flip_outcome flip;       /* what became of its last flip, until judged at the next end_stage */
+    bool given_up;               /* switched off for failing flips: stays dark until its monitor is seen
+                                    unplugged (then it may come back like any unplugged one) */
 } drm_output;
 
 /* A property id of one KMS object, by name (a string literal). */
@@ -89,7 +92,7 @@ struct drm_card {
     int pending_flips;            /* flip events still to come; display thread only */
     uint64_t ready_frame;         /* the newest frame show() handed us (display thread) */
     uint64_t flipping_frame;      /* the frame the last commit flips to (display thread) */
-    int flip_timeouts;            /* flip time-outs and refusals since flips last completed */
+    drm_flip_health flip_health;  /* per output: stages in a row whose flips failed (display thread) */
     /* hotplug (display thread): udev's connector-change events for this card */
     struct udev *udev;
     struct udev_monitor *monitor; /* NULL: no udev; only flip timeouts make us probe */
@@ -647,15 +650,20 @@ static void disable_output(drm_card *c, int o)
 
 static void flip_done(int fd, unsigned sequence, unsigned tv_sec, unsigned tv_usec, unsigned crtc_id, void *data)
 {
-    (void)fd, (void)sequence, (void)tv_sec, (void)tv_usec, (void)crtc_id;
+    (void)fd, (void)sequence, (void)tv_sec, (void)tv_usec;
     drm_card *c = data;
     if (c->pending_flips > 0)
         c->pending_flips--;
+    for (int o = 0; o < c->output_count; o++)
+        if (c->outputs[o].flip_pending && c->outputs[o].crtc_id == crtc_id) {
+            c->outputs[o].flip_pending = false;
+            c->outputs[o].flip = DRM_FLIP_DONE;
+        }
 }
 
-/* Wait for the flip events of the last commit. One that never comes (an
- * output unplugged under it) makes the connectors be probed; flip_timeouts
- * counts failures (time-outs, refused flips) since flips last completed. */
+/* Wait for the flip events of the last commit. An output whose event never
+ * comes (unplugged under it) is marked TIMED_OUT and the connectors are
+ * probed; drm_end_stage judges the outcomes (drm_flip_judge). */
 static void wait_flips(drm_card *c)
 {
     drmEventContext ev = {.version = 3, .page_flip_handler2 = flip_done};
@@ -669,60 +677,133 @@ static void wait_flips(drm_card *c)
         if (n <= 0) {
             log_warn("%s: no page-flip event within %d ms; probing the connectors", c->path, DRM_FLIP_TIMEOUT_MS);
             c->pending_flips = 0;
-            c->flip_timeouts++;
+            for (int o = 0; o < c->output_count; o++)
+                if (c->outputs[o].flip_pending) {
+                    c->outputs[o].flip_pending = false;
+                    c->outputs[o].flip = DRM_FLIP_TIMED_OUT;
+                }
             c->probe_needed = true;
             return;
         }
         drmHandleEvent(c->fd, &ev);
     }
-    c->flip_timeouts = 0; /* flips complete again */
     /* what the end-to-end tests (tests/vm_*.sh) wait for: from now on every output shows
      * this frame or a later one */
     log_debug("%s: frame %llu on screen", c->path, (unsigned long long)c->flipping_frame);
 }
 
 /* Flip every live output that has a new frame, in one commit (atomic) or one
- * page flip per CRTC (legacy). A refused flip makes the connectors be probed:
- * an output may have gone between the last probe and now. */
+ * page flip per CRTC (legacy: each on its own, so one refused CRTC does not
+ * hold back the others). A refused flip makes the connectors be probed: an
+ * output may have gone between the last probe and now. */
 static void flip_ready(drm_card *c)
 {
-    int count = 0;
-    bool ok = true;
+    int count = 0, refused = 0, refused_errno = 0;
     if (c->atomic) {
         drmModeAtomicReq *req = drmModeAtomicAlloc();
-        ok = req != NULL;
+        bool ok = req != NULL;
         for (int o = 0; o < c->output_count && ok; o++) {
             drm_output *out = &c->outputs[o];
             if (out->live && out->ready >= 0) {
                 ok = add_output_props(c, req, o, out->buffers[out->ready].fb_id, false);
+                out->flip_pending = true;
                 count++;
             }
         }
         if (ok && count > 0)
             ok = drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT, c) == 0;
+        refused_errno = errno;
         drmModeAtomicFree(req);
+        if (!ok) { /* a failed atomic commit changed nothing: no events come, for any output in it */
+            for (int o = 0; o < c->output_count; o++)
+                if (c->outputs[o].live && c->outputs[o].ready >= 0) {
+                    c->outputs[o].flip_pending = false;
+                    c->outputs[o].flip = DRM_FLIP_REFUSED;
+                    refused++;
+                }
+            count = 0;
+        }
     } else {
-        for (int o = 0; o < c->output_count && ok; o++) {
+        for (int o = 0; o < c->output_count; o++) {
             drm_output *out = &c->outputs[o];
-            if (out->live && out->ready >= 0) {
-                ok = drmModePageFlip(c->fd, out->crtc_id, out->buffers[out->ready].fb_id, DRM_MODE_PAGE_FLIP_EVENT,
-                                     c) == 0;
-                count += ok;
+            if (!out->live || out->ready < 0)
+                continue;
+            if (drmModePageFlip(c->fd, out->crtc_id, out->buffers[out->ready].fb_id, DRM_MODE_PAGE_FLIP_EVENT, c) ==
+                0) {
+                out->flip_pending = true;
+                count++;
+            } else {
+                refused_errno = errno;
+                out->flip = DRM_FLIP_REFUSED;
+                refused++;
             }
         }
     }
-    /* a failed atomic commit changed nothing: no events come; legacy flips queued before one
-     * failed still send theirs */
-    c->pending_flips = ok || !c->atomic ? count : 0;
+    c->pending_flips = count;
     if (c->pending_flips > 0)
         c->flipping_frame = c->ready_frame;
-    if (!ok) {
-        log_warn("%s: page flip refused: %s; probing the connectors", c->path, strerror(errno));
-        c->flip_timeouts++;
+    if (refused > 0) {
+        log_warn("%s: page flip refused (%d output%s): %s; probing the connectors", c->path, refused,
+                 refused == 1 ? "" : "s", strerror(refused_errno));
         c->probe_needed = true;
     }
     for (int o = 0; o < c->output_count; o++)
         c->outputs[o].ready = -1;
+}
+
+/* "were refused", "never completed" or both, for the failures in `kinds` */
+static const char *failure_text(unsigned kinds)
+{
+    bool refused = kinds & (1u << DRM_FLIP_REFUSED), timed_out = kinds & (1u << DRM_FLIP_TIMED_OUT);
+    return refused && timed_out ? "were refused or never completed" : refused ? "were refused" : "never completed";
+}
+
+drm_flip_verdict drm_flip_judge(drm_flip_health *h, const drm_flip_outcome *outcome, const char *const *names,
+                                int count)
+{
+    drm_flip_verdict v = {0};
+    bool any_done = false;
+    int limit_reached = -1; /* an output whose failures reached the limit */
+    if (count > WALL_MAX_OUTPUTS)
+        count = WALL_MAX_OUTPUTS;
+    for (int o = 0; o < count; o++) {
+        if (outcome[o] == DRM_FLIP_DONE) {
+            h->failed[o] = 0;
+            h->kinds[o] = 0;
+            any_done = true;
+        } else if (outcome[o] == DRM_FLIP_REFUSED || outcome[o] == DRM_FLIP_TIMED_OUT) {
+            h->failed[o]++;
+            h->kinds[o] |= 1u << outcome[o];
+            v.probe = true;
+            if (h->failed[o] >= DRM_FLIP_FAILS_LIMIT && limit_reached < 0)
+                limit_reached = o;
+        }
+    }
+    if (limit_reached >= 0 && !any_done) {
+        v.fatal = true;
+        tess_error_set(&v.why, "%d page flips in a row %s and no output's completed", DRM_FLIP_FAILS_LIMIT,
+                       failure_text(h->kinds[limit_reached]));
+        return v;
+    }
+    char list[TESS_ERROR_MSG_BYTES] = "";
+    size_t used = 0;
+    unsigned kinds = 0;
+    for (int o = 0; o < count && any_done; o++) {
+        if (h->failed[o] < DRM_FLIP_FAILS_LIMIT)
+            continue;
+        v.give_up[o] = true;
+        kinds |= h->kinds[o];
+        int n = snprintf(list + used, sizeof list - used, "%soutputs[%d]%s%s%s", used ? ", " : "", o,
+                         names && names[o] ? " (" : "", names && names[o] ? names[o] : "",
+                         names && names[o] ? ")" : "");
+        used = n > 0 && (size_t)n < sizeof list - used ? used + (size_t)n : sizeof list - 1;
+        h->failed[o] = 0;
+        h->kinds[o] = 0;
+    }
+    if (used > 0)
+        tess_error_set(&v.why, "%s: %d page flips in a row %s while the other outputs' completed; switched off, the "
+                               "rest of the wall goes on", list, DRM_FLIP_FAILS_LIMIT, failure_text(kinds));
+    return v;
 }
 
 /* ---------------------------------------------------------------- hotplug */
@@ -793,14 +874,20 @@ static void bring_back(drm_card *c, int o, int conn, int mode)
     announce(c, o, true);
 }
 
-/* Read the connectors again and apply what the plan says. */
-static void handle_hotplug(drm_card *c)
+/* Read the connectors again and apply what the plan says; true when an
+ * output went dark or was lit again. */
+static bool handle_hotplug(drm_card *c)
 {
     tess_error err = {{0}};
+    bool any_change = false;
     if (!read_connectors(c, &err)) {
         log_warn("%s: reading the connectors after a hotplug event: %s", c->path, err.msg);
-        return;
+        return false;
     }
+    for (int o = 0; o < c->output_count; o++) /* a given-up output's monitor unplugged: a new chance */
+        for (size_t k = 0; c->outputs[o].given_up && k < c->conn_count; k++)
+            if (c->infos[k].id == c->outputs[o].connector_id && !c->conns[k].connected)
+                c->outputs[o].given_up = false;
     for (int pass = 0; pass < DRM_HOTPLUG_PASSES; pass++) {
         bool live[WALL_MAX_OUTPUTS];
         int driving[WALL_MAX_OUTPUTS];
@@ -823,7 +910,7 @@ static void handle_hotplug(drm_card *c)
                 c->outputs[o].ready = -1;
                 announce(c, o, false);
                 changed = true;
-            } else if (steps[o].action == WALL_HOTPLUG_BACK) {
+            } else if (steps[o].action == WALL_HOTPLUG_BACK && !c->outputs[o].given_up) {
                 bring_back(c, o, steps[o].connector, steps[o].mode);
                 changed = changed || c->outputs[o].live;
             } else if (pass == 0 && !live[o] && tess_error_is_set(&steps[o].reason)) {
@@ -832,8 +919,10 @@ static void handle_hotplug(drm_card *c)
         }
         if (!changed)
             break;
-        c->flip_timeouts = 0; /* the failures had a cause: an output came or went */
+        any_change = true;
+        c->flip_health = (drm_flip_health){{0}, {0}}; /* the failures had a cause: an output came or went */
     }
+    return any_change;
 }
 
 /* ---------------------------------------------------------------- VT switches */
@@ -871,8 +960,11 @@ static void follow_seat(drm_card *c)
     log_info("%s: back on our VT: the wall goes on", c->path);
     restore_wall(c);
     c->probe_needed = true; /* monitors may have come and gone meanwhile */
-    for (int o = 0; o < c->output_count; o++)
+    c->flip_health = (drm_flip_health){{0}, {0}}; /* flips before the switch say nothing about now */
+    for (int o = 0; o < c->output_count; o++) {
         c->outputs[o].ready = -1; /* their buffers may have been written while we waited: show the next frame */
+        c->outputs[o].flip = DRM_FLIP_NONE;
+    }
 }
 
 /* ---------------------------------------------------------------- the displays */
@@ -916,11 +1008,32 @@ static bool drm_end_stage(image_display *d, tess_error *err)
     if (!session_active(c->session))
         return true; /* stopping while switched away: touch nothing */
     wait_flips(c);
+    drm_flip_outcome outcome[WALL_MAX_OUTPUTS];
+    for (int o = 0; o < c->output_count; o++) {
+        outcome[o] = c->outputs[o].flip;
+        c->outputs[o].flip = DRM_FLIP_NONE;
+    }
+    const char *names[WALL_MAX_OUTPUTS];
+    for (int o = 0; o < c->output_count; o++)
+        names[o] = output_name(c, o);
+    drm_flip_verdict verdict = drm_flip_judge(&c->flip_health, outcome, names, c->output_count);
+    if (!verdict.fatal && tess_error_is_set(&verdict.why))
+        log_warn("%s: %s (tried again once its monitor has been unplugged and plugged in)", c->path,
+                 verdict.why.msg);
+    for (int o = 0; o < c->output_count; o++)
+        if (verdict.give_up[o] && c->outputs[o].live) {
+            disable_output(c, o);
+            c->outputs[o].live = false;
+            c->outputs[o].given_up = true;
+            c->outputs[o].ready = -1;
+            announce(c, o, false);
+        }
     if (c->monitor && hotplug_event(c))
         c->probe_needed = true;
-    if (c->probe_needed) {
+    bool outputs_changed = false;
+    if (c->probe_needed || verdict.probe) {
         c->probe_needed = false;
-        handle_hotplug(c);
+        outputs_changed = handle_hotplug(c);
     }
     bool any_live = false;
     for (int o = 0; o < c->output_count; o++)
@@ -935,9 +1048,8 @@ static bool drm_end_stage(image_display *d, tess_error *err)
         }
         return true;
     }
-    if (c->flip_timeouts >= DRM_FLIP_TIMEOUTS_FATAL)
-        return tess_error_set(err, "%s: %d page flips in a row never completed or were refused, and no output was "
-                                   "unplugged", c->path, c->flip_timeouts);
+    if (verdict.fatal && !outputs_changed)
+        return tess_error_set(err, "%s: %s, and no output was unplugged", c->path, verdict.why.msg);
     flip_ready(c);
     return true;
 }

@@ -83,6 +83,46 @@ void drm_card_set_pause_hook(drm_card *c, drm_pause_fn fn, void *ctx);
  * cannot. Pure; drm_wall_start uses it with the card's masks. */
 int drm_match_crtcs(const uint32_t *masks, int outputs, int crtcs, int *crtc_of_output);
 
+/* ---- page flips that fail (pure: drm_end_stage applies it; tested without a card) ----
+ *
+ * What became of one output's page flip in a display stage: its event came
+ * (DONE), the commit or its legacy page flip was refused (REFUSED: an atomic
+ * commit is refused for every output in it), or no event came within the
+ * flip time-out (TIMED_OUT: the monitor may have gone mid-frame); NONE when it
+ * was not flipped (no new frame, dark). */
+typedef enum drm_flip_outcome {
+    DRM_FLIP_NONE,
+    DRM_FLIP_DONE,
+    DRM_FLIP_REFUSED,
+    DRM_FLIP_TIMED_OUT,
+} drm_flip_outcome;
+
+#define DRM_FLIP_FAILS_LIMIT 5 /* stages in a row an output's flips may fail before it is given up */
+
+/* Per output: display stages in a row whose flip of it failed. Zeroed at
+ * start and after a hotplug change (the failures had a cause). */
+typedef struct drm_flip_health {
+    int failed[WALL_MAX_OUTPUTS];
+    unsigned kinds[WALL_MAX_OUTPUTS]; /* bit 1 << outcome of each failure counted in failed[] */
+} drm_flip_health;
+
+typedef struct drm_flip_verdict {
+    bool probe;                        /* a flip failed: read the connectors (an output may be gone) */
+    bool give_up[WALL_MAX_OUTPUTS];    /* failed DRM_FLIP_FAILS_LIMIT stages in a row while another
+                                          output's flips completed: switch it off, the rest goes on */
+    bool fatal;                        /* the limit reached and no output's flip completed: the card
+                                          shows nothing (unless the probe finds an output gone) */
+    tess_error why;                    /* with give_up or fatal: one line naming the outputs given up
+                                          and what failed, or why the card is given up */
+} drm_flip_verdict;
+
+/* Note one stage's outcomes (outcome[o] for outputs 0 .. count-1; names[o]
+ * their connectors for messages, or NULL) in *h and say what to do. An
+ * output given up has its count cleared (if it is lit again, it starts
+ * afresh). */
+drm_flip_verdict drm_flip_judge(drm_flip_health *h, const drm_flip_outcome *outcome, const char *const *names,
+                                int count);
+
 /* Whether the card took the atomic path (else legacy). */
 bool drm_card_atomic(const drm_card *c);
 
