@@ -130,6 +130,28 @@ build-tsan/tessera_tsan_tests: $(TSAN_TESTS) $(LIB)
 tessera-asan: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
+# the soak (tests/soak.sh, README: Soak): the kiosk (run --wall, headless) under random
+# transactions from several threads for SOAK_S seconds (default 3600), RSS, descriptors,
+# frame gaps and transaction counts checked. SOAK_SAN=1: under ASan + UBSan in its own tree
+# (build-soak-asan/; never build/ or ./tessera). SOAK_SEED, SOAK_THREADS (<= 2 here), SOAK_DIR.
+.PHONY: soak clean-soak
+SOAK_DRIVER_OBJ := $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ)) $(BUILD)/tests/soak/soak_driver.o
+$(BUILD)/soak_driver: $(SOAK_DRIVER_OBJ) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(SOAK_DRIVER_OBJ) $(LIB) $(LDLIBS)
+SOAK_SAN ?= 0
+soak:
+ifeq ($(SOAK_SAN),1)
+	$(MAKE) BUILD=build-soak-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
+	    build-soak-asan/soak_driver
+	SOAK_DRIVER=build-soak-asan/soak_driver SOAK_SAN=1 sh tests/soak.sh
+else
+	$(MAKE) $(BUILD)/soak_driver
+	SOAK_DRIVER=$(BUILD)/soak_driver sh tests/soak.sh
+endif
+clean: clean-soak
+clean-soak:
+	rm -rf build-soak-asan
+
 # every header compiles on its own
 HEADERS := $(wildcard engine/*.h wall/*.h input/*.h tools/cli/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels

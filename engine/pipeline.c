@@ -407,8 +407,10 @@ static bool queue_call(pipeline *p, bool oneshot, uint64_t frame, const char *na
     pthread_mutex_lock(&p->queue_lock);
     const char *refusal = NULL;
     queued_call *slot = NULL;
-    if (p->closed)
-        refusal = "the pipeline has stopped";
+    /* once the stop is asked for no barrier runs transactions any more (serial_section) */
+    bool stopping = p->closed || atomic_load(&p->stop_requested);
+    if (stopping)
+        refusal = p->closed ? "the pipeline has stopped" : "the pipeline is stopping";
     else if (!oneshot && p->queue_count == PIPELINE_QUEUE_MAX)
         refusal = "the transaction queue is full";
     else if (oneshot && p->oneshot_count == PIPELINE_QUEUE_MAX)
@@ -436,6 +438,10 @@ static bool queue_call(pipeline *p, bool oneshot, uint64_t frame, const char *na
                      name ? name : "(unnamed)", refusal);
         pthread_mutex_lock(&p->stats_lock);
         p->stats.transactions_rejected++;
+        if (stopping)
+            p->stats.rejected_stopped++;
+        else
+            p->stats.rejected_queue_full++;
         pthread_mutex_unlock(&p->stats_lock);
         return false;
     }
@@ -1139,15 +1145,24 @@ bool pipeline_run(pipeline *p, tess_error *err)
     for (int i = 0; i < PIPELINE_MAX_THREADS; i++)
         barrier_s += p->threads[i].barrier_s;
     double run_s = now_s() - t0;
+    /* what is still queued will never run: count it (every accepted transaction is
+     * applied or discarded), and empty the queue so the counts stay exact */
     pthread_mutex_lock(&p->queue_lock);
     p->closed = true;
+    size_t discarded = p->queue_count;
+    p->queue_head = (p->queue_head + p->queue_count) % PIPELINE_QUEUE_MAX;
+    p->queue_count = 0;
     pthread_mutex_unlock(&p->queue_lock);
+    if (discarded)
+        log_info("pipeline: %zu transaction%s queued before the stop not applied (the loop had ended)", discarded,
+                 discarded == 1 ? "" : "s");
     for (int i = 0; i < p->termination_count; i++)
         p->terminations[i].fn(p, p->terminations[i].ctx);
     atomic_store(&p->running, false);
     pthread_mutex_lock(&p->stats_lock);
     p->stats.run_s = run_s;
     p->stats.barrier_s = barrier_s;
+    p->stats.transactions_discarded += discarded;
     pthread_mutex_unlock(&p->stats_lock);
     if (p->display_failed)
         return tess_error_set(err, "%s", p->display_error.msg);

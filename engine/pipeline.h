@@ -160,8 +160,10 @@ typedef void (*pipeline_fn)(pipeline *p, void *args);
 
 /* Queue fn(p, copy of args) for the next barrier. `name` (a string literal:
  * kept, not copied) names it in logs. False, with a logged reason, when
- * args_bytes > PIPELINE_ARGS_MAX, the queue is full, or the pipeline has
- * stopped. */
+ * args_bytes > PIPELINE_ARGS_MAX, the queue is full, or pipeline_stop has
+ * been called (the loop runs no more transactions then). A transaction
+ * accepted just before the stop whose barrier never comes is counted as
+ * discarded (pipeline_stats). */
 bool pipeline_transaction(pipeline *p, const char *name, pipeline_fn fn, const void *args, size_t args_bytes);
 
 /* Queue fn to run once in the serial section of frame `frame`, after that
@@ -266,6 +268,13 @@ bool pipeline_in_serial_section(const pipeline *p);
 typedef struct pipeline_stats {
     uint64_t frames_rendered, frames_displayed;
     uint64_t transactions_applied, transactions_rejected;
+    /* of the rejected: the queue was full; the pipeline was stopping or had stopped
+     * (the rest: more than PIPELINE_ARGS_MAX bytes of arguments) */
+    uint64_t rejected_queue_full, rejected_stopped;
+    /* accepted, then never run: still queued when the loop ended (queued after the
+     * last barrier that ran transactions, before the stop was asked for). So every
+     * accepted transaction is counted once: applied + discarded. */
+    uint64_t transactions_discarded;
     uint64_t slow_callbacks;        /* over PIPELINE_CALLBACK_BUDGET_S */
     uint64_t thread_changes;        /* applied thread-count changes */
     render_counts rays;             /* over all frames */

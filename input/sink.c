@@ -43,6 +43,8 @@ struct input_sink {
     atomic_bool replay_stop;
 
     atomic_uint_fast64_t emitted, refused;
+    atomic_uint_fast64_t replayed;        /* played back from a record (not emitted) */
+    atomic_uint_fast64_t queued;          /* pipeline transactions queued (accepted) */
     atomic_uint_fast64_t camera_changes;  /* cameras put into the mailbox */
     atomic_uint_fast64_t camera_applied;  /* mailbox transactions that applied a camera */
 };
@@ -126,8 +128,7 @@ static void tour_step(pipeline *p, void *ctx, const frame_info *fi)
 
 static void count_refused(input_sink *s, bool queued)
 {
-    if (!queued)
-        atomic_fetch_add(&s->refused, 1);
+    atomic_fetch_add(queued ? &s->queued : &s->refused, 1);
 }
 
 static void queue_mail(input_sink *s, const input_txn *t)
@@ -148,8 +149,9 @@ static void queue_mail(input_sink *s, const input_txn *t)
     pthread_mutex_unlock(&s->lock);
     if (!need_queue)
         return;
-    if (!pipeline_transaction(s->p, "input camera/cursor", apply_mail, &s, sizeof s)) {
-        count_refused(s, false);
+    bool queued = pipeline_transaction(s->p, "input camera/cursor", apply_mail, &s, sizeof s);
+    count_refused(s, queued);
+    if (!queued) {
         pthread_mutex_lock(&s->lock);
         s->mail_queued = false;
         pthread_mutex_unlock(&s->lock);
@@ -221,7 +223,8 @@ camera_desc input_sink_current_camera(input_sink *s)
 input_sink_stats input_sink_get_stats(input_sink *s)
 {
     uint64_t changes = atomic_load(&s->camera_changes), applied = atomic_load(&s->camera_applied);
-    return (input_sink_stats){atomic_load(&s->emitted), atomic_load(&s->refused), changes, applied};
+    return (input_sink_stats){atomic_load(&s->emitted), atomic_load(&s->refused), changes, applied,
+                              atomic_load(&s->replayed), atomic_load(&s->queued)};
 }
 
 /* ---- life ------------------------------------------------------------------------------ */
@@ -293,8 +296,10 @@ static void replay_frame(pipeline *p, void *ctx, const frame_info *fi)
     (void)p;
     (void)fi;
     input_sink *s = ctx;
-    if (s->replay_next < s->replay.count)
+    if (s->replay_next < s->replay.count) {
+        atomic_fetch_add(&s->replayed, 1);
         queue(s, &s->replay.entries[s->replay_next++].txn);
+    }
 }
 
 static void *replay_main(void *arg)
@@ -313,6 +318,7 @@ static void *replay_main(void *arg)
             struct timespec ts = {0, (long)(wait_s * 1e9)};
             nanosleep(&ts, NULL);
         }
+        atomic_fetch_add(&s->replayed, 1);
         queue(s, &s->replay.entries[i].txn);
     }
     return NULL;
@@ -330,8 +336,10 @@ bool input_sink_replay(input_sink *s, const input_record *rec, input_replay_spee
     s->replay.count = s->replay.capacity = rec->count;
     switch (speed) {
     case INPUT_REPLAY_ALL:
-        for (size_t i = 0; i < rec->count; i++)
+        for (size_t i = 0; i < rec->count; i++) {
+            atomic_fetch_add(&s->replayed, 1);
             queue(s, &rec->entries[i].txn);
+        }
         return true;
     case INPUT_REPLAY_FRAMES:
         if (!pipeline_add_serial_animation(s->p, "input replay", replay_frame, s))

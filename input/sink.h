@@ -69,10 +69,15 @@ bool input_sink_replay(input_sink *s, const input_record *rec, input_replay_spee
 
 /* Transactions emitted, those the pipeline refused (queue full, stopped);
  * camera changes put into the mailbox, and mailbox transactions that applied
- * one (the rest were overwritten by newer ones before a barrier: coalesced). */
+ * one (the rest were overwritten by newer ones before a barrier: coalesced);
+ * transactions played back from a record (counted apart from emitted); and
+ * pipeline transactions queued (accepted): a camera or cursor change that
+ * rides on a waiting mailbox transaction queues none, so emitted + replayed
+ * = queued + refused + changes coalesced into a waiting mailbox. */
 typedef struct input_sink_stats {
     uint64_t emitted, refused;
     uint64_t camera_changes, camera_applied;
+    uint64_t replayed, queued;
 } input_sink_stats;
 input_sink_stats input_sink_get_stats(input_sink *s);
 

@@ -40,6 +40,8 @@ struct input_source {
     char path_real[INPUT_MAX_PATHS][INPUT_NAME_BYTES]; /* realpath of each, "" if unresolved */
     double next_path_retry_s;
     bool path_missing_said[INPUT_MAX_PATHS]; /* its absence was logged (once until it is back) */
+    bool retry_quiet;                   /* retrying a path already reported: libinput's messages are
+                                           dropped (they would repeat every second forever) */
     bool suspended;                     /* libinput_suspend'ed (the seat is switched away) */
 };
 
@@ -76,7 +78,9 @@ static void libinput_message(struct libinput *li, enum libinput_log_priority pri
     __attribute__((format(printf, 3, 0)));
 static void libinput_message(struct libinput *li, enum libinput_log_priority priority, const char *fmt, va_list args)
 {
-    (void)li;
+    const input_source *s = libinput_get_user_data(li);
+    if (s && s->retry_quiet)
+        return;
     char msg[512];
     vsnprintf(msg, sizeof msg, fmt, args);
     size_t n = strlen(msg);
@@ -207,7 +211,9 @@ static void device_removed(input_source *s, struct libinput_device *dev, input_e
 }
 
 /* Path backend: add the configured devices that are not (or no longer)
- * there, when their node exists; a missing one is said once until it is back. */
+ * there, when their node exists; a missing or unusable one is said once until
+ * it is back (libinput's own messages about it too: they would repeat every
+ * second for as long as the kiosk runs). */
 static void retry_paths(input_source *s)
 {
     double now = clock_monotonic_s();
@@ -223,7 +229,10 @@ static void retry_paths(input_source *s)
             s->path_missing_said[i] = true;
             continue;
         }
-        if (libinput_path_add_device(s->li, s->cfg.paths[i])) {
+        s->retry_quiet = s->path_missing_said[i];
+        struct libinput_device *added = libinput_path_add_device(s->li, s->cfg.paths[i]);
+        s->retry_quiet = false;
+        if (added) {
             s->path_open[i] = true; /* its DEVICE_ADDED event follows */
             s->path_missing_said[i] = false;
         } else if (!s->path_missing_said[i]) {

@@ -868,6 +868,95 @@ Test(pipeline, stop_from_another_thread_displays_the_last_frame_and_runs_termina
     fixture_free(&fx);
 }
 
+/* ---- the stop: every transaction applied, refused or discarded, each counted ---- */
+#define STOP_BACKLOG 7 /* queued in the last serial section, just before the stop */
+
+typedef struct stop_books {
+    pipeline *p;
+    atomic_uint_fast64_t applied;           /* count_applied ran */
+    atomic_uint_fast64_t accepted, refused; /* pipeline_transaction's answers, every thread */
+    int backlog_accepted;                   /* of the backlog (serial section only) */
+    bool refused_after_stop;                /* (serial section only) */
+    atomic_bool run_returned;
+} stop_books;
+
+static void count_applied(pipeline *p, void *args)
+{
+    (void)p;
+    stop_books *b = *(stop_books **)args;
+    atomic_fetch_add(&b->applied, 1);
+}
+
+static bool book(stop_books *b)
+{
+    bool ok = pipeline_transaction(b->p, "counted", count_applied, &b, sizeof b);
+    atomic_fetch_add(ok ? &b->accepted : &b->refused, 1);
+    return ok;
+}
+
+/* Frame 5's serial section: a backlog, then the stop, then one more (refused). */
+static void backlog_then_stop(pipeline *p, void *ctx, const frame_info *fi)
+{
+    stop_books *b = ctx;
+    if (fi->frame != 5)
+        return;
+    for (int i = 0; i < STOP_BACKLOG; i++)
+        b->backlog_accepted += book(b);
+    pipeline_stop(p);
+    b->refused_after_stop = !book(b);
+}
+
+static void *flood_until_closed(void *arg)
+{
+    stop_books *b = arg;
+    while (!atomic_load(&b->run_returned)) {
+        book(b);
+        struct timespec ts = {0, 20000}; /* 20 us: busy, but far from filling the queue in a frame */
+        nanosleep(&ts, NULL);
+    }
+    book(b); /* after run: refused */
+    return NULL;
+}
+
+/* Before: transactions accepted after the last barrier that ran any were
+ * dropped at the stop without a trace (the soak's reconciliation found it). */
+Test(pipeline, at_the_stop_every_transaction_is_applied_refused_or_counted_as_discarded, .timeout = 60)
+{
+    fixture fx = fixture_make();
+    camera_desc cam = test_camera(&fx, 0);
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 2;
+    capture_display *cap;
+    pipeline *p = make_pipeline(&fx, cfg, &cap, &cam);
+    stop_books *b = calloc(1, sizeof *b);
+    cr_assert(b);
+    b->p = p;
+    cr_assert(pipeline_add_serial_animation(p, "backlog, stop", backlog_then_stop, b));
+    pthread_t th;
+    cr_assert_eq(pthread_create(&th, NULL, flood_until_closed, b), 0);
+    run_ok(p);
+    atomic_store(&b->run_returned, true);
+    pthread_join(th, NULL);
+    pipeline_stats st = pipeline_get_stats(p);
+    uint64_t accepted = atomic_load(&b->accepted), refused = atomic_load(&b->refused);
+    uint64_t applied = atomic_load(&b->applied);
+    cr_assert_eq(accepted, applied + st.transactions_discarded,
+                 "%llu accepted, %llu applied + %llu discarded", (unsigned long long)accepted,
+                 (unsigned long long)applied, (unsigned long long)st.transactions_discarded);
+    cr_assert_eq(st.transactions_applied, applied);
+    cr_assert_eq(b->backlog_accepted, STOP_BACKLOG);
+    cr_assert(b->refused_after_stop, "a transaction queued after the stop was accepted");
+    cr_assert(st.transactions_discarded >= STOP_BACKLOG, "the backlog queued before the stop: %llu discarded",
+              (unsigned long long)st.transactions_discarded);
+    cr_assert_eq(refused, st.transactions_rejected);
+    cr_assert_eq(st.transactions_rejected, st.rejected_queue_full + st.rejected_stopped);
+    cr_assert(st.rejected_stopped >= 2, "refused after the stop and after run: %llu",
+              (unsigned long long)st.rejected_stopped);
+    free(b);
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
 Test(pipeline, a_failing_display_stops_the_pipeline_with_its_error, .timeout = 60)
 {
     fixture fx = fixture_make();

@@ -50,6 +50,23 @@ void cli_scene_finish(cli_scene *cs);
 
 int cli_render(int argc, char **argv); /* tessera render ... */
 int cli_run(int argc, char **argv);    /* tessera run ... */
+
+struct pipeline;
+struct cli_input;
+
+/* `tessera run` embedded in another program (tests/soak: the kiosk under a
+ * load of transactions): the same options, set-up, frame loop and teardown,
+ * with callbacks on the thread that runs it. Either callback may be NULL. */
+typedef struct cli_run_hooks {
+    void *ctx;
+    /* Everything is made (outputs, input, animations), pipeline_run comes
+     * next; `in` is NULL without input. False: the run ends with exit code 1. */
+    bool (*started)(void *ctx, struct pipeline *p, struct cli_input *in);
+    /* pipeline_run has returned (`ran`: without an error); the input is still
+     * there (its thread running) and the pipeline's stats are final. */
+    void (*finished)(void *ctx, struct pipeline *p, struct cli_input *in, bool ran);
+} cli_run_hooks;
+int cli_run_with(int argc, char **argv, const cli_run_hooks *hooks);
 int cli_trace(int argc, char **argv);  /* tessera trace ... (cmd_trace.c) */
 int cli_bench(int argc, char **argv);  /* tessera bench ... (cmd_bench.c) */
 int cli_bench_path(int argc, char **argv); /* tessera bench --path / --scaling (cmd_bench_path.c) */

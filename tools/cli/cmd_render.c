@@ -109,6 +109,10 @@ static void stop_on_signal(int sig)
         pipeline_stop(p);
 }
 
+/* The callbacks of cli_run_with around the frame loop (NULL: none). Set
+ * only for the duration of that call, on its thread. */
+static const cli_run_hooks *run_hooks;
+
 static void catch_stop_signals(pipeline *p)
 {
     signal_target = p;
@@ -176,9 +180,13 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     if (cli_input_wanted(&s->input) &&
         !(input = cli_input_start(&s->input, p, &cs, &input_files)))
         goto done;
+    if (run_hooks && run_hooks->started && !run_hooks->started(run_hooks->ctx, p, input))
+        goto done;
     catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
     bool ran = pipeline_run(p, &err);
     catch_stop_signals(NULL);
+    if (run_hooks && run_hooks->finished)
+        run_hooks->finished(run_hooks->ctx, p, input, ran);
     cli_input_finish(input);
     input = NULL;
     if (!ran) {
@@ -272,6 +280,14 @@ int cli_render(int argc, char **argv)
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
     return run_job(&s, scene_path, false, NULL);
+}
+
+int cli_run_with(int argc, char **argv, const cli_run_hooks *hooks)
+{
+    run_hooks = hooks;
+    int code = cli_run(argc, argv);
+    run_hooks = NULL;
+    return code;
 }
 
 static void run_usage(FILE *f)

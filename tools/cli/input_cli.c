@@ -421,6 +421,8 @@ fail:
     return NULL;
 }
 
+input_sink *cli_input_sink(cli_input *in) { return in ? in->sink : NULL; }
+
 void cli_input_finish(cli_input *in)
 {
     if (!in)

@@ -73,6 +73,9 @@ typedef struct cli_input cli_input;
  * NULL after printing the error. */
 cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files);
 
+/* The sink input's transactions go through (for an embedding: cli_run_hooks). */
+input_sink *cli_input_sink(cli_input *in);
+
 /* After pipeline_run: stops the input thread, reports, frees. NULL is fine. */
 void cli_input_finish(cli_input *in);
 
