@@ -610,8 +610,32 @@ static void device_removed(input_controller *c, int device)
 
 /* ---- events ------------------------------------------------------------------------------- */
 
+/* Whether the numbers an event of its kind carries are finite: a broken
+ * device's NaN or infinity must never reach the camera (it is dropped, and
+ * does not count as someone being there either). */
+static bool event_finite(const input_event *e)
+{
+    switch (e->kind) {
+    case INPUT_POINTER_ABS:
+    case INPUT_TOUCH_DOWN:
+    case INPUT_TOUCH_MOTION:
+        return isfinite(e->x) && isfinite(e->y);
+    case INPUT_POINTER_MOTION:
+    case INPUT_SWIPE_UPDATE:
+        return isfinite(e->dx) && isfinite(e->dy);
+    case INPUT_SCROLL:
+        return isfinite(e->dy);
+    case INPUT_PINCH_UPDATE:
+        return isfinite(e->dx) && isfinite(e->dy) && isfinite(e->scale);
+    default:
+        return true;
+    }
+}
+
 void input_controller_event(input_controller *c, const input_event *e)
 {
+    if (!event_finite(e))
+        return;
     switch (e->kind) {
     case INPUT_DEVICE_ADDED:
         return;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "engine/json_read.h"
+#include "engine/log.h"
 
 #define RECORD_MAX_BYTES (256u << 20)
 
@@ -263,6 +264,14 @@ bool input_record_parse(const char *name, const char *text, size_t len, input_re
         skip_spaces(&r);
         if (r.p == r.end || *r.p == '#')
             continue;
+        if (!eol && header) { /* see CUT OFF in record.h */
+            rec.cut_line = r.line;
+            tess_error_set(&rec.warning,
+                           "%s:%zu: the last line has no newline at its end (the recording was cut off?): left out; "
+                           "%zu transaction%s before it replay",
+                           name, r.line, rec.count, rec.count == 1 ? "" : "s");
+            break;
+        }
         if (!header) {
             if ((size_t)(r.end - r.p) != strlen(INPUT_RECORD_HEADER) ||
                 memcmp(r.p, INPUT_RECORD_HEADER, strlen(INPUT_RECORD_HEADER)) != 0) {
@@ -312,5 +321,7 @@ bool input_record_load(const char *file, input_record *out, tess_error *err)
         return false;
     bool ok = input_record_parse(file, text, len, out, err);
     free(text);
+    if (ok && out->cut_line)
+        log_warn("%s", out->warning.msg);
     return ok;
 }

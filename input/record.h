@@ -12,7 +12,15 @@
  *   T unhide-all
  *   T tour ON
  *   T quit
- * Errors name the file, the line and the problem. */
+ * Errors name the file, the line and the problem.
+ *
+ * CUT OFF. A recording that ends mid-line (the kiosk killed or the power cut
+ * while it wrote) still replays: tessera ends every line it writes with a
+ * newline, so a last line without one may be the start of a longer line
+ * ("0.5 hide 12" of "0.5 hide 123") and is left out, whether it parses or not,
+ * with a warning naming the file and line; the complete lines before it play.
+ * An operator wants the session back up to where the recording stopped rather
+ * than nothing; a broken line anywhere else is an error. */
 #ifndef TESSERA_INPUT_RECORD_H
 #define TESSERA_INPUT_RECORD_H
 
@@ -33,12 +41,15 @@ typedef struct input_record_entry {
 typedef struct input_record {
     input_record_entry *entries; /* malloc'ed */
     size_t count, capacity;
+    size_t cut_line;             /* the last line, left out because it had no newline; 0: none */
+    tess_error warning;          /* with cut_line: one line saying so (input_record_load logs it) */
 } input_record;
 
 /* Write one line (no header); false when the write failed. */
 bool input_record_write(FILE *f, double time_s, const input_txn *t);
 
-/* Read a whole record file. *out owns its entries (input_record_free). */
+/* Read a whole record file. *out owns its entries (input_record_free). A
+ * line cut off at the end is left out (see CUT OFF) and logged as a warning. */
 bool input_record_load(const char *file, input_record *out, tess_error *err);
 bool input_record_parse(const char *name, const char *text, size_t len, input_record *out, tess_error *err);
 void input_record_free(input_record *r);
