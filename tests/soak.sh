@@ -14,7 +14,9 @@
 #     (growth < 1 %). The warm-up is min(60 s, SOAK_S / 2): the first minute of
 #     the hour run, half of a short CI run (the allocator's arenas of the
 #     sender and render threads settle in the first seconds);
-#   - descriptors: the same count in every sample after the warm-up;
+#   - descriptors: the same count in every sample after the warm-up (each
+#     sample the least of 3 readings 5 ms apart: one held for a moment by
+#     another thread, as the input thread's device retry, is not a leak);
 #   - frames keep coming: no second's worst frame (the time between two frame
 #     barriers) is over 10 x the median frame time (the driver's), unless the
 #     process's threads waited for a CPU in that second and the one before at
