@@ -12,6 +12,7 @@
 
 #include "cli.h"
 #include "engine/scene.h"
+#include "option_check.h"
 #include "pipeline_cli.h"
 
 #define BENCH_PATH_MAX_TRANSACTIONS 1000000
@@ -344,6 +345,7 @@ int cli_bench_path(int argc, char **argv)
     if (config && !cli_pipeline_config_load(config, &spec))
         return 2;
     bool display_given = false;
+    cli_given given = {.count = 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val;
         bool handled;
@@ -351,6 +353,7 @@ int cli_bench_path(int argc, char **argv)
             usage(stdout);
             return 0;
         }
+        cli_given_add(&given, a);
         display_given = display_given || !strcmp(a, "--display");
         if (!cli_pipeline_option(argc, argv, &i, &spec, &handled))
             return 2;
@@ -376,6 +379,8 @@ int cli_bench_path(int argc, char **argv)
         cli_error("bench: --path FILE or --scaling is required here");
         return 2;
     }
+    if (!cli_check_ignored_bench(&given, &spec, scaling ? "--scaling" : "--path"))
+        return 2;
     if (scaling && !display_given && !config)
         snprintf(spec.channels[0].display, sizeof spec.channels[0].display, "convert");
     if (!scaling)

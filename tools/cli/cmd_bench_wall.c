@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "option_check.h"
 #include "pipeline_cli.h"
 #include "wall/display.h"
 #include "wall/wall_config.h"
@@ -621,9 +622,11 @@ static int parse_options(int argc, char **argv, bench_wall *b, const char **scen
     if (config && !cli_pipeline_config_load(config, &b->spec))
         return 2;
     bool frames_given = b->spec.frames_given && b->spec.frames > 0;
+    cli_given given = {.count = 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val;
         bool handled;
+        cli_given_add(&given, a);
         if (!strcmp(a, "--display")) {
             if (!(val = cli_option_value(argc, argv, &i)))
                 return 2;
@@ -678,6 +681,8 @@ static int parse_options(int argc, char **argv, bench_wall *b, const char **scen
         cli_error("bench --wall: FILE is required");
         return 2;
     }
+    if (!cli_check_ignored_bench(&given, &b->spec, "--wall"))
+        return 2;
     if (!frames_given)
         b->spec.frames = WALL_DEFAULT_FRAMES;
     if (b->spec.frames < WALL_MIN_FRAMES) {

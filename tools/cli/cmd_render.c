@@ -15,6 +15,7 @@
 #include "cli.h"
 #include "engine/accel.h"
 #include "engine/scene.h"
+#include "option_check.h"
 #include "pipeline_cli.h"
 #include "wall/drm.h"
 #include "wall/dump.h"
@@ -24,7 +25,7 @@
  * false when the command should stop: after --help (*exit_code 0) or a bad
  * option (*exit_code 2). */
 static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const char **scene_path,
-                          void (*usage)(FILE *), int *exit_code)
+                          void (*usage)(FILE *), int *exit_code, cli_given *given)
 {
     const char *config = cli_pipeline_find_config(argc, argv);
     if (config && !cli_pipeline_config_load(config, s))
@@ -37,6 +38,7 @@ static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const cha
             *exit_code = 0;
             return false;
         }
+        cli_given_add(given, a);
         if (!cli_pipeline_option(argc, argv, &i, s, &handled))
             goto bad;
         if (handled)
@@ -268,7 +270,8 @@ int cli_render(int argc, char **argv)
     s.time_mode = PIPELINE_TIME_FIXED_RATE;
     const char *scene_path = NULL;
     int code = 0;
-    if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code))
+    cli_given given = {.count = 0};
+    if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code, &given))
         return code;
     if (s.input.enabled == 1) {
         cli_error("%s: 'tessera render' reads no input devices (use 'tessera run'; render can --replay-input)",
@@ -279,6 +282,7 @@ int cli_render(int argc, char **argv)
         return 2;
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
+    cli_check_ignored_render_run(&given, &s, "render");
     return run_job(&s, scene_path, false, NULL);
 }
 
@@ -320,7 +324,8 @@ int cli_run(int argc, char **argv)
     s.rate_hz = 24.0;
     const char *scene_path = NULL;
     int code = 0;
-    if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code))
+    cli_given given = {.count = 0};
+    if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code, &given))
         return code;
     /* the kiosk: a wall on a card when there is one, until stopped, in real time */
     if (s.wall_file[0] && !s.display_given && access("/dev/dri/card0", F_OK) == 0)
@@ -339,6 +344,7 @@ int cli_run(int argc, char **argv)
     }
     if (!check_option_conflicts(&s))
         return 2;
+    cli_check_ignored_render_run(&given, &s, "run");
     /* the default output directory is ours to create */
     if (!strcmp(s.channels[0].display, "dump") && !strcmp(s.channels[0].out, "out/frame_####.png") &&
         mkdir("out", 0777) != 0 && errno != EEXIST) {

@@ -12,6 +12,7 @@
 #include "engine/json_read.h"
 #include "engine/log.h"
 #include "engine/scene.h"
+#include "option_check.h"
 #include "wall/display.h"
 #include "wall/drm.h"
 #include "wall/session.h"
@@ -595,7 +596,7 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
     }
     if (s->wall_file[0]) {
         if (s->channel_count > 1)
-            cli_error("--wall: the config's extra channels are ignored (a wall's channels are its outputs)");
+            cli_warn("the config's extra channels are ignored with --wall (a wall's channels are its outputs)");
         if (!add_wall_channels(p, s, cs)) {
             pipeline_destroy(p);
             return NULL;

@@ -1,0 +1,90 @@
+/* option_check.c - options that do not apply are said (option_check.h). */
+#include "option_check.h"
+
+#include <stdarg.h>
+#include <string.h>
+
+void cli_given_add(cli_given *g, const char *name)
+{
+    if (g->count < CLI_GIVEN_MAX)
+        g->names[g->count++] = name;
+}
+
+bool cli_given_has(const cli_given *g, const char *name)
+{
+    for (int i = 0; i < g->count; i++)
+        if (!strcmp(g->names[i], name))
+            return true;
+    return false;
+}
+
+void cli_warn(const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, "tessera: warning: %s\n", msg);
+}
+
+/* The options that only steer live input (libinput), not a replay. */
+static const char *const live_input_options[] = {"--bindings", "--seat", "--input-device", "--map-input",
+                                                 "--idle-timeout", "--tour", NULL};
+
+void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s, const char *command)
+{
+    const char *display = s->channels[0].display;
+    bool live_input = s->input.enabled == 1;
+    if (s->wall_file[0] && cli_given_has(g, "--size"))
+        cli_warn("--size is ignored with --wall (each output's size comes from the wall config)");
+    if (strcmp(display, "dump") && cli_given_has(g, "--out"))
+        cli_warn("--out is ignored with --display %s (only the dump display writes files)", display);
+    if (s->time_mode == PIPELINE_TIME_REAL && cli_given_has(g, "--rate"))
+        cli_warn("--rate is ignored in real time (it is the frame rate of --time fixed)%s",
+                 !strcmp(display, "drm") && !s->time_given ? "; the kiosk on a DRM card runs in real time" : "");
+    if (strcmp(display, "drm") && cli_given_has(g, "--card"))
+        cli_warn("--card is ignored with --display %s (only the drm display drives a card)", display);
+    if (s->path_file[0] && !live_input && !s->input.replay_file[0] && cli_given_has(g, "--camera"))
+        cli_warn("--camera is ignored with --path (the path sets the camera from the first frame)");
+    if (!s->input.replay_file[0] && cli_given_has(g, "--replay-speed"))
+        cli_warn("--replay-speed is ignored without --replay-input");
+    if (!live_input)
+        for (const char *const *o = live_input_options; *o; o++)
+            if (cli_given_has(g, *o))
+                cli_warn("%s is ignored: 'tessera %s' reads no input devices here (%s)", *o, command,
+                         !strcmp(command, "render") ? "render never does; 'tessera run' can"
+                                                    : "--input on, the default on a DRM wall, turns them on");
+}
+
+bool cli_check_ignored_bench(const cli_given *g, const cli_pipeline_spec *s, const char *mode)
+{
+    (void)s;
+    static const char *const input_options[] = {"--input", "--bindings", "--seat", "--input-device", "--map-input",
+                                                "--idle-timeout", "--tour", "--record-input", "--replay-input",
+                                                "--replay-speed", NULL};
+    for (const char *const *o = input_options; *o; o++)
+        if (cli_given_has(g, *o)) {
+            cli_error("%s: not an option of bench %s (benchmarks read no input; 'tessera run' does)", *o, mode);
+            return false;
+        }
+    /* what each mode sets itself */
+    static const struct {
+        const char *mode, *option, *why;
+    } fixed[] = {
+        {"--path", "--frames", "it renders until the path's transactions are done"},
+        {"--path", "--time", "it runs in real time: frame times are what it measures"},
+        {"--path", "--camera", "the path sets the camera"},
+        {"--path", "--rounds", "--rounds is for --scaling"},
+        {"--path", "--keep-noisy", "--keep-noisy is for --scaling"},
+        {"--path", "--record", "it records nothing"},
+        {"--scaling", "--time", "it runs in fixed-rate time: the same frames at every thread count"},
+        {"--scaling", "--record", "it records nothing"},
+    };
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
+        if (!strcmp(mode, fixed[i].mode) && cli_given_has(g, fixed[i].option)) {
+            cli_error("%s: not an option of bench %s (%s)", fixed[i].option, mode, fixed[i].why);
+            return false;
+        }
+    return true;
+}
