@@ -152,6 +152,24 @@ clean: clean-soak
 clean-soak:
 	rm -rf build-soak-asan
 
+# libFuzzer on every parser (tests/fuzz/README.md): clang with ASan + UBSan in its own tree
+# build-fuzz/ (tests/fuzz/fuzz.mk, with this file's CPPFLAGS, LDLIBS and WARN), then each
+# target for FUZZ_S seconds (default 60) alone; any crash, leak, hang > 1 s or OOM > 2 GiB
+# fails. FUZZ_TARGETS="ply obj" picks targets. fuzz-smoke (3 s a target) is what CI runs.
+.PHONY: fuzz fuzz-build fuzz-smoke clean-fuzz
+FUZZ_S ?= 60
+FUZZ_TARGETS ?=
+fuzz-build:
+	@sh tools/deps.sh --fuzz
+	$(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='$(CPPFLAGS)' LDLIBS='$(LDLIBS)' WARN='$(WARN)'
+fuzz: fuzz-build
+	sh tests/fuzz/run.sh $(FUZZ_S) $(FUZZ_TARGETS)
+fuzz-smoke:
+	$(MAKE) fuzz FUZZ_S=3
+clean: clean-fuzz
+clean-fuzz:
+	rm -rf build-fuzz
+
 # every header compiles on its own
 HEADERS := $(wildcard engine/*.h wall/*.h input/*.h tools/cli/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels

@@ -20,7 +20,9 @@ typedef struct tess_error {
 } tess_error;
 
 /* Keep the first failure: a second set on an already-set error is ignored, so
- * the root cause survives the unwinding. err may be NULL. Always returns false,
+ * the root cause survives the unwinding. The message is kept one printable
+ * line: control characters that input put in it (a quoted token) become '?'
+ * (a tab a space). err may be NULL. Always returns false,
  * so `return tess_error_set(err, ...);` reads as a failed return. */
 bool tess_error_set(tess_error *err, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 

@@ -28,6 +28,9 @@
 /* fread size: big enough that system calls and the partial-record memmove
  * between chunks cost nothing measurable */
 #define READ_CHUNK_BYTES ((size_t)1 << 20)
+/* the first buffer of a file smaller than a chunk: its size, but at least this
+ * (a 400-byte cube needs no megabyte; the buffer still grows for long lines) */
+#define READ_MIN_BYTES ((size_t)4 << 10)
 /* a header line longer than this means the file is not a PLY header */
 #define HEADER_LINE_MAX_BYTES ((size_t)1 << 16)
 /* an ascii record line longer than this is refused, so a file without
@@ -187,11 +190,14 @@ static bool fail_input(ply_loader *ld, const ply_element *e, uint64_t index, boo
 
 /* ---- the buffered reader ------------------------------------------------- */
 
-static bool reader_init(ply_reader *r, FILE *file)
+/* `file_bytes`: the file's size as fstat saw it (it may change while read). */
+static bool reader_init(ply_reader *r, FILE *file, uint64_t file_bytes)
 {
     r->file = file;
-    r->buf = malloc(READ_CHUNK_BYTES + 1);
-    r->capacity = READ_CHUNK_BYTES;
+    r->capacity = file_bytes < READ_MIN_BYTES ? READ_MIN_BYTES
+                  : file_bytes < READ_CHUNK_BYTES ? (size_t)file_bytes
+                                                  : READ_CHUNK_BYTES;
+    r->buf = malloc(r->capacity + 1);
     return r->buf != NULL;
 }
 
@@ -1126,7 +1132,7 @@ static bool load(ply_loader *ld, FILE *file)
     struct stat st;
     if (fstat(fileno(file), &st) != 0 || !S_ISREG(st.st_mode))
         return fail(ld, "cannot open: not a regular file");
-    if (!reader_init(&ld->in, file))
+    if (!reader_init(&ld->in, file, (uint64_t)st.st_size))
         return fail(ld, "out of memory");
     char *line;
     if (!reader_line(&ld->in, HEADER_LINE_MAX_BYTES, &line) || strcmp(line, "ply") != 0) {

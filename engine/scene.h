@@ -108,5 +108,9 @@ scene *scene_create_default(tess_error *err);
  * directional light, and no camera (so the caller frames the bounds). */
 scene *scene_load(const char *path, tess_error *err);
 scene *scene_load_json(const char *path, tess_error *err);
+/* The same from `len` bytes of JSON text (need not be NUL-terminated): `path`
+ * names the text in messages, and relative mesh paths resolve from its
+ * directory. */
+scene *scene_parse_json(const char *path, const char *text, size_t len, tess_error *err);
 
 #endif

@@ -538,9 +538,15 @@ scene *scene_load_json(const char *path, tess_error *err)
     char *text = jr_read_file(path, SCENE_JSON_MAX_BYTES, "a scene file", &len, err);
     if (!text)
         return NULL;
+    scene *s = scene_parse_json(path, text, len, err);
+    free(text);
+    return s;
+}
+
+scene *scene_parse_json(const char *path, const char *text, size_t len, tess_error *err)
+{
     json_object *root = NULL;
     bool ok = jr_parse(path, text, len, &root, err);
-    free(text);
     loader L = {.ctx = {.path = path, .err = err}, .default_material = -1};
     const char *slash = strrchr(path, '/');
     L.dir_len = slash ? (size_t)(slash - path) + 1 : 0;

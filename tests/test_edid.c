@@ -59,6 +59,23 @@ Test(edid, product_code_and_numeric_serial_without_descriptors)
     cr_expect_str_eq(id.serial, "", "no serial at all");
 }
 
+/* Found by fuzzing (tests/fuzz/corpus/edid/crash-empty-name): an empty or
+ * all-blank name or serial descriptor used to give model "" (no wall file can
+ * name it); the product code and the serial number stand instead. */
+Test(edid, empty_text_descriptors_keep_the_numbers)
+{
+    uint8_t b[128];
+    edid_identity id;
+    make_block(b, "DEL", 0xA0C4, 4242, "", "  ");
+    cr_assert(edid_parse(b, sizeof b, &id));
+    cr_expect_str_eq(id.model, "0xA0C4");
+    cr_expect_str_eq(id.serial, "4242");
+    make_block(b, "DEL", 0xA0C4, 0, "   ", "");
+    cr_assert(edid_parse(b, sizeof b, &id));
+    cr_expect_str_eq(id.model, "0xA0C4");
+    cr_expect_str_eq(id.serial, "", "no serial at all");
+}
+
 Test(edid, broken_blocks_are_refused)
 {
     uint8_t b[128];

@@ -900,6 +900,21 @@ Test(mesh_load, header_errors_cite_their_line)
     }
 }
 
+/* Found by fuzzing (tests/fuzz/corpus/ply/crash-control-char): a token with a
+ * control character was quoted into the message as it was; messages stay one
+ * printable line, the character shown as '?'. */
+Test(mesh_load, control_characters_in_quoted_tokens)
+{
+    char path[PATH_BYTES], line[PATH_BYTES + 32];
+    write_text(path, "ctrl.ply", "ply\nformat ascii 1.0\nelement vertex 1\np\x1aroperty float x\n");
+    expect_error(mesh_load_ply, path, at_line(line, path, 4), "unknown header keyword 'p?roperty'");
+    write_text(path, "esc.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                "property float z\nend_header\n0 \x1b[2J 0\n");
+    expect_error(mesh_load_ply, path, at_line(line, path, 8), "got '?[2J'");
+    write_text(path, "ctrl.obj", "v 0 0 0\nv 1 \x1b[2J 0\nv 0 1 0\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 2), "got '?[2J'");
+}
+
 Test(mesh_load, missing_required_parts)
 {
     char path[PATH_BYTES];

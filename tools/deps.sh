@@ -2,7 +2,8 @@
 # deps.sh - make sure the Debian packages tessera builds against are installed.
 # As root: installs what is missing with apt-get (and says so).
 # Otherwise: prints the exact apt-get line and fails.
-# Usage: tools/deps.sh [--bench]   (--bench adds Embree, for the peer comparison)
+# Usage: tools/deps.sh [--bench | --fuzz]   (--bench adds Embree, for the peer comparison;
+#        --fuzz adds clang and its libFuzzer runtime, for make fuzz: tests/fuzz/README.md)
 set -eu
 
 PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libseat-dev libinput-dev libevdev-dev \
@@ -11,6 +12,10 @@ libsystemd-dev libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev"
 PACKAGES="$PACKAGES systemd"
 if [ "${1:-}" = "--bench" ]; then
     PACKAGES="$PACKAGES libembree-dev"
+fi
+# bookworm's clang is clang-14; libclang_rt.fuzzer*.a comes with libclang-rt-14-dev
+if [ "${1:-}" = "--fuzz" ]; then
+    PACKAGES="$PACKAGES clang libclang-rt-14-dev"
 fi
 
 missing=""

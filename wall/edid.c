@@ -10,15 +10,20 @@
 #define EDID_TAG_SERIAL 0xFF
 #define EDID_TAG_NAME 0xFC
 
-/* Descriptor text: up to 13 bytes, ended by a line feed, padded with spaces. */
+/* Descriptor text: up to 13 bytes, ended by a line feed, padded with spaces.
+ * An empty (or all-blank) text leaves out as it is: the product code or the
+ * serial number stands, never "" (which no wall file can name). */
 static void descriptor_text(const uint8_t *d, char *out, size_t out_bytes)
 {
+    char text[EDID_DESCRIPTOR_BYTES];
     size_t n = 0;
-    for (size_t i = 5; i < EDID_DESCRIPTOR_BYTES && d[i] != 0x0A && n + 1 < out_bytes; i++)
-        out[n++] = (d[i] >= 0x20 && d[i] < 0x7F) ? (char)d[i] : '?';
-    while (n > 0 && out[n - 1] == ' ')
+    for (size_t i = 5; i < EDID_DESCRIPTOR_BYTES && d[i] != 0x0A; i++)
+        text[n++] = (d[i] >= 0x20 && d[i] < 0x7F) ? (char)d[i] : '?';
+    while (n > 0 && text[n - 1] == ' ')
         n--;
-    out[n] = '\0';
+    text[n] = '\0';
+    if (n > 0)
+        snprintf(out, out_bytes, "%s", text);
 }
 
 bool edid_parse(const uint8_t *data, size_t size, edid_identity *out)

@@ -264,13 +264,25 @@ static bool load_channels(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
 
 bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
 {
-    static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
-                                         "camera", "display", "path", "channels", "input", NULL};
     tess_error err = {{0}};
     size_t len = 0;
     char *text = jr_read_file(file, CONFIG_MAX_BYTES, "a pipeline config", &len, &err);
+    if (!text) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    bool ok = cli_pipeline_config_parse(file, text, len, s);
+    free(text);
+    return ok;
+}
+
+bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
+                                         "camera", "display", "path", "channels", "input", NULL};
+    tess_error err = {{0}};
     json_object *root = NULL;
-    bool ok = text && jr_parse(file, text, len, &root, &err);
+    bool ok = jr_parse(file, text, len, &root, &err);
     jr_ctx c = {file, &err, "", 0};
     char path[CLI_PATTERN_BYTES] = "";
     ok = ok && jr_expect_object(&c, root) && jr_check_fields(&c, root, fields) &&

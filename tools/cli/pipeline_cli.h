@@ -56,6 +56,9 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
 /* Load --config FILE into s (only the fields it names). False after printing
  * the error (file, line or field, problem). */
 bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s);
+/* The same from `len` bytes of JSON text (need not be NUL-terminated): `file`
+ * names the text in messages, and relative paths resolve from its directory. */
+bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, cli_pipeline_spec *s);
 
 /* If argv[*i] is a pipeline option, parse it (advancing *i past its value)
  * and set *handled. False after printing an error for a bad value. */

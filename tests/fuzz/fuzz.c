@@ -1,0 +1,132 @@
+/* fuzz.c - the helpers of fuzz.h. */
+#define _GNU_SOURCE /* memfd_create */
+#include "fuzz.h"
+
+#include "engine/mesh.h"
+
+#include <dirent.h>
+#include <stdbool.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+void fuzz_fail(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("fuzz: FINDING: ", stdout);
+    vfprintf(stdout, fmt, ap);
+    fputc('\n', stdout);
+    va_end(ap);
+    fflush(stdout);
+    abort();
+}
+
+static void write_all(int fd, const void *data, size_t size, const char *what)
+{
+    const char *p = data;
+    while (size > 0) {
+        ssize_t n = write(fd, p, size);
+        if (n <= 0)
+            fuzz_fail("harness: cannot write %s", what);
+        p += n;
+        size -= (size_t)n;
+    }
+}
+
+const char *fuzz_memfd(const uint8_t *data, size_t size)
+{
+    static int fd = -1;
+    static char path[64];
+    if (fd < 0) {
+        fd = memfd_create("fuzz-input", 0);
+        if (fd < 0)
+            fuzz_fail("harness: memfd_create failed");
+        snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
+    }
+    if (ftruncate(fd, 0) != 0 || lseek(fd, 0, SEEK_SET) != 0)
+        fuzz_fail("harness: cannot truncate the memfd");
+    write_all(fd, data, size, "the memfd");
+    return path;
+}
+
+static char scratch[256];
+
+static void remove_scratch(void)
+{
+    DIR *d = opendir(scratch);
+    if (d) {
+        for (struct dirent *e; (e = readdir(d));) {
+            if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
+                continue;
+            char path[512];
+            snprintf(path, sizeof path, "%s/%s", scratch, e->d_name);
+            unlink(path);
+        }
+        closedir(d);
+    }
+    rmdir(scratch);
+}
+
+const char *fuzz_scratch_dir(void)
+{
+    if (!scratch[0]) {
+        const char *tmp = getenv("TMPDIR");
+        snprintf(scratch, sizeof scratch, "%s/tessera-fuzz-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
+        if (!mkdtemp(scratch))
+            fuzz_fail("harness: cannot make a scratch directory under %s", tmp && tmp[0] ? tmp : "/tmp");
+        atexit(remove_scratch);
+    }
+    return scratch;
+}
+
+void fuzz_write(const char *path, const void *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        fuzz_fail("harness: cannot write %s", path);
+    bool written = size == 0 || fwrite(data, 1, size, f) == size;
+    if (fclose(f) != 0 || !written)
+        fuzz_fail("harness: cannot write %s", path);
+}
+
+void fuzz_check_error(const tess_error *err, const char *name)
+{
+    const char *msg = err->msg;
+    if (!msg[0])
+        fuzz_fail("a failed parse of %s left no error message", name);
+    if (strncmp(msg, name, strlen(name)) != 0)
+        fuzz_fail("error message does not start with the name '%s': %s", name, msg);
+    for (const unsigned char *p = (const unsigned char *)msg; *p; p++)
+        if (*p < 0x20 || *p == 0x7F)
+            fuzz_fail("error message has control character 0x%02X at byte %d: %s", *p, (int)(p - (const unsigned char *)msg), msg);
+}
+
+void fuzz_check_mesh(const mesh *m, const char *name)
+{
+    tess_error err = {{0}};
+    if (!mesh_validate(m, name, &err))
+        fuzz_fail("a loaded mesh does not validate: %s", err.msg);
+    if (m->vertex_count > m->vertex_capacity || m->triangle_count > m->triangle_capacity)
+        fuzz_fail("%s: counts %u, %u exceed capacities %u, %u", name, m->vertex_count, m->triangle_count,
+                  m->vertex_capacity, m->triangle_capacity);
+    volatile float sink = 0.f;
+    for (size_t i = 0; i < 3 * (size_t)m->vertex_count; i++) {
+        sink += m->positions[i];
+        if (m->normals)
+            sink += m->normals[i];
+        if (m->colors && !(m->colors[i] >= 0.f && m->colors[i] <= 1.f))
+            fuzz_fail("%s: vertex %zu: colour %g outside [0, 1]", name, i / 3, (double)m->colors[i]);
+    }
+    for (uint32_t i = 0; i < m->material_count; i++) {
+        if (!memchr(m->materials[i].name, '\0', sizeof m->materials[i].name))
+            fuzz_fail("%s: material %u: name not terminated", name, i);
+        for (int k = 0; k < 3; k++)
+            if (!(m->materials[i].diffuse_rgb[k] >= 0.f && m->materials[i].diffuse_rgb[k] <= 1.f))
+                fuzz_fail("%s: material %u: diffuse %g outside [0, 1]", name, i, (double)m->materials[i].diffuse_rgb[k]);
+    }
+    (void)sink;
+}

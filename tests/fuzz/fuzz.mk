@@ -1,0 +1,53 @@
+# fuzz.mk - the libFuzzer build (tests/fuzz/README.md), run by `make fuzz` as
+#   $(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='...' LDLIBS='...' WARN='...'
+# from the top directory, with the Makefile's CPPFLAGS (pkg-config), LDLIBS
+# and WARN, so the fuzzed code is compiled as the product is, by clang with
+# libFuzzer, ASan and UBSan (every report fatal), in its own tree build-fuzz/.
+
+FZ := build-fuzz
+FZ_CC := clang
+FZ_CXX := clang++
+FZ_SAN := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+FZ_CFLAGS := -std=c11 -O1 -g $(WARN) -Werror -ffp-contract=off -fno-math-errno -pthread $(FZ_SAN) \
+             -fsanitize=fuzzer-no-link
+FZ_CXXFLAGS := -std=c++17 -O1 -g -Wall -Wextra -Werror -pthread $(FZ_SAN) -fsanitize=fuzzer-no-link
+
+# one target per input format: tests/fuzz/fuzz_NAME.c
+FZ_TARGETS := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
+FZ_BINS := $(addprefix $(FZ)/fuzz_,$(FZ_TARGETS))
+
+# the whole product but main(), as one archive: a target links what it uses
+FZ_LIB_C := $(wildcard engine/*.c wall/*.c input/*.c) $(filter-out tools/cli/main.c,$(wildcard tools/cli/*.c))
+FZ_LIB_OBJ := $(patsubst %.c,$(FZ)/%.o,$(FZ_LIB_C)) $(patsubst %.cpp,$(FZ)/%.o,$(wildcard wall/*.cpp)) \
+              $(FZ)/engine/isa/traverse_sse2.o $(FZ)/engine/isa/traverse_avx2.o $(FZ)/engine/isa/traverse_avx512.o
+FZ_LIB := $(FZ)/libtessera_fuzz.a
+FZ_ISA_sse2 := -DTESS_ISA_SSE2
+FZ_ISA_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
+# (clang's avx512f implies fma, so -mno-fma would turn AVX-512 off again; -ffp-contract=off
+# still keeps FMA out, and the fuzz build renders nothing that is compared)
+FZ_ISA_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw
+
+.PHONY: all
+all: $(FZ_BINS)
+
+$(FZ)/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) -MMD -MP -c $< -o $@
+
+$(FZ)/engine/isa/traverse_%.o: engine/isa/traverse.c
+	@mkdir -p $(dir $@)
+	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) $(FZ_ISA_$*) -MMD -MP -c $< -o $@
+
+$(FZ)/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(FZ_CXX) $(CPPFLAGS) $(FZ_CXXFLAGS) -MMD -MP -c $< -o $@
+
+$(FZ_LIB): $(FZ_LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(FZ)/fuzz_%: $(FZ)/tests/fuzz/fuzz_%.o $(FZ)/tests/fuzz/fuzz.o $(FZ_LIB)
+	$(FZ_CXX) $(FZ_SAN) -fsanitize=fuzzer -pthread -o $@ $< $(FZ)/tests/fuzz/fuzz.o $(FZ_LIB) $(LDLIBS)
+
+%.d: ;
+-include $(shell find $(FZ) -name '*.d' 2>/dev/null)
