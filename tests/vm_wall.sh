@@ -72,7 +72,9 @@ K=16    # frames per loop: period 4 s x rate 4 Hz
 RATE=4  # also in guest.sh's tessera run
 MIN_FRAMES=3
 
-vm_build "$CACHE" ./tessera
+mkdir -p "$W/bin"
+copy_tessera
+vm_build "$CACHE" "$W/bin/tessera"
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
@@ -126,7 +128,7 @@ dump() { qmp screendump "$2" "$1" > "$W/dump.err" 2>&1; } # HEAD FILE
 
 # the native references, while the guest boots: frames 0 .. 2K-1 of every output
 mkdir "$W/ref"
-if ! ./tessera render --wall "$W/wall.json" --scene "$W/scene.json" --path "$W/loop.json" --time fixed \
+if ! "$W/bin/tessera" render --wall "$W/wall.json" --scene "$W/scene.json" --path "$W/loop.json" --time fixed \
     --rate $RATE --frames $((2 * K)) --threads 2 --out "$W/ref/f_####.bmp" > "$W/native.log" 2>&1; then
     cat "$W/native.log"
     echo "vm_wall: FAIL: the native render failed"

@@ -20,6 +20,16 @@ T0=$(date +%s)
 elapsed() { echo $(($(date +%s) - T0)); }
 mkdir -p "$CACHE"
 
+# copy_tessera: the binary under test ($TESSERA_BIN, default ./tessera), copied to
+# $W/bin/tessera once, so that the guest and the host's native renders run the same
+# one even when ./tessera is rebuilt while the test runs
+copy_tessera() {
+    if ! cp "${TESSERA_BIN:-./tessera}" "$W/bin/tessera"; then
+        echo "$NAME: FAIL: no ${TESSERA_BIN:-./tessera} to test (make tessera)"
+        exit 1
+    fi
+}
+
 # vm_build OUT FILE...: the guest with FILEs in OUT (VM_OUT; downloads in
 # CACHE). On failure: SKIPPED (exit 0) when qemu or the packages cannot be
 # installed here, said in the last line, never silently; else FAIL (exit 1).
