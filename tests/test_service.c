@@ -404,7 +404,9 @@ Test(service, a_stuck_frame_loop_stops_the_pings_and_a_pause_feeds_them, .timeou
     while (!s->blocked)
         pthread_cond_wait(&s->changed, &s->lock);
     pthread_mutex_unlock(&s->lock);
-    /* what was sent before it blocked is queued already: drain it, then nothing may come */
+    /* drain what is queued; the sender thread may still be sending the one ping the last
+     * serial section posted before the display stage blocked, so one late ping is allowed:
+     * a loop that kept pinging while stuck would send SERVICE_PINGS_PER_INTERVAL per interval */
     while (listener_next(&l, 0.0, msg, sizeof msg))
         ;
     double silent_until = clock_monotonic_s() + SILENT_INTERVALS * interval_s;
@@ -412,7 +414,8 @@ Test(service, a_stuck_frame_loop_stops_the_pings_and_a_pause_feeds_them, .timeou
     for (double now; (now = clock_monotonic_s()) < silent_until;)
         if (listener_next(&l, silent_until - now, msg, sizeof msg) && has_line(msg, "WATCHDOG=1"))
             stuck_pings++;
-    cr_expect_eq(stuck_pings, 0, "WATCHDOG=1 while the frame loop was stuck: %s", l.log);
+    cr_expect_leq(stuck_pings, 1, "%d WATCHDOG=1 over %d intervals while the frame loop was stuck: %s", stuck_pings,
+                  SILENT_INTERVALS, l.log);
 
     /* the same wait as a healthy pause: pings again, and the status says so */
     stall_set(s, STALL_PAUSED);
