@@ -300,7 +300,6 @@ bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, c
     s->frames_given = s->frames_given || (ok && jr_get_member(root, "frames", &given));
     s->time_given = s->time_given || (ok && jr_get_member(root, "time", &given));
     json_object_put(root);
-    free(text);
     if (!ok)
         cli_error("%s", err.msg);
     return ok;
