@@ -10,6 +10,10 @@
  *  - its OBJ parser drops a "v" line with a non-numeric coordinate ("v 1 abc 2")
  *    without a word, shifting every later vertex index, and reads "2abc" as 2;
  *    check_obj_numbers() reads the numbers of .obj files itself first;
+ *  - its MTL reader dereferences a NULL material for a texture statement
+ *    (map_Kd, bump, disp, norm, ...) before the first "newmtl" and crashes
+ *    (found by fuzzing), and drops colours given there silently;
+ *    check_mtllib() reads the material libraries an .obj names first;
  *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
  *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
  *    therefore checked for non-finite values before that step runs. */
@@ -26,6 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 /* PreTransformVertices bakes the node hierarchy into the vertices, so all
  * meshes share one object space; ValidateDataStructure turns out-of-range
@@ -67,12 +72,69 @@ static const struct obj_vertex_data {
     {"vt", 1, 3}, /* u, optional v w */
 };
 
+/* Every statement of material library `mtl_path` must follow a "newmtl" (see
+ * the top of the file). A library that is not a regular file, or cannot be
+ * read, is left to assimp (which goes on without its materials). */
+static bool check_mtl_file(const char *mtl_path, const char *obj_path, unsigned long obj_line, tess_error *err)
+{
+    FILE *file = fopen(mtl_path, "r");
+    if (!file)
+        return true;
+    struct stat st;
+    bool ok = true;
+    char *line = NULL;
+    size_t capacity = 0;
+    unsigned long line_no = 0;
+    while (ok && fstat(fileno(file), &st) == 0 && S_ISREG(st.st_mode) && getline(&line, &capacity, file) >= 0) {
+        line_no++;
+        char *save;
+        char *word = strtok_r(line, " \t\r\n\v\f", &save);
+        if (!word || word[0] == '#')
+            continue;
+        if (strcmp(word, "newmtl") == 0)
+            break;
+        ok = tess_error_set(err, "%s:%lu: material library %s:%lu: '%.40s' before any 'newmtl' (a material "
+                                 "statement needs its material)",
+                            obj_path, obj_line, mtl_path, line_no, word);
+    }
+    free(line);
+    fclose(file);
+    return ok;
+}
+
+/* An "mtllib" line (`rest`: after the keyword). assimp 5.2 reads the first
+ * name, relative to the .obj's directory unless absolute, and when that does
+ * not exist, the .obj's own name with ".mtl" for ".obj". */
+static bool check_mtllib(char *rest, const char *obj_path, unsigned long obj_line, tess_error *err)
+{
+    char *save;
+    const char *name = strtok_r(rest, " \t\r\n\v\f", &save);
+    if (!name)
+        return true;
+    char mtl[4096];
+    const char *slash = strrchr(obj_path, '/');
+    int dir_len = name[0] == '/' || !slash ? 0 : (int)(slash - obj_path + 1);
+    if (snprintf(mtl, sizeof mtl, "%.*s%s", dir_len, obj_path, name) >= (int)sizeof mtl)
+        return true;
+    struct stat st;
+    if (stat(mtl, &st) != 0) {
+        size_t n = strlen(obj_path); /* ends in ".obj" */
+        if (n + 1 > sizeof mtl)
+            return true;
+        snprintf(mtl, sizeof mtl, "%.*smtl", (int)(n - 3), obj_path);
+    }
+    return check_mtl_file(mtl, obj_path, obj_line, err);
+}
+
 /* Check one line: a vertex-data line must carry only finite numbers, as many
- * as its keyword takes. Other lines are assimp's business. */
+ * as its keyword takes. An "mtllib" line has its
+ * libraries checked (check_mtllib). Other lines are assimp's business. */
 static bool check_obj_line(char *line, unsigned long line_no, const char *path, tess_error *err)
 {
     char *save;
     char *word = strtok_r(line, " \t\r\n\v\f", &save);
+    if (word && strcmp(word, "mtllib") == 0)
+        return check_mtllib(save, path, line_no, err);
     const struct obj_vertex_data *kind = NULL;
     for (size_t i = 0; word && i < sizeof obj_vertex_data / sizeof obj_vertex_data[0]; i++)
         if (strcmp(word, obj_vertex_data[i].keyword) == 0)

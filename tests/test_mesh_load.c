@@ -1016,6 +1016,32 @@ Test(mesh_load, obj_errors)
     expect_error(mesh_load_assimp, scratch_path(path, "absent.obj"), "cannot open");
 }
 
+/* Found by fuzzing (tests/fuzz/corpus/obj/crash-mtl-texture-before-newmtl):
+ * assimp 5.2's MTL reader crashed (SIGSEGV, a NULL material) on a texture
+ * statement before the first "newmtl", also in the library assimp falls back
+ * to (the .obj's name with .mtl) when the named one does not exist. */
+Test(mesh_load, mtl_statements_before_newmtl)
+{
+    char path[PATH_BYTES], mtl[PATH_BYTES], line[PATH_BYTES + 32];
+    static const char tri[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
+    char obj[256];
+    write_text(mtl, "tex_first.mtl", "# a comment\n\nmap_Kd wood.png\nnewmtl a\nKd 1 1 1\n");
+    snprintf(obj, sizeof obj, "# x\nmtllib tex_first.mtl\n%s", tri);
+    write_text(path, "tex_first.obj", obj);
+    expect_error(mesh_load_assimp, path, at_line(line, path, 2), "material library", mtl, ":3:", "'map_Kd'",
+                 "before any 'newmtl'");
+    write_text(mtl, "fallback.mtl", "Kd 1 0 0\nnewmtl a\n");
+    snprintf(obj, sizeof obj, "mtllib absent.mtl\n%s", tri);
+    write_text(path, "fallback.obj", obj);
+    expect_error(mesh_load_assimp, path, at_line(line, path, 1), mtl, ":1:", "'Kd' before any 'newmtl'");
+    /* a library that is absent altogether is assimp's to report (it goes on) */
+    snprintf(obj, sizeof obj, "mtllib absent.mtl\n%s", tri);
+    write_text(path, "no_library.obj", obj);
+    mesh *m = load_ok(mesh_load_assimp, path);
+    cr_expect_eq(m->triangle_count, 1);
+    mesh_destroy(m);
+}
+
 Test(mesh_load, stl_nan_is_caught_before_vertices_are_joined)
 {
     char path[PATH_BYTES];
