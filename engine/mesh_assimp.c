@@ -78,14 +78,19 @@ static const struct obj_vertex_data {
 static bool check_mtl_file(const char *mtl_path, const char *obj_path, unsigned long obj_line, tess_error *err)
 {
     FILE *file = fopen(mtl_path, "r");
-    if (!file)
-        return true;
+    if (!file) /* out of memory is no reason to skip the check (assimp would read it unchecked) */
+        return errno != ENOMEM ||
+               tess_error_set(err, "%s:%lu: material library %s: out of memory opening it", obj_path, obj_line,
+                              mtl_path);
     struct stat st;
     bool ok = true;
     char *line = NULL;
     size_t capacity = 0;
     unsigned long line_no = 0;
-    while (ok && fstat(fileno(file), &st) == 0 && S_ISREG(st.st_mode) && getline(&line, &capacity, file) >= 0) {
+    ssize_t got = 0;
+    errno = 0;
+    while (ok && fstat(fileno(file), &st) == 0 && S_ISREG(st.st_mode) &&
+           (got = getline(&line, &capacity, file)) >= 0) {
         line_no++;
         char *save;
         char *word = strtok_r(line, " \t\r\n\v\f", &save);
@@ -97,6 +102,9 @@ static bool check_mtl_file(const char *mtl_path, const char *obj_path, unsigned 
                                  "statement needs its material)",
                             obj_path, obj_line, mtl_path, line_no, word);
     }
+    if (ok && got < 0 && !feof(file) && errno == ENOMEM) /* getline's -1 without the end: as in check_obj_numbers */
+        ok = tess_error_set(err, "%s:%lu: material library %s:%lu: out of memory reading the line", obj_path, obj_line,
+                            mtl_path, line_no + 1);
     free(line);
     fclose(file);
     return ok;
