@@ -14,6 +14,9 @@
  *    (map_Kd, bump, disp, norm, ...) before the first "newmtl" and crashes
  *    (found by fuzzing), and drops colours given there silently;
  *    check_mtllib() reads the material libraries an .obj names first;
+ *  - a vertex index of an "f", "l" or "p" line out of range after a second
+ *    group ("g") makes it throw with the group's mesh half built and leak it
+ *    (found by fuzzing); the check counts vertices and checks the indices;
  *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
  *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
  *    therefore checked for non-finite values before that step runs. */
@@ -134,15 +137,58 @@ static bool check_mtllib(char *rest, const char *obj_path, unsigned long obj_lin
     return check_mtl_file(mtl, obj_path, obj_line, err);
 }
 
-/* Check one line: a vertex-data line must carry only finite numbers, as many
- * as its keyword takes. An "mtllib" line has its
- * libraries checked (check_mtllib). Other lines are assimp's business. */
-static bool check_obj_line(char *line, unsigned long line_no, const char *path, tess_error *err)
+/* What the check carries from line to line: vertex positions are counted, and
+ * of the positive vertex indices (which may point forward) the largest is
+ * kept, to be checked against the count at the end. */
+typedef struct obj_check {
+    const char *path;
+    tess_error *err;
+    unsigned long line_no;    /* the current line, from 1 */
+    long long vertices;       /* "v" lines so far */
+    long long max_index;      /* largest positive vertex index so far, 0 if none */
+    unsigned long max_line;   /* where it was */
+} obj_check;
+
+/* The vertex indices of an element line ("f 1/2/3 -1//4 ..."): a negative one
+ * counts back from the vertices so far and must land on one; positive ones are
+ * checked at the end. Components that are not integers (and 0) are assimp's
+ * to report. */
+static bool check_obj_indices(obj_check *c, const char *keyword, char **save)
 {
+    for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", save)) && token[0] != '#';) {
+        char *end;
+        errno = 0;
+        long long index = strtoll(token, &end, 10);
+        if (end == token || (*end != '\0' && *end != '/') || errno == ERANGE)
+            continue;
+        if (index < 0 && -index > c->vertices)
+            return tess_error_set(c->err, "%s:%lu: '%s' line: vertex index %lld is before the first vertex (%lld so far)",
+                                  c->path, c->line_no, keyword, index, c->vertices);
+        if (index > c->max_index) {
+            c->max_index = index;
+            c->max_line = c->line_no;
+        }
+    }
+    return true;
+}
+
+/* Check one line: a vertex-data line must carry only finite numbers, as many
+ * as its keyword takes; an element line's vertex indices must be in range
+ * (check_obj_indices); an "mtllib" line has its libraries checked
+ * (check_mtllib). Other lines are assimp's business. */
+static bool check_obj_line(obj_check *c, char *line)
+{
+    const char *path = c->path;
+    unsigned long line_no = c->line_no;
+    tess_error *err = c->err;
     char *save;
     char *word = strtok_r(line, " \t\r\n\v\f", &save);
     if (word && strcmp(word, "mtllib") == 0)
         return check_mtllib(save, path, line_no, err);
+    if (word && (strcmp(word, "f") == 0 || strcmp(word, "l") == 0 || strcmp(word, "p") == 0))
+        return check_obj_indices(c, word, &save);
+    if (word && strcmp(word, "v") == 0)
+        c->vertices++;
     const struct obj_vertex_data *kind = NULL;
     for (size_t i = 0; word && i < sizeof obj_vertex_data / sizeof obj_vertex_data[0]; i++)
         if (strcmp(word, obj_vertex_data[i].keyword) == 0)
@@ -177,11 +223,15 @@ static bool check_obj_numbers(const char *path, tess_error *err)
     }
     char *line = NULL;
     size_t capacity = 0;
-    unsigned long line_no = 0;
+    obj_check c = {.path = path, .err = err};
     bool ok = true;
     errno = 0;
-    while (ok && getline(&line, &capacity, file) >= 0)
-        ok = check_obj_line(line, ++line_no, path, err);
+    while (ok && getline(&line, &capacity, file) >= 0) {
+        c.line_no++;
+        ok = check_obj_line(&c, line);
+        errno = 0;
+    }
+    unsigned long line_no = c.line_no;
     /* getline's -1 is the end, a read error, or (without the error flag)
      * no memory for a longer line: anything but the end stops the load */
     if (ok && !feof(file)) {
@@ -192,6 +242,9 @@ static bool check_obj_numbers(const char *path, tess_error *err)
         ok = e == ENOMEM ? tess_error_set(err, "%s:%lu: out of memory reading the line", path, line_no + 1)
                          : tess_error_set(err, "%s: read error: %s", path, text);
     }
+    if (ok && c.max_index > c.vertices)
+        ok = tess_error_set(err, "%s:%lu: vertex index %lld out of range (the file has %lld vertices)", path,
+                            c.max_line, c.max_index, c.vertices);
     free(line);
     fclose(file);
     return ok;
