@@ -8,6 +8,16 @@
 
 static const char *const level_names[] = {"debug", "info", "warn", "error"};
 
+/* log_divert_thread: this thread's lines go here instead of stderr */
+static _Thread_local log_divert_fn divert_fn;
+static _Thread_local void *divert_ctx;
+
+void log_divert_thread(log_divert_fn fn, void *ctx)
+{
+    divert_fn = fn;
+    divert_ctx = fn ? ctx : NULL;
+}
+
 static enum log_level threshold(void)
 {
     const char *env = getenv("TESSERA_LOG");
@@ -25,6 +35,15 @@ static void emit(enum log_level level, const char *file, int line, const char *s
         return;
     char body[1024];
     vsnprintf(body, sizeof body, fmt, ap);
+    if (divert_fn) {
+        char whole[1400];
+        if (level == LOG_DEBUG)
+            snprintf(whole, sizeof whole, "tessera: %s: %s%s (%s:%d)", level_names[level], body, suffix, file, line);
+        else
+            snprintf(whole, sizeof whole, "tessera: %s: %s%s", level_names[level], body, suffix);
+        divert_fn(divert_ctx, whole);
+        return;
+    }
     /* one fprintf per message so lines from several threads do not interleave */
     if (level == LOG_DEBUG)
         fprintf(stderr, "tessera: %s: %s%s (%s:%d)\n", level_names[level], body, suffix, file, line);

@@ -11,6 +11,13 @@ void log_write(enum log_level level, const char *file, int line, const char *fmt
 void log_write_errno(enum log_level level, const char *file, int line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
+/* Divert the calling thread's messages: each formatted line (no newline) goes
+ * to fn(ctx, line) instead of stderr until log_divert_thread(NULL, NULL).
+ * The pipeline's serial section collects its lines this way and writes them
+ * after the frame barrier, so a slow stderr never stalls a frame. */
+typedef void (*log_divert_fn)(void *ctx, const char *line);
+void log_divert_thread(log_divert_fn fn, void *ctx);
+
 #define log_debug(...) log_write(LOG_DEBUG, __FILE__, __LINE__, __VA_ARGS__)
 #define log_info(...) log_write(LOG_INFO, __FILE__, __LINE__, __VA_ARGS__)
 #define log_warn(...) log_write(LOG_WARN, __FILE__, __LINE__, __VA_ARGS__)

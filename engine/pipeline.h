@@ -34,7 +34,8 @@
  * the order they were queued (one FIFO; the order between two queueing threads
  * is the order their pipeline_transaction calls took the queue lock). While it
  * runs, no render thread touches renderer state, so a transaction may change
- * anything: cameras, render options, thread count, callbacks.
+ * anything: cameras, render options, thread count, callbacks. What it logs
+ * (log.h) is kept and written by render thread 0 after the barrier.
  * A transaction (and any serial callback) MUST NOT
  *   - block: no waiting on locks other threads hold across frames, on I/O that
  *     may stall, on frames (it runs inside the frame the others wait for);
@@ -94,6 +95,7 @@ struct accel;
 #define PIPELINE_TILE_PX_MIN 4
 #define PIPELINE_TILE_PX_MAX 256
 #define PIPELINE_STATUS_BYTES 128        /* status line text, with its terminating NUL */
+#define PIPELINE_BARRIER_LOG_BYTES 16384 /* log text one serial section may leave for thread 0 to write */
 
 typedef struct pipeline pipeline;
 

@@ -6,9 +6,12 @@
 #include <criterion/criterion.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "engine/accel.h"
 #include "engine/pipeline.h"
@@ -953,6 +956,71 @@ Test(pipeline, at_the_stop_every_transaction_is_applied_refused_or_counted_as_di
     cr_assert(st.rejected_stopped >= 2, "refused after the stop and after run: %llu",
               (unsigned long long)st.rejected_stopped);
     free(b);
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
+/* ---- no I/O at the barrier: what the serial section logs is written after it ---- */
+typedef struct barrier_log_probe {
+    int fd;                          /* stderr's file */
+    off_t size_before, size_after;   /* around a refused setter, in the serial section */
+    bool ran;
+} barrier_log_probe;
+
+static off_t file_size(int fd)
+{
+    struct stat st;
+    cr_assert_eq(fstat(fd, &st), 0);
+    return st.st_size;
+}
+
+static void log_at_the_barrier(pipeline *p, void *args)
+{
+    barrier_log_probe *b = *(barrier_log_probe **)args;
+    camera_desc bad = {{1, 2, 3}, {1, 2, 3}, {0, 1, 0}, 40.f}; /* eye == look_at */
+    b->size_before = file_size(b->fd);
+    cr_assert_not(pipeline_set_camera(p, 0, &bad)); /* logs why */
+    b->size_after = file_size(b->fd);
+    b->ran = true;
+}
+
+/* The soak saw frames stall for up to 1.4 s while a transaction's error line
+ * waited for a busy disk: the serial section's log lines are now kept and
+ * written by thread 0 after the barrier. */
+Test(pipeline, what_the_serial_section_logs_is_written_after_the_barrier, .timeout = 60)
+{
+    fixture fx = fixture_make();
+    camera_desc cam = test_camera(&fx, 0);
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 2;
+    cfg.max_frames = 3;
+    capture_display *cap;
+    pipeline *p = make_pipeline(&fx, cfg, &cap, &cam);
+    char path[] = "/tmp/tessera-barrier-log-XXXXXX";
+    int fd = mkstemp(path);
+    cr_assert(fd >= 0);
+    fflush(stderr);
+    int saved = dup(2);
+    cr_assert(saved >= 0 && dup2(fd, 2) == 2);
+    barrier_log_probe probe = {.fd = fd};
+    barrier_log_probe *pp = &probe;
+    cr_assert(pipeline_transaction(p, "log", log_at_the_barrier, &pp, sizeof pp));
+    tess_error err = {{0}};
+    bool ran = pipeline_run(p, &err);
+    fflush(stderr);
+    dup2(saved, 2);
+    close(saved);
+    cr_assert(ran, "%s", err.msg);
+    cr_assert(probe.ran);
+    cr_assert_eq(probe.size_after, probe.size_before, "%lld bytes written to stderr at the barrier",
+                 (long long)(probe.size_after - probe.size_before));
+    char text[4096] = "";
+    ssize_t n = pread(fd, text, sizeof text - 1, 0);
+    cr_assert(n > 0);
+    text[n] = '\0';
+    cr_assert(strstr(text, "eye and look_at are the same point"), "the line was never written: '%s'", text);
+    close(fd);
+    unlink(path);
     pipeline_destroy(p);
     fixture_free(&fx);
 }
