@@ -75,6 +75,23 @@ static const struct obj_vertex_data {
     {"vt", 1, 3}, /* u, optional v w */
 };
 
+/* assimp's OBJ and MTL readers end a line at '\n', '\r', '\f' and '\0' alike
+ * ("#\0mtllib x.mtl" names a library for them; found by fuzzing): the next
+ * such line of the bytes from *p to `end` (as getline gave them),
+ * NUL-terminated in place, or NULL after the last. */
+static char *next_logical_line(char **p, char *end)
+{
+    if (*p >= end)
+        return NULL;
+    char *line = *p, *q = line;
+    while (q < end && *q != '\n' && *q != '\r' && *q != '\f' && *q != '\0')
+        q++;
+    if (q < end)
+        *q++ = '\0';
+    *p = q;
+    return line;
+}
+
 /* Every statement of material library `mtl_path` must follow a "newmtl" (see
  * the top of the file). A library that is not a regular file, or cannot be
  * read, is left to assimp (which goes on without its materials). */
@@ -92,18 +109,22 @@ static bool check_mtl_file(const char *mtl_path, const char *obj_path, unsigned 
     unsigned long line_no = 0;
     ssize_t got = 0;
     errno = 0;
-    while (ok && fstat(fileno(file), &st) == 0 && S_ISREG(st.st_mode) &&
+    bool named = false; /* a "newmtl" was seen: the rest is assimp's */
+    while (ok && !named && fstat(fileno(file), &st) == 0 && S_ISREG(st.st_mode) &&
            (got = getline(&line, &capacity, file)) >= 0) {
         line_no++;
-        char *save;
-        char *word = strtok_r(line, " \t\r\n\v\f", &save);
-        if (!word || word[0] == '#')
-            continue;
-        if (strcmp(word, "newmtl") == 0)
-            break;
-        ok = tess_error_set(err, "%s:%lu: material library %s:%lu: '%.40s' before any 'newmtl' (a material "
-                                 "statement needs its material)",
-                            obj_path, obj_line, mtl_path, line_no, word);
+        char *p = line, *part;
+        while (ok && !named && (part = next_logical_line(&p, line + got))) {
+            char *save;
+            char *word = strtok_r(part, " \t\v", &save);
+            if (!word || word[0] == '#')
+                continue;
+            named = strcmp(word, "newmtl") == 0;
+            if (!named)
+                ok = tess_error_set(err, "%s:%lu: material library %s:%lu: '%.40s' before any 'newmtl' (a "
+                                         "material statement needs its material)",
+                                    obj_path, obj_line, mtl_path, line_no, word);
+        }
     }
     if (ok && got < 0 && !feof(file) && errno == ENOMEM) /* getline's -1 without the end: as in check_obj_numbers */
         ok = tess_error_set(err, "%s:%lu: material library %s:%lu: out of memory reading the line", obj_path, obj_line,
@@ -226,9 +247,12 @@ static bool check_obj_numbers(const char *path, tess_error *err)
     obj_check c = {.path = path, .err = err};
     bool ok = true;
     errno = 0;
-    while (ok && getline(&line, &capacity, file) >= 0) {
+    ssize_t got;
+    while (ok && (got = getline(&line, &capacity, file)) >= 0) {
         c.line_no++;
-        ok = check_obj_line(&c, line);
+        char *p = line, *part;
+        while (ok && (part = next_logical_line(&p, line + got)))
+            ok = check_obj_line(&c, part);
         errno = 0;
     }
     unsigned long line_no = c.line_no;

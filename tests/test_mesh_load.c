@@ -1045,6 +1045,16 @@ Test(mesh_load, mtl_statements_before_newmtl)
     snprintf(obj, sizeof obj, "mtllib absent.mtl\n%s", tri);
     write_text(path, "fallback.obj", obj);
     expect_error(mesh_load_assimp, path, at_line(line, path, 1), mtl, ":1:", "'Kd' before any 'newmtl'");
+    /* assimp ends lines at '\r' and '\0' too (tests/fuzz/corpus/obj/crash-mtllib-after-nul) */
+    static const char nul_obj[] = "# c\0mtllib tex_first.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n";
+    write_bytes(path, "nul.obj", nul_obj, sizeof nul_obj - 1);
+    write_text(mtl, "tex_first.mtl", "# a comment\n\nmap_Kd wood.png\nnewmtl a\nKd 1 1 1\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 1), mtl, ":3:", "'map_Kd'");
+    write_text(path, "cr.obj", "# c\rmtllib tex_first.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 1), mtl, ":3:", "'map_Kd'");
+    write_text(mtl, "nul_mtl.mtl", "# x\rmap_Kd t.png\nnewmtl a\n");
+    write_text(path, "nul_mtl.obj", "mtllib nul_mtl.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 1), mtl, ":1:", "'map_Kd'");
     /* a library that is absent altogether is assimp's to report (it goes on) */
     snprintf(obj, sizeof obj, "mtllib absent.mtl\n%s", tri);
     write_text(path, "no_library.obj", obj);
