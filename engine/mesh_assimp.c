@@ -401,6 +401,12 @@ static void describe_material(const struct aiMaterial *mat, mesh_material *out)
     }
     if (!material_diffuse(mat, out->diffuse_rgb))
         out->diffuse_rgb[0] = out->diffuse_rgb[1] = out->diffuse_rgb[2] = DEFAULT_DIFFUSE;
+    /* a reflectance: clamped to [0, 1] as vertex colours are ("Kd 1.0000001",
+     * or a fuzzer's "Kd 9"); NaN passes and is refused by convert_scene */
+    for (int k = 0; k < 3; k++) {
+        float v = out->diffuse_rgb[k];
+        out->diffuse_rgb[k] = v < 0.f ? 0.f : v > 1.f ? 1.f : v;
+    }
 }
 
 /* Give m one mesh_material per scene material some triangle mesh uses, in
@@ -496,6 +502,13 @@ static mesh *convert_scene(const struct aiScene *scene, const char *path, tess_e
         tess_error_set(err, "%s: out of memory for %llu vertices and %llu triangles", path,
                        (unsigned long long)plan.vertex_count, (unsigned long long)plan.triangle_count);
         goto fail;
+    }
+    for (uint32_t i = 0; i < m->material_count; i++) {
+        const mesh_material *mm = &m->materials[i];
+        if (!isfinite(mm->diffuse_rgb[0] + mm->diffuse_rgb[1] + mm->diffuse_rgb[2])) {
+            tess_error_set(err, "%s: material '%s': diffuse colour (Kd) is not finite", path, mm->name);
+            goto fail;
+        }
     }
     for (unsigned i = 0; i < scene->mNumMeshes; i++) {
         const struct aiMesh *am = scene->mMeshes[i];

@@ -1055,10 +1055,21 @@ Test(mesh_load, mtl_statements_before_newmtl)
     write_text(mtl, "nul_mtl.mtl", "# x\rmap_Kd t.png\nnewmtl a\n");
     write_text(path, "nul_mtl.obj", "mtllib nul_mtl.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
     expect_error(mesh_load_assimp, path, at_line(line, path, 1), mtl, ":1:", "'map_Kd'");
+    /* found by fuzzing (tests/fuzz/corpus/obj/crash-kd-out-of-range): Kd is a
+     * reflectance, clamped to [0, 1] as vertex colours are; NaN is refused */
+    write_text(mtl, "bright.mtl", "newmtl red\nKd 9 -1 0.5\nnewmtl dark\nKd nan 0 0\n");
+    write_text(path, "bright.obj", "mtllib bright.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl red\nf 1 2 3\n");
+    mesh *m = load_ok(mesh_load_assimp, path);
+    cr_assert_eq(m->material_count, 1);
+    cr_expect(m->materials[0].diffuse_rgb[0] == 1.f && m->materials[0].diffuse_rgb[1] == 0.f &&
+              m->materials[0].diffuse_rgb[2] == 0.5f);
+    mesh_destroy(m);
+    write_text(path, "nan_kd.obj", "mtllib bright.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl dark\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, "material 'dark': diffuse colour (Kd) is not finite");
     /* a library that is absent altogether is assimp's to report (it goes on) */
     snprintf(obj, sizeof obj, "mtllib absent.mtl\n%s", tri);
     write_text(path, "no_library.obj", obj);
-    mesh *m = load_ok(mesh_load_assimp, path);
+    m = load_ok(mesh_load_assimp, path);
     cr_expect_eq(m->triangle_count, 1);
     mesh_destroy(m);
 }
