@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "engine/clock.h"
@@ -210,10 +211,38 @@ static void device_removed(input_source *s, struct libinput_device *dev, input_e
     }
 }
 
+/* What a path that is not a character device is. */
+static const char *not_a_device(mode_t mode)
+{
+    if (S_ISREG(mode))
+        return "a regular file, not a device node";
+    if (S_ISDIR(mode))
+        return "a directory, not a device node";
+    if (S_ISFIFO(mode))
+        return "a FIFO, not a device node";
+    if (S_ISSOCK(mode))
+        return "a socket, not a device node";
+    return "a block device, not an input device";
+}
+
+/* Whether udev has set up the character device `rdev` (its rules ran).
+ * libinput's path backend waits for that itself, about 2 s, before it gives
+ * up on a device: offered a node udev never sets up (/dev/null, or any node
+ * where no udevd runs) every second, the input thread would stall for 2 s of
+ * every 3 (measured: tests/test_input_cli.c, before this check). */
+static bool udev_ready(input_source *s, dev_t rdev)
+{
+    struct udev_device *ud = udev_device_new_from_devnum(s->udev, 'c', rdev);
+    bool ready = ud && udev_device_get_is_initialized(ud);
+    if (ud)
+        udev_device_unref(ud);
+    return ready;
+}
+
 /* Path backend: add the configured devices that are not (or no longer)
- * there, when their node exists; a missing or unusable one is said once until
- * it is back (libinput's own messages about it too: they would repeat every
- * second for as long as the kiosk runs). */
+ * there, when their node exists and is one libinput can take; a missing or
+ * unusable one is said once until it is back (libinput's own messages about
+ * it too: they would repeat every second for as long as the kiosk runs). */
 static void retry_paths(input_source *s)
 {
     double now = clock_monotonic_s();
@@ -223,21 +252,33 @@ static void retry_paths(input_source *s)
     for (int i = 0; i < s->cfg.path_count; i++) {
         if (s->path_open[i])
             continue;
-        if (access(s->cfg.paths[i], F_OK) != 0) {
-            if (!s->path_missing_said[i])
-                log_warn("input: %s: no such device now; waiting for it", s->cfg.paths[i]);
-            s->path_missing_said[i] = true;
-            continue;
+        const char *path = s->cfg.paths[i];
+        if (s->path_missing_said[i])
+            log_debug("input: %s: looked for again", path); /* what tests wait for */
+        struct stat st;
+        const char *problem = NULL; /* why it cannot be used now (said once), NULL to offer it to libinput */
+        char why[160];
+        if (stat(path, &st) != 0) {
+            problem = "no such device now; waiting for it";
+        } else if (!S_ISCHR(st.st_mode)) {
+            snprintf(why, sizeof why, "not usable as an input device (%s); looked at again every second",
+                     not_a_device(st.st_mode));
+            problem = why;
+        } else if (!udev_ready(s, st.st_rdev)) {
+            problem = "udev has not set this device up (is systemd-udevd running?); waiting for it";
         }
-        s->retry_quiet = s->path_missing_said[i];
-        struct libinput_device *added = libinput_path_add_device(s->li, s->cfg.paths[i]);
-        s->retry_quiet = false;
+        struct libinput_device *added = NULL;
+        if (!problem) {
+            s->retry_quiet = s->path_missing_said[i];
+            added = libinput_path_add_device(s->li, path);
+            s->retry_quiet = false;
+            problem = "not usable as an input device (libinput's message above); trying again every second";
+        }
         if (added) {
             s->path_open[i] = true; /* its DEVICE_ADDED event follows */
             s->path_missing_said[i] = false;
         } else if (!s->path_missing_said[i]) {
-            log_warn("input: %s: not usable as an input device (libinput's message above); trying again every "
-                     "second", s->cfg.paths[i]);
+            log_warn("input: %s: %s", path, problem);
             s->path_missing_said[i] = true;
         }
     }
@@ -273,6 +314,11 @@ input_source *input_source_open(const input_source_config *cfg, struct session *
             goto fail;
         }
         libinput_log_set_handler(s->li, libinput_message);
+        s->udev = udev_new(); /* only to ask whether udev set a node up (udev_ready) */
+        if (!s->udev) {
+            tess_error_set(err, "input: cannot create a udev context");
+            goto fail;
+        }
         retry_paths(s); /* at once: next_path_retry_s is 0 */
     } else {
         s->udev = udev_new();

@@ -3,11 +3,17 @@
  * option, file and field; a mapping to an output the wall lacks is refused;
  * --replay-input steers a render (and a broken record names its line);
  * --record-input writes the header and invents no transactions. */
+#define _DEFAULT_SOURCE /* usleep */
 #include <criterion/criterion.h>
+#include <fcntl.h>
+#include <signal.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "engine/camera.h"
 #include "input/controller.h"
@@ -380,4 +386,110 @@ Test(input_cli, bindings_and_tour_files_are_checked_before_the_scene_loads)
     cr_expect_eq(run("run --input off --bindings %s/nope.json --display null --frames 1 --size 32x18 --threads 1"), 0,
                  "%s", err_text);
     cr_expect(strstr(err_text, "input is off") != NULL, "%s", err_text);
+}
+
+/* ---- devices that are not input devices ------------------------------------------------ */
+
+/* Count the lines of `text` that hold both `a` and `b`. */
+static int count_lines_with(const char *text, const char *a, const char *b)
+{
+    int n = 0;
+    for (const char *line = text; line && *line;) {
+        const char *end = strchr(line, '\n');
+        size_t len = end ? (size_t)(end - line) : strlen(line);
+        char buf[1024];
+        snprintf(buf, sizeof buf, "%.*s", (int)(len < sizeof buf ? len : sizeof buf - 1), line);
+        if (strstr(buf, a) && strstr(buf, b))
+            n++;
+        line = end ? end + 1 : NULL;
+    }
+    return n;
+}
+
+/* --input-device paths a kiosk may be given by mistake or find broken: a
+ * regular file of garbage bytes, /dev/null (a character device that is no
+ * evdev device, and one udev may not have set up: libinput alone would wait
+ * 2 s for it on every retry), a FIFO, a directory, and a path that does not
+ * exist. Each is said once, naming the path and what it is; the path backend
+ * looks at them again every second (a debug line each time, which this test
+ * waits for: two retries of every path), saying nothing more; a node udev
+ * has not set up is never handed to libinput (its "never initialized"
+ * message would say it waited); frames keep coming; SIGINT ends the run
+ * cleanly. */
+Test(input_cli, paths_that_are_not_input_devices_are_said_once_and_the_kiosk_goes_on)
+{
+    char garbage[512], fifo[512], dir[512], missing[512], log_path[512];
+    snprintf(garbage, sizeof garbage, "%s/garbage-device", tmp_dir);
+    snprintf(fifo, sizeof fifo, "%s/fifo-device", tmp_dir);
+    snprintf(dir, sizeof dir, "%s/dir-device", tmp_dir);
+    snprintf(missing, sizeof missing, "%s/missing-device", tmp_dir);
+    snprintf(log_path, sizeof log_path, "%s/run.log", tmp_dir);
+    FILE *f = fopen(garbage, "wb");
+    cr_assert(f);
+    unsigned state = 12345u;
+    for (int i = 0; i < 4096; i++) {
+        state = state * 1103515245u + 12345u;
+        fputc((int)(state >> 24), f);
+    }
+    fclose(f);
+    cr_assert_eq(mkfifo(fifo, 0600), 0);
+    cr_assert_eq(mkdir(dir, 0700), 0);
+    const char *paths[] = {garbage, "/dev/null", fifo, dir, missing};
+    enum { PATHS = sizeof paths / sizeof paths[0] };
+
+    pid_t pid = fork();
+    cr_assert(pid >= 0);
+    if (pid == 0) {
+        int fd = open(log_path, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+        if (fd < 0 || dup2(fd, 1) < 0 || dup2(fd, 2) < 0)
+            _exit(127);
+        setenv("TESSERA_LOG", "debug", 1);
+        execl(support_tessera_bin(), "tessera", "run", "--input", "on", "--input-device", paths[0],
+              "--input-device", paths[1], "--input-device", paths[2], "--input-device", paths[3], "--input-device",
+              paths[4], "--display", "null", "--frames", "100000000", "--size", "16x16", "--threads", "1",
+              "--renderer", "eyelight", (char *)NULL);
+        _exit(127);
+    }
+    /* wait (an event, bounded) for two retries of every path */
+    static char text[1 << 20];
+    bool retried = false;
+    for (int waited_ms = 0; waited_ms < TIMEOUT_S * 1000 && !retried; waited_ms += 50) {
+        usleep(50 * 1000);
+        support_read_text(log_path, text, sizeof text);
+        retried = true;
+        for (int i = 0; i < PATHS; i++)
+            retried = retried && count_lines_with(text, paths[i], "looked for again") >= 2;
+        if (waitpid(pid, NULL, WNOHANG) == pid) {
+            pid = -1;
+            break;
+        }
+    }
+    int status = -1;
+    if (pid > 0) {
+        kill(pid, SIGINT);
+        for (int waited_ms = 0; waited_ms < TIMEOUT_S * 1000; waited_ms += 50) {
+            if (waitpid(pid, &status, WNOHANG) == pid)
+                break;
+            usleep(50 * 1000);
+        }
+        if (status == -1) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            cr_expect(false, "the run did not end on SIGINT");
+        }
+    }
+    support_read_text(log_path, text, sizeof text);
+    cr_assert(pid > 0, "the run ended by itself:\n%s", text);
+    cr_assert(retried, "no two retries of every path within %d s:\n%s", TIMEOUT_S, text);
+    cr_expect(WIFEXITED(status) && WEXITSTATUS(status) == 0, "exit status %d after SIGINT:\n%s", status, text);
+    for (int i = 0; i < PATHS; i++)
+        cr_expect_eq(count_lines_with(text, paths[i], "warn: input:"), 1, "%s: said %d times, expected once:\n%s",
+                     paths[i], count_lines_with(text, paths[i], "warn: input:"), text);
+    cr_expect(count_lines_with(text, missing, "no such device now") == 1, "%s", text);
+    cr_expect(count_lines_with(text, garbage, "a regular file") == 1, "%s", text);
+    cr_expect(count_lines_with(text, fifo, "a FIFO") == 1, "%s", text);
+    cr_expect(count_lines_with(text, dir, "a directory") == 1, "%s", text);
+    cr_expect(strstr(text, "never initialized") == NULL, "libinput was made to wait for udev:\n%s", text);
+    cr_expect(strstr(text, "frames rendered") != NULL, "no frame report:\n%s", text);
+    cr_expect(count_lines_with(text, "error", "") == 0, "an error line:\n%s", text);
 }
