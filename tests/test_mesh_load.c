@@ -5,7 +5,6 @@
  * so the tests hold on hosts of either endianness. */
 #include <criterion/criterion.h>
 
-#include <dirent.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
@@ -18,6 +17,7 @@
 #include <unistd.h>
 
 #include "engine/mesh.h"
+#include "support.h"
 
 #define PATH_BYTES 512
 
@@ -25,35 +25,17 @@
 
 /* This test's scratch directory. Criterion runs every test in its own
  * process, and the suite's init/fini create and remove it around the test. */
-static char scratch_dir[64];
+static char scratch_dir[128];
 
-static void scratch_create(void)
-{
-    snprintf(scratch_dir, sizeof scratch_dir, "/tmp/tessera_mesh_load_XXXXXX");
-    cr_assert_not_null(mkdtemp(scratch_dir), "mkdtemp failed");
-}
+static void scratch_create(void) { support_make_tmp_dir(scratch_dir, sizeof scratch_dir, "mesh_load"); }
 
-static void scratch_remove(void)
-{
-    DIR *dir = opendir(scratch_dir);
-    if (!dir)
-        return;
-    for (struct dirent *ent; (ent = readdir(dir)) != NULL;) {
-        if (strcmp(ent->d_name, ".") == 0 || strcmp(ent->d_name, "..") == 0)
-            continue;
-        char path[PATH_BYTES];
-        snprintf(path, sizeof path, "%s/%.300s", scratch_dir, ent->d_name);
-        unlink(path);
-    }
-    closedir(dir);
-    rmdir(scratch_dir);
-}
+static void scratch_remove(void) { support_remove_tmp_dir(scratch_dir); }
 
 TestSuite(mesh_load, .init = scratch_create, .fini = scratch_remove);
 
 static const char *scratch_path(char out[PATH_BYTES], const char *name)
 {
-    snprintf(out, PATH_BYTES, "%s/%.300s", scratch_dir, name);
+    snprintf(out, PATH_BYTES, "%s/%.200s", scratch_dir, name);
     return out;
 }
 

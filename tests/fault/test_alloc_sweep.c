@@ -27,6 +27,7 @@
 #include "input/bindings.h"
 #include "input/record.h"
 #include "tests/fault/fault.h"
+#include "tests/support.h"
 #include "tools/cli/pipeline_cli.h"
 #include "wall/edid.h"
 #include "wall/wall_config.h"
@@ -35,21 +36,11 @@
 
 /* ---- scratch files -------------------------------------------------------- */
 
-static char scratch_dir[64];
+static char scratch_dir[128];
 
-static void scratch_create(void)
-{
-    snprintf(scratch_dir, sizeof scratch_dir, "/tmp/tessera_fault_XXXXXX");
-    cr_assert_not_null(mkdtemp(scratch_dir), "mkdtemp failed");
-}
+static void scratch_create(void) { support_make_tmp_dir(scratch_dir, sizeof scratch_dir, "fault"); }
 
-static void scratch_remove(void)
-{
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", scratch_dir);
-    if (system(cmd) != 0)
-        fprintf(stderr, "could not remove %s\n", scratch_dir);
-}
+static void scratch_remove(void) { support_remove_tmp_dir(scratch_dir); }
 
 TestSuite(alloc_sweep, .init = scratch_create, .fini = scratch_remove);
 

@@ -4,6 +4,7 @@
 #ifndef TESSERA_CLI_H
 #define TESSERA_CLI_H
 
+#include <stdarg.h>
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -17,6 +18,9 @@ bool cli_parse_size(const char *option, const char *text, int *width_px, int *he
 bool cli_parse_camera(const char *option, const char *text, camera_desc *out);
 /* The value after argv[*i] (advancing *i), or NULL with a message when missing. */
 const char *cli_option_value(int argc, char **argv, int *i);
+/* "tessera: SEVERITY: message" on stderr (the command line's own messages,
+ * before and beside the logger); cli_error and cli_warn (option_check.h). */
+void cli_say(const char *severity, const char *fmt, va_list ap) __attribute__((format(printf, 2, 0)));
 void cli_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 double cli_now_s(void); /* monotonic seconds */
 /* Busy CPU seconds of the whole machine since boot (user + nice + system + irq

@@ -20,12 +20,10 @@ bool cli_given_has(const cli_given *g, const char *name)
 
 void cli_warn(const char *fmt, ...)
 {
-    char msg[1024];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    cli_say("warning", fmt, ap);
     va_end(ap);
-    fprintf(stderr, "tessera: warning: %s\n", msg);
 }
 
 /* The options that only steer live input (libinput), not a replay. */

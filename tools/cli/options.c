@@ -11,14 +11,19 @@
 #include <time.h>
 #include <unistd.h>
 
-void cli_error(const char *fmt, ...)
+void cli_say(const char *severity, const char *fmt, va_list ap)
 {
     char msg[1024];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    fprintf(stderr, "tessera: %s: %s\n", severity, msg);
+}
+
+void cli_error(const char *fmt, ...)
+{
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    cli_say("error", fmt, ap);
     va_end(ap);
-    fprintf(stderr, "tessera: error: %s\n", msg);
 }
 
 double cli_now_s(void) { return clock_monotonic_s(); }
