@@ -1,4 +1,5 @@
 #include "parallel.h"
+#include "thread_name.h"
 
 #include <assert.h>
 #include <pthread.h>
@@ -96,6 +97,7 @@ static void *worker_main(void *arg)
 {
     worker_arg a = *(worker_arg *)arg;
     free(arg);
+    thread_name_set("tess-pool");
     parallel_pool *p = a.pool;
     unsigned seen = 0; /* the generation at create */
     for (;;) {

@@ -17,6 +17,7 @@
 #include "accel.h"
 #include "log.h"
 #include "overlay.h"
+#include "thread_name.h"
 #include "clock.h"
 
 _Static_assert(PIPELINE_STATUS_BYTES == OVERLAY_TEXT_BYTES, "the status line is the overlay's text");
@@ -1153,6 +1154,7 @@ static void frame_loop(render_thread *t)
 static void *thread_main(void *arg)
 {
     render_thread *t = arg;
+    thread_name_set("tess-render-%d", t->id);
     barrier *b = &t->p->frame_barrier;
     pthread_mutex_lock(&b->lock);
     while (atomic_load(&b->generation) == t->start_generation)

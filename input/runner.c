@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "engine/clock.h"
+#include "engine/thread_name.h"
 #include "engine/log.h"
 #include "wall/session.h"
 
@@ -58,6 +59,7 @@ static void on_event(void *ctx, const input_event *e)
 static void *input_main(void *arg)
 {
     input_runner *r = arg;
+    thread_name_set("tess-input");
     input_controller_tick(r->controller, clock_monotonic_us());
     bool said_devices = false;
     while (!atomic_load(&r->stop)) {

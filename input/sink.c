@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "engine/clock.h"
+#include "engine/thread_name.h"
 #include "engine/log.h"
 #include "input/navigate.h"
 
@@ -305,6 +306,7 @@ static void replay_frame(pipeline *p, void *ctx, const frame_info *fi)
 static void *replay_main(void *arg)
 {
     input_sink *s = arg;
+    thread_name_set("tess-replay");
     double t0_s = clock_monotonic_s();
     for (size_t i = 0; i < s->replay.count; i++) {
         for (;;) {

@@ -19,9 +19,11 @@
 #     another thread, as the input thread's device retry, is not a leak);
 #   - frames keep coming: no second's worst frame (the time between two frame
 #     barriers) is over 10 x the median frame time (the driver's), unless the
-#     process's threads waited for a CPU in that second and the one before at
+#     pipeline's threads waited for a CPU in that second and the one before at
 #     least as long as the excess: on a shared machine a loop that waits for
-#     the scheduler is not a stuck loop. Such gaps are counted and shown. A
+#     the scheduler is not a stuck loop. Only the pipeline's threads count
+#     (the frame loop's and tess-render-N: the senders' and the input
+#     thread's waits excuse nothing). Such gaps are counted and shown. A
 #     loop stuck for 120 s makes the driver abort (a FAIL, with a core).
 # It prints PASS/FAIL lines and `soak: N passed, M failed`; exit 1 on a failure.
 #
@@ -125,7 +127,7 @@ if grep -qE 'runtime error:|ERROR: (Address|Leak)Sanitizer' "$log"; then
     grep -m 5 -E 'runtime error:|ERROR: (Address|Leak)Sanitizer' "$log"
 fi
 
-# the samples: t_s rss_kib fds frames txn_accepted txn_applied worst_frame_ms runqueue_wait_ms
+# the samples: t_s rss_kib fds frames txn_accepted txn_applied worst_frame_ms pipeline_runqueue_wait_ms
 if [ ! -s "$samples" ] || [ "$(grep -vc '^#' "$samples")" -lt 2 ]; then
     fail "samples: fewer than 2 in $samples"
     finish
@@ -174,7 +176,7 @@ else
          "${gwait} ms) seconds_over_limit_starved=$starved seconds_over_limit_not_explained=$stuck"
     if [ "$stuck" -eq 0 ]; then
         pass "frame gaps: worst $gworst ms; $starved second(s) over $limit ms (10 x median $median ms), each while" \
-             "the threads waited at least as long for a CPU"
+             "the pipeline's threads waited at least as long for a CPU"
     else
         fail "frame gaps: $stuck second(s) with a frame over $limit ms (10 x median $median ms) not explained by" \
              "waiting for a CPU; the worst $sworst ms at ${st} s (see $samples)"

@@ -12,6 +12,7 @@
 
 #include "engine/clock.h"
 #include "engine/log.h"
+#include "engine/thread_name.h"
 #include "engine/pipeline.h"
 
 #define SERVICE_MESSAGE_BYTES 256 /* one datagram: a few assignments and a status line */
@@ -71,6 +72,7 @@ static void notify(service_notifier *sn, const outbox *b)
 static void *sender_main(void *arg)
 {
     service_notifier *sn = arg;
+    thread_name_set("tess-notify");
     pthread_mutex_lock(&sn->lock);
     for (;;) {
         bool pending = sn->box.ping || sn->box.ready || sn->box.stopping || sn->box.status[0];

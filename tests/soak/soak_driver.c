@@ -441,31 +441,74 @@ static int open_fds_once(void)
     return n - 1;
 }
 
-/* Nanoseconds the process's threads have waited for a CPU so far (the sum of
- * field 2 of /proc/self/task/N/schedstat; threads that left take theirs with
- * them). A diagnostic for frame gaps: a loop that waited for the machine is
- * not a stuck loop. 0 when unreadable. */
-static uint64_t runqueue_wait_ns(void)
+/* Whether a task of this process is one of the pipeline's threads: the one
+ * that runs the frame loop (this process's main thread: cli_run_with is called
+ * from main) and the render threads it starts (engine/thread_name.h). */
+static bool pipeline_task(const char *tid)
+{
+    if (strtol(tid, NULL, 10) == (long)getpid())
+        return true;
+    char path[64], comm[32] = "";
+    snprintf(path, sizeof path, "/proc/self/task/%.20s/comm", tid);
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return false;
+    bool render = fgets(comm, sizeof comm, f) && strncmp(comm, "tess-render-", 12) == 0;
+    fclose(f);
+    return render;
+}
+
+/* Per pipeline thread, the nanoseconds it had waited for a CPU at the last
+ * reading (field 2 of /proc/self/task/N/schedstat). Only the monitor thread
+ * reads and writes it. */
+#define WAIT_TASKS_MAX 128
+typedef struct task_wait {
+    long tid;
+    uint64_t waited_ns;
+} task_wait;
+typedef struct wait_book {
+    task_wait task[WAIT_TASKS_MAX];
+    int count;
+} wait_book;
+
+/* Nanoseconds the pipeline's threads waited for a CPU since the last call
+ * (per thread, so a render thread that leaves at a thread-count change takes
+ * nothing away; one that came counts from its start). A diagnostic for frame
+ * gaps: a frame loop whose threads waited for the machine is not a stuck
+ * loop; the waits of the other threads (the soak's senders, input) excuse
+ * nothing. 0 when unreadable. */
+static uint64_t pipeline_wait_delta_ns(wait_book *book)
 {
     DIR *d = opendir("/proc/self/task");
     if (!d)
         return 0;
-    uint64_t total = 0;
+    wait_book now = {.count = 0};
+    uint64_t delta = 0;
     struct dirent *e;
-    while ((e = readdir(d))) {
-        if (e->d_name[0] == '.')
+    while ((e = readdir(d)) && now.count < WAIT_TASKS_MAX) {
+        if (e->d_name[0] == '.' || !pipeline_task(e->d_name))
             continue;
         char path[64];
         snprintf(path, sizeof path, "/proc/self/task/%.20s/schedstat", e->d_name);
         FILE *f = fopen(path, "r");
         unsigned long long on_cpu_ns, waited_ns;
-        if (f && fscanf(f, "%llu %llu", &on_cpu_ns, &waited_ns) == 2)
-            total += waited_ns;
+        bool read = f && fscanf(f, "%llu %llu", &on_cpu_ns, &waited_ns) == 2;
         if (f)
             fclose(f);
+        if (!read)
+            continue;
+        long tid = strtol(e->d_name, NULL, 10);
+        uint64_t before = 0;
+        for (int i = 0; i < book->count; i++)
+            if (book->task[i].tid == tid)
+                before = book->task[i].waited_ns;
+        if (waited_ns > before)
+            delta += waited_ns - before;
+        now.task[now.count++] = (task_wait){tid, waited_ns};
     }
     closedir(d);
-    return total;
+    *book = now;
+    return delta;
 }
 
 /* The least of FD_READINGS counts FD_READING_GAP_S apart: a descriptor another
@@ -498,10 +541,11 @@ static void *monitor_main(void *arg)
 {
     soak *s = arg;
     fprintf(s->samples, "# t_s rss_kib fds frames txn_accepted txn_applied worst_frame_ms_this_second "
-                        "runqueue_wait_ms_this_second\n");
+                        "pipeline_runqueue_wait_ms_this_second\n");
     fflush(s->samples);
     bool stop_sent = false;
-    uint64_t waited_before_ns = runqueue_wait_ns();
+    static wait_book waits; /* the monitor thread's alone */
+    pipeline_wait_delta_ns(&waits);
     for (int second = 1; !atomic_load(&s->monitor_stop); second++) {
         /* sleep to the next whole second since the start, in short steps (stop promptly) */
         for (;;) {
@@ -526,9 +570,7 @@ static void *monitor_main(void *arg)
             abort();
         }
         pipeline_stats ps = pipeline_get_stats(s->p);
-        uint64_t waited_ns = runqueue_wait_ns();
-        double waited_ms = waited_ns > waited_before_ns ? 1e-6 * (double)(waited_ns - waited_before_ns) : 0.0;
-        waited_before_ns = waited_ns;
+        double waited_ms = 1e-6 * (double)pipeline_wait_delta_ns(&waits);
         fprintf(s->samples, "%.0f %ld %d %llu %llu %llu %.1f %.0f\n", now_s - s->start_s, rss_kib(), open_fds(),
                 (unsigned long long)atomic_load(&s->frames_seen), (unsigned long long)accepted_total(s),
                 (unsigned long long)ps.transactions_applied, 1e-3 * (double)atomic_exchange(&s->second_worst_us, 0),
