@@ -23,12 +23,14 @@
 #include "engine/bvh.h"
 #include "engine/camera_path.h"
 #include "engine/mesh.h"
+#include "engine/pipeline.h"
 #include "engine/scene.h"
 #include "input/bindings.h"
 #include "input/record.h"
 #include "tests/fault/fault.h"
 #include "tests/support.h"
 #include "tools/cli/pipeline_cli.h"
+#include "wall/display.h"
 #include "wall/edid.h"
 #include "wall/wall_config.h"
 
@@ -433,6 +435,99 @@ Test(alloc_sweep, accel_build_parallel)
     cr_assert_gt(st.failed, 0);
     scene_destroy(s);
     (void)err;
+}
+
+/* ---- the pipeline: create, channels, displays, frames, destroy ------------- */
+
+/* The frames the dump display wrote (pattern frame_####.png, frames 0..2 of
+ * 2 channels: NAME-c0/-c1 beside it) equal the reference run's files. */
+#define PIPELINE_FRAMES 3
+
+typedef struct pipeline_op {
+    const scene *s;
+    const accel *a;
+    camera_desc camera;
+    char pattern[PATH_BYTES]; /* where each run of the op writes */
+    char ref_dir[PATH_BYTES]; /* the fault-free run's files */
+} pipeline_op;
+
+/* A 2-thread pipeline with two channels (a whole picture and a window of a
+ * wall), each to a dump display, for PIPELINE_FRAMES frames at fixed time. */
+static bool run_pipeline(const pipeline_op *o, const char *pattern, tess_error *err)
+{
+    pipeline_config cfg = pipeline_config_default(o->s, o->a);
+    cfg.threads = 2;
+    cfg.max_frames = PIPELINE_FRAMES;
+    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
+    pipeline *p = pipeline_create(&cfg, err);
+    if (!p)
+        return false;
+    char path[2][PATH_BYTES];
+    for (int c = 0; c < 2; c++)
+        snprintf(path[c], PATH_BYTES, "%s-c%d_####.png", pattern, c);
+    image_display *d0 = display_dump_create(path[0], true, err);
+    bool ok = d0 && pipeline_add_channel(p, &o->camera, 40, 24, d0, err) >= 0;
+    image_display *d1 = ok ? display_dump_create(path[1], true, err) : NULL;
+    camera_window right_half = {0.5f, 0.0f, 0.5f, 1.0f};
+    ok = ok && d1 && pipeline_add_channel_window(p, &o->camera, 2.0f, right_half, 20, 20, d1, err) >= 0;
+    ok = ok && pipeline_run(p, err);
+    pipeline_destroy(p);
+    return ok;
+}
+
+static bool same_file(const char *a, const char *b)
+{
+    char cmd[5 * PATH_BYTES];
+    snprintf(cmd, sizeof cmd, "cmp -s '%s' '%s'", a, b);
+    return support_run(cmd) == 0;
+}
+
+static bool op_pipeline(void *ctx, char *msg, size_t msg_bytes, bool *same)
+{
+    pipeline_op *o = ctx;
+    tess_error err = {{0}};
+    bool ok = run_pipeline(o, o->pattern, &err);
+    fault_disarm();
+    if (!ok) {
+        copy_msg(msg, msg_bytes, &err);
+        return false;
+    }
+    *same = true;
+    for (int c = 0; c < 2 && *same; c++)
+        for (int f = 0; f < PIPELINE_FRAMES && *same; f++) {
+            char got[2 * PATH_BYTES], want[2 * PATH_BYTES];
+            snprintf(got, sizeof got, "%s-c%d_%04d.png", o->pattern, c, f);
+            snprintf(want, sizeof want, "%s/ref-c%d_%04d.png", o->ref_dir, c, f);
+            *same = same_file(got, want);
+        }
+    return true;
+}
+
+/* Every allocation of making a pipeline (threads, channels, tiles, the
+ * transaction queue, the displays) and of running it fails cleanly: an error
+ * saying "out of memory", no leak, no crash; or the frames are those of the
+ * fault-free run. */
+Test(alloc_sweep, pipeline_create_run_destroy, .timeout = 600)
+{
+    tess_error err = {{0}};
+    scene *s = scene_create_default(&err);
+    cr_assert_not_null(s, "%s", err.msg);
+    accel *a = accel_build(s, 1, &err);
+    cr_assert_not_null(a, "%s", err.msg);
+    vec3 lo, hi;
+    cr_assert(scene_bounds(s, &lo, &hi));
+    pipeline_op o = {s, a, s->has_camera ? s->camera : camera_frame_bounds(lo, hi, v3(0.f, 0.f, -1.f), 50.f, 40, 24), "",
+                     ""};
+    snprintf(o.pattern, sizeof o.pattern, "%s/run", scratch_dir);
+    snprintf(o.ref_dir, sizeof o.ref_dir, "%s", scratch_dir);
+    char ref[PATH_BYTES];
+    snprintf(ref, sizeof ref, "%s/ref", scratch_dir);
+    cr_assert(run_pipeline(&o, ref, &err), "the fault-free run: %s", err.msg);
+    const char *needles[] = {NULL};
+    fault_sweep_stats st = fault_sweep("pipeline", op_pipeline, &o, needles);
+    cr_assert_gt(st.failed, 0, "nothing failed: the sweep tests nothing");
+    accel_destroy(a);
+    scene_destroy(s);
 }
 
 /* ---- wall, bindings, camera path, record, pipeline config ----------------- */
