@@ -774,7 +774,6 @@ Test(hide, out_of_range_ids_are_refused)
 /* ---- threads: a picker and a cursor sender while hiding toggles each frame ---- */
 #define RACE_W 72
 #define RACE_H 40
-#define RACE_FRAMES 30
 #define RACE_CURSORS 3
 
 static const float race_cursor[RACE_CURSORS][2] = {{-0.5f, 0.5f}, {0.f, 0.f}, {0.4f, -0.3f}};
@@ -787,9 +786,16 @@ typedef struct racer {
     atomic_int bad_picks;
 } racer;
 
+/* The racer: picks (reading the hidden flags the serial section writes)
+ * and cursor moves from its own thread while frames render. Each move waits
+ * for a frame to be rendered after it (an event: a starved racer makes the
+ * run longer, never the test wrong); after RACE_MOVES moves and two more
+ * frames it stops the pipeline. */
+#define RACE_MOVES 9
 static void *pick_and_move(void *arg)
 {
     racer *r = arg;
+    struct timespec poll = {0, 50000};
     for (unsigned k = 0; !atomic_load(&r->done); k++) {
         ray down = down_ray(0.f, 0.f);
         hit h;
@@ -799,14 +805,51 @@ static void *pick_and_move(void *arg)
             atomic_fetch_add(&r->bad_picks, 1);
         (void)accel_hidden(r->a, 2);
         atomic_fetch_add(&r->picks, 1);
-        const float *c = race_cursor[k % RACE_CURSORS];
-        if (pipeline_queue_cursor(r->p, true, c[0], c[1]))
-            atomic_fetch_add(&r->moves, 1);
-        struct timespec pause = {0, 50000}; /* a fast mouse, not a flood that fills the queue */
-        nanosleep(&pause, NULL);
+        const float *c = race_cursor[(k + 1) % RACE_CURSORS]; /* the first differs from the start's */
+        uint64_t frames_then = pipeline_get_stats(r->p).frames_rendered;
+        if (pipeline_queue_cursor(r->p, true, c[0], c[1]) && atomic_fetch_add(&r->moves, 1) + 1 >= RACE_MOVES)
+            frames_then++; /* the last: two frames more */
+        while (!atomic_load(&r->done) && pipeline_get_stats(r->p).frames_rendered < frames_then + 1)
+            nanosleep(&poll, NULL);
+        if (atomic_load(&r->moves) >= RACE_MOVES) {
+            pipeline_stop(r->p);
+            break;
+        }
     }
     return NULL;
 }
+
+/* Frames of the race checked as they are shown (any number of them): each
+ * must equal one of the references for its frame's hidden state (odd frames
+ * hide the sphere) at one of the cursor positions. */
+typedef struct race_display {
+    image_display base;
+    float *(*refs)[RACE_CURSORS]; /* [hidden][cursor] */
+    int count;
+    int seen[RACE_CURSORS];
+    int first_whole_miss; /* -1: every frame matched */
+} race_display;
+
+static bool race_show(image_display *d, const frame_image *img, tess_error *err)
+{
+    (void)err;
+    race_display *rd = (race_display *)d;
+    int hidden = (int)(img->frame % 2), match = -1;
+    for (int c = 0; c < RACE_CURSORS && match < 0; c++)
+        if (img->width_px == RACE_W && img->height_px == RACE_H &&
+            same_image(img->rgb, rd->refs[hidden][c], RACE_W, RACE_H))
+            match = c;
+    if (match >= 0)
+        rd->seen[match]++;
+    else if (rd->first_whole_miss < 0)
+        rd->first_whole_miss = rd->count;
+    rd->count++;
+    return true;
+}
+
+static void race_destroy(image_display *d) { (void)d; /* the test's */ }
+
+static const image_display_ops race_ops = {.name = "race", .show = race_show, .destroy = race_destroy};
 
 static void toggle_sphere(pipeline *p, void *ctx, const frame_info *fi)
 {
@@ -840,11 +883,11 @@ Test(hide, frames_stay_whole_while_another_thread_picks_and_moves_the_cursor, .t
     pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
     cfg.threads = 3;
     cfg.tile_px = 8;
-    cfg.max_frames = RACE_FRAMES;
+    cfg.max_frames = 0; /* until the racer stops it */
     pipeline *p = pipeline_create(&cfg, &err);
     cr_assert(p);
-    grabbed g = {0, 0, 0, {0}};
-    cr_assert_eq(pipeline_add_channel(p, &fx.camera, RACE_W, RACE_H, grab_create(&g), &err), 0, "%s", err.msg);
+    race_display rd = {.base = {.ops = &race_ops}, .refs = refs, .first_whole_miss = -1};
+    cr_assert_eq(pipeline_add_channel(p, &fx.camera, RACE_W, RACE_H, &rd.base, &err), 0, "%s", err.msg);
     cr_assert(pipeline_set_status(p, "racing"));
     cr_assert(pipeline_set_cursor(p, true, race_cursor[0][0], race_cursor[0][1]));
     cr_assert(pipeline_add_serial_animation(p, "toggle sphere", toggle_sphere, NULL));
@@ -860,25 +903,17 @@ Test(hide, frames_stay_whole_while_another_thread_picks_and_moves_the_cursor, .t
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
     atomic_store(&r.done, true);
     pthread_join(th, NULL);
-    cr_assert_eq(g.count, RACE_FRAMES);
-    int seen[RACE_CURSORS] = {0};
-    for (int f = 0; f < g.count; f++) {
-        int hidden = f % 2, match = -1;
-        for (int c = 0; c < RACE_CURSORS && match < 0; c++)
-            if (same_image(g.frames[f], refs[hidden][c], RACE_W, RACE_H))
-                match = c;
-        cr_assert(match >= 0, "frame %d (sphere %s) is no whole image", f, hidden ? "hidden" : "shown");
-        seen[match]++;
-    }
-    cr_assert((seen[0] > 0) + (seen[1] > 0) + (seen[2] > 0) >= 2, "the cursor never moved between frames");
+    cr_assert(rd.count >= RACE_MOVES, "%d frames for %d cursor moves", rd.count, RACE_MOVES);
+    cr_assert_eq(rd.first_whole_miss, -1, "frame %d (sphere %s) is no whole image", rd.first_whole_miss,
+                 rd.first_whole_miss % 2 ? "hidden" : "shown");
+    cr_assert((rd.seen[0] > 0) + (rd.seen[1] > 0) + (rd.seen[2] > 0) >= 2, "the cursor never moved between frames");
     cr_assert_eq(atomic_load(&r.bad_picks), 0);
-    cr_assert(atomic_load(&r.picks) > 0 && atomic_load(&r.moves) > 0);
+    cr_assert(atomic_load(&r.picks) >= RACE_MOVES && atomic_load(&r.moves) >= RACE_MOVES);
     pipeline_destroy(p);
     accel_unhide_all(fx.accel);
     for (int hidden = 0; hidden < 2; hidden++)
         for (int c = 0; c < RACE_CURSORS; c++)
             free(refs[hidden][c]);
-    grabbed_free(&g);
     fixture_free(&fx);
 }
 
