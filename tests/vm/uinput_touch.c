@@ -60,6 +60,14 @@
  *                     moving together from X0,Y0 to X1,Y1 in STEPS frames
  *   swipe3 X0 Y0 X1 Y1 STEPS three fingers in a row GAP apart (X-GAP, X,
  *                     X+GAP) moving together from X0,Y0 to X1,Y1
+ *   garbage N SEED    N raw events no well-behaved device sends (a broken or hostile
+ *                     one): random EV_ABS/EV_KEY/EV_SYN events of the device's codes
+ *                     with values out of range (INT_MIN, INT_MAX, slots -1 and 10,
+ *                     tracking ids reused), SYN_MT_REPORT, frames closed at random,
+ *                     bursts with no pause (a SYN_DROPPED sent is dropped by the input
+ *                     core; a reader sees real ones when a burst overflows its evdev
+ *                     buffer); then every slot is lifted in one well-formed frame, so
+ *                     later commands start clean
  *   sleep MS          wait
  *   quit              lift every contact, remove the device, exit 0
  * Gestures take the lowest free slots; all their fingers go down in one
@@ -409,6 +417,87 @@ static int ints(const char *args, int n, int *v)
     return *s ? -1 : 0;
 }
 
+/* a random number from the command's seed (xorshift32; the seed is never 0) */
+static unsigned next_random(unsigned *state)
+{
+    unsigned x = *state;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    return *state = x;
+}
+
+/* a value an axis of size `size` may be sent: mostly in range, often not */
+static int wild_value(unsigned *rs, int size)
+{
+    switch (next_random(rs) % 8) {
+    case 0:
+        return INT_MIN;
+    case 1:
+        return INT_MAX;
+    case 2:
+        return -1;
+    case 3:
+        return size + (int)(next_random(rs) % 1000);
+    case 4:
+        return -(int)(next_random(rs) % 100000);
+    default:
+        return (int)(next_random(rs) % (unsigned)size);
+    }
+}
+
+/* garbage N SEED (see the top): the events, then a clean lift of every slot */
+static int garbage(struct touch *t, int n, int seed, char *err, size_t errlen)
+{
+    static const int keys[] = {BTN_TOUCH, BTN_TOOL_FINGER, BTN_TOOL_DOUBLETAP, BTN_TOOL_TRIPLETAP,
+                               BTN_TOOL_QUADTAP, BTN_LEFT};
+    unsigned rs = (unsigned)seed * 2654435761u + 1u;
+    if (rs == 0)
+        rs = 1;
+    int rc = 0;
+    for (int i = 0; i < n && !rc && !stop; i++) {
+        unsigned pick = next_random(&rs) % 100;
+        if (pick < 15) {
+            rc = emit(t, EV_SYN, SYN_REPORT, 0);
+        } else if (pick < 18) {
+            rc = emit(t, EV_SYN, SYN_DROPPED, 0);
+        } else if (pick < 20) {
+            rc = emit(t, EV_SYN, SYN_MT_REPORT, 0);
+        } else if (pick < 35) {
+            int key = keys[next_random(&rs) % (sizeof keys / sizeof keys[0])];
+            rc = emit(t, EV_KEY, key, (int)(next_random(&rs) % 4) - 1); /* -1..2: 2 is autorepeat */
+        } else if (pick < 45) {
+            rc = emit(t, EV_ABS, ABS_MT_SLOT, (int)(next_random(&rs) % (SLOTS + 2)) - 1);
+        } else if (pick < 55) {
+            int id = next_random(&rs) % 3 == 0 ? -1 : (int)(next_random(&rs) % 8); /* ids reused */
+            rc = emit(t, EV_ABS, ABS_MT_TRACKING_ID, id);
+        } else {
+            static const int axes[] = {ABS_X, ABS_Y, ABS_MT_POSITION_X, ABS_MT_POSITION_Y};
+            int axis = axes[next_random(&rs) % 4];
+            int size = axis == ABS_X || axis == ABS_MT_POSITION_X ? t->w : t->h;
+            rc = emit(t, EV_ABS, axis, wild_value(&rs, size));
+        }
+        if (next_random(&rs) % 64 == 0)
+            sleep_ms(next_random(&rs) % 20); /* else a burst */
+    }
+    /* every slot lifted, no key down: the device is clean for the next command */
+    for (int s = 0; s < SLOTS; s++) {
+        rc |= emit(t, EV_ABS, ABS_MT_SLOT, s);
+        rc |= emit(t, EV_ABS, ABS_MT_TRACKING_ID, -1);
+        t->c[s].active = 0;
+    }
+    for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
+        rc |= emit(t, EV_KEY, keys[k], 0);
+    rc |= emit(t, EV_SYN, SYN_REPORT, 0);
+    t->tool = 0;
+    t->touching = 0;
+    if (rc) {
+        snprintf(err, errlen, "write to uinput failed");
+        return -1;
+    }
+    return 0;
+}
+
 /* run one command; 1 for quit, 0 done, -1 failed (err says why) */
 static int command(struct touch *t, char *line, char *err, size_t errlen)
 {
@@ -480,6 +569,14 @@ static int command(struct touch *t, char *line, char *err, size_t errlen)
         ARGS(5);
         struct path p = {3, v[0], v[1], v[2], v[3], t->gap, t->gap};
         return gesture(t, &p, v[4], err, errlen);
+    }
+    if (!strcmp(word, "garbage")) {
+        ARGS(2);
+        if (v[0] < 0) {
+            snprintf(err, errlen, "negative event count");
+            return -1;
+        }
+        return garbage(t, v[0], v[1], err, errlen);
     }
     if (!strcmp(word, "sleep")) {
         ARGS(1);
