@@ -19,8 +19,8 @@
 #     another thread, as the input thread's device retry, is not a leak);
 #   - frames keep coming: no second's worst frame (the time between two frame
 #     barriers) is over 10 x the median frame time (the driver's), unless the
-#     pipeline's threads waited for a CPU in that second and the one before at
-#     least as long as the excess: on a shared machine a loop that waits for
+#     pipeline's threads waited for a CPU, over the seconds the frame spans
+#     and the one before it began, at least as long as the excess: on a shared machine a loop that waits for
 #     the scheduler is not a stuck loop. Only the pipeline's threads count
 #     (the frame loop's and tess-render-N: the senders' and the input
 #     thread's waits excuse nothing). Such gaps are counted and shown. A
@@ -165,7 +165,10 @@ if [ -z "$median" ]; then
 else
     gaps=$(awk -v med="$median" '
         /^#/ { next }
-        { limit = 10 * med; worst = $7; wait = $8 + prev_wait; prev_wait = $8
+        { n++; waited[n] = $8; limit = 10 * med; worst = $7
+          # the wait over the seconds the worst frame spans, and the one before it began
+          span = int(worst / 1000) + 2; wait = 0
+          for (i = n; i > n - span && i > 0; i--) wait += waited[i]
           if (worst > limit) { if (wait >= worst - limit) starved++; else { stuck++; if (worst > sw) { sw = worst; st = $1 } } }
           if (worst > gw) { gw = worst; gt = $1; gwait = wait } }
         END { printf "%d %d %s %s %s %s %s\n", stuck, starved, gw + 0, gt + 0, gwait + 0, sw + 0, st + 0 }' "$samples")
