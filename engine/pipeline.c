@@ -102,6 +102,8 @@ typedef struct render_thread {
     render_counts counts; /* rays of the current frame; written by this thread in the render
                              stage, read and cleared by the serial section */
     double barrier_s;     /* this thread's time at frame barriers so far; its own until run ends */
+    double render_stage_s; /* its render stage in the current step: written by this thread, read
+                              and cleared by the serial section (the frame barrier orders them) */
 } render_thread;
 
 /* A barrier whose last arriving thread runs a function before releasing the
@@ -162,6 +164,7 @@ struct pipeline {
     bool exit_after_step;  /* the current step is the last: serial section only */
     uint64_t next_frame;   /* serial section only */
     double start_s, last_serial_s;
+    double last_render_s;  /* serial section only: the previous step's longest render stage */
     queued_call *oneshot_scratch; /* serial section only: due one-shots being run */
 
     /* display stage: written by thread 0 in the display stage, read by the serial section */
@@ -963,13 +966,18 @@ static void finish_previous_step(pipeline *p)
 {
     const loop_step *prev = &p->step;
     render_counts sum = {0, 0, 0};
+    double longest_render_s = 0.0;
     for (int i = 0; i < PIPELINE_MAX_THREADS; i++) {
         render_counts *c = &p->threads[i].counts;
         sum.primary_rays += c->primary_rays;
         sum.primary_hits += c->primary_hits;
         sum.shadow_rays += c->shadow_rays;
         memset(c, 0, sizeof *c);
+        if (p->threads[i].render_stage_s > longest_render_s)
+            longest_render_s = p->threads[i].render_stage_s;
+        p->threads[i].render_stage_s = 0.0;
     }
+    p->last_render_s = longest_render_s;
     pthread_mutex_lock(&p->stats_lock);
     p->stats.rays.primary_rays += sum.primary_rays;
     p->stats.rays.primary_hits += sum.primary_hits;
@@ -1034,6 +1042,7 @@ static int serial_section_steps(pipeline *p)
     uint64_t frame = p->next_frame;
     s->info.frame = frame;
     s->info.last_frame_s = frame == 0 ? 0.0 : now - p->last_serial_s;
+    s->info.last_render_s = frame == 0 ? 0.0 : p->last_render_s;
     p->last_serial_s = now;
     if (frame == 0)
         p->start_s = now;
@@ -1120,7 +1129,9 @@ static void display_stage(pipeline *p)
 static void render_stage(pipeline *p, render_thread *t)
 {
     render_counts counts = {0, 0, 0}; /* on this thread's stack: no shared cache line per packet */
+    double t0 = now_s();
     p->traverser->ops->render(p->traverser, p->cfg.renderer, &p->cfg.sampler, &counts);
+    t->render_stage_s = now_s() - t0;
     t->counts = counts;
 }
 

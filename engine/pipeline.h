@@ -221,6 +221,9 @@ typedef struct frame_info {
     uint64_t frame;        /* the frame about to be rendered */
     double time_s;         /* its time */
     double last_frame_s;   /* wall-clock duration of the previous loop step (0 for frame 0) */
+    double last_render_s;  /* the longest render stage of one thread in that step (0 when it rendered
+                              nothing): last_frame_s minus this is what the step spent outside
+                              rendering (display stage, serial section, barriers, waiting for a CPU) */
     int threads;           /* render threads for this frame */
 } frame_info;
 

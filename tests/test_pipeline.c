@@ -34,6 +34,7 @@ typedef struct capture_display {
     captured frames[CAPTURE_MAX]; /* display thread only while running */
     int count;
     int fail_at_frame;            /* -1: never fail */
+    int slow_at_frame;            /* -1: never; else show sleeps SLOW_SHOW_MS at this frame */
     /* check mode (check_ref set): each frame is compared with check_ref
      * (check_w x check_h) as it is shown and not kept, so a run may show any
      * number of frames; count counts them, first_wrong is the first frame that
@@ -45,9 +46,16 @@ typedef struct capture_display {
 
 static bool same_pixels(const float *a, const float *b, int w, int h);
 
+#define SLOW_SHOW_MS 20
+
 static bool capture_show(image_display *d, const frame_image *img, tess_error *err)
 {
     capture_display *c = (capture_display *)d;
+    if (c->slow_at_frame >= 0 && img->frame == (uint64_t)c->slow_at_frame) {
+        struct timespec ts = {0, SLOW_SHOW_MS * 1000000L};
+        while (nanosleep(&ts, &ts) != 0)
+            ;
+    }
     if (c->fail_at_frame >= 0 && img->frame == (uint64_t)c->fail_at_frame)
         return tess_error_set(err, "capture display: refusing frame %d as told", c->fail_at_frame);
     if (c->check_ref) {
@@ -85,6 +93,7 @@ static capture_display *capture_create(void)
     cr_assert(c);
     c->base.ops = &capture_ops;
     c->fail_at_frame = -1;
+    c->slow_at_frame = -1;
     c->first_wrong = -1;
     return c;
 }
@@ -1080,6 +1089,67 @@ Test(pipeline, a_failing_display_stops_the_pipeline_with_its_error, .timeout = 6
     cr_assert_not(pipeline_run(p, &err));
     cr_assert(strstr(err.msg, "refusing frame 3"), "error: %s", err.msg);
     cr_assert_eq(cap->count, 3);
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
+/* ---- each step's time: its render stage and the rest ---- */
+#define SPLIT_FRAMES 12
+#define SLOW_SERIAL_FRAME 7
+typedef struct step_split {
+    double frame_s[SPLIT_FRAMES], render_s[SPLIT_FRAMES];
+} step_split;
+
+static void note_split(pipeline *p, void *ctx, const frame_info *fi)
+{
+    (void)p;
+    step_split *sp = ctx;
+    if (fi->frame < SPLIT_FRAMES) {
+        sp->frame_s[fi->frame] = fi->last_frame_s;
+        sp->render_s[fi->frame] = fi->last_render_s;
+    }
+    if (fi->frame == SLOW_SERIAL_FRAME) { /* a serial section held up: in the next step's time */
+        struct timespec ts = {0, SLOW_SHOW_MS * 1000000L};
+        while (nanosleep(&ts, &ts) != 0)
+            ;
+    }
+}
+
+/* One render thread, so a step is its display stage, its render stage and
+ * the serial section in a row: what a slow display or a slow serial section
+ * costs is outside rendering, whatever the machine's speed (soak.sh judges
+ * frame gaps on this: a view that costs more to render is not a stall). */
+Test(pipeline, a_step_s_time_splits_into_its_render_stage_and_the_rest, .timeout = 60)
+{
+    fixture fx = fixture_make();
+    camera_desc cam = test_camera(&fx, 0);
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 1;
+    cfg.max_frames = SPLIT_FRAMES;
+    capture_display *cap;
+    pipeline *p = make_pipeline(&fx, cfg, &cap, &cam);
+    cap->slow_at_frame = 3;
+    step_split sp;
+    memset(&sp, 0, sizeof sp);
+    cr_assert(pipeline_add_serial_animation(p, "split", note_split, &sp));
+    run_ok(p);
+    cr_assert_eq(sp.frame_s[0], 0.0);
+    cr_assert_eq(sp.render_s[0], 0.0);
+    double limit_s = 1e-3 * SLOW_SHOW_MS;
+    int held_up = 0;
+    for (int f = 1; f < SPLIT_FRAMES; f++) {
+        cr_assert(sp.render_s[f] > 0.0, "frame %d: no render stage time", f);
+        cr_assert(sp.render_s[f] <= sp.frame_s[f], "frame %d: render stage %.6f s > step %.6f s", f, sp.render_s[f],
+                  sp.frame_s[f]);
+        if (sp.frame_s[f] - sp.render_s[f] >= limit_s)
+            held_up++;
+    }
+    /* the step that showed frame 3, and the one after the slow serial section at frame 7 */
+    cr_assert(sp.frame_s[SLOW_SERIAL_FRAME + 1] - sp.render_s[SLOW_SERIAL_FRAME + 1] >= limit_s,
+              "the slow serial section is not outside rendering: step %.6f s, render %.6f s",
+              sp.frame_s[SLOW_SERIAL_FRAME + 1], sp.render_s[SLOW_SERIAL_FRAME + 1]);
+    cr_assert(held_up >= 2, "%d step(s) held up %d ms outside rendering, want the slow show's and the serial's",
+              held_up, SLOW_SHOW_MS);
     pipeline_destroy(p);
     fixture_free(&fx);
 }
