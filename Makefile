@@ -26,6 +26,7 @@ ENGINE_SRC := $(wildcard engine/*.c)
 WALL_SRC := $(wildcard wall/*.c)
 WALL_CXX := $(wildcard wall/*.cpp)
 INPUT_SRC := $(wildcard input/*.c)
+METRICS_SRC := $(wildcard metrics/*.c)
 CLI_SRC := $(wildcard tools/cli/*.c)
 TEST_SRC := $(wildcard tests/*.c)
 
@@ -37,7 +38,7 @@ ISA_FLAGS_sse2 := -DTESS_ISA_SSE2
 ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
 
-LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC)) \
+LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC) $(METRICS_SRC)) \
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
@@ -171,7 +172,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h wall/*.h input/*.h tools/cli/*.h)
+HEADERS := $(wildcard engine/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \

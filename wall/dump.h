@@ -29,6 +29,15 @@ bool dump_read_rgb8(const char *path, int *width_px, int *height_px, uint8_t **r
 /* Read an image as float RGB (3 per pixel) with the file's values (EXR: linear). */
 bool dump_read_rgbf(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err);
 
+/* Read an image as linear RGB floats (3 per pixel, top row first), for
+ * measuring: formats stored as floating point (EXR, HDR, float TIFF...) are
+ * taken as linear and kept as stored; integer formats (8- and 16-bit PNG,
+ * JPEG, TIFF...) are taken as sRGB-encoded and decoded with the sRGB curve
+ * (IEC 61966-2-1) in double. Grey becomes RGB, alpha and further channels
+ * are dropped. Errors name the file and OpenImageIO's reason. The caller
+ * frees *rgb_out with free(). */
+bool dump_read_linear_rgb(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err);
+
 /* The file name of frame `frame` of a sequence written to `pattern`: a run of
  * '#' becomes the zero-padded frame number (at least as many digits as '#'s),
  * as does a printf-style "%d" or "%0Nd". A pattern without either gets

@@ -388,6 +388,53 @@ bool read_rgb(const char *path, OIIO::TypeDesc type, int *width_px, int *height_
     return true;
 }
 
+/* The sRGB decoding curve (IEC 61966-2-1) in double. */
+double srgb_decode(double encoded)
+{
+    return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
+}
+
+bool read_linear_rgb(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
+{
+    if (!path || !width_px || !height_px || !rgb_out)
+        return tess_error_set(err, "%s: dump_read: NULL argument", shown(path));
+    *width_px = *height_px = 0;
+    *rgb_out = nullptr;
+    /* What the file stores decides the encoding; a second open is cheap
+     * next to decoding the pixels. */
+    bool stored_float;
+    {
+        auto in = OIIO::ImageInput::open(path);
+        if (!in)
+            return tess_error_set(err, "%s: cannot read: %s", path, oiio_global_error().c_str());
+        stored_float = in->spec().format.is_floating_point();
+        in->close();
+    }
+    if (stored_float)
+        return read_rgb<float>(path, OIIO::TypeDesc::FLOAT, width_px, height_px, rgb_out, err);
+
+    /* Integer formats through 16 bits (OIIO widens 8-bit values exactly,
+     * v * 257) and a table of the 65536 decoded values. */
+    uint16_t *codes = nullptr;
+    if (!read_rgb<uint16_t>(path, OIIO::TypeDesc::UINT16, width_px, height_px, &codes, err))
+        return false;
+    std::unique_ptr<uint16_t, free_deleter> owned(codes);
+    const size_t values = (size_t)*width_px * (size_t)*height_px * 3;
+    std::unique_ptr<float, free_deleter> rgb((float *)std::malloc(values * sizeof(float)));
+    if (!rgb) {
+        tess_error_set(err, "%s: out of memory for %dx%d pixels", path, *width_px, *height_px);
+        *width_px = *height_px = 0;
+        return false;
+    }
+    std::vector<float> table(65536);
+    for (size_t v = 0; v < table.size(); v++)
+        table[v] = (float)srgb_decode((double)v / 65535.0);
+    for (size_t i = 0; i < values; i++)
+        rgb.get()[i] = table[codes[i]];
+    *rgb_out = rgb.release();
+    return true;
+}
+
 /* One frame-number field found in a pattern: pattern[at, at + len) becomes
  * the frame number zero-padded to `digits`. */
 struct frame_field {
@@ -493,6 +540,11 @@ bool dump_read_rgbf(const char *path, int *width_px, int *height_px, float **rgb
 {
     return guarded(path, err,
                    [&] { return read_rgb<float>(path, OIIO::TypeDesc::FLOAT, width_px, height_px, rgb_out, err); });
+}
+
+bool dump_read_linear_rgb(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
+{
+    return guarded(path, err, [&] { return read_linear_rgb(path, width_px, height_px, rgb_out, err); });
 }
 
 bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes,
