@@ -131,6 +131,8 @@ static double hyab(const double a[3], const double b[3])
     return fabs(a[0] - b[0]) + hypot(a[1] - b[1], a[2] - b[2]);
 }
 
+double flip_ppd_of_viewer(double distance_m, double pixels_per_m) { return distance_m * pixels_per_m * FLIP_PI / 180.0; }
+
 int flip_spatial_radius_px(double ppd)
 {
     return (int)ceil(3.0 * sqrt(FLIP_WIDEST_B / (2.0 * FLIP_PI * FLIP_PI)) * ppd);

@@ -51,6 +51,11 @@
 #define FLIP_MIN_PPD 1.0
 #define FLIP_MAX_PPD 1000.0
 
+/* Pixels per degree of a viewer distance_m from a display of pixels_per_m
+ * pixels per metre, as FLIP computes it: distance * pixels_per_m * pi / 180
+ * (the small-angle form: 2.5e-5 less than 2 d tan(0.5 deg)). */
+double flip_ppd_of_viewer(double distance_m, double pixels_per_m);
+
 /* Radius in pixels of the colour (contrast sensitivity) filter and of the
  * edge/point filter at `ppd` pixels per degree (67.02: 10 and 9). */
 int flip_spatial_radius_px(double ppd);

@@ -14,6 +14,8 @@
 #define CLI_MAX_IMAGE_EDGE_PX 16384
 
 bool cli_parse_int(const char *option, const char *text, int min, int max, int *out);
+/* A finite decimal number in [min, max]. */
+bool cli_parse_double(const char *option, const char *text, double min, double max, double *out);
 bool cli_parse_size(const char *option, const char *text, int *width_px, int *height_px);
 bool cli_parse_camera(const char *option, const char *text, camera_desc *out);
 /* The value after argv[*i] (advancing *i), or NULL with a message when missing. */
@@ -75,5 +77,6 @@ int cli_trace(int argc, char **argv);  /* tessera trace ... (cmd_trace.c) */
 int cli_bench(int argc, char **argv);  /* tessera bench ... (cmd_bench.c) */
 int cli_bench_path(int argc, char **argv); /* tessera bench --path / --scaling (cmd_bench_path.c) */
 int cli_bench_wall(int argc, char **argv); /* tessera bench --wall without --path / --scaling (cmd_bench_wall.c) */
+int cli_compare(int argc, char **argv); /* tessera compare ... (cmd_compare.c) */
 
 #endif

@@ -29,6 +29,7 @@ static const command commands[] = {
     {"render", cli_render, "render a scene headless and write image files"},
     {"trace", cli_trace, "trace rays from a binary file and write their hits (for users and tests)"},
     {"bench", cli_bench, "measure ray throughput, build time and memory (machine-readable lines)"},
+    {"compare", cli_compare, "how much an image differs from a reference: FLIP, RMSE, PSNR (one line)"},
     {"outputs", cli_outputs, "list DRM cards, connectors, monitors (EDID) and modes, for wall configs"},
 };
 
@@ -55,7 +56,7 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);
-    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, outputs; see 'tessera --help')",
+    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, compare, outputs; see 'tessera --help')",
               argv[1]);
     return 2;
 }

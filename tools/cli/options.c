@@ -50,6 +50,19 @@ bool cli_parse_int(const char *option, const char *text, int min, int max, int *
     return true;
 }
 
+bool cli_parse_double(const char *option, const char *text, double min, double max, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (end == text || *end != '\0' || errno == ERANGE || !isfinite(v) || v < min || v > max) {
+        cli_error("%s: expected a number from %g to %g, got '%s'", option, min, max, text);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
 bool cli_parse_size(const char *option, const char *text, int *width_px, int *height_px)
 {
     char *end;
