@@ -139,6 +139,9 @@ tessera-asan: $(CLI_OBJ) $(LIB)
 SOAK_DRIVER_OBJ := $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ)) $(BUILD)/tests/soak/soak_driver.o
 $(BUILD)/soak_driver: $(SOAK_DRIVER_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(SOAK_DRIVER_OBJ) $(LIB) $(LDLIBS)
+# tools/flip_check/check.sh: image pairs for checking tessera compare against NVlabs' FLIP
+$(BUILD)/flip_pairs: $(BUILD)/tools/flip_check/pairs.o $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(BUILD)/tools/flip_check/pairs.o $(LIB) $(LDLIBS)
 SOAK_SAN ?= 0
 soak:
 ifeq ($(SOAK_SAN),1)
