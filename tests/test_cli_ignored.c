@@ -116,12 +116,29 @@ Test(cli_ignored, extra_config_channels_with_a_wall)
     cr_expect(!strstr(out, "error"), "a warning, not an error line: %s", out);
 }
 
+Test(cli_ignored, render_scale_options_that_do_not_apply)
+{
+    expect_warning("render --size 32x18 --upscale clamped-cubic --out %s/x.png --threads 2",
+                   "--upscale is ignored at --scale 1 (the image is rendered at full size: nothing is upscaled)");
+    expect_warning("render --size 32x18 --scale 1 --upscale bilinear --out %s/x.png --threads 2",
+                   "--upscale is ignored at --scale 1 (the image is rendered at full size: nothing is upscaled)");
+    expect_warning("render --wall %s/wall.json --scale 1/2 --out %s/wall.png --threads 2",
+                   "--scale is ignored with --wall (a wall renders every output at full size)");
+    int w, h;
+    float *rgb = support_read_image(dir, "wall-A-1.png", &w, &h);
+    cr_expect(w == 64 && h == 36, "the output's image is %dx%d, not the wall's 64x36", w, h);
+    free(rgb);
+    expect_warning("render --wall %s/wall.json --scale 1/2 --upscale clamped-cubic --out %s/wall.png --threads 2",
+                   "--upscale is ignored with --wall (a wall renders every output at full size)");
+}
+
 /* Everything given applies: not a word. */
 Test(cli_ignored, nothing_said_when_every_option_applies)
 {
     expect_warning("render --size 32x18 --out %s/x.png --camera 0,1,5,0,0,0,0,1,0,40 --threads 2 --rate 12 "
                    "--tile-size 8 --sampler single",
                    NULL);
+    expect_warning("render --size 32x18 --out %s/x.png --scale 1/2 --upscale clamped-cubic --threads 2", NULL);
     expect_warning("run --size 32x18 --display dump --out %s/f_####.png --frames 2 --threads 2 --time fixed --rate 10",
                    NULL);
 }

@@ -18,6 +18,10 @@ bool cli_parse_int(const char *option, const char *text, int min, int max, int *
 bool cli_parse_double(const char *option, const char *text, double min, double max, double *out);
 bool cli_parse_size(const char *option, const char *text, int *width_px, int *height_px);
 bool cli_parse_camera(const char *option, const char *text, camera_desc *out);
+/* A render scale in (0, 1] (engine/upscale.h): a fraction of two unsigned
+ * decimal numbers ("3/4", "1/3") or one ("0.75", "1"); no signs, spaces or
+ * exponents. */
+bool cli_parse_scale(const char *option, const char *text, double *out);
 /* The value after argv[*i] (advancing *i), or NULL with a message when missing. */
 const char *cli_option_value(int argc, char **argv, int *i);
 /* "tessera: SEVERITY: message" on stderr (the command line's own messages,

@@ -21,11 +21,39 @@
 #include "wall/dump.h"
 #include "wall/service.h"
 
-/* Parse the options both commands take (after loading --config). Returns
- * false when the command should stop: after --help (*exit_code 0) or a bad
- * option (*exit_code 2). */
+/* render's own options: --scale and --upscale (engine/upscale.h). False
+ * after an error for a bad value; *handled when argv[*i] was one. */
+static bool render_scale_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bool *handled)
+{
+    const char *a = argv[*i], *val;
+    *handled = true;
+    if (!strcmp(a, "--scale")) {
+        if (!(val = cli_option_value(argc, argv, i)) || !cli_parse_scale(a, val, &s->render_scale))
+            return false;
+        snprintf(s->render_scale_text, sizeof s->render_scale_text, "%.*s", (int)sizeof s->render_scale_text - 1,
+                 val);
+        return true;
+    }
+    if (!strcmp(a, "--upscale")) {
+        tess_error err = {{0}};
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (!upscale_filter_from_name(val, &s->upscale, &err)) {
+            cli_error("--upscale: %s", err.msg);
+            return false;
+        }
+        return true;
+    }
+    *handled = false;
+    return true;
+}
+
+/* Parse the options both commands take (after loading --config), and with
+ * `scale_options` render's --scale and --upscale. Returns false when the
+ * command should stop: after --help (*exit_code 0) or a bad option
+ * (*exit_code 2). */
 static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const char **scene_path,
-                          void (*usage)(FILE *), int *exit_code, cli_given *given)
+                          void (*usage)(FILE *), int *exit_code, cli_given *given, bool scale_options)
 {
     const char *config = cli_pipeline_find_config(argc, argv);
     if (config && !cli_pipeline_config_load(config, s))
@@ -40,6 +68,10 @@ static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const cha
         }
         cli_given_add(given, a);
         if (!cli_pipeline_option(argc, argv, &i, s, &handled))
+            goto bad;
+        if (handled)
+            continue;
+        if (scale_options && !render_scale_option(argc, argv, &i, s, &handled))
             goto bad;
         if (handled)
             continue;
@@ -230,6 +262,14 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
            s->threads == 1 ? "" : "s", fps,
            fps > 0.0 ? 1e3 / fps : 0.0, pixels * fps * 1e-6, ch->display,
            st.frames_displayed ? 1e3 * st.display_s / (double)st.frames_displayed : 0.0);
+    uint64_t upscaled;
+    double upscale_s;
+    if (cli_pipeline_upscale_time(&upscaled, &upscale_s)) {
+        camera_basis b = pipeline_channel_basis(p, 0);
+        printf("render scale %s: %dx%d rendered, upscaled to %dx%d (%s): %.2f ms/frame upscaling on thread 0\n",
+               s->render_scale_text, b.width_px, b.height_px, ch->width_px, ch->height_px,
+               upscale_filter_name(s->upscale), upscaled ? 1e3 * upscale_s / (double)upscaled : 0.0);
+    }
     cli_pipeline_report(p, s);
     code = 0;
 done:
@@ -257,7 +297,13 @@ static void render_usage(FILE *f)
           "  --camera ex,ey,ez,lx,ly,lz,ux,uy,uz,fov\n"
           "                   eye, look-at point, up vector, vertical field of view in degrees\n"
           "                   (default: the scene's camera, else the bounding box framed from (1,0.5,1.5))\n"
-          "  --frames N       render and write N frames (default 1; with --path the camera moves)\n",
+          "  --frames N       render and write N frames (default 1; with --path the camera moves)\n"
+          "  --scale S        render at S of --size and upscale to --size: S in (0, 1], a fraction\n"
+          "                   (3/4, 1/3) or a decimal (0.5); each edge max(1, round(edge * S)) pixels,\n"
+          "                   the same view (default 1: no upscaling; not with --wall)\n"
+          "  --upscale F      filter for --scale < 1: bilinear, or clamped-cubic (Catmull-Rom clamped\n"
+          "                   to the 2x2 nearest rendered pixels: steeper edges, no ringing)\n"
+          "                   (default bilinear)\n",
           f);
     cli_pipeline_usage(f);
 }
@@ -271,7 +317,7 @@ int cli_render(int argc, char **argv)
     const char *scene_path = NULL;
     int code = 0;
     cli_given given = {.count = 0};
-    if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code, &given))
+    if (!parse_options(argc, argv, &s, &scene_path, render_usage, &code, &given, true))
         return code;
     if (s.input.enabled == 1) {
         cli_error("%s: 'tessera render' reads no input devices (use 'tessera run'; render can --replay-input)",
@@ -325,7 +371,7 @@ int cli_run(int argc, char **argv)
     const char *scene_path = NULL;
     int code = 0;
     cli_given given = {.count = 0};
-    if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code, &given))
+    if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code, &given, false))
         return code;
     /* the kiosk: a wall on a card when there is one, until stopped, in real time */
     if (s.wall_file[0] && !s.display_given && access("/dev/dri/card0", F_OK) == 0)

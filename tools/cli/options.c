@@ -1,5 +1,6 @@
 #include "cli.h"
 #include "engine/clock.h"
+#include "engine/upscale.h"
 
 #include <errno.h>
 #include <math.h>
@@ -111,6 +112,51 @@ bool cli_parse_camera(const char *option, const char *text, camera_desc *out)
         return false;
     }
     *out = c;
+    return true;
+}
+
+/* An unsigned decimal number (digits with at most one '.') at *p; advances *p. */
+static bool parse_unsigned_decimal(const char **p, double *out)
+{
+    const char *s = *p;
+    size_t digits = strspn(s, "0123456789");
+    if (s[digits] == '.')
+        digits += 1 + strspn(s + digits + 1, "0123456789");
+    if (digits == 0 || (digits == 1 && s[0] == '.'))
+        return false;
+    char number[64];
+    if (digits >= sizeof number)
+        return false;
+    memcpy(number, s, digits);
+    number[digits] = '\0';
+    *out = strtod(number, NULL);
+    *p = s + digits;
+    return true;
+}
+
+bool cli_parse_scale(const char *option, const char *text, double *out)
+{
+    const char *p = text;
+    double numerator, denominator = 1.0;
+    bool ok = parse_unsigned_decimal(&p, &numerator);
+    if (ok && *p == '/') {
+        p++;
+        ok = parse_unsigned_decimal(&p, &denominator);
+    }
+    if (!ok || *p != '\0') {
+        cli_error("%s: expected a render scale in (0, 1], a fraction such as 3/4 or a decimal such as 0.75, "
+                  "got '%s'",
+                  option, text);
+        return false;
+    }
+    double scale = denominator > 0.0 ? numerator / denominator : INFINITY;
+    tess_error err = {{0}};
+    if (!upscale_scale_validate(scale, &err)) {
+        cli_error("%s: '%s' is %s: a render scale must be in (0, 1] (a fraction of the output size)", option,
+                  text, denominator > 0.0 ? (scale > 1.0 ? "more than 1" : "0") : "a division by 0");
+        return false;
+    }
+    *out = scale;
     return true;
 }
 

@@ -14,6 +14,7 @@
 #include "engine/scene.h"
 #include "option_check.h"
 #include "wall/display.h"
+#include "wall/display_upscale.h"
 #include "wall/drm.h"
 #include "wall/session.h"
 #include "wall/wall_headless.h"
@@ -45,6 +46,9 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     snprintf(s->channels[0].display, sizeof s->channels[0].display, "%s", display);
     snprintf(s->channels[0].out, sizeof s->channels[0].out, "%s", out ? out : "");
     cli_input_spec_default(&s->input);
+    s->render_scale = 1.0;
+    s->upscale = UPSCALE_BILINEAR;
+    snprintf(s->render_scale_text, sizeof s->render_scale_text, "1");
 }
 
 /* ---------------------------------------------------------------- the config file */
@@ -457,6 +461,10 @@ void cli_pipeline_usage(FILE *f)
  * by cli_pipeline_release_outputs). */
 static drm_card *active_card;
 static session *active_session;
+/* The upscaling displays of the pipeline cli_pipeline_create made (owned by
+ * it; forgotten by cli_pipeline_release_outputs, after pipeline_destroy). */
+static image_display *upscale_displays[PIPELINE_MAX_CHANNELS];
+static int upscale_display_count;
 
 /* The wall cli_pipeline_create laid out (for input: where each output is). */
 static struct {
@@ -494,6 +502,21 @@ void cli_pipeline_release_outputs(void)
     session_close(active_session);
     active_session = NULL;
     active_layout.valid = false;
+    upscale_display_count = 0;
+}
+
+bool cli_pipeline_upscale_time(uint64_t *frames, double *upscale_s)
+{
+    *frames = 0;
+    *upscale_s = 0.0;
+    for (int i = 0; i < upscale_display_count; i++) {
+        uint64_t n;
+        double t;
+        display_upscale_time(upscale_displays[i], &n, &t);
+        *frames += n;
+        *upscale_s += t;
+    }
+    return upscale_display_count > 0;
 }
 
 /* Open the card, match the wall's outputs to its connectors (which resolves
@@ -600,6 +623,7 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
 {
     tess_error err = {{0}};
     pipeline_config cfg = cli_pipeline_config(s, cs);
+    upscale_display_count = 0;
     pipeline *p = pipeline_create(&cfg, &err);
     if (!p) {
         cli_error("%s", err.msg);
@@ -622,7 +646,21 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
             return NULL;
         }
         image_display *d = display_create(ch->display, ch->out, s->frames != 1, &err);
-        if (!d || pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) < 0) {
+        int added;
+        if (!d || s->render_scale >= 1.0) {
+            added = d ? pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) : -1;
+        } else {
+            /* the reduced image covers the same plane: the output's aspect, the whole window */
+            int low_w = upscale_low_res_px(ch->width_px, s->render_scale);
+            int low_h = upscale_low_res_px(ch->height_px, s->render_scale);
+            d = display_upscale_create(d, low_w, low_h, ch->width_px, ch->height_px, s->upscale, &err);
+            if (d)
+                upscale_displays[upscale_display_count++] = d;
+            added = d ? pipeline_add_channel_window(p, &cam, (float)ch->width_px / (float)ch->height_px,
+                                                    CAMERA_WINDOW_FULL, low_w, low_h, d, &err)
+                      : -1;
+        }
+        if (added < 0) {
             cli_error("channel %d: %s", i, err.msg);
             pipeline_destroy(p);
             return NULL;

@@ -12,6 +12,7 @@
 #include "cli.h"
 #include "engine/camera_path.h"
 #include "engine/pipeline.h"
+#include "engine/upscale.h"
 #include "input_cli.h"
 #include "input/source.h"
 
@@ -46,6 +47,12 @@ typedef struct cli_pipeline_spec {
     char card_path[CLI_PATTERN_BYTES];   /* --card: the DRM card for display drm, "" = the first connected */
     bool display_given, frames_given, time_given; /* on the command line or in --config */
     cli_input_spec input;        /* --input ..., the config's "input" object */
+    /* render --scale / --upscale (engine/upscale.h): every channel but a wall's renders at
+     * render_scale of its size, the same view, and is upscaled with `upscale` before its
+     * display sees it; 1 (nothing scaled) for the other commands */
+    double render_scale;         /* (0, 1] */
+    upscale_filter upscale;
+    char render_scale_text[32];  /* as given ("3/4"), for messages; "1" by default */
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
@@ -90,6 +97,11 @@ int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_are
 struct session *cli_pipeline_session(void);
 /* The DRM card cli_pipeline_create opened for a wall, else NULL. */
 struct drm_card *cli_pipeline_card(void);
+
+/* With render_scale < 1: the frames cli_pipeline_create's upscaling displays
+ * have upscaled and their time in seconds, summed over channels (false when
+ * there are none). While the pipeline exists and does not run. */
+bool cli_pipeline_upscale_time(uint64_t *frames, double *upscale_s);
 
 /* Release what cli_pipeline_create opened besides the pipeline (a DRM card:
  * its CRTCs are restored): after pipeline_destroy. */
