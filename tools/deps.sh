@@ -2,8 +2,9 @@
 # deps.sh - make sure the Debian packages tessera builds against are installed.
 # As root: installs what is missing with apt-get (and says so).
 # Otherwise: prints the exact apt-get line and fails.
-# Usage: tools/deps.sh [--bench | --fuzz]   (--bench adds Embree, for the peer comparison;
-#        --fuzz adds clang and its libFuzzer runtime, for make fuzz: tests/fuzz/README.md)
+# Usage: tools/deps.sh [--bench | --fuzz | --report]   (--bench adds Embree, for the peer
+#        comparison; --fuzz adds clang and its libFuzzer runtime, for make fuzz:
+#        tests/fuzz/README.md; --report adds gnuplot, for make report's plots)
 set -eu
 
 PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libseat-dev libinput-dev libevdev-dev \
@@ -16,6 +17,11 @@ fi
 # bookworm's clang is clang-14; libclang_rt.fuzzer*.a comes with libclang-rt-14-dev
 if [ "${1:-}" = "--fuzz" ]; then
     PACKAGES="$PACKAGES clang libclang-rt-14-dev"
+fi
+
+# gnuplot without X (its png/pngcairo terminals): the plots of make report (tools/report/)
+if [ "${1:-}" = "--report" ]; then
+    PACKAGES="$PACKAGES gnuplot-nox"
 fi
 
 missing=""
