@@ -199,6 +199,18 @@ bench-pipeline: deps
 	$(MAKE) tessera
 	sh tools/bench_pipeline.sh
 
+# the speed-against-error report (README "Speed against error: make report"): REPORT.md and
+# report/*.png from tools/report/report.sh, one section per quality knob (tools/report/knob_*.sh);
+# REPORT_SIZE, REPORT_RUNS, REPORT_FRAMES, REPORT_THREADS tune it. report_img averages renders
+# into the reference and cuts the crops.
+.PHONY: report
+$(BUILD)/report_img: $(BUILD)/tools/report/report_img.o $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(BUILD)/tools/report/report_img.o $(LIB) $(LDLIBS)
+report:
+	@sh tools/deps.sh --report
+	$(MAKE) tessera $(BUILD)/report_img
+	sh tools/report/report.sh
+
 clean:
 	rm -rf build build-asan build-tsan tessera tessera-asan out
 
