@@ -1,0 +1,318 @@
+# lib.sh - what every knob of the speed-against-error report shares
+# (sourced by tools/report/report.sh; POSIX sh). A knob file
+# (tools/report/knob_NAME.sh) calls these:
+#
+#   report_curve KNOB SCENE LABEL=ARGS...   measure one curve on one scene
+#       (ARGS: tessera render options, '~' for each space between them):
+#       per setting an image (EXR, linear) compared with the scene's
+#       reference (error and FLIP map), and REPORT_RUNS timed runs taken in
+#       turn over the settings; appends rows to $WORK/KNOB.tsv
+#   report_plot KNOB METRIC YLABEL TITLE [ALONE]  gnuplot: frame time
+#       against one error column for every scene, points labelled with their
+#       setting, joined in the order measured (but for setting ALONE)
+#   report_knee KNOB SCENE METRIC           sets KNEE to the setting at the knee
+#   report_crops KNOB SCENE A B             side-by-side crops of settings A, B
+#   report_row KNOB SCENE SETTING           sets MS FLIP RMSE ... of one row
+#
+# Conventions: every function that runs a program goes through report_run,
+# which stops the whole report, naming the command, when it fails; nothing
+# is written outside $WORK until report.sh has every section (no half report).
+# Results go into variables, not stdout, so no failure is lost in a $(...).
+
+# Stop with a message; $WORK (with the logs) is kept for a look.
+report_fail()
+{
+    echo "report: $*" >&2
+    # a reference half made is never cached
+    [ -z "${rr_tmp:-}" ] || rm -rf "$rr_tmp"
+    if [ -d "${WORK:-}" ]; then
+        echo "report: REPORT.md and report/ not written (the previous ones are untouched); work files in $WORK" >&2
+    else
+        echo "report: REPORT.md and report/ not written (the previous ones are untouched)" >&2
+    fi
+    exit 1
+}
+
+# Run a command; its stdout goes to $WORK/cmd.out, stderr to $WORK/cmd.err
+# (and both are appended to $WORK/report.log). On failure: stop, naming it.
+report_run()
+{
+    echo "+ $*" >> "$WORK/report.log"
+    code=0
+    "$@" > "$WORK/cmd.out" 2> "$WORK/cmd.err" || code=$?
+    cat "$WORK/cmd.out" "$WORK/cmd.err" >> "$WORK/report.log"
+    if [ "$code" -ne 0 ]; then
+        echo "report: this command failed (exit $code):" >&2
+        echo "  $*" >&2
+        sed 's/^/  | /' "$WORK/cmd.err" | tail -n 8 >&2
+        report_fail "stopped"
+    fi
+}
+
+# key=value field of a one-line record.
+report_field() { # line key
+    echo "$1" | tr ' ' '\n' | sed -n "s/^$2=//p"
+}
+
+# Median of the numbers given (the mean of the middle two for an even count).
+report_median()
+{
+    printf '%s\n' "$@" | sort -g | awk '{ v[NR] = $1 } END {
+        if (NR % 2) print v[(NR + 1) / 2]; else printf "%.2f\n", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'
+}
+
+# The scene argument of a scene label (report.sh registers them in SCENES).
+report_scene_arg() { # label
+    eval "echo \"\$SCENE_ARG_$1\""
+}
+
+# One timed run: mean frame time (ms) of REPORT_FRAMES frames rendered to the
+# null display (no image writing; pipeline_run's wall time, so neither process
+# start, scene load nor BVH build), into MS_RUN.
+report_time_run() { # scene_arg, then render options
+    rt_scene=$1
+    shift
+    report_run "$TESSERA" render --scene "$rt_scene" --size "$SIZE" --threads "$THREADS" --frames "$FRAMES" \
+        --display null "$@"
+    MS_RUN=$(sed -n 's/.*(\([0-9.]*\) ms\/frame.*/\1/p' "$WORK/cmd.out")
+    [ -n "$MS_RUN" ] || report_fail "no 'ms/frame' in the output of: $TESSERA render ... $*"
+}
+
+# The reference of a scene: REFERENCE_RENDERS renders of jittered:REFERENCE_K
+# (seeds 1..N: the curves use seed 0) averaged by report_img mean, cached in
+# $CACHE under a key of the scene, the size, the recipe and the sources that
+# make the picture (engine/, tools/cli/, wall/: committed state and any
+# uncommitted diff). Also the two halves (seeds 1..N/2 against the rest)
+# compared, which bounds how far the reference itself is from converged.
+# Sets REF (path) and REF_HALVES (tessera compare's line for the halves).
+report_reference() { # scene label
+    rr_label=$1
+    rr_scene=$(report_scene_arg "$rr_label")
+    if [ "$rr_scene" = default ]; then
+        rr_scene_key=default
+    else
+        rr_scene_key=$(sha256sum "$rr_scene" | cut -c1-16)
+    fi
+    if git rev-parse --git-dir > /dev/null 2>&1; then
+        rr_src_key=$({ git ls-files -s engine tools/cli wall; git diff HEAD -- engine tools/cli wall; } | sha256sum | cut -c1-16)
+    else
+        rr_src_key=$(sha256sum "$TESSERA" | cut -c1-16)
+    fi
+    rr_dir=$CACHE/$rr_label-$SIZE-j${REFERENCE_K}x$REFERENCE_RENDERS-$rr_scene_key-$rr_src_key
+    if [ ! -f "$rr_dir/reference.exr" ]; then
+        echo "report: reference for $rr_label at $SIZE: $REFERENCE_RENDERS x jittered:$REFERENCE_K (not cached yet)" >&2
+        mkdir -p "$CACHE"
+        rr_tmp=$(mktemp -d "$CACHE/.new.XXXXXX")
+        rr_start=$(date +%s)
+        rr_seeds=""
+        rr_n=1
+        while [ "$rr_n" -le "$REFERENCE_RENDERS" ]; do
+            printf '{"sampler": {"name": "jittered", "k": %d, "seed": %d}}\n' "$REFERENCE_K" "$rr_n" > "$rr_tmp/seed$rr_n.json"
+            report_run "$TESSERA" render --config "$rr_tmp/seed$rr_n.json" --scene "$rr_scene" --size "$SIZE" \
+                --threads "$THREADS" --out "$rr_tmp/seed$rr_n.exr"
+            rr_seeds="$rr_seeds $rr_tmp/seed$rr_n.exr"
+            rr_n=$((rr_n + 1))
+        done
+        rr_half=$((REFERENCE_RENDERS / 2))
+        # shellcheck disable=SC2086
+        set -- $rr_seeds
+        rr_first="" rr_second=""
+        rr_n=1
+        for rr_f in "$@"; do
+            if [ "$rr_n" -le "$rr_half" ]; then rr_first="$rr_first $rr_f"; else rr_second="$rr_second $rr_f"; fi
+            rr_n=$((rr_n + 1))
+        done
+        # shellcheck disable=SC2086
+        report_run "$REPORT_IMG" mean "$rr_tmp/reference.exr" "$@"
+        # shellcheck disable=SC2086
+        report_run "$REPORT_IMG" mean "$rr_tmp/half_a.exr" $rr_first
+        # shellcheck disable=SC2086
+        report_run "$REPORT_IMG" mean "$rr_tmp/half_b.exr" $rr_second
+        report_run "$TESSERA" compare "$rr_tmp/half_a.exr" "$rr_tmp/half_b.exr" --threads "$THREADS"
+        cp "$WORK/cmd.out" "$rr_tmp/halves.txt"
+        echo "$(($(date +%s) - rr_start))" > "$rr_tmp/seconds.txt"
+        rm -f "$rr_tmp"/seed* "$rr_tmp"/half_*.exr
+        rm -rf "$rr_dir"
+        mv "$rr_tmp" "$rr_dir"
+        rr_tmp=""
+    fi
+    REF=$rr_dir/reference.exr
+    REF_HALVES=$(cat "$rr_dir/halves.txt")
+    REF_SECONDS=$(cat "$rr_dir/seconds.txt")
+}
+
+# Measure one knob's curve on one scene (see the top of this file). Rows of
+# $WORK/KNOB.tsv: scene setting ms_median ms_min ms_max flip_mean flip_median
+# flip_q3 rmse psnr; images in $WORK/img/KNOB-SCENE-SETTING.exr, FLIP maps
+# beside them (-map.png).
+report_curve() { # knob scene label=args...
+    rc_knob=$1
+    rc_label=$2
+    shift 2
+    rc_scene=$(report_scene_arg "$rc_label")
+    report_reference "$rc_label"
+    mkdir -p "$WORK/img" "$WORK/times"
+    for rc_setting in "$@"; do
+        rc_name=${rc_setting%%=*}
+        rc_args=$(echo "${rc_setting#*=}" | tr '~' ' ')
+        echo "report: $rc_knob, $rc_label, $rc_name: image and error" >&2
+        rc_img=$WORK/img/$rc_knob-$rc_label-$rc_name
+        # shellcheck disable=SC2086
+        report_run "$TESSERA" render --scene "$rc_scene" --size "$SIZE" --threads "$THREADS" --out "$rc_img.exr" $rc_args
+        report_run "$TESSERA" compare "$REF" "$rc_img.exr" --map "$rc_img-map.png" --threads "$THREADS"
+        cp "$WORK/cmd.out" "$rc_img.compare"
+        : > "$WORK/times/$rc_knob-$rc_label-$rc_name"
+    done
+    # runs in turn over the settings, so a slow spell of the machine spreads over all of them
+    rc_run=1
+    while [ "$rc_run" -le "$RUNS" ]; do
+        echo "report: $rc_knob, $rc_label: timed run $rc_run of $RUNS" >&2
+        for rc_setting in "$@"; do
+            rc_name=${rc_setting%%=*}
+            # shellcheck disable=SC2046
+            report_time_run "$rc_scene" $(echo "${rc_setting#*=}" | tr '~' ' ')
+            echo "$MS_RUN" >> "$WORK/times/$rc_knob-$rc_label-$rc_name"
+        done
+        rc_run=$((rc_run + 1))
+    done
+    for rc_setting in "$@"; do
+        rc_name=${rc_setting%%=*}
+        # shellcheck disable=SC2046
+        set -- $(cat "$WORK/times/$rc_knob-$rc_label-$rc_name")
+        rc_ms=$(report_median "$@")
+        rc_lo=$(printf '%s\n' "$@" | sort -g | head -n 1)
+        rc_hi=$(printf '%s\n' "$@" | sort -g | tail -n 1)
+        rc_line=$(cat "$WORK/img/$rc_knob-$rc_label-$rc_name.compare")
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$rc_label" "$rc_name" "$rc_ms" "$rc_lo" "$rc_hi" \
+            "$(report_field "$rc_line" flip_mean)" "$(report_field "$rc_line" flip_median)" \
+            "$(report_field "$rc_line" flip_q3)" "$(report_field "$rc_line" rmse)" "$(report_field "$rc_line" psnr)" \
+            >> "$WORK/$rc_knob.tsv"
+    done
+}
+
+# The values of one row: MS MS_LO MS_HI FLIP FLIP_MEDIAN FLIP_Q3 RMSE PSNR.
+report_row() { # knob scene setting
+    row=$(awk -F '\t' -v s="$2" -v n="$3" '$1 == s && $2 == n' "$WORK/$1.tsv")
+    [ -n "$row" ] || report_fail "no measurement of $3 on $2 for $1"
+    MS=$(echo "$row" | cut -f3)
+    MS_LO=$(echo "$row" | cut -f4)
+    MS_HI=$(echo "$row" | cut -f5)
+    FLIP=$(echo "$row" | cut -f6)
+    FLIP_MEDIAN=$(echo "$row" | cut -f7)
+    FLIP_Q3=$(echo "$row" | cut -f8)
+    RMSE=$(echo "$row" | cut -f9)
+    PSNR=$(echo "$row" | cut -f10)
+}
+
+# Column of a metric in KNOB.tsv.
+report_metric_column() {
+    case $1 in
+        flip) echo 6 ;;
+        rmse) echo 9 ;;
+        *) report_fail "report_metric_column: unknown metric '$1'" ;;
+    esac
+}
+
+# The knee of a scene's curve for a metric, into KNEE: the point farthest
+# below the straight line from the fastest to the slowest point, with frame
+# time and error each scaled to [0, 1] over the curve (Satopää et al. 2011,
+# "Kneedle"). The fastest point when no point lies below that line.
+report_knee() { # knob scene metric
+    rk_col=$(report_metric_column "$3")
+    KNEE=$(awk -F '\t' -v s="$2" -v c="$rk_col" '$1 == s { n++; name[n] = $2; x[n] = $3; y[n] = $c }
+        END {
+            if (n == 0) exit 1
+            lo = 1; hi = 1
+            for (i = 1; i <= n; i++) { if (x[i] < x[lo]) lo = i; if (x[i] > x[hi]) hi = i }
+            ymin = y[1]; ymax = y[1]
+            for (i = 1; i <= n; i++) { if (y[i] < ymin) ymin = y[i]; if (y[i] > ymax) ymax = y[i] }
+            dx = x[hi] - x[lo]; dy = ymax - ymin
+            if (dx <= 0 || dy <= 0) { print name[lo]; exit }
+            best = lo; bestd = 0
+            for (i = 1; i <= n; i++) {
+                u = (x[i] - x[lo]) / dx; v = (y[i] - ymin) / dy
+                line = (y[lo] - ymin) / dy + u * ((y[hi] - y[lo]) / dy)
+                if (line - v > bestd) { bestd = line - v; best = i }
+            }
+            print name[best]
+        }' "$WORK/$1.tsv") || report_fail "report_knee: no rows for $2 in $1"
+}
+
+# Plot frame time (x) against one error column (y): one series per scene,
+# each point labelled with its setting, the points joined in the order
+# measured except setting ALONE (a point apart: another kind of setting);
+# log axes where the values span a decade or more. Writes
+# $WORK/plots/KNOB_METRIC.png.
+report_plot() { # knob metric ylabel title [alone]
+    rp_knob=$1
+    rp_col=$(report_metric_column "$2")
+    mkdir -p "$WORK/plots"
+    rp_gp=$WORK/plots/$rp_knob-$2.gp
+    {
+        echo "set terminal $GNUPLOT_TERM size 900,600"
+        echo "set output '$WORK/plots/${rp_knob}_$2.png'"
+        echo "set title \"$4\""
+        echo "set xlabel 'frame time (ms, median of $RUNS runs, $THREADS threads, $SIZE)'"
+        echo "set ylabel \"$3\""
+        echo "set grid"
+        echo "set key top right"
+        echo "set offsets graph 0.05, graph 0.12, graph 0.08, graph 0.08"
+        [ "$(report_plot_span "$rp_knob" 3)" = log ] && echo "set logscale x"
+        [ "$(report_plot_span "$rp_knob" "$rp_col")" = log ] && echo "set logscale y"
+        printf 'plot '
+        rp_side=1
+        for rp_scene in $(cut -f1 "$WORK/$rp_knob.tsv" | awk '!seen[$0]++'); do
+            rp_dat=$WORK/plots/$rp_knob-$rp_scene.dat
+            # labels to the right of the first scene's points, to the left of the next one's, and so
+            # on: series of similar settings lie side by side; a blank line (gnuplot: break the
+            # line) around the setting that stands apart
+            awk -F '\t' -v s="$rp_scene" -v c="$rp_col" -v alone="${5:-}" '$1 == s {
+                    n++
+                    if ($2 == alone && n > 1) print ""
+                    print $3, $c, $2
+                    if ($2 == alone) print ""
+                }' "$WORK/$rp_knob.tsv" > "$rp_dat"
+            printf "'%s' using 1:2 with linespoints pointtype 7 title '%s', " "$rp_dat" "$rp_scene"
+            if [ "$rp_side" -gt 0 ]; then
+                printf "'%s' using 1:2:3 with labels left offset char 1,0 notitle, " "$rp_dat"
+            else
+                printf "'%s' using 1:2:3 with labels right offset char -1,0 notitle, " "$rp_dat"
+            fi
+            rp_side=$((-rp_side))
+        done | sed 's/, $//'
+        echo
+    } > "$rp_gp"
+    report_run "$GNUPLOT" "$rp_gp"
+}
+
+# "log" when a column of KNOB.tsv spans a decade or more (max / min >= 10).
+report_plot_span() { # knob column
+    awk -F '\t' -v c="$2" 'NR == 1 || $c < lo { lo = $c } NR == 1 || $c > hi { hi = $c }
+        END { if (lo > 0 && hi / lo >= 10) print "log" }' "$WORK/$1.tsv"
+}
+
+# A side-by-side crop of two settings of a knob on a scene, with their FLIP
+# maps, around where setting A differs most from the reference: row 1 the
+# reference, A, B; row 2 nothing, A's map, B's map. Sets CROP (file name in
+# report/), CROP_X, CROP_Y, CROP_PX, CROP_ZOOM.
+report_crops() { # knob scene A B
+    rx_knob=$1
+    rx_label=$2
+    report_reference "$rx_label"
+    rx_height=${SIZE#*x}
+    rx_width=${SIZE%x*}
+    CROP_PX=$((CROP_AT_1080 * rx_height / 1080 / 8 * 8))
+    [ "$CROP_PX" -ge 32 ] || CROP_PX=32
+    [ "$CROP_PX" -le "$rx_height" ] && [ "$CROP_PX" -le "$rx_width" ] || report_fail "$SIZE is too small for a crop"
+    CROP_ZOOM=$((CROP_AT_1080 / CROP_PX))
+    [ "$CROP_ZOOM" -ge 1 ] || CROP_ZOOM=1
+    rx_a=$WORK/img/$rx_knob-$rx_label-$3
+    rx_b=$WORK/img/$rx_knob-$rx_label-$4
+    report_run "$REPORT_IMG" region "$CROP_PX" "$REF" "$rx_a.exr"
+    CROP_X=$(cut -d' ' -f1 "$WORK/cmd.out")
+    CROP_Y=$(cut -d' ' -f2 "$WORK/cmd.out")
+    mkdir -p "$WORK/plots"
+    CROP=${rx_knob}_crop_$rx_label.png
+    report_run "$REPORT_IMG" montage "$WORK/plots/$CROP" "$CROP_X" "$CROP_Y" "$CROP_PX" "$CROP_ZOOM" 3 \
+        "$REF" "$rx_a.exr" "$rx_b.exr" - "$rx_a-map.png" "$rx_b-map.png"
+}
