@@ -420,6 +420,9 @@ embree_version=${embree_kv#embree=}
     echo "least as fast as the best of Embree's single-ray and 8- and 16-wide packet modes on the same"
     echo "machine. In this run $met of $rows rows meet it."
     echo
+    echo "Speed against error (frame time against image error for each quality knob: antialiasing,"
+    echo "and the knobs later issues add) is measured apart: REPORT.md, written by \`make report\`."
+    echo
     echo "- date: $run_date; $ROUNDS round(s), $FRAMES timed frames per run$(
         [ "$QUICK" = 1 ] && echo ' (BENCH_QUICK=1 smoke run)')"
     echo "- the whole run took $(min_s "$total_s"): $(min_s $((RUN_MS / 1000))) in the measured programs"
