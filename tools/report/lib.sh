@@ -14,6 +14,9 @@
 #   report_crops KNOB SCENE A B             side-by-side crops of settings A, B
 #   report_row KNOB SCENE SETTING           sets MS FLIP RMSE ... of one row
 #
+# shellcheck shell=sh disable=SC2034
+# (SC2034: the variables set here are read by report.sh and the knob files)
+#
 # Conventions: every function that runs a program goes through report_run,
 # which stops the whole report, naming the command, when it fails; nothing
 # is written outside $WORK until report.sh has every section (no half report).
@@ -303,7 +306,9 @@ report_crops() { # knob scene A B
     rx_width=${SIZE%x*}
     CROP_PX=$((CROP_AT_1080 * rx_height / 1080 / 8 * 8))
     [ "$CROP_PX" -ge 32 ] || CROP_PX=32
-    [ "$CROP_PX" -le "$rx_height" ] && [ "$CROP_PX" -le "$rx_width" ] || report_fail "$SIZE is too small for a crop"
+    if [ "$CROP_PX" -gt "$rx_height" ] || [ "$CROP_PX" -gt "$rx_width" ]; then
+        report_fail "$SIZE is too small for a $CROP_PX px crop"
+    fi
     CROP_ZOOM=$((CROP_AT_1080 / CROP_PX))
     [ "$CROP_ZOOM" -ge 1 ] || CROP_ZOOM=1
     rx_a=$WORK/img/$rx_knob-$rx_label-$3
