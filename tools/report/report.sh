@@ -21,6 +21,8 @@
 #   REPORT_KEEP        1: keep the work directory after a good run [0]
 #   TESSERA_SHARED     the shared data (meshes) [../shared]; scenes missing there are skipped
 #   GNUPLOT            the gnuplot program [gnuplot]
+# shellcheck disable=SC2034,SC2154
+# (SC2034, SC2154: the per-scene SCENE_ARG_x, SCENE_NOTE_x are read back through eval)
 set -eu
 
 cd "$(dirname "$0")/../.."
@@ -74,6 +76,7 @@ for k in $RUN_KNOBS; do
         *) report_fail "REPORT_KNOBS: unknown knob '$k' (known: $KNOBS)" ;;
     esac
     [ -f "tools/report/knob_$k.sh" ] || report_fail "tools/report/knob_$k.sh missing"
+    # shellcheck source=tools/report/knob_antialiasing.sh
     . "tools/report/knob_$k.sh"
 done
 for tool in awk sed sort sha256sum mktemp; do
