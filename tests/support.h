@@ -54,22 +54,29 @@ static inline void support_read_text(const char *path, char *out, size_t out_byt
         fclose(f);
 }
 
-/* Run `tessera bench ARGS` with a time limit, stdout and stderr kept apart
- * (dir/bench.out, dir/bench.err, copied to out and err, out_bytes each);
+/* Run `tessera COMMAND ARGS` with a time limit, stdout and stderr kept apart
+ * (dir/COMMAND.out, dir/COMMAND.err, copied to out and err, out_bytes each);
  * every %s in args_fmt (up to 4) is `dir`. The exit status (128+signal). */
-static inline int support_tessera_bench(const char *dir, int timeout_s, char *out, char *err, size_t out_bytes,
-                                        const char *args_fmt)
+static inline int support_tessera_split(const char *dir, int timeout_s, char *out, char *err, size_t out_bytes,
+                                        const char *command, const char *args_fmt)
 {
     char args[2048], cmd[4096], out_path[512], err_path[512];
     snprintf(args, sizeof args, args_fmt, dir, dir, dir, dir);
-    snprintf(out_path, sizeof out_path, "%s/bench.out", dir);
-    snprintf(err_path, sizeof err_path, "%s/bench.err", dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s bench %s > '%s' 2> '%s'", timeout_s, support_tessera_bin(), args,
+    snprintf(out_path, sizeof out_path, "%s/%s.out", dir, command);
+    snprintf(err_path, sizeof err_path, "%s/%s.err", dir, command);
+    snprintf(cmd, sizeof cmd, "timeout %d %s %s %s > '%s' 2> '%s'", timeout_s, support_tessera_bin(), command, args,
              out_path, err_path);
     int code = support_run(cmd);
     support_read_text(out_path, out, out_bytes);
     support_read_text(err_path, err, out_bytes);
     return code;
+}
+
+/* `tessera bench ARGS`, as support_tessera_split. */
+static inline int support_tessera_bench(const char *dir, int timeout_s, char *out, char *err, size_t out_bytes,
+                                        const char *args_fmt)
+{
+    return support_tessera_split(dir, timeout_s, out, err, out_bytes, "bench", args_fmt);
 }
 
 /* Run `tessera ARGS` with a time limit; every %s in args_fmt (up to 8) is

@@ -50,16 +50,7 @@ TestSuite(compare_cli, .init = setup, .fini = teardown, .timeout = 120);
 /* Run `tessera compare ARGS` (every %s is dir); stdout to out, stderr to err. The exit status. */
 static int compare(char *out, char *err, const char *args_fmt)
 {
-    char args[2048], cmd[4096], out_path[512], err_path[512];
-    snprintf(args, sizeof args, args_fmt, dir, dir, dir, dir);
-    snprintf(out_path, sizeof out_path, "%s/compare.out", dir);
-    snprintf(err_path, sizeof err_path, "%s/compare.err", dir);
-    snprintf(cmd, sizeof cmd, "timeout %d %s compare %s > '%s' 2> '%s'", RUN_TIMEOUT_S, support_tessera_bin(), args,
-             out_path, err_path);
-    int code = support_run(cmd);
-    support_read_text(out_path, out, OUT_BYTES);
-    support_read_text(err_path, err, OUT_BYTES);
-    return code;
+    return support_tessera_split(dir, RUN_TIMEOUT_S, out, err, OUT_BYTES, "compare", args_fmt);
 }
 
 /* `tessera compare ARGS` fails with `code`, prints nothing on stdout and
