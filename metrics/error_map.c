@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/srgb.h"
+
 /* matplotlib's magma at 0, 1/8, ..., 1 (sRGB-encoded). */
 #define MAGMA_SAMPLES 9
 static const double magma_srgb[MAGMA_SAMPLES][3] = {
@@ -51,12 +53,10 @@ void error_map_color_srgb(double value, double srgb[3])
         srgb[c] = magma_srgb[i][c] + f * (magma_srgb[i + 1][c] - magma_srgb[i][c]);
 }
 
-static double srgb_to_linear(double e) { return e <= 0.04045 ? e / 12.92 : pow((e + 0.055) / 1.055, 2.4); }
-
 static void put_srgb(float *px, const double srgb[3])
 {
     for (int c = 0; c < 3; c++)
-        px[c] = (float)srgb_to_linear(srgb[c]);
+        px[c] = (float)srgb_curve_decode(srgb[c]);
 }
 
 /* Fill the rectangle [x0, x1) x [y0, y1) of a W-wide picture, clipped to it. */

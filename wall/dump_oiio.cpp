@@ -7,6 +7,7 @@
  * write is removed so a partial frame is never mistaken for a good one. */
 
 #include "engine/err.h"
+#include "engine/srgb.h"
 #include "wall/dump.h"
 
 #include <OpenImageIO/filesystem.h>
@@ -43,7 +44,7 @@ int srgb_encode_exact(float linear)
     if (linear >= 1.0f)
         return 255;
     double x = linear;
-    double v = x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1.0 / 2.4) - 0.055;
+    double v = srgb_curve_encode(x);
     double code = std::floor(v * 255.0 + 0.5);
     return code < 0.0 ? 0 : code > 255.0 ? 255 : (int)code;
 }
@@ -61,7 +62,7 @@ struct srgb_table {
              * float to the exact first value the reference rounds above k
              * (the reference is monotone in its input). */
             double v = (k + 0.5) / 255.0;
-            double x = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+            double x = srgb_curve_decode(v);
             float f = (float)x;
             while (f > 0.0f && srgb_encode_exact(std::nextafter(f, 0.0f)) > k)
                 f = std::nextafter(f, 0.0f);
@@ -388,12 +389,6 @@ bool read_rgb(const char *path, OIIO::TypeDesc type, int *width_px, int *height_
     return true;
 }
 
-/* The sRGB decoding curve (IEC 61966-2-1) in double. */
-double srgb_decode(double encoded)
-{
-    return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
-}
-
 bool read_linear_rgb(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
 {
     if (!path || !width_px || !height_px || !rgb_out)
@@ -428,7 +423,7 @@ bool read_linear_rgb(const char *path, int *width_px, int *height_px, float **rg
     }
     std::vector<float> table(65536);
     for (size_t v = 0; v < table.size(); v++)
-        table[v] = (float)srgb_decode((double)v / 65535.0);
+        table[v] = (float)srgb_curve_decode((double)v / 65535.0);
     for (size_t i = 0; i < values; i++)
         rgb.get()[i] = table[codes[i]];
     *rgb_out = rgb.release();

@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "engine/srgb.h"
 #include "wall/dump.h"
 
 #define PI 3.14159265358979323846
@@ -43,8 +44,6 @@ static double normal(void)
     return sqrt(-2.0 * log(u)) * cos(2.0 * PI * v);
 }
 
-static double srgb_decode(double e) { return e <= 0.04045 ? e / 12.92 : pow((e + 0.055) / 1.055, 2.4); }
-static double srgb_encode(double l) { return l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1.0 / 2.4) - 0.055; }
 
 /* Write sRGB code values in [0, 1] (clamped, rounded to 8 bits) as a PNG:
  * dump_write_rgb takes linear RGB and encodes it again, so each value is
@@ -59,7 +58,7 @@ static int write_codes(const char *dir, const char *name, int w, int h, const fl
     }
     for (size_t i = 0; i < n; i++) {
         double c = codes[i] < 0.0f ? 0.0 : codes[i] > 1.0f ? 1.0 : codes[i];
-        linear[i] = (float)srgb_decode(round(c * 255.0) / 255.0);
+        linear[i] = (float)srgb_curve_decode(round(c * 255.0) / 255.0);
     }
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
@@ -121,7 +120,7 @@ static void aa_render(int s, float *codes)
                         sum[c] += rgb[c];
                 }
             for (int c = 0; c < 3; c++)
-                codes[3 * ((size_t)y * AA_W + x) + c] = (float)srgb_encode(sum[c] / (s * s));
+                codes[3 * ((size_t)y * AA_W + x) + c] = (float)srgb_curve_encode(sum[c] / (s * s));
         }
 }
 
