@@ -47,6 +47,8 @@ typedef struct frame_image {
     int channel;             /* index of the channel that rendered it */
     camera_desc camera;      /* the camera it was rendered with */
     uint64_t camera_serial;  /* changes of this channel's camera before this frame (0: the initial one) */
+    double render_scale;     /* the governor's render scale for the frame (1: full size) */
+    int samples;             /* rays per pixel the picture holds (the governor's accumulation; else the sampler's) */
 } frame_image;
 
 typedef struct image_display image_display;

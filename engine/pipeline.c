@@ -78,6 +78,13 @@ typedef struct pipe_channel {
     render_view view;
     overlay_plan overlay; /* the overlay in this channel's pixels (given to the traverser only when
                              something of it falls on them) */
+    bool overlay_on;      /* overlay has something to draw this frame */
+    /* governor only (NULL / unused without one), made by pipeline_run: */
+    float *accum;         /* accumulation buffer, width * height * 3 (render threads, per tile) */
+    float *lowres;        /* a reduced frame, the size of rung 1's (render threads) */
+    render_view lowres_view;              /* frozen like `view`, for reduced frames */
+    upscale_plan *plans[GOVERNOR_RUNGS];  /* [0] unused; read-only once made */
+    uint32_t first_band;  /* reduced frames: this channel's first upscale work item */
 } pipe_channel;
 
 /* What every thread does in the current loop step; written only by the
@@ -104,6 +111,9 @@ typedef struct render_thread {
     double barrier_s;     /* this thread's time at frame barriers so far; its own until run ends */
     double render_stage_s; /* its render stage in the current step: written by this thread, read
                               and cleared by the serial section (the frame barrier orders them) */
+    double upscale_stage_s; /* of which upscaling; the same rules */
+    float *upscale_scratch; /* governor: upscale_plan_rows' scratch, made by the serial section
+                               before the thread's first reduced frame; used only by this thread */
 } render_thread;
 
 /* A barrier whose last arriving thread runs a function before releasing the
@@ -137,6 +147,7 @@ struct pipeline {
     size_t queue_head, queue_count;
     queued_call *oneshots; /* PIPELINE_QUEUE_MAX slots, unordered; due frames ascend within a frame's run */
     size_t oneshot_count;
+    pthread_cond_t queue_changed; /* signalled on every queued call and on stop (an idle step waits on it) */
     bool closed;   /* no more transactions: run has returned */
     bool refusing; /* the last call was refused (logging only the first of a run) */
 
@@ -152,6 +163,29 @@ struct pipeline {
     int threads_wanted;
     bool shadows;
     overlay_state overlay; /* status line and cursor */
+    char user_status[PIPELINE_STATUS_BYTES]; /* the status text asked for (overlay.status adds the
+                                                governor's line to it when that is shown) */
+    bool governor_status_shown;
+    uint64_t picture_serial; /* bumped by every setter that changes what the picture shows */
+    uint64_t overlay_serial; /* bumped by every change of the overlay (status text, cursor) */
+
+    /* the governor: serial section only, except `frame_plan`, `frame_sampler`,
+     * `reduced` and the upscale fields, which render threads read in the
+     * step the serial section prepared */
+    bool governed;
+    governor gov;
+    governor_frame frame_plan;           /* of the frame being rendered */
+    pixel_sampler frame_sampler;         /* its sampler */
+    bool reduced;                        /* the frame renders at a reduced scale */
+    double rung_pixels[GOVERNOR_RUNGS];  /* low-res pixels of every channel at each rung */
+    uint64_t planned_picture_serial, planned_overlay_serial;
+    image_traverser *rung_traversers[GOVERNOR_RUNGS]; /* [0] unused: low-res tiles of each rung */
+    size_t upscale_scratch_floats;       /* the most any plan needs */
+    barrier upscale_barrier;             /* between the low-res tiles and upscaling */
+    uint32_t upscale_items;              /* bands of all active channels this frame */
+    alignas(64) atomic_uint upscale_next; /* next band to hand out; reset by the serial section */
+    alignas(64) double last_upscale_s;   /* serial section: the previous step's longest upscale */
+    double last_step_pixels;             /* serial section: low-res pixels the previous step rendered */
 
     /* the loop */
     barrier frame_barrier, anim_barrier;
@@ -163,6 +197,7 @@ struct pipeline {
     bool ran;              /* pipeline_run was called: its thread only */
     bool exit_after_step;  /* the current step is the last: serial section only */
     uint64_t next_frame;   /* serial section only */
+    uint64_t next_step;    /* serial section only: loop steps that rendered or idled (frames without a governor) */
     double start_s, last_serial_s;
     double last_render_s;  /* serial section only: the previous step's longest render stage */
     queued_call *oneshot_scratch; /* serial section only: due one-shots being run */
@@ -288,6 +323,10 @@ pipeline_config pipeline_config_default(const struct scene *s, const struct acce
     c.sampler = pixel_sampler_single();
     c.renderer = renderer_by_name("raytracer");
     c.shadows = true;
+    c.budget_ms = 0.0;
+    c.still_s = GOVERNOR_DEFAULT_STILL_S;
+    c.refine_k = GOVERNOR_DEFAULT_REFINE_K;
+    c.upscale = UPSCALE_BILINEAR;
     return c;
 }
 
@@ -311,6 +350,19 @@ bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
     if (!pixel_sampler_validate(&cfg->sampler, err)) {
         tess_error_prefix(err, "pipeline: sampler: ");
         return false;
+    }
+    if (cfg->sampler.kind == PIXEL_SAMPLER_STRATUM)
+        return tess_error_set(err, "pipeline: sampler: a stratum sampler is the governor's, not a config's");
+    if (!(cfg->budget_ms >= 0.0) || !isfinite(cfg->budget_ms))
+        return tess_error_set(err, "pipeline: budget_ms: %g is not a time >= 0 (0: no governor)", cfg->budget_ms);
+    if ((unsigned)cfg->upscale > UPSCALE_CLAMPED_CUBIC)
+        return tess_error_set(err, "pipeline: unknown upscale filter %d", (int)cfg->upscale);
+    if (cfg->budget_ms > 0.0) {
+        governor_config g = {cfg->budget_ms * 1e-3, cfg->still_s, cfg->refine_k};
+        if (!governor_config_validate(&g, err)) {
+            tess_error_prefix(err, "pipeline: ");
+            return false;
+        }
     }
     return true;
 }
@@ -338,9 +390,14 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
     p->threads_wanted = cfg->threads;
     p->shadows = cfg->shadows;
     pthread_mutex_init(&p->queue_lock, NULL);
+    pthread_cond_init(&p->queue_changed, NULL);
     pthread_mutex_init(&p->stats_lock, NULL);
     barrier_init(&p->frame_barrier);
     barrier_init(&p->anim_barrier);
+    barrier_init(&p->upscale_barrier);
+    p->frame_plan = (governor_frame){GOVERNOR_FRAME_SCALED, 0, 0, 1};
+    p->frame_sampler = cfg->sampler;
+    atomic_init(&p->upscale_next, 0);
     atomic_init(&p->stop_requested, false);
     atomic_init(&p->running, false);
     p->thread_count = 1;
@@ -355,6 +412,10 @@ static void channel_free(pipe_channel *c)
 {
     for (int b = 0; b < BUFFER_COUNT; b++)
         free(c->buffers[b].rgb);
+    free(c->accum);
+    free(c->lowres);
+    for (int r = 0; r < GOVERNOR_RUNGS; r++)
+        upscale_plan_destroy(c->plans[r]);
     image_display_destroy(c->display);
 }
 
@@ -463,6 +524,7 @@ static bool queue_call(pipeline *p, bool oneshot, uint64_t frame, const char *na
     else
         slot = &p->queue[(p->queue_head + p->queue_count++) % PIPELINE_QUEUE_MAX];
     if (slot) {
+        pthread_cond_broadcast(&p->queue_changed); /* an idle step may be waiting for work */
         slot->fn = fn;
         slot->name = name ? name : "(unnamed)";
         slot->due_frame = frame;
@@ -502,7 +564,13 @@ bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_f
     return queue_call(p, true, frame, name, fn, args, args_bytes);
 }
 
-void pipeline_stop(pipeline *p) { atomic_store(&p->stop_requested, true); }
+void pipeline_stop(pipeline *p)
+{
+    atomic_store(&p->stop_requested, true);
+    pthread_mutex_lock(&p->queue_lock); /* wake an idle step (it checks the flag under this lock) */
+    pthread_cond_broadcast(&p->queue_changed);
+    pthread_mutex_unlock(&p->queue_lock);
+}
 
 bool pipeline_stop_requested(const pipeline *p) { return atomic_load(&p->stop_requested); }
 
@@ -599,6 +667,18 @@ static void apply_cursor(pipeline *p, void *args)
     pipeline_set_cursor(p, a->visible, a->sx, a->sy);
 }
 
+static void apply_governor_status(pipeline *p, void *args)
+{
+    bool shown;
+    memcpy(&shown, args, sizeof shown);
+    pipeline_set_governor_status(p, shown);
+}
+
+bool pipeline_queue_governor_status(pipeline *p, bool shown)
+{
+    return pipeline_transaction(p, "governor status", apply_governor_status, &shown, sizeof shown);
+}
+
 bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy)
 {
     if (!isfinite(sx) || !isfinite(sy)) {
@@ -665,6 +745,38 @@ static bool may_change_state(const pipeline *p, const char *what)
     return false;
 }
 
+/* overlay.status from the status text asked for and, when shown, the
+ * governor's line for the frame being planned; bumps overlay_serial when the
+ * drawn text changes. */
+static void compose_status(pipeline *p)
+{
+    char text[PIPELINE_STATUS_BYTES];
+    if (!p->governor_status_shown)
+        snprintf(text, sizeof text, "%s", p->user_status);
+    else {
+        char line[PIPELINE_STATUS_BYTES];
+        if (p->governed)
+            governor_describe(&p->gov, &p->frame_plan, line, sizeof line);
+        else
+            snprintf(line, sizeof line, "governor: off (no frame budget)");
+        /* the asked-for text first, the governor's line after it, cut at the end */
+        size_t used = strlen(p->user_status);
+        memcpy(text, p->user_status, used + 1);
+        if (used && used + 3 < sizeof text) {
+            memcpy(text + used, " | ", 4);
+            used += 3;
+        }
+        size_t room = sizeof text - 1 - used, n = strnlen(line, room);
+        memcpy(text + used, line, n);
+        text[used + n] = '\0';
+    }
+    char before[PIPELINE_STATUS_BYTES];
+    memcpy(before, p->overlay.status, sizeof before);
+    overlay_set_status(&p->overlay, text);
+    if (strcmp(before, p->overlay.status) != 0)
+        p->overlay_serial++;
+}
+
 bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera)
 {
     if (!may_change_state(p, "camera change"))
@@ -680,6 +792,7 @@ bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera)
     }
     p->channels[channel].camera = *camera;
     p->channels[channel].camera_serial++;
+    p->picture_serial++;
     return true;
 }
 
@@ -691,6 +804,8 @@ bool pipeline_set_channel_active(pipeline *p, int channel, bool active)
         log_error("pipeline: switching channel %d: there are %d channels", channel, p->channel_count);
         return false;
     }
+    if (active != p->channels[channel].active)
+        p->picture_serial++;
     p->channels[channel].active = active;
     return true;
 }
@@ -720,9 +835,21 @@ bool pipeline_set_status(pipeline *p, const char *text)
         log_error("pipeline: status line: no text (\"\" hides the line)");
         return false;
     }
-    overlay_set_status(&p->overlay, text);
+    snprintf(p->user_status, sizeof p->user_status, "%s", text);
+    compose_status(p);
     return true;
 }
+
+bool pipeline_set_governor_status(pipeline *p, bool shown)
+{
+    if (!may_change_state(p, "governor status change"))
+        return false;
+    p->governor_status_shown = shown;
+    compose_status(p);
+    return true;
+}
+
+governor_frame pipeline_governor_frame(const pipeline *p) { return p->frame_plan; }
 
 const char *pipeline_status(const pipeline *p) { return p->overlay.status; }
 
@@ -734,6 +861,8 @@ bool pipeline_set_cursor(pipeline *p, bool visible, float sx, float sy)
         log_error("pipeline: cursor position (%g, %g) is not finite", (double)sx, (double)sy);
         return false;
     }
+    if (visible != p->overlay.cursor_visible || sx != p->overlay.cursor_sx || sy != p->overlay.cursor_sy)
+        p->overlay_serial++;
     p->overlay.cursor_visible = visible;
     p->overlay.cursor_sx = sx;
     p->overlay.cursor_sy = sy;
@@ -754,6 +883,8 @@ bool pipeline_set_hidden(pipeline *p, uint32_t geom_id, bool hidden)
     if (!may_change_state(p, hidden ? "hiding a geometry" : "showing a geometry") ||
         !geometry_exists(p, geom_id, hidden ? "hiding" : "showing"))
         return false;
+    if (accel_hidden(p->cfg.accel, geom_id) != hidden)
+        p->picture_serial++;
     accel_set_hidden(p->cfg.accel, geom_id, hidden);
     return true;
 }
@@ -762,6 +893,7 @@ bool pipeline_unhide_all(pipeline *p)
 {
     if (!may_change_state(p, "showing every geometry"))
         return false;
+    p->picture_serial++;
     accel_unhide_all(p->cfg.accel);
     return true;
 }
@@ -966,8 +1098,11 @@ static void finish_previous_step(pipeline *p)
 {
     const loop_step *prev = &p->step;
     render_counts sum = {0, 0, 0};
-    double longest_render_s = 0.0;
+    double longest_render_s = 0.0, longest_upscale_s = 0.0;
     for (int i = 0; i < PIPELINE_MAX_THREADS; i++) {
+        if (p->threads[i].upscale_stage_s > longest_upscale_s)
+            longest_upscale_s = p->threads[i].upscale_stage_s;
+        p->threads[i].upscale_stage_s = 0.0;
         render_counts *c = &p->threads[i].counts;
         sum.primary_rays += c->primary_rays;
         sum.primary_hits += c->primary_hits;
@@ -978,12 +1113,22 @@ static void finish_previous_step(pipeline *p)
         p->threads[i].render_stage_s = 0.0;
     }
     p->last_render_s = longest_render_s;
+    p->last_upscale_s = longest_upscale_s;
     pthread_mutex_lock(&p->stats_lock);
     p->stats.rays.primary_rays += sum.primary_rays;
     p->stats.rays.primary_hits += sum.primary_hits;
     p->stats.rays.shadow_rays += sum.shadow_rays;
     if (prev->render)
         p->stats.frames_rendered++;
+    if (prev->render && p->governed) {
+        const governor_frame *f = &p->frame_plan;
+        p->stats.frames_scaled += f->kind == GOVERNOR_FRAME_SCALED;
+        p->stats.frames_reduced += f->kind == GOVERNOR_FRAME_SCALED && f->rung > 0;
+        p->stats.frames_accumulated += f->kind == GOVERNOR_FRAME_ACCUMULATE;
+        p->stats.frames_resolved += f->kind == GOVERNOR_FRAME_RESOLVE;
+    }
+    if (prev->info.idle)
+        p->stats.idle_steps++;
     if (prev->display && prev->frames_queued && !p->display_failed)
         p->stats.frames_displayed++;
     if (prev->display)
@@ -1004,10 +1149,14 @@ static void finish_previous_step(pipeline *p)
 }
 
 /* Freeze each channel's camera and options for the frame about to render,
- * and give the traverser the frame's targets. */
+ * and give the traverser (a reduced frame: its rung's) the frame's targets. */
 static void freeze_frame(pipeline *p)
 {
     traverser_target targets[PIPELINE_MAX_CHANNELS];
+    const governor_frame *plan = &p->frame_plan;
+    const bool accumulate = plan->kind == GOVERNOR_FRAME_ACCUMULATE || plan->kind == GOVERNOR_FRAME_RESOLVE;
+    const double scale = GOVERNOR_SCALES[plan->rung];
+    uint32_t bands = 0;
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
         c->view = (render_view){p->cfg.scene, p->cfg.accel,
@@ -1015,14 +1164,122 @@ static void freeze_frame(pipeline *p)
                                 p->shadows, p->cfg.renderer->shading};
         frame_buffer *b = &c->buffers[c->pending];
         b->meta = (frame_image){b->rgb, c->width_px, c->height_px, p->step.info.frame, p->step.info.time_s, i,
-                                c->camera, c->camera_serial};
+                                c->camera, c->camera_serial, p->reduced ? scale : 1.0,
+                                p->governed ? plan->samples : p->cfg.sampler.kind == PIXEL_SAMPLER_SINGLE
+                                                                  ? 1
+                                                                  : p->cfg.sampler.k * p->cfg.sampler.k};
         b->rendered = c->active;
         image_display *sink = c->display->ops->write_tile ? c->display : NULL;
-        bool overlay = overlay_plan_make(&c->overlay, &p->overlay, c->window, c->width_px, c->height_px);
-        targets[i] = (traverser_target){&c->view, c->active ? b->rgb : NULL, sink, &b->meta,
-                                        overlay ? &c->overlay : NULL};
+        c->overlay_on = overlay_plan_make(&c->overlay, &p->overlay, c->window, c->width_px, c->height_px);
+        if (p->reduced) {
+            int w = upscale_low_res_px(c->width_px, scale), h = upscale_low_res_px(c->height_px, scale);
+            c->lowres_view = c->view;
+            c->lowres_view.camera = camera_basis_window(&c->camera, c->plane_aspect, c->window, w, h);
+            targets[i] = (traverser_target){.view = &c->lowres_view, .rgb = c->active ? c->lowres : NULL,
+                                            .img = &b->meta};
+            c->first_band = bands;
+            if (c->active)
+                bands += (uint32_t)((c->height_px + p->cfg.tile_px - 1) / p->cfg.tile_px);
+            continue;
+        }
+        targets[i] = (traverser_target){.view = &c->view, .rgb = c->active ? b->rgb : NULL, .sink = sink,
+                                        .img = &b->meta, .overlay = c->overlay_on ? &c->overlay : NULL};
+        if (accumulate) {
+            targets[i].accum = c->accum;
+            targets[i].accum_samples = (float)plan->samples;
+            targets[i].accum_reset = plan->kind == GOVERNOR_FRAME_ACCUMULATE && plan->stratum == 0;
+            targets[i].resolve_only = plan->kind == GOVERNOR_FRAME_RESOLVE;
+        }
     }
-    p->traverser->ops->begin_frame(p->traverser, targets);
+    if (p->reduced) {
+        p->upscale_items = bands;
+        atomic_store_explicit(&p->upscale_next, 0, memory_order_relaxed);
+        p->rung_traversers[plan->rung]->ops->begin_frame(p->rung_traversers[plan->rung], targets);
+    } else
+        p->traverser->ops->begin_frame(p->traverser, targets);
+}
+
+/* Governor, real time: the previous step was idle; wait (in the serial
+ * section, every render thread asleep at the barrier) until a transaction, a
+ * one-shot or a stop arrives, or PIPELINE_IDLE_POLL_S passes (serial
+ * animation, e.g. an idle clock, runs then). */
+static void wait_while_idle(pipeline *p)
+{
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until); /* pthread_cond_timedwait's default clock */
+    long ns = until.tv_nsec + (long)(PIPELINE_IDLE_POLL_S * 1e9);
+    until.tv_sec += ns / 1000000000L;
+    until.tv_nsec = ns % 1000000000L;
+    pthread_mutex_lock(&p->queue_lock);
+    while (p->queue_count == 0 && p->oneshot_count == 0 && !atomic_load(&p->stop_requested))
+        if (pthread_cond_timedwait(&p->queue_changed, &p->queue_lock, &until) == ETIMEDOUT)
+            break;
+    pthread_mutex_unlock(&p->queue_lock);
+}
+
+/* Governor: feed it what the previous frame cost, plan this one, and make
+ * sure the threads have upscale scratch for a reduced frame. Sets
+ * frame_plan, frame_sampler and reduced. */
+static void plan_governed_frame(pipeline *p, int threads)
+{
+    const loop_step *s = &p->step;
+    if (p->last_step_pixels > 0.0) { /* the previous step rendered: what did it cost? */
+        governor_cost cost = {s->info.last_frame_s, s->info.last_render_s, p->last_upscale_s, p->last_step_pixels};
+        uint64_t over = p->gov.frames_over_budget;
+        governor_observe(&p->gov, &p->frame_plan, &cost);
+        if (p->gov.frames_over_budget != over) {
+            pthread_mutex_lock(&p->stats_lock);
+            p->stats.frames_over_budget++;
+            pthread_mutex_unlock(&p->stats_lock);
+        }
+    }
+    bool picture_changed = p->picture_serial != p->planned_picture_serial || p->parallel_anim_count > 0;
+    bool overlay_changed = p->overlay_serial != p->planned_overlay_serial;
+    governor_mode before = p->gov.mode;
+    int rung_before = p->frame_plan.rung;
+    governor_frame f = governor_plan(&p->gov, s->info.time_s, picture_changed, overlay_changed, p->rung_pixels);
+    /* a reduced frame needs every thread's scratch: without it (no memory), full size */
+    for (int i = 0; f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0 && i < threads; i++)
+        if (!p->threads[i].upscale_scratch) {
+            p->threads[i].upscale_scratch = malloc(p->upscale_scratch_floats * sizeof(float));
+            if (!p->threads[i].upscale_scratch) {
+                log_error("pipeline: governor: no memory for upscaling on thread %d: rendering at full size", i);
+                f.rung = 0;
+            }
+        }
+    p->frame_plan = f;
+    p->planned_picture_serial = p->picture_serial;
+    if (p->governor_status_shown)
+        compose_status(p); /* the line describes this frame's plan */
+    /* the drawn text changed while idle: show it */
+    if (p->overlay_serial != p->planned_overlay_serial && p->frame_plan.kind == GOVERNOR_FRAME_IDLE)
+        p->frame_plan.kind = GOVERNOR_FRAME_RESOLVE;
+    p->planned_overlay_serial = p->overlay_serial;
+    f = p->frame_plan;
+    p->reduced = f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0;
+    p->frame_sampler = f.kind == GOVERNOR_FRAME_ACCUMULATE
+                           ? pixel_sampler_stratum(p->cfg.refine_k, p->cfg.sampler.seed, f.stratum)
+                           : pixel_sampler_single();
+    if (p->gov.mode != before) {
+        char line[PIPELINE_STATUS_BYTES];
+        governor_describe(&p->gov, &f, line, sizeof line);
+        log_info("pipeline: frame %llu: %s", (unsigned long long)s->info.frame, line);
+    } else if (f.kind == GOVERNOR_FRAME_SCALED && f.rung != rung_before)
+        log_debug("pipeline: frame %llu: governor: scale %.3g -> %.3g (predicted %.1f ms, budget %.1f ms)",
+                  (unsigned long long)s->info.frame, GOVERNOR_SCALES[rung_before], GOVERNOR_SCALES[f.rung],
+                  1e3 * governor_predict_s(&p->gov, f.rung, p->rung_pixels), p->cfg.budget_ms);
+    p->last_step_pixels = 0.0;
+    if (f.kind == GOVERNOR_FRAME_SCALED || f.kind == GOVERNOR_FRAME_ACCUMULATE) {
+        for (int i = 0; i < p->channel_count; i++)
+            if (p->channels[i].active) {
+                double w = p->channels[i].width_px, h = p->channels[i].height_px;
+                if (p->reduced) {
+                    w = upscale_low_res_px(p->channels[i].width_px, GOVERNOR_SCALES[f.rung]);
+                    h = upscale_low_res_px(p->channels[i].height_px, GOVERNOR_SCALES[f.rung]);
+                }
+                p->last_step_pixels += w * h;
+            }
+    }
 }
 
 /* The serial section of the frame barrier; returns the threads of the next step. */
@@ -1038,20 +1295,23 @@ static int serial_section_steps(pipeline *p)
         tls_serial_owner = NULL;
         return -1;
     }
+    if (s->info.idle && p->cfg.time_mode == PIPELINE_TIME_REAL)
+        wait_while_idle(p);
     double now = now_s();
-    uint64_t frame = p->next_frame;
+    uint64_t frame = p->next_frame, step = p->next_step;
     s->info.frame = frame;
+    s->info.idle = false;
     s->info.last_frame_s = frame == 0 ? 0.0 : now - p->last_serial_s;
     s->info.last_render_s = frame == 0 ? 0.0 : p->last_render_s;
     p->last_serial_s = now;
     if (frame == 0)
         p->start_s = now;
-    s->info.time_s = p->cfg.time_mode == PIPELINE_TIME_FIXED_RATE ? (double)frame / p->cfg.rate_hz : now - p->start_s;
+    s->info.time_s = p->cfg.time_mode == PIPELINE_TIME_FIXED_RATE ? (double)step / p->cfg.rate_hz : now - p->start_s;
     s->info.threads = p->thread_count;
     /* a frame that will not render gets no callbacks (a stop asked for by one
      * of this barrier's transactions is seen after them) */
     bool stop = atomic_load(&p->stop_requested) || p->display_failed ||
-                (p->cfg.max_frames > 0 && frame >= p->cfg.max_frames);
+                (p->cfg.max_frames > 0 && step >= p->cfg.max_frames);
     if (!stop) {
         run_transactions(p);
         run_oneshots(p, frame);
@@ -1074,8 +1334,20 @@ static int serial_section_steps(pipeline *p)
     }
     int threads = change_thread_count(p);
     s->info.threads = threads;
-    s->render = true;
     s->exit = false;
+    p->next_step = step + 1;
+    if (p->governed) {
+        plan_governed_frame(p, threads);
+        if (p->frame_plan.kind == GOVERNOR_FRAME_IDLE) {
+            s->info.idle = true;
+            s->render = s->animate_parallel = false;
+            tls_serial_owner = NULL;
+            return threads;
+        }
+        if (p->reduced)
+            barrier_set_participants(&p->upscale_barrier, threads);
+    }
+    s->render = true;
     s->animate_parallel = p->parallel_anim_count > 0;
     if (s->animate_parallel)
         barrier_set_participants(&p->anim_barrier, threads);
@@ -1126,11 +1398,49 @@ static void display_stage(pipeline *p)
 }
 
 /* The dynamically balanced stage: the traverser hands out the frame's work. */
+/* A reduced frame's second half: bands of tile_px output rows, upscaled from
+ * the channel's low-res frame, then the overlay and write_tile per tile. */
+static void upscale_stage(pipeline *p, render_thread *t)
+{
+    const int tile_px = p->cfg.tile_px, rung = p->frame_plan.rung;
+    for (;;) {
+        uint32_t item = atomic_fetch_add_explicit(&p->upscale_next, 1, memory_order_relaxed);
+        if (item >= p->upscale_items)
+            return;
+        int ci = 0; /* first_band ascends; a channel switched off has no bands (its first equals the next's) */
+        while (ci + 1 < p->channel_count && item >= p->channels[ci + 1].first_band)
+            ci++;
+        pipe_channel *c = &p->channels[ci];
+        frame_buffer *b = &c->buffers[c->pending];
+        int y0 = (int)(item - c->first_band) * tile_px;
+        int y1 = y0 + tile_px < c->height_px ? y0 + tile_px : c->height_px;
+        upscale_plan_rows(c->plans[rung], c->lowres, b->rgb, y0, y1, t->upscale_scratch);
+        image_display *sink = c->display->ops->write_tile ? c->display : NULL;
+        for (int x0 = 0; x0 < c->width_px; x0 += tile_px) {
+            int x1 = x0 + tile_px < c->width_px ? x0 + tile_px : c->width_px;
+            if (c->overlay_on)
+                overlay_draw(&c->overlay, c->width_px, x0, y0, x1, y1, b->rgb);
+            if (sink)
+                sink->ops->write_tile(sink, &b->meta, x0, y0, x1, y1);
+        }
+    }
+}
+
+/* The dynamically balanced stage: the traverser hands out the frame's work
+ * (a reduced frame: its rung's traverser, the upscale barrier, upscaling). */
 static void render_stage(pipeline *p, render_thread *t)
 {
     render_counts counts = {0, 0, 0}; /* on this thread's stack: no shared cache line per packet */
     double t0 = now_s();
-    p->traverser->ops->render(p->traverser, p->cfg.renderer, &p->cfg.sampler, &counts);
+    if (p->reduced) {
+        image_traverser *lowres = p->rung_traversers[p->frame_plan.rung];
+        lowres->ops->render(lowres, p->cfg.renderer, &p->frame_sampler, &counts);
+        barrier_wait(&p->upscale_barrier, p, NULL);
+        double t1 = now_s();
+        upscale_stage(p, t);
+        t->upscale_stage_s = now_s() - t1;
+    } else
+        p->traverser->ops->render(p->traverser, p->cfg.renderer, &p->frame_sampler, &counts);
     t->render_stage_s = now_s() - t0;
     t->counts = counts;
 }
@@ -1175,6 +1485,60 @@ static void *thread_main(void *arg)
     return NULL;
 }
 
+/* The governor's buffers, plans and per-rung traversers (pipeline_run, before
+ * the loop): everything a governed frame needs except per-thread scratch. */
+static bool governor_setup(pipeline *p, const int *widths, const int *heights, tess_error *err)
+{
+    governor_config g = {p->cfg.budget_ms * 1e-3, p->cfg.still_s, p->cfg.refine_k};
+    double output_pixels = 0.0;
+    for (int i = 0; i < p->channel_count; i++)
+        output_pixels += (double)widths[i] * (double)heights[i];
+    governor_init(&p->gov, &g, output_pixels);
+    for (int r = 0; r < GOVERNOR_RUNGS; r++)
+        p->rung_pixels[r] = governor_rung_pixels(r, widths, heights, p->channel_count);
+    for (int r = 1; r < GOVERNOR_RUNGS; r++) {
+        int low_w[PIPELINE_MAX_CHANNELS], low_h[PIPELINE_MAX_CHANNELS];
+        for (int i = 0; i < p->channel_count; i++) {
+            low_w[i] = upscale_low_res_px(widths[i], GOVERNOR_SCALES[r]);
+            low_h[i] = upscale_low_res_px(heights[i], GOVERNOR_SCALES[r]);
+        }
+        p->rung_traversers[r] = traverser_tiled_create(p->cfg.tile_px, p->cfg.order, p->cfg.order_seed, low_w, low_h,
+                                                       p->channel_count, err);
+        if (!p->rung_traversers[r])
+            return false;
+        for (int i = 0; i < p->channel_count; i++) {
+            pipe_channel *c = &p->channels[i];
+            c->plans[r] = upscale_plan_create(low_w[i], low_h[i], widths[i], heights[i], p->cfg.upscale, err);
+            if (!c->plans[r]) {
+                tess_error_prefix(err, "pipeline: governor: channel %d: ", i);
+                return false;
+            }
+            size_t need = upscale_plan_scratch_floats(c->plans[r]);
+            if (need > p->upscale_scratch_floats)
+                p->upscale_scratch_floats = need;
+        }
+    }
+    for (int i = 0; i < p->channel_count; i++) {
+        pipe_channel *c = &p->channels[i];
+        size_t full = (size_t)widths[i] * (size_t)heights[i] * 3;
+        size_t low = (size_t)upscale_low_res_px(widths[i], GOVERNOR_SCALES[1]) *
+                     (size_t)upscale_low_res_px(heights[i], GOVERNOR_SCALES[1]) * 3;
+        c->accum = calloc(full, sizeof(float));
+        c->lowres = calloc(low, sizeof(float));
+        if (!c->accum || !c->lowres)
+            return tess_error_set(err, "pipeline: governor: channel %d: out of memory for its %dx%d buffers", i,
+                                  widths[i], heights[i]);
+    }
+    p->governed = true;
+    p->frame_plan = (governor_frame){GOVERNOR_FRAME_SCALED, 0, 0, 1};
+    p->frame_sampler = pixel_sampler_single();
+    log_info("pipeline: governor: budget %.1f ms, scales 1..%.3g (%s upscaling), refining to jittered:%d after "
+             "%.2f s still",
+             p->cfg.budget_ms, GOVERNOR_SCALES[GOVERNOR_RUNGS - 1], upscale_filter_name(p->cfg.upscale),
+             p->cfg.refine_k, p->cfg.still_s);
+    return true;
+}
+
 bool pipeline_run(pipeline *p, tess_error *err)
 {
     if (tls_serial_owner == p) {
@@ -1194,6 +1558,8 @@ bool pipeline_run(pipeline *p, tess_error *err)
     p->traverser = traverser_tiled_create(p->cfg.tile_px, p->cfg.order, p->cfg.order_seed, widths, heights,
                                           p->channel_count, err);
     if (!p->traverser)
+        return false;
+    if (p->cfg.budget_ms > 0.0 && !governor_setup(p, widths, heights, err))
         return false;
     p->ran = true;
     atomic_store(&p->running, true);
@@ -1245,6 +1611,12 @@ void pipeline_destroy(pipeline *p)
     image_traverser_destroy(p->traverser);
     barrier_destroy(&p->frame_barrier);
     barrier_destroy(&p->anim_barrier);
+    barrier_destroy(&p->upscale_barrier);
+    for (int r = 0; r < GOVERNOR_RUNGS; r++)
+        image_traverser_destroy(p->rung_traversers[r]);
+    for (int i = 0; i < PIPELINE_MAX_THREADS; i++)
+        free(p->threads[i].upscale_scratch);
+    pthread_cond_destroy(&p->queue_changed);
     pthread_mutex_destroy(&p->queue_lock);
     pthread_mutex_destroy(&p->stats_lock);
     free(p->queue);

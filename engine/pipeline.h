@@ -66,8 +66,38 @@
  *
  * DETERMINISM. A pixel's value depends on the scene (with its hidden
  * geometries), the channel's camera, the sampler, the renderer and the
- * overlay only: never on the thread count, the tile size or the tile
- * order. */
+ * overlay only (with the governor also on its plan for the frame, below):
+ * never on the thread count, the tile size or the tile order.
+ *
+ * GOVERNOR (config budget_ms > 0; engine/governor.h decides, this carries
+ * out). Every frame has one plan for all channels, made in the serial section
+ * after the transactions and serial animation:
+ *   - a moving picture renders one ray per pixel at the ladder scale the cost
+ *     model picks: each channel's low-res image (upscale.h, RENDER SCALE; the
+ *     same scale on every output of a wall, so no seams between monitors) is
+ *     rendered by the render threads from a tiled traverser of its own, then,
+ *     after the upscale barrier (only frames at a reduced scale have it), the
+ *     threads upscale bands of tile_px output rows (upscale_plan_rows) handed
+ *     out by an atomic counter, composite the overlay and give each tile to
+ *     write_tile. At scale 1 the frame is the ungoverned one, bit for bit;
+ *   - a picture still for still_s seconds of frame time refines: frame n
+ *     renders stratum n of jittered:refine_k (sampler.h, STRATUM) and adds it
+ *     to the channel's accumulation buffer; it shows the mean so far. After
+ *     refine_k^2 frames the picture is jittered:refine_k's, bit for bit;
+ *   - a converged picture renders nothing: such a loop step is IDLE (no frame
+ *     number is used, no display gets a frame, parallel animation is skipped;
+ *     serial animation and transactions still run). In real time an idle step
+ *     first waits up to PIPELINE_IDLE_POLL_S for a transaction, a one-shot or
+ *     a stop, so an idle wall costs no CPU; an overlay change alone makes one
+ *     RESOLVE frame (the converged mean, new overlay, no rays).
+ * What counts as a change of the picture: the setters of cameras, hidden
+ * geometries and channel switches (each bumps a serial), and any registered
+ * parallel animation (it may change anything rendering reads, every frame).
+ * The attract tour and camera paths change the camera every frame, so they
+ * count as movement. max_frames counts loop steps, idle ones included, and
+ * in PIPELINE_TIME_FIXED_RATE time is steps / rate_hz (without the governor
+ * both are frames, as before). A governor costs nothing when off: no
+ * buffers, no upscale barrier, the same frames. */
 #ifndef TESSERA_PIPELINE_H
 #define TESSERA_PIPELINE_H
 
@@ -78,10 +108,12 @@
 #include "camera.h"
 #include "display.h"
 #include "err.h"
+#include "governor.h"
 #include "render.h"
 #include "sampler.h"
 #include "tile_order.h"
 #include "traverser.h"
+#include "upscale.h"
 
 struct scene;
 struct accel;
@@ -96,6 +128,7 @@ struct accel;
 #define PIPELINE_TILE_PX_MAX 256
 #define PIPELINE_STATUS_BYTES 128        /* status line text, with its terminating NUL */
 #define PIPELINE_BARRIER_LOG_BYTES 16384 /* log text one serial section may leave for thread 0 to write */
+#define PIPELINE_IDLE_POLL_S 0.05        /* governor, real time: an idle step waits this long for work */
 
 typedef struct pipeline pipeline;
 
@@ -120,10 +153,19 @@ typedef struct pipeline_config {
     pixel_sampler sampler;
     const renderer *renderer;  /* renderer_by_name: "raytracer" or "eyelight" */
     bool shadows;
+    /* the governor (GOVERNOR above): off when budget_ms is 0; then `sampler`
+     * is every frame's, else frames moving use one ray per pixel and still
+     * ones converge to jittered:refine_k with the sampler's seed */
+    double budget_ms;          /* frame-time budget, >= 0 */
+    double still_s;            /* still this long (frame time) before refining */
+    int refine_k;              /* 1..PIXEL_SAMPLER_MAX_K */
+    upscale_filter upscale;    /* how reduced frames are enlarged */
 } pipeline_config;
 
 /* Defaults: 1 thread, real time (rate 30 for FIXED_RATE), no frame limit,
- * 16-pixel tiles in row order, single sample, Phong with shadows. */
+ * 16-pixel tiles in row order, single sample, Phong with shadows, no
+ * governor (still_s GOVERNOR_DEFAULT_STILL_S, refine_k
+ * GOVERNOR_DEFAULT_REFINE_K, bilinear upscaling when one is asked for). */
 pipeline_config pipeline_config_default(const struct scene *s, const struct accel *a);
 
 /* Check a config; false with err naming the field and the problem. */
@@ -207,6 +249,11 @@ bool pipeline_queue_status(pipeline *p, const char *text);
  * that is not finite or when the transaction is refused. */
 bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy);
 
+/* Show the governor's state (mode, scale, samples) as the status line, after
+ * any status text of pipeline_queue_status, or stop showing it, as a
+ * transaction. Without a governor the line says so. */
+bool pipeline_queue_governor_status(pipeline *p, bool shown);
+
 /* Hide geometry geom_id (ids as in scene.h) or show it again, as a
  * transaction: a hidden geometry is not seen and casts no shadows. False,
  * logged, for an id the scene does not have or when refused. The flags live
@@ -218,7 +265,9 @@ bool pipeline_queue_unhide_all(pipeline *p);
 
 /* ---- per-frame information given to callbacks ---- */
 typedef struct frame_info {
-    uint64_t frame;        /* the frame about to be rendered */
+    uint64_t frame;        /* the frame about to be rendered (an idle step renders none: the
+                              next step gets the same number) */
+    bool idle;             /* governor: this step renders nothing */
     double time_s;         /* its time */
     double last_frame_s;   /* wall-clock duration of the previous loop step (0 for frame 0) */
     double last_render_s;  /* the longest render stage of one thread in that step (0 when it rendered
@@ -261,6 +310,10 @@ bool pipeline_set_status(pipeline *p, const char *text);
 const char *pipeline_status(const pipeline *p);
 bool pipeline_set_cursor(pipeline *p, bool visible, float sx, float sy);
 bool pipeline_cursor(const pipeline *p, float *sx, float *sy);
+bool pipeline_set_governor_status(pipeline *p, bool shown);
+/* The governor's plan for the frame the serial section prepares (serial
+ * section only; a frame of kind SCALED at rung 0 without a governor). */
+governor_frame pipeline_governor_frame(const pipeline *p);
 bool pipeline_set_hidden(pipeline *p, uint32_t geom_id, bool hidden);
 bool pipeline_unhide_all(pipeline *p);
 bool pipeline_hidden(const pipeline *p, uint32_t geom_id); /* any thread */
@@ -287,6 +340,10 @@ typedef struct pipeline_stats {
     double run_s;                   /* pipeline_run's wall time */
     double barrier_s;               /* summed over threads: time from arriving at a frame barrier to
                                        leaving it (idle at the end of frames + serial sections) */
+    /* the governor (all 0 without one): rendered frames by kind, idle steps,
+     * moving frames whose loop step took longer than the budget */
+    uint64_t frames_scaled, frames_reduced, frames_accumulated, frames_resolved, idle_steps;
+    uint64_t frames_over_budget;
 } pipeline_stats;
 
 /* Counters so far (exact after run returns; may lag while running). */

@@ -413,10 +413,24 @@ static void render_block_jittered(const render_view *v, const pixel_sampler *s, 
     store_block(&v->camera, x0, y0, w, h, sum, rgb);
 }
 
+/* One w x h block with a stratum sampler: the packet render_block_jittered
+ * traces for that stratum, its colours stored as they are (the governor's
+ * accumulation adds them up in stratum order, as render_block_jittered does). */
+static void render_block_stratum(const render_view *v, const pixel_sampler *s, int x0, int y0, int w, int h,
+                                 float *rgb, render_counts *counts)
+{
+    alignas(64) float sample_x[PACKET_MAX_RAYS], sample_y[PACKET_MAX_RAYS];
+    const int n = w * h;
+    pixel_sampler_block_positions(s, x0, y0, w, h, 0, 0, sample_x, sample_y);
+    packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)n);
+    shade_packet(v, &scratch.primary, &scratch.shadows, &scratch.ps, counts);
+    store_block(&v->camera, x0, y0, w, h, scratch.ps.colour, rgb);
+}
+
 void render_tile_sampled(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
                          render_counts *counts)
 {
-    if (s->kind != PIXEL_SAMPLER_JITTERED) {
+    if (s->kind == PIXEL_SAMPLER_SINGLE) {
         render_tile(v, x0, y0, x1, y1, rgb, counts);
         return;
     }
@@ -424,7 +438,10 @@ void render_tile_sampled(const render_view *v, const pixel_sampler *s, int x0, i
         for (int px = x0; px < x1; px += RENDER_PACKET_EDGE_PX) {
             int w = x1 - px < RENDER_PACKET_EDGE_PX ? x1 - px : RENDER_PACKET_EDGE_PX;
             int h = y1 - py < RENDER_PACKET_EDGE_PX ? y1 - py : RENDER_PACKET_EDGE_PX;
-            render_block_jittered(v, s, px, py, w, h, rgb, counts);
+            if (s->kind == PIXEL_SAMPLER_STRATUM)
+                render_block_stratum(v, s, px, py, w, h, rgb, counts);
+            else
+                render_block_jittered(v, s, px, py, w, h, rgb, counts);
         }
 }
 

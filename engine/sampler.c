@@ -59,6 +59,8 @@ void pixel_sampler_name(const pixel_sampler *s, char *buf, size_t size)
 {
     if (s->kind == PIXEL_SAMPLER_JITTERED)
         snprintf(buf, size, "jittered:%d", s->k);
+    else if (s->kind == PIXEL_SAMPLER_STRATUM)
+        snprintf(buf, size, "stratum:%d/%d", s->stratum, s->k);
     else
         snprintf(buf, size, "single");
 }
@@ -67,11 +69,14 @@ bool pixel_sampler_validate(const pixel_sampler *s, tess_error *err)
 {
     if (s->kind == PIXEL_SAMPLER_SINGLE)
         return true;
-    if (s->kind != PIXEL_SAMPLER_JITTERED)
+    if (s->kind != PIXEL_SAMPLER_JITTERED && s->kind != PIXEL_SAMPLER_STRATUM)
         return tess_error_set(err, "pixel sampler: unknown kind %d", (int)s->kind);
     if (s->k < 1 || s->k > PIXEL_SAMPLER_MAX_K)
-        return tess_error_set(err, "pixel sampler jittered: k = %d is out of range (strata per pixel side: 1..%d)",
-                              s->k, PIXEL_SAMPLER_MAX_K);
+        return tess_error_set(err, "pixel sampler %s: k = %d is out of range (strata per pixel side: 1..%d)",
+                              s->kind == PIXEL_SAMPLER_JITTERED ? "jittered" : "stratum", s->k, PIXEL_SAMPLER_MAX_K);
+    if (s->kind == PIXEL_SAMPLER_STRATUM && (s->stratum < 0 || s->stratum >= s->k * s->k))
+        return tess_error_set(err, "pixel sampler stratum: stratum %d is not in 0..%d (k = %d)", s->stratum,
+                              s->k * s->k - 1, s->k);
     return true;
 }
 
@@ -130,12 +135,16 @@ void pixel_sampler_position(const pixel_sampler *s, int x, int y, int i, int j, 
 void pixel_sampler_block_positions(const pixel_sampler *s, int x0, int y0, int w, int h, int i, int j, float *px,
                                    float *py)
 {
-    if (s->kind != PIXEL_SAMPLER_JITTERED) {
+    if (s->kind == PIXEL_SAMPLER_SINGLE) {
         for (int r = 0; r < w * h; r++) {
             px[r] = (float)(x0 + r % w) + 0.5f;
             py[r] = (float)(y0 + r / w) + 0.5f;
         }
         return;
+    }
+    if (s->kind == PIXEL_SAMPLER_STRATUM) { /* its one stratum, whatever i, j (0, 0) say */
+        i = s->stratum % s->k;
+        j = s->stratum / s->k;
     }
     const uint64_t stratum = stratum_key(s->seed, i, j);
     const float inv_k = 1.f / (float)s->k;

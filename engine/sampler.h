@@ -24,7 +24,15 @@
 
 #include "err.h"
 
-typedef enum pixel_sampler_kind { PIXEL_SAMPLER_SINGLE, PIXEL_SAMPLER_JITTERED } pixel_sampler_kind;
+/* STRATUM is not named in configs: it is one frame of the governor's
+ * accumulation (pipeline.h, GOVERNOR): one ray per pixel, the ray of stratum
+ * `stratum` (= j * k + i) that jittered:k with the same seed traces, so k^2
+ * such frames summed in stratum order give jittered:k's pixels bit for bit. */
+typedef enum pixel_sampler_kind {
+    PIXEL_SAMPLER_SINGLE,
+    PIXEL_SAMPLER_JITTERED,
+    PIXEL_SAMPLER_STRATUM,
+} pixel_sampler_kind;
 
 #define PIXEL_SAMPLER_MAX_K 16    /* strata per pixel side: up to 256 rays per pixel */
 #define PIXEL_SAMPLER_DEFAULT_K 4 /* what a bare "jittered" means */
@@ -32,8 +40,9 @@ typedef enum pixel_sampler_kind { PIXEL_SAMPLER_SINGLE, PIXEL_SAMPLER_JITTERED }
 
 typedef struct pixel_sampler {
     pixel_sampler_kind kind;
-    int k;         /* jittered: k x k strata per pixel, 1 .. PIXEL_SAMPLER_MAX_K; single: ignored */
-    uint32_t seed; /* jittered: selects the jitter pattern; single: ignored */
+    int k;         /* jittered, stratum: k x k strata per pixel, 1 .. PIXEL_SAMPLER_MAX_K; single: ignored */
+    uint32_t seed; /* jittered, stratum: selects the jitter pattern; single: ignored */
+    int stratum;   /* stratum: which one, 0 .. k^2 - 1 (row-major: i = stratum % k, j = stratum / k) */
 } pixel_sampler;
 
 /* Longest name pixel_sampler_name writes, with its terminating NUL. */
@@ -41,12 +50,18 @@ typedef struct pixel_sampler {
 
 static inline pixel_sampler pixel_sampler_single(void)
 {
-    return (pixel_sampler){PIXEL_SAMPLER_SINGLE, 1, PIXEL_SAMPLER_DEFAULT_SEED};
+    return (pixel_sampler){PIXEL_SAMPLER_SINGLE, 1, PIXEL_SAMPLER_DEFAULT_SEED, 0};
 }
 
 static inline pixel_sampler pixel_sampler_jittered(int k, uint32_t seed)
 {
-    return (pixel_sampler){PIXEL_SAMPLER_JITTERED, k, seed};
+    return (pixel_sampler){PIXEL_SAMPLER_JITTERED, k, seed, 0};
+}
+
+/* Stratum `stratum` (0 .. k^2 - 1) of jittered:k with `seed`, alone. */
+static inline pixel_sampler pixel_sampler_stratum(int k, uint32_t seed, int stratum)
+{
+    return (pixel_sampler){PIXEL_SAMPLER_STRATUM, k, seed, stratum};
 }
 
 /* Parse "single", "jittered" (k = PIXEL_SAMPLER_DEFAULT_K) or "jittered:K"
@@ -59,8 +74,9 @@ bool pixel_sampler_from_name(const char *name, pixel_sampler *out, tess_error *e
  * part of it. Writes at most `size` bytes (PIXEL_SAMPLER_NAME_BYTES is enough). */
 void pixel_sampler_name(const pixel_sampler *s, char *buf, size_t size);
 
-/* False, with the reason in err, for an unknown kind or a jittered k outside
- * 1 .. PIXEL_SAMPLER_MAX_K. The render functions require a valid sampler. */
+/* False, with the reason in err, for an unknown kind, a jittered or stratum k
+ * outside 1 .. PIXEL_SAMPLER_MAX_K or a stratum outside 0 .. k^2 - 1. The
+ * render functions require a valid sampler. */
 bool pixel_sampler_validate(const pixel_sampler *s, tess_error *err);
 
 /* Strata per pixel side: k for jittered, 1 for single. */
@@ -88,7 +104,9 @@ void sampler_jitter(uint32_t seed, int x, int y, int i, int j, float *u, float *
  * put it on a stratum border, stepped inside by float steps, so that
  *   x + i / k <= *px < x + (i + 1) / k  exactly (likewise *py with y, j),
  * for 0 <= x, y < 2^19 (where a stratum is wider than a few float steps).
- * The sampler must be valid; 0 <= i, j < pixel_sampler_strata(s). */
+ * The sampler must be valid; 0 <= i, j < pixel_sampler_strata(s) (a stratum
+ * sampler has one: (0, 0) stands for its own, whose position is jittered:k's
+ * for that stratum). */
 void pixel_sampler_position(const pixel_sampler *s, int x, int y, int i, int j, float *px, float *py);
 
 /* pixel_sampler_position of stratum (i, j) for every pixel of the w x h block

@@ -33,6 +33,30 @@ static void tiled_begin_frame(image_traverser *t, const traverser_target *target
     atomic_store_explicit(&tt->next, 0, memory_order_relaxed);
 }
 
+/* The accumulation step of one tile (traverser_target's accum fields): the
+ * same float operations for every pixel, whichever thread runs it. */
+static void accumulate_tile(const traverser_target *t, int width_px, int x0, int y0, int x1, int y1)
+{
+    const float samples = t->accum_samples;
+    for (int y = y0; y < y1; y++) {
+        size_t first = 3 * ((size_t)y * (size_t)width_px + (size_t)x0), count = 3 * (size_t)(x1 - x0);
+        float *rgb = t->rgb + first, *acc = t->accum + first;
+        if (t->resolve_only)
+            for (size_t i = 0; i < count; i++)
+                rgb[i] = acc[i] / samples;
+        else if (t->accum_reset)
+            for (size_t i = 0; i < count; i++) {
+                acc[i] = 0.0f + rgb[i];
+                rgb[i] = acc[i] / samples;
+            }
+        else
+            for (size_t i = 0; i < count; i++) {
+                acc[i] = acc[i] + rgb[i];
+                rgb[i] = acc[i] / samples;
+            }
+    }
+}
+
 static void tiled_render(image_traverser *t, const renderer *r, const pixel_sampler *s, render_counts *counts)
 {
     tiled_traverser *tt = (tiled_traverser *)t;
@@ -51,7 +75,10 @@ static void tiled_render(image_traverser *t, const renderer *r, const pixel_samp
         int y1 = y0 + tile_px < c->height_px ? y0 + tile_px : c->height_px;
         if (!c->target.rgb)
             continue;
-        r->render_tile(c->target.view, s, x0, y0, x1, y1, c->target.rgb, counts);
+        if (!c->target.resolve_only)
+            r->render_tile(c->target.view, s, x0, y0, x1, y1, c->target.rgb, counts);
+        if (c->target.accum)
+            accumulate_tile(&c->target, c->width_px, x0, y0, x1, y1);
         if (c->target.overlay) /* the one branch a frame without an overlay pays per tile */
             overlay_draw(c->target.overlay, c->width_px, x0, y0, x1, y1, c->target.rgb);
         if (c->target.sink)

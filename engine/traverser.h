@@ -28,6 +28,15 @@ typedef struct traverser_target {
     const frame_image *img;  /* what sink->write_tile is given (the frame being rendered) */
     const overlay_plan *overlay; /* composited into each tile between rendering and write_tile;
                                     NULL: nothing of the overlay falls on this channel */
+    /* The governor's accumulation buffer (pipeline.h, GOVERNOR): NULL for none.
+     * With one, each tile is rendered into rgb (one sample per pixel), then per
+     * float: accum = (accum_reset ? 0.0f : accum) + rgb, rgb = accum / accum_samples,
+     * both before the overlay; resolve_only skips the rendering and only sets
+     * rgb = accum / accum_samples (the overlay changed, the picture did not). */
+    float *accum;
+    float accum_samples; /* samples in accum after this frame, >= 1 */
+    bool accum_reset;
+    bool resolve_only;
 } traverser_target;
 
 typedef struct image_traverser image_traverser;

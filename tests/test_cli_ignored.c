@@ -119,17 +119,37 @@ Test(cli_ignored, extra_config_channels_with_a_wall)
 Test(cli_ignored, render_scale_options_that_do_not_apply)
 {
     expect_warning("render --size 32x18 --upscale clamped-cubic --out %s/x.png --threads 2",
-                   "--upscale is ignored at --scale 1 (the image is rendered at full size: nothing is upscaled)");
+                   "--upscale is ignored at --scale 1 without --budget-ms (the image is rendered at full size: nothing "
+                   "is upscaled)");
     expect_warning("render --size 32x18 --scale 1 --upscale bilinear --out %s/x.png --threads 2",
-                   "--upscale is ignored at --scale 1 (the image is rendered at full size: nothing is upscaled)");
+                   "--upscale is ignored at --scale 1 without --budget-ms (the image is rendered at full size: nothing "
+                   "is upscaled)");
     expect_warning("render --wall %s/wall.json --scale 1/2 --out %s/wall.png --threads 2",
-                   "--scale is ignored with --wall (a wall renders every output at full size)");
+                   "--scale is ignored with --wall (a wall renders every output at full size unless --budget-ms gives "
+                   "its governor a budget)");
     int w, h;
     float *rgb = support_read_image(dir, "wall-A-1.png", &w, &h);
     cr_expect(w == 64 && h == 36, "the output's image is %dx%d, not the wall's 64x36", w, h);
     free(rgb);
     expect_warning("render --wall %s/wall.json --scale 1/2 --upscale clamped-cubic --out %s/wall.png --threads 2",
-                   "--upscale is ignored with --wall (a wall renders every output at full size)");
+                   "--upscale is ignored with --wall (a wall renders every output at full size unless --budget-ms "
+                   "gives its governor a budget)");
+}
+
+/* The governor's own options say when there is no governor to steer. */
+Test(cli_ignored, governor_options_without_a_budget)
+{
+    expect_warning("render --size 32x18 --refine-k 2 --out %s/x.png --threads 2",
+                   "--refine-k is ignored without --budget-ms (it steers the frame-budget governor)");
+    expect_warning("render --size 32x18 --still-s 0 --out %s/x.png --threads 2",
+                   "--still-s is ignored without --budget-ms (it steers the frame-budget governor)");
+    expect_warning("render --size 32x18 --budget-ms 50 --upscale clamped-cubic --refine-k 2 --still-s 0 "
+                   "--out %s/x.png --threads 2",
+                   NULL);
+    expect_refusal("render --size 32x18 --budget-ms 50 --scale 1/2 --out x.png",
+                   "--scale 1/2 and --budget-ms 50: choose one (with a budget the governor picks the scale)");
+    expect_refusal("render --size 32x18 --budget-ms -3 --out x.png",
+                   "--budget-ms: '-3' is not a frame budget in milliseconds (a number in [0, 1e6]; 0: no governor)");
 }
 
 /* Everything given applies: not a word. */

@@ -21,7 +21,7 @@
 #include "wall/dump.h"
 #include "wall/service.h"
 
-/* render's own options: --scale and --upscale (engine/upscale.h). False
+/* render's own option: --scale (engine/upscale.h; --upscale is a pipeline option). False
  * after an error for a bad value; *handled when argv[*i] was one. */
 static bool render_scale_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bool *handled)
 {
@@ -34,22 +34,12 @@ static bool render_scale_option(int argc, char **argv, int *i, cli_pipeline_spec
                  val);
         return true;
     }
-    if (!strcmp(a, "--upscale")) {
-        tess_error err = {{0}};
-        if (!(val = cli_option_value(argc, argv, i)))
-            return false;
-        if (!upscale_filter_from_name(val, &s->upscale, &err)) {
-            cli_error("--upscale: %s", err.msg);
-            return false;
-        }
-        return true;
-    }
     *handled = false;
     return true;
 }
 
 /* Parse the options both commands take (after loading --config), and with
- * `scale_options` render's --scale and --upscale. Returns false when the
+ * `scale_options` render's --scale. Returns false when the
  * command should stop: after --help (*exit_code 0) or a bad option
  * (*exit_code 2). */
 static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const char **scene_path,
@@ -83,6 +73,11 @@ static bool parse_options(int argc, char **argv, cli_pipeline_spec *s, const cha
             cli_error("unknown option '%s' (see 'tessera %s --help')", a, argv[0]);
             goto bad;
         }
+    }
+    if (s->budget_ms > 0.0 && s->render_scale < 1.0) {
+        cli_error("--scale %s and --budget-ms %g: choose one (with a budget the governor picks the scale)",
+                  s->render_scale_text, s->budget_ms);
+        goto bad;
     }
     return true;
 bad:
@@ -300,10 +295,8 @@ static void render_usage(FILE *f)
           "  --frames N       render and write N frames (default 1; with --path the camera moves)\n"
           "  --scale S        render at S of --size and upscale to --size: S in (0, 1], a fraction\n"
           "                   (3/4, 1/3) or a decimal (0.5); each edge max(1, round(edge * S)) pixels,\n"
-          "                   the same view (default 1: no upscaling; not with --wall)\n"
-          "  --upscale F      filter for --scale < 1: bilinear, or clamped-cubic (Catmull-Rom clamped\n"
-          "                   to the 2x2 nearest rendered pixels: steeper edges, no ringing)\n"
-          "                   (default bilinear)\n",
+          "                   the same view (default 1: no upscaling; not with --wall); --upscale\n"
+          "                   (below) is its filter\n",
           f);
     cli_pipeline_usage(f);
 }

@@ -45,12 +45,23 @@ void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s
         cli_warn("--card is ignored with --display %s (only the drm display drives a card)", display);
     if (s->path_file[0] && !live_input && !s->input.replay_file[0] && cli_given_has(g, "--camera"))
         cli_warn("--camera is ignored with --path (the path sets the camera from the first frame)");
+    const bool governed = s->budget_ms > 0.0;
     if (s->wall_file[0])
         for (const char *const *o = (const char *const[]){"--scale", "--upscale", NULL}; *o; o++)
+            if (cli_given_has(g, *o) && !(governed && !strcmp(*o, "--upscale")))
+                cli_warn("%s is ignored with --wall (a wall renders every output at full size%s)", *o,
+                         governed ? "" : " unless --budget-ms gives its governor a budget");
+    if (!governed && !s->wall_file[0] && s->render_scale >= 1.0 && cli_given_has(g, "--upscale"))
+        cli_warn("--upscale is ignored at --scale 1 without --budget-ms (the image is rendered at full size: "
+                 "nothing is upscaled)");
+    if (!governed)
+        for (const char *const *o = (const char *const[]){"--refine-k", "--still-s", NULL}; *o; o++)
             if (cli_given_has(g, *o))
-                cli_warn("%s is ignored with --wall (a wall renders every output at full size)", *o);
-    if (!s->wall_file[0] && s->render_scale >= 1.0 && cli_given_has(g, "--upscale"))
-        cli_warn("--upscale is ignored at --scale 1 (the image is rendered at full size: nothing is upscaled)");
+                cli_warn("%s is ignored without --budget-ms (it steers the frame-budget governor)", *o);
+    if (governed && s->sampler.kind != PIXEL_SAMPLER_SINGLE)
+        cli_warn("--sampler %s: with --budget-ms only its seed is used (moving frames take one ray per pixel, "
+                 "still ones converge to jittered:%d, --refine-k)",
+                 s->sampler.kind == PIXEL_SAMPLER_JITTERED ? "jittered" : "?", s->refine_k);
     if (!s->input.replay_file[0] && cli_given_has(g, "--replay-speed"))
         cli_warn("--replay-speed is ignored without --replay-input");
     if (!live_input)

@@ -49,6 +49,9 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     s->render_scale = 1.0;
     s->upscale = UPSCALE_BILINEAR;
     snprintf(s->render_scale_text, sizeof s->render_scale_text, "1");
+    s->budget_ms = 0.0;
+    s->refine_k = GOVERNOR_DEFAULT_REFINE_K;
+    s->still_s = GOVERNOR_DEFAULT_STILL_S;
 }
 
 /* ---------------------------------------------------------------- the config file */
@@ -390,6 +393,31 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
             return false;
         }
         return true;
+    } else if (!strcmp(a, "--budget-ms") || !strcmp(a, "--still-s")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        char *end;
+        double v = strtod(val, &end);
+        bool budget = !strcmp(a, "--budget-ms");
+        if (end == val || *end || !(v >= 0.0 && v <= (budget ? 1e6 : 3600.0))) {
+            cli_error("%s: '%s' is not %s", a, val,
+                      budget ? "a frame budget in milliseconds (a number in [0, 1e6]; 0: no governor)"
+                             : "a time in seconds (a number in [0, 3600])");
+            return false;
+        }
+        *(budget ? &s->budget_ms : &s->still_s) = v;
+        return true;
+    } else if (!strcmp(a, "--refine-k")) {
+        return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 1, PIXEL_SAMPLER_MAX_K, &s->refine_k);
+    } else if (!strcmp(a, "--upscale")) {
+        tess_error err = {{0}};
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (!upscale_filter_from_name(val, &s->upscale, &err)) {
+            cli_error("--upscale: %s", err.msg);
+            return false;
+        }
+        return true;
     } else if (!strcmp(a, "--renderer")) {
         if (!(val = cli_option_value(argc, argv, i)))
             return false;
@@ -439,6 +467,12 @@ void cli_pipeline_usage(FILE *f)
           "                   shuffle (default rows; the image does not depend on it)\n"
           "  --sampler S      single, or jittered[:K] (K x K strata per pixel, default K 4)\n"
           "  --renderer R     raytracer (Phong, shadows) or eyelight (default raytracer)\n"
+          "  --budget-ms MS   frame-time budget: the governor renders moving frames at the scale that\n"
+          "                   meets it and refines still ones to jittered:K (default 0: off)\n"
+          "  --refine-k K     the governor's converged picture: jittered:K, K x K frames (default 4)\n"
+          "  --still-s S      still this long before refining (default 0.25)\n"
+          "  --upscale F      how reduced frames are enlarged: bilinear, or clamped-cubic (Catmull-Rom\n"
+          "                   clamped to the 2x2 neighbourhood) (default bilinear)\n"
           "  --no-shadows     skip shadow rays\n"
           "  --display D      null (drop frames), convert (to 8-bit sRGB as scan-out would, then\n"
           "                   drop), convert-tiles (the same, per tile on the render threads, as\n"
@@ -616,6 +650,10 @@ pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene 
     cfg.sampler = s->sampler;
     cfg.renderer = s->renderer;
     cfg.shadows = s->shadows;
+    cfg.budget_ms = s->budget_ms;
+    cfg.refine_k = s->refine_k;
+    cfg.still_s = s->still_s;
+    cfg.upscale = s->upscale;
     return cfg;
 }
 
@@ -756,4 +794,11 @@ void cli_pipeline_report(pipeline *p, const cli_pipeline_spec *s)
             (unsigned long long)st.transactions_applied, (unsigned long long)st.transactions_rejected,
             (unsigned long long)st.slow_callbacks, pipeline_channel_count(p), pipeline_channel_count(p) == 1 ? "" : "s",
             s->threads);
+    if (s->budget_ms > 0.0)
+        fprintf(stderr,
+                "tessera: governor (budget %.1f ms): %llu moving frames (%llu at a reduced scale, %llu over the "
+                "budget), %llu refining, %llu redrawn for the overlay, %llu idle steps\n",
+                s->budget_ms, (unsigned long long)st.frames_scaled, (unsigned long long)st.frames_reduced,
+                (unsigned long long)st.frames_over_budget, (unsigned long long)st.frames_accumulated,
+                (unsigned long long)st.frames_resolved, (unsigned long long)st.idle_steps);
 }

@@ -53,6 +53,11 @@ typedef struct cli_pipeline_spec {
     double render_scale;         /* (0, 1] */
     upscale_filter upscale;
     char render_scale_text[32];  /* as given ("3/4"), for messages; "1" by default */
+    /* --budget-ms, --refine-k, --still-s (pipeline.h, GOVERNOR): budget 0 is no governor;
+     * `upscale` is then its filter */
+    double budget_ms;
+    int refine_k;
+    double still_s;
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
