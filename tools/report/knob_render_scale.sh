@@ -103,15 +103,37 @@ rs_equal_time() { # scene metric
     fi
 }
 
-# The equal-time pair of a scene for the crops: the budget is the frame time
-# of clamped-cubic's knee (by mean FLIP; its 1/2 when the knee is full size);
-# each filter's setting is the one of lowest mean FLIP among its settings
-# (full size included) that take no longer. Sets BUDGET, PAIR_B, PAIR_C.
+# The equal-time pair of a scene for the crops: for a budget of T ms/frame,
+# each filter's best setting is its lowest mean FLIP among its settings (full
+# size included) that take no longer than T. The budget is the frame time of
+# the first of: bilinear's knee, clamped-cubic's knee (by mean FLIP), then
+# every other point from the slowest, at which the two filters' best settings
+# differ in scale (the eye then judges pixels against filter); when none does,
+# clamped-cubic's knee. Sets BUDGET, BUDGET_FROM (the setting), PAIR_B,
+# PAIR_C, PAIR_SPLIT (1 when the scales differ).
 rs_pair() { # scene
+    report_knee render_scale "$1" flip $(rs_series_settings bilinear)
+    knee_b=$KNEE
     report_knee render_scale "$1" flip $(rs_series_settings clamped-cubic)
-    [ "$KNEE" != 1 ] || KNEE=1_2-clamped-cubic
-    report_row render_scale "$1" "$KNEE"
+    knee_c=$KNEE
+    others=$(awk -F '\t' -v s="$1" '$1 == s && $2 != "1" { print $3 "\t" $2 }' "$WORK/render_scale.tsv" |
+        sort -g -r | cut -f2)
+    PAIR_SPLIT=0
+    for cand in $knee_b $knee_c $others; do
+        [ "$cand" != 1 ] || continue
+        rs_pair_at "$1" "$cand"
+        if [ "$(rs_scale "$PAIR_B")" != "$(rs_scale "$PAIR_C")" ]; then
+            PAIR_SPLIT=1
+            return
+        fi
+    done
+    [ "$knee_c" != 1 ] || knee_c=1_2-clamped-cubic
+    rs_pair_at "$1" "$knee_c"
+}
+rs_pair_at() { # scene setting: the budget its frame time
+    report_row render_scale "$1" "$2"
     BUDGET=$MS
+    BUDGET_FROM=$2
     for f in $RS_FILTERS; do
         best=$(awk -F '\t' -v s="$1" -v t="$BUDGET" -v only=" $(rs_series_settings "$f") " '
             $1 == s && index(only, " " $2 " ") && $3 <= t && (b == "" || $6 < e) { b = $2; e = $6 }
@@ -201,8 +223,8 @@ knob_render_scale() { # scene labels...
         rs_sentences rmse "RMSE" "$@"
         echo
         echo "**Default shipped: scale 1 (full size), filter \`bilinear\`.** \`tessera render\` and \`tessera"
-        echo "run\` render at full size unless \`--scale\` says otherwise: every step down costs error"
-        echo "everywhere in the image (above), so the scale is for when the frame rate cannot be had"
+        echo "run\` render at full size unless \`--scale\` says otherwise: every step down raises the error"
+        echo "(above), so the scale is for when the frame rate cannot be had"
         echo "otherwise. The governor of issue 13 (not written yet) is to lower the scale only while a moving"
         echo "camera overruns its frame budget and go back to 1 when it stops. Bilinear is the \`--upscale\`"
         echo "default because its upscale costs a fraction of clamped-cubic's (the upscale column) and runs"
@@ -233,6 +255,13 @@ knob_render_scale() { # scene labels...
         echo
         echo "### Side by side at equal time"
         echo
+        echo "A budget of frame time, and the best each filter does within it: its setting of lowest mean FLIP"
+        echo "among those that take no longer (full size included). The budget is the frame time of the first"
+        echo "of bilinear's knee, clamped-cubic's knee, then every other point from the slowest, at which the"
+        echo "two filters' best settings differ in scale: more pixels against a better filter, in the same time."
+        echo "Each is what a governor holding that budget would pick with that filter; their own frame times"
+        echo "are below the budget by as much as the step between two scales (the settings are discrete)."
+        echo
         for scene in "$@"; do
             rs_pair "$scene"
             report_crops render_scale "$scene" "$PAIR_B" "$PAIR_C"
@@ -241,12 +270,16 @@ knob_render_scale() { # scene labels...
             report_row render_scale "$scene" "$PAIR_C"
             echo "![$scene: reference, $(rs_scale "$PAIR_B") $(rs_filter "$PAIR_B"), $(rs_scale "$PAIR_C") $(rs_filter "$PAIR_C") and their FLIP maps](report/$CROP)"
             echo
-            echo "$scene, a budget of $BUDGET ms/frame (the frame time of clamped-cubic's knee by mean FLIP) and"
-            echo "the best each filter does within it (lowest mean FLIP among its settings that take no longer):"
+            echo "$scene, a budget of $BUDGET ms/frame (the frame time of $(rs_scale "$BUDGET_FROM") $(rs_filter "$BUDGET_FROM")) and the best"
+            echo "each filter does within it (lowest mean FLIP among its settings that take no longer):"
             echo "bilinear at scale $(rs_scale "$PAIR_B") ($b_ms ms, mean FLIP $b_flip) and clamped-cubic at scale"
             echo "$(rs_scale "$PAIR_C") ($MS ms, $FLIP). The ${CROP_PX}×$CROP_PX pixels at ($CROP_X, $CROP_Y) where the"
             echo "bilinear one differs most from the reference$([ "$CROP_ZOOM" -gt 1 ] && echo ", enlarged $CROP_ZOOM×"): top, the reference and the"
             echo "two; below, their FLIP maps (black 0, pale yellow 1)."
+            if [ "$PAIR_SPLIT" = 0 ]; then
+                echo "At no point's frame time do the two filters' best settings differ in scale on this curve, so"
+                echo "this pair (at clamped-cubic's knee) differs in the filter only."
+            fi
             echo
         done
     } > "$out"
