@@ -134,8 +134,9 @@ knob_antialiasing() { # scene labels...
             echo "$scene, the ${CROP_PX}×$CROP_PX pixels at ($CROP_X, $CROP_Y) where \`single\` differs most from the"
             echo "reference$([ "$CROP_ZOOM" -gt 1 ] && echo ", enlarged $CROP_ZOOM×"): top, the reference, \`single\` ($a_ms ms, mean FLIP"
             echo "$a_flip over the whole image) and \`$other\` ($MS ms, $FLIP); below, their FLIP maps (black 0, pale"
-            echo "yellow 1). Not equal time: two settings of one knob never cost the same; equal-time pairs"
-            echo "come with the render-scale knob (e.g. $other at a smaller scale against \`single\` at full size)."
+            echo "yellow 1). Not equal time: two settings of one knob never cost the same; the render-scale"
+            echo "section has equal-time pairs of its two upscale filters (antialiasing at a smaller scale"
+            echo "against \`single\` at full size is not measured yet)."
             echo
         done
     } > "$out"

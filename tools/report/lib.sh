@@ -10,7 +10,11 @@
 #   report_plot KNOB METRIC YLABEL TITLE [ALONE]  gnuplot: frame time
 #       against one error column for every scene, points labelled with their
 #       setting, joined in the order measured (but for setting ALONE)
-#   report_knee KNOB SCENE METRIC           sets KNEE to the setting at the knee
+#   report_plot KNOB METRIC YLABEL TITLE ALONE SERIES...  several series
+#       per scene (SERIES: NAME=SETTING[:LABEL],...; see report_plot)
+#   report_knee KNOB SCENE METRIC [SETTINGS...]  sets KNEE to the setting at
+#       the knee (of the curve of SETTINGS only, when given)
+#   report_upscale_ms KNOB SCENE SETTING    sets UPSCALE_MS (median, --scale < 1)
 #   report_crops KNOB SCENE A B             side-by-side crops of settings A, B
 #   report_row KNOB SCENE SETTING           sets MS FLIP RMSE ... of one row
 #
@@ -79,6 +83,8 @@ report_time_run() { # scene_arg, then render options
         --display null "$@"
     MS_RUN=$(sed -n 's/.*(\([0-9.]*\) ms\/frame.*/\1/p' "$WORK/cmd.out")
     [ -n "$MS_RUN" ] || report_fail "no 'ms/frame' in the output of: $TESSERA render ... $*"
+    # with --scale < 1, the upscale's share (on thread 0, inside the frame time above)
+    UPSCALE_RUN=$(sed -n 's/^render scale .*: \([0-9.]*\) ms\/frame upscaling.*/\1/p' "$WORK/cmd.out")
 }
 
 # The reference of a scene: REFERENCE_RENDERS renders of jittered:REFERENCE_K
@@ -175,6 +181,7 @@ report_curve() { # knob scene label=args...
             # shellcheck disable=SC2046
             report_time_run "$rc_scene" $(echo "${rc_setting#*=}" | tr '~' ' ')
             echo "$MS_RUN" >> "$WORK/times/$rc_knob-$rc_label-$rc_name"
+            [ -z "$UPSCALE_RUN" ] || echo "$UPSCALE_RUN" >> "$WORK/times/$rc_knob-$rc_label-$rc_name.upscale"
         done
         rc_run=$((rc_run + 1))
     done
@@ -207,6 +214,18 @@ report_row() { # knob scene setting
     PSNR=$(echo "$row" | cut -f10)
 }
 
+# The median upscale time (ms/frame, tessera render's 'render scale' line) of
+# a setting's timed runs into UPSCALE_MS; empty for a setting that does not
+# upscale.
+report_upscale_ms() { # knob scene setting
+    ru_file=$WORK/times/$1-$2-$3.upscale
+    UPSCALE_MS=""
+    if [ -s "$ru_file" ]; then
+        # shellcheck disable=SC2046
+        UPSCALE_MS=$(report_median $(cat "$ru_file"))
+    fi
+}
+
 # Column of a metric in KNOB.tsv.
 report_metric_column() {
     case $1 in
@@ -219,10 +238,15 @@ report_metric_column() {
 # The knee of a scene's curve for a metric, into KNEE: the point farthest
 # below the straight line from the fastest to the slowest point, with frame
 # time and error each scaled to [0, 1] over the curve (Satopää et al. 2011,
-# "Kneedle"). The fastest point when no point lies below that line.
-report_knee() { # knob scene metric
+# "Kneedle"). The fastest point when no point lies below that line. With
+# SETTINGS, the curve of those settings only (one series of several).
+report_knee() { # knob scene metric [settings...]
     rk_col=$(report_metric_column "$3")
-    KNEE=$(awk -F '\t' -v s="$2" -v c="$rk_col" '$1 == s { n++; name[n] = $2; x[n] = $3; y[n] = $c }
+    rk_knob=$1
+    rk_scene=$2
+    shift 3
+    KNEE=$(awk -F '\t' -v s="$rk_scene" -v c="$rk_col" -v only=" $* " '$1 == s && (only == "  " || index(only, " " $2 " ")) {
+            n++; name[n] = $2; x[n] = $3; y[n] = $c }
         END {
             if (n == 0) exit 1
             lo = 1; hi = 1
@@ -238,7 +262,7 @@ report_knee() { # knob scene metric
                 if (line - v > bestd) { bestd = line - v; best = i }
             }
             print name[best]
-        }' "$WORK/$1.tsv") || report_fail "report_knee: no rows for $2 in $1"
+        }' "$WORK/$rk_knob.tsv") || report_fail "report_knee: no rows for $rk_scene in $rk_knob"
 }
 
 # Plot frame time (x) against one error column (y): one series per scene,
@@ -246,17 +270,29 @@ report_knee() { # knob scene metric
 # measured except setting ALONE (a point apart: another kind of setting);
 # log axes where the values span a decade or more. Writes
 # $WORK/plots/KNOB_METRIC.png.
-report_plot() { # knob metric ylabel title [alone]
+#
+# With SERIES (ALONE given, '' for none), each scene draws one series per
+# SERIES word instead, NAME=SETTING[:LABEL],SETTING[:LABEL],... : the settings
+# joined in that order, titled 'SCENE, NAME' (no spaces in NAME), each point
+# labelled LABEL (the setting when no ':'; nothing for an empty LABEL, e.g. a
+# point two series share, labelled once). Point shapes tell the series of a
+# scene apart; colours, the scenes and series.
+report_plot() { # knob metric ylabel title [alone [series...]]
     rp_knob=$1
     rp_col=$(report_metric_column "$2")
+    rp_metric=$2
+    rp_ylabel=$3
+    rp_title=$4
+    rp_alone=${5:-}
+    if [ $# -gt 5 ]; then shift 5; else set --; fi # no SERIES: one series per scene
     mkdir -p "$WORK/plots"
-    rp_gp=$WORK/plots/$rp_knob-$2.gp
+    rp_gp=$WORK/plots/$rp_knob-$rp_metric.gp
     {
         echo "set terminal $GNUPLOT_TERM size 900,600"
-        echo "set output '$WORK/plots/${rp_knob}_$2.png'"
-        echo "set title \"$4\""
+        echo "set output '$WORK/plots/${rp_knob}_$rp_metric.png'"
+        echo "set title \"$rp_title\""
         echo "set xlabel 'frame time (ms, median of $RUNS runs, $THREADS threads, $SIZE)'"
-        echo "set ylabel \"$3\""
+        echo "set ylabel \"$rp_ylabel\""
         echo "set grid"
         echo "set key top right"
         echo "set offsets graph 0.05, graph 0.12, graph 0.08, graph 0.08"
@@ -265,27 +301,61 @@ report_plot() { # knob metric ylabel title [alone]
         printf 'plot '
         rp_side=1
         for rp_scene in $(cut -f1 "$WORK/$rp_knob.tsv" | awk '!seen[$0]++'); do
-            rp_dat=$WORK/plots/$rp_knob-$rp_scene.dat
-            # labels to the right of the first scene's points, to the left of the next one's, and so
-            # on: series of similar settings lie side by side; a blank line (gnuplot: break the
-            # line) around the setting that stands apart
-            awk -F '\t' -v s="$rp_scene" -v c="$rp_col" -v alone="${5:-}" '$1 == s {
-                    n++
-                    if ($2 == alone && n > 1) print ""
-                    print $3, $c, $2
-                    if ($2 == alone) print ""
-                }' "$WORK/$rp_knob.tsv" > "$rp_dat"
-            printf "'%s' using 1:2 with linespoints pointtype 7 title '%s', " "$rp_dat" "$rp_scene"
-            if [ "$rp_side" -gt 0 ]; then
-                printf "'%s' using 1:2:3 with labels left offset char 1,0 notitle, " "$rp_dat"
-            else
-                printf "'%s' using 1:2:3 with labels right offset char -1,0 notitle, " "$rp_dat"
+            if [ $# -eq 0 ]; then
+                rp_dat=$WORK/plots/$rp_knob-$rp_scene.dat
+                # labels to the right of the first scene's points, to the left of the next one's, and so
+                # on: series of similar settings lie side by side; a blank line (gnuplot: break the
+                # line) around the setting that stands apart
+                awk -F '\t' -v s="$rp_scene" -v c="$rp_col" -v alone="$rp_alone" '$1 == s {
+                        n++
+                        if ($2 == alone && n > 1) print ""
+                        print $3, $c, $2
+                        if ($2 == alone) print ""
+                    }' "$WORK/$rp_knob.tsv" > "$rp_dat"
+                report_plot_series "$rp_dat" "$rp_scene" 7
+                continue
             fi
-            rp_side=$((-rp_side))
+            rp_n=0
+            for rp_series in "$@"; do
+                rp_n=$((rp_n + 1))
+                rp_name=${rp_series%%=*}
+                rp_dat=$WORK/plots/$rp_knob-$rp_scene-$rp_name.dat
+                # the series' settings in its order; labels quoted (gnuplot: a string column)
+                echo "${rp_series#*=}" | tr ',' '\n' | awk -F '\t' -v s="$rp_scene" -v c="$rp_col" '
+                    NR == FNR { if ($1 == s) { x[$2] = $3; y[$2] = $c }; next }
+                    {
+                        set = $0; label = $0
+                        if (index($0, ":")) { set = substr($0, 1, index($0, ":") - 1); label = substr($0, index($0, ":") + 1) }
+                        if (!(set in x)) { print "no row for " set > "/dev/stderr"; exit 1 }
+                        printf "%s %s \"%s\"\n", x[set], y[set], label
+                    }' "$WORK/$rp_knob.tsv" - > "$rp_dat" ||
+                    report_fail "report_plot: series $rp_name of $rp_knob names a setting not measured on $rp_scene"
+                # shapes: filled circle, square, triangle, diamond, then circles again
+                case $rp_n in
+                    2) rp_pt=5 ;;
+                    3) rp_pt=9 ;;
+                    4) rp_pt=13 ;;
+                    *) rp_pt=7 ;;
+                esac
+                report_plot_series "$rp_dat" "$rp_scene, $rp_name" "$rp_pt"
+            done
         done | sed 's/, $//'
         echo
     } > "$rp_gp"
     report_run "$GNUPLOT" "$rp_gp"
+}
+
+# One series of report_plot: the points joined, then their labels, to the
+# right of the points for every other series and to the left for the rest
+# (rp_side, flipped here).
+report_plot_series() { # dat title pointtype
+    printf "'%s' using 1:2 with linespoints pointtype %s title '%s', " "$1" "$3" "$2"
+    if [ "$rp_side" -gt 0 ]; then
+        printf "'%s' using 1:2:3 with labels left offset char 1,0 notitle, " "$1"
+    else
+        printf "'%s' using 1:2:3 with labels right offset char -1,0 notitle, " "$1"
+    fi
+    rp_side=$((-rp_side))
 }
 
 # "log" when a column of KNOB.tsv spans a decade or more (max / min >= 10).

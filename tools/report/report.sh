@@ -30,7 +30,7 @@ ROOT=$(pwd)
 . tools/report/lib.sh
 
 # the knobs, in report order (tools/report/knob_NAME.sh each)
-KNOBS="antialiasing"
+KNOBS="antialiasing render_scale"
 
 SIZE=${REPORT_SIZE:-1920x1080}
 RUNS=${REPORT_RUNS:-3}
