@@ -201,6 +201,47 @@ Test(pipeline_cli, bench_path_prints_every_transaction_and_frame_time_summary)
     cr_expect(median > 0 && worst >= median, "median %g worst %g", median, worst);
 }
 
+/* With a budget: every transaction's line has the frame's render scale, the
+ * sampled ones a FLIP against the full-size frame; the summary has p50, p95
+ * and the mean FLIP. The first frame (nothing measured yet) is full size, so
+ * its FLIP against the full-size frame is exactly 0. */
+Test(pipeline_cli, bench_path_with_a_budget_prints_scale_and_flip_per_transaction)
+{
+    char out[16384];
+    write_file("short2.json", "{\"format\": \"tessera-camera-path\", \"version\": 1, \"keyframes\": ["
+                              "{\"time\": 0, \"eye\": [4.5, 3.2, 6.5], \"look_at\": [0, 0.6, 0]},"
+                              "{\"time\": 0.5, \"eye\": [-4.5, 3.2, 6.5], \"look_at\": [0, 0.6, 0]}]}");
+    cr_assert_eq(run(out, sizeof out,
+                     "bench --path %s/short2.json --rate 20 --size 64x40 --threads 2 --budget-ms 5 --flip-samples 3"),
+                 0, "%s", out);
+    int k, frame, sampled = 0;
+    double t, ms, fps, scale;
+    char flip[32];
+    for (const char *l = strstr(out, "\ntxn "); l; l = strstr(l + 1, "\ntxn ")) {
+        cr_assert_eq(sscanf(l, "\ntxn %d %lf %d %lf %lf %lf %31s", &k, &t, &frame, &ms, &fps, &scale, flip), 7,
+                     "a transaction line without scale and FLIP: %.80s", l);
+        cr_expect(scale > 0 && scale <= 1, "scale %g", scale);
+        if (strcmp(flip, "-")) {
+            double f = atof(flip);
+            cr_expect(f >= 0 && f <= 1, "flip %g", f);
+            if (k == 0)
+                cr_expect(f == 0.0 && scale == 1.0, "the first frame is full size: FLIP %g at scale %g", f, scale);
+            sampled++;
+        }
+    }
+    cr_expect_eq(sampled, 3, "3 transactions sampled: %s", out);
+    const char *line = strstr(out, "BENCH_PATH ");
+    cr_assert(line, "no BENCH_PATH line: %s", out);
+    double p50 = -1, p95 = -1, mean = -1;
+    const char *a = strstr(line, "p50_ms="), *b = strstr(line, "p95_ms="), *c = strstr(line, "flip_mean=");
+    cr_assert(a && b && c, "%s", line);
+    sscanf(a, "p50_ms=%lf", &p50);
+    sscanf(b, "p95_ms=%lf", &p95);
+    sscanf(c, "flip_mean=%lf", &mean);
+    cr_expect(p50 > 0 && p95 >= p50 && mean >= 0 && mean <= 1, "p50 %g p95 %g flip_mean %g", p50, p95, mean);
+    cr_expect(strstr(line, "flip_frames=3"), "%s", line);
+}
+
 Test(pipeline_cli, bench_scaling_prints_a_fraction_of_linear_per_thread_count)
 {
     char out[8192];

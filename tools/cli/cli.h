@@ -37,6 +37,9 @@ double cli_machine_busy_s(void);
 double cli_own_cpu_s(void);
 /* Median of n values (sorts them in place); 0 for n == 0. */
 double cli_median(double *values, size_t n);
+/* The q-quantile (0..1) of values[0 .. n), linear between order statistics
+ * (sorts them; 0 for n = 0). */
+double cli_quantile(double *values, size_t n, double q);
 
 struct scene;
 struct accel;

@@ -11,25 +11,33 @@
 #include <time.h>
 
 #include "cli.h"
+#include "engine/render.h"
 #include "engine/scene.h"
+#include "engine/srgb.h"
+#include "metrics/flip.h"
 #include "option_check.h"
 #include "pipeline_cli.h"
 
 #define BENCH_PATH_MAX_TRANSACTIONS 1000000
+#define BENCH_PATH_DEFAULT_FLIP_SAMPLES 16 /* with --budget-ms: transactions whose frame gets flip_vs_full */
+#define BENCH_PATH_MAX_FLIP_SAMPLES 1000
 #define SCALING_DEFAULT_ROUNDS 3
 #define SCALING_DEFAULT_FRAMES 48
 
 /* Per-frame durations, kept by a serial callback (serial section only). */
 typedef struct frame_clock {
-    double *frame_s;  /* frame_s[f]: wall time of loop step f (display f-1 + render f) */
+    double *frame_s;  /* frame_s[f]: wall time of the loop step that rendered frame f (display f-1 + render f) */
     size_t count, capacity;
+    bool last_idle;   /* the previous step rendered nothing (a governor's idle step): it is not a frame */
 } frame_clock;
 
 static void clock_tick(pipeline *p, void *ctx, const frame_info *fi)
 {
     (void)p;
     frame_clock *fc = ctx;
-    if (fi->frame == 0)
+    bool previous_was_frame = fi->frame > 0 && !fc->last_idle && fc->count == fi->frame - 1;
+    fc->last_idle = fi->idle;
+    if (!previous_was_frame)
         return;
     if (fc->count == fc->capacity) {
         size_t cap = fc->capacity ? 2 * fc->capacity : 1024;
@@ -82,6 +90,162 @@ static void end_of_path(pipeline *p, void *args)
     pipeline_at_frame(p, pipeline_frame(p) + 1, "stop", stop_now, NULL, 0);
 }
 
+/* ---- what channel 0's display was given: each frame's scale, and 8-bit
+ * copies of the frames that first showed the sampled transactions ---- */
+
+typedef struct flip_sample {
+    size_t txn;         /* the transaction it measures */
+    bool captured;
+    camera_desc camera; /* of the frame */
+    uint8_t *srgb;      /* the frame as scan-out shows it: 8-bit sRGB, w * h * 3 */
+    double flip;        /* mean FLIP against the full-size frame of the camera; NAN: not measured */
+} flip_sample;
+
+typedef struct frame_tap {
+    image_display base;
+    image_display_ops ops;   /* the inner display's hooks, forwarded */
+    image_display *inner;
+    const path_sender *sender;
+    flip_sample *samples;    /* sorted by txn */
+    size_t sample_count;
+    double *frame_scale;     /* frame_scale[f]: render scale of frame f (display thread while running) */
+    size_t frame_count, frame_capacity;
+    int width_px, height_px;
+    bool out_of_memory;
+} frame_tap;
+
+static uint8_t srgb_byte(float linear)
+{
+    double v = linear > 0.f ? (linear < 1.f ? (double)linear : 1.0) : 0.0;
+    return (uint8_t)(srgb_curve_encode(v) * 255.0 + 0.5);
+}
+
+static void to_srgb8(const float *rgb, size_t floats, uint8_t *out)
+{
+    for (size_t i = 0; i < floats; i++)
+        out[i] = srgb_byte(rgb[i]);
+}
+
+static bool tap_show(image_display *d, const frame_image *img, tess_error *err)
+{
+    frame_tap *t = (frame_tap *)d;
+    if (img->frame >= t->frame_capacity) {
+        size_t cap = t->frame_capacity ? 2 * t->frame_capacity : 1024;
+        while (cap <= img->frame)
+            cap *= 2;
+        double *grown = realloc(t->frame_scale, cap * sizeof *grown);
+        if (grown) {
+            t->frame_scale = grown;
+            t->frame_capacity = cap;
+        }
+    }
+    if (img->frame < t->frame_capacity) {
+        for (size_t f = t->frame_count; f < img->frame; f++)
+            t->frame_scale[f] = NAN; /* frames never shown (none, unless a channel was off) */
+        t->frame_scale[img->frame] = img->render_scale;
+        if (img->frame >= t->frame_count)
+            t->frame_count = img->frame + 1;
+    }
+    /* the serial section that applied a transaction came before this frame's display stage */
+    for (size_t i = 0; i < t->sample_count; i++) {
+        flip_sample *s = &t->samples[i];
+        if (s->captured || t->sender->applied_at[s->txn] != img->frame)
+            continue;
+        size_t floats = (size_t)img->width_px * (size_t)img->height_px * 3;
+        s->srgb = malloc(floats);
+        if (!s->srgb) {
+            t->out_of_memory = true;
+            continue;
+        }
+        to_srgb8(img->rgb, floats, s->srgb);
+        s->camera = img->camera;
+        s->captured = true;
+        t->width_px = img->width_px;
+        t->height_px = img->height_px;
+    }
+    return t->inner->ops->show(t->inner, img, err);
+}
+
+static void tap_write_tile(image_display *d, const frame_image *img, int x0, int y0, int x1, int y1)
+{
+    frame_tap *t = (frame_tap *)d;
+    t->inner->ops->write_tile(t->inner, img, x0, y0, x1, y1);
+}
+
+static bool tap_end_stage(image_display *d, tess_error *err)
+{
+    frame_tap *t = (frame_tap *)d;
+    return t->inner->ops->end_stage(t->inner, err);
+}
+
+static void tap_destroy(image_display *d)
+{
+    frame_tap *t = (frame_tap *)d;
+    image_display_destroy(t->inner);
+    t->inner = NULL; /* the samples and scales outlive the pipeline: freed by bench_path */
+}
+
+/* cli_pipeline_spec.wrap_display: channel 0 gets the tap (made by bench_path). */
+static image_display *wrap_with_tap(void *ctx, int channel, image_display *inner, tess_error *err)
+{
+    (void)err;
+    frame_tap *t = ctx;
+    if (channel != 0)
+        return inner;
+    t->inner = inner;
+    t->ops = (image_display_ops){"tap", tap_show, tap_destroy, inner->ops->write_tile ? tap_write_tile : NULL,
+                                 inner->ops->end_stage ? tap_end_stage : NULL};
+    t->base.ops = &t->ops;
+    return &t->base;
+}
+
+/* After the run: each captured frame against the full-size, one-ray-per-pixel
+ * frame of its camera (what the governor would show with time to spare),
+ * both as 8-bit sRGB, FLIP at its default viewer. */
+static bool measure_flips(frame_tap *t, const cli_pipeline_spec *spec, const cli_scene *cs)
+{
+    int w = t->width_px, h = t->height_px;
+    size_t pixels = (size_t)w * (size_t)h;
+    float *full = malloc(pixels * 3 * sizeof *full), *a = malloc(pixels * 3 * sizeof *a);
+    float *b = malloc(pixels * 3 * sizeof *b), *map = malloc(pixels * sizeof *map);
+    uint8_t *full8 = malloc(pixels * 3);
+    bool ok = full && a && b && map && full8;
+    if (!ok)
+        cli_error("bench --path: out of memory for the FLIP measurement at %dx%d", w, h);
+    float decode[256];
+    for (int c = 0; c < 256; c++)
+        decode[c] = (float)srgb_curve_decode(c / 255.0);
+    for (size_t i = 0; ok && i < t->sample_count; i++) {
+        flip_sample *s = &t->samples[i];
+        if (!s->captured)
+            continue;
+        render_view v = {cs->scene, cs->accel, camera_basis_make(&s->camera, w, h), spec->shadows,
+                         spec->renderer->shading};
+        render_image(&v, spec->threads, full, NULL);
+        to_srgb8(full, pixels * 3, full8);
+        for (size_t k = 0; k < pixels * 3; k++) {
+            a[k] = decode[full8[k]];
+            b[k] = decode[s->srgb[k]];
+        }
+        tess_error err = {{0}};
+        if (!flip_ldr_map(a, b, w, h, FLIP_DEFAULT_PPD, spec->threads, map, &err)) {
+            cli_error("bench --path: FLIP: %s", err.msg);
+            ok = false;
+            break;
+        }
+        double sum = 0.0;
+        for (size_t k = 0; k < pixels; k++)
+            sum += map[k];
+        s->flip = sum / (double)pixels;
+    }
+    free(full);
+    free(a);
+    free(b);
+    free(map);
+    free(full8);
+    return ok;
+}
+
 static void sleep_until(double t)
 {
     double now = cli_now_s();
@@ -110,28 +274,50 @@ static void *send_path(void *arg)
     return NULL;
 }
 
-static void print_path_report(const path_sender *s, frame_clock *fc, const cli_pipeline_spec *spec)
+static void print_path_report(const path_sender *s, frame_clock *fc, const frame_tap *tap,
+                              const cli_pipeline_spec *spec)
 {
-    printf("# txn time_s frame frame_ms fps (the frame that first showed the transaction)\n");
+    printf("# txn time_s frame frame_ms fps scale flip_vs_full (the frame that first showed the transaction; "
+           "scale: its render scale, - on a wall; flip_vs_full: mean FLIP against the full-size frame of its "
+           "camera, - where not sampled)\n");
+    size_t next_sample = 0;
+    double flip_sum = 0.0;
+    size_t flips = 0;
     for (size_t k = 0; k < s->transactions; k++) {
         uint64_t f = s->applied_at[k];
         double frame_s = f < fc->count ? fc->frame_s[f] : NAN;
-        printf("txn %zu %.4f %llu %.2f %.1f\n", k, (double)k / s->rate_hz, (unsigned long long)f, 1e3 * frame_s,
-               1.0 / frame_s);
+        char scale[16] = "-", flip[16] = "-";
+        if (f < tap->frame_count && !isnan(tap->frame_scale[f]))
+            snprintf(scale, sizeof scale, "%.4g", tap->frame_scale[f]);
+        while (next_sample < tap->sample_count && tap->samples[next_sample].txn < k)
+            next_sample++;
+        if (next_sample < tap->sample_count && tap->samples[next_sample].txn == k &&
+            !isnan(tap->samples[next_sample].flip)) {
+            snprintf(flip, sizeof flip, "%.5f", tap->samples[next_sample].flip);
+            flip_sum += tap->samples[next_sample].flip;
+            flips++;
+        }
+        printf("txn %zu %.4f %llu %.2f %.1f %s %s\n", k, (double)k / s->rate_hz, (unsigned long long)f,
+               1e3 * frame_s, 1.0 / frame_s, scale, flip);
     }
     size_t frames = fc->count;
     double worst = 0.0;
     for (size_t i = 0; i < frames; i++)
         worst = fc->frame_s[i] > worst ? fc->frame_s[i] : worst;
+    double p95 = cli_quantile(fc->frame_s, frames, 0.95);
     double med = cli_median(fc->frame_s, frames);
+    char flip_mean[32] = "-";
+    if (flips)
+        snprintf(flip_mean, sizeof flip_mean, "%.5f", flip_sum / (double)flips);
     printf("BENCH_PATH transactions=%zu frames=%zu rate_hz=%g threads=%d size=%dx%d median_frame_ms=%.3f "
-           "worst_frame_ms=%.3f median_fps=%.2f refused=%zu\n",
+           "worst_frame_ms=%.3f median_fps=%.2f refused=%zu p50_ms=%.3f p95_ms=%.3f budget_ms=%g flip_mean=%s "
+           "flip_frames=%zu\n",
            s->transactions, frames, s->rate_hz, spec->threads, spec->channels[0].width_px,
            spec->channels[0].height_px, 1e3 * med, 1e3 * worst, med > 0.0 ? 1.0 / med : 0.0,
-           atomic_load(&s->refused));
+           atomic_load(&s->refused), 1e3 * med, 1e3 * p95, spec->budget_ms, flip_mean, flips);
 }
 
-static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs)
+static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_samples)
 {
     tess_error err = {{0}};
     camera_path path = {0};
@@ -151,7 +337,23 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs)
                      .all_channels = spec->wall_file[0] != '\0'};
     atomic_init(&s.refused, 0);
     s.applied_at = calloc(s.transactions, sizeof *s.applied_at);
-    frame_clock fc = {NULL, 0, 0};
+    for (size_t k = 0; s.applied_at && k < s.transactions; k++)
+        s.applied_at[k] = UINT64_MAX; /* not applied yet */
+    frame_clock fc = {NULL, 0, 0, false};
+    /* the sampled transactions: evenly spread over the path, the first and the last included */
+    frame_tap tap = {.sender = &s};
+    size_t want = (size_t)flip_samples < s.transactions ? (size_t)flip_samples : s.transactions;
+    tap.samples = want ? calloc(want, sizeof *tap.samples) : NULL;
+    for (size_t i = 0; tap.samples && i < want; i++) {
+        size_t txn = want == 1 ? 0 : (size_t)llround((double)i * (double)(s.transactions - 1) / (double)(want - 1));
+        if (tap.sample_count && tap.samples[tap.sample_count - 1].txn == txn)
+            continue;
+        tap.samples[tap.sample_count++] = (flip_sample){.txn = txn, .flip = NAN};
+    }
+    if (!spec->wall_file[0]) {
+        spec->wrap_display = wrap_with_tap;
+        spec->wrap_ctx = &tap;
+    }
     spec->channels[0].camera = camera_path_eval(&path, path.keys[0].time_s);
     spec->channels[0].have_camera = true;
     spec->frames = 0; /* until the path ends */
@@ -168,17 +370,26 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs)
             pthread_join(sender, NULL);
             if (!ok)
                 cli_error("%s", err.msg);
-            else {
-                print_path_report(&s, &fc, spec);
+            else if (tap.out_of_memory) {
+                cli_error("bench --path: out of memory keeping the frames to measure");
+            } else if (measure_flips(&tap, spec, cs)) {
+                print_path_report(&s, &fc, &tap, spec);
                 cli_pipeline_report(p, spec);
                 code = 0;
             }
         }
     }
     pipeline_destroy(p);
+    if (!p)
+        image_display_destroy(tap.inner);
+    for (size_t i = 0; i < tap.sample_count; i++)
+        free(tap.samples[i].srgb);
+    free(tap.samples);
+    free(tap.frame_scale);
     free(s.applied_at);
     free(fc.frame_s);
     camera_path_free(&path);
+    spec->wrap_display = NULL;
     return code;
 }
 
@@ -318,8 +529,13 @@ static void usage(FILE *f)
           "       tessera bench --scaling [--path FILE] [--threads N] [--rounds R] [options]\n"
           "--path: a sender thread queues one camera transaction per 1/HZ s of the camera path\n"
           "  (--rate, default 30), as a user steering would, while the pipeline renders as fast as it\n"
-          "  can (real time). Prints per transaction 'txn K TIME FRAME FRAME_MS FPS' (the frame that\n"
-          "  first showed it) and a BENCH_PATH line with the median and worst frame time.\n"
+          "  can (real time). Prints per transaction 'txn K TIME FRAME FRAME_MS FPS SCALE FLIP' (the\n"
+          "  frame that first showed it, its render scale, and for --flip-samples of them the mean\n"
+          "  FLIP against the full-size frame of the same camera) and a BENCH_PATH line with the\n"
+          "  median, p95 and worst frame time and the mean FLIP. With --budget-ms the governor\n"
+          "  picks the scale.\n"
+          "  --flip-samples N --path: transactions measured with FLIP, spread over the path (default\n"
+          "                   16 with --budget-ms, else 0; each keeps one 8-bit frame until the end)\n"
           "--scaling: renders the same animation (the path, or a 2 s orbit) in fixed-rate time at\n"
           "  1..N threads (--threads, default the number of CPUs), --rounds times each (default 3,\n"
           "  alternating), and prints per thread count a SCALING line: median wall time, speed-up\n"
@@ -340,7 +556,7 @@ int cli_bench_path(int argc, char **argv)
     cli_pipeline_spec_default(&spec, "null", NULL);
     const char *scene_path = NULL;
     bool scaling = false, reject_noisy = true;
-    int rounds = SCALING_DEFAULT_ROUNDS;
+    int rounds = SCALING_DEFAULT_ROUNDS, flip_samples = -1;
     const char *config = cli_pipeline_find_config(argc, argv);
     if (config && !cli_pipeline_config_load(config, &spec))
         return 2;
@@ -361,6 +577,10 @@ int cli_bench_path(int argc, char **argv)
             continue;
         if (!strcmp(a, "--scaling")) {
             scaling = true;
+        } else if (!strcmp(a, "--flip-samples")) {
+            if (!(val = cli_option_value(argc, argv, &i)) ||
+                !cli_parse_int(a, val, 0, BENCH_PATH_MAX_FLIP_SAMPLES, &flip_samples))
+                return 2;
         } else if (!strcmp(a, "--keep-noisy")) {
             reject_noisy = false;
         } else if (!strcmp(a, "--rounds")) {
@@ -391,7 +611,10 @@ int cli_bench_path(int argc, char **argv)
         cli_scene_finish(&cs);
         return 1;
     }
-    int code = scaling ? bench_scaling(&spec, &cs, max_threads, rounds, reject_noisy) : bench_path(&spec, &cs);
+    if (flip_samples < 0)
+        flip_samples = spec.budget_ms > 0.0 ? BENCH_PATH_DEFAULT_FLIP_SAMPLES : 0;
+    int code = scaling ? bench_scaling(&spec, &cs, max_threads, rounds, reject_noisy)
+                       : bench_path(&spec, &cs, flip_samples);
     cli_scene_finish(&cs);
     return code;
 }

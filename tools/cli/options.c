@@ -190,6 +190,16 @@ static int compare_doubles(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+double cli_quantile(double *values, size_t n, double q)
+{
+    if (n == 0)
+        return 0.0;
+    qsort(values, n, sizeof *values, compare_doubles);
+    double at = q * (double)(n - 1); /* linear between the two nearest order statistics */
+    size_t lo = (size_t)floor(at), hi = lo + 1 < n ? lo + 1 : lo;
+    return values[lo] + (at - (double)lo) * (values[hi] - values[lo]);
+}
+
 double cli_median(double *values, size_t n)
 {
     if (n == 0)

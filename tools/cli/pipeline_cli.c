@@ -684,6 +684,8 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
             return NULL;
         }
         image_display *d = display_create(ch->display, ch->out, s->frames != 1, &err);
+        if (d && s->wrap_display)
+            d = s->wrap_display(s->wrap_ctx, i, d, &err);
         int added;
         if (!d || s->render_scale >= 1.0) {
             added = d ? pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) : -1;

@@ -58,6 +58,10 @@ typedef struct cli_pipeline_spec {
     double budget_ms;
     int refine_k;
     double still_s;
+    /* optional (NULL): put a display in front of each channel's display (not a wall's):
+     * returns the display to add, owning `inner` (destroyed on failure, then NULL with err) */
+    image_display *(*wrap_display)(void *ctx, int channel, image_display *inner, tess_error *err);
+    void *wrap_ctx;
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
