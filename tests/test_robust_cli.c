@@ -38,7 +38,8 @@ Test(robust_cli, prints_every_field_and_default_kernels_make_no_errors)
     int code = support_tessera_split(dir, RUN_TIMEOUT_S, out, err, OUT_BYTES, "robust", "--small --threads 2");
     cr_assert_eq(code, 0, "exit %d: %s", code, err);
     const char *cases[] = {"primary", "closed_sphere", "slivers", "lit_plane"};
-    const char *keys[] = {"rays", "wrong_hits", "leaks", "per_million", "mrays_s", "checked", "threads"};
+    const char *keys[] = {"rays", "wrong_hits", "leaks", "per_million", "mrays_s", "checked", "threads", "mrays_s_min",
+                          "mrays_s_max", "mrays_cpu_s", "mrays_cpu_s_min", "mrays_cpu_s_max"};
     char *save = NULL;
     int lines = 0;
     for (char *line = strtok_r(out, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {

@@ -6,11 +6,14 @@
  *
  * One line per case on stdout:
  *   case=NAME rays=N wrong_hits=W leaks=L per_million=X mrays_s=M checked=C build=B isa=I threads=T
+ *   mrays_s_min=A mrays_s_max=B mrays_cpu_s=P mrays_cpu_s_min=Q mrays_cpu_s_max=R
+ * (mrays_cpu_s: millions of rays per CPU second of this process, median)
  * rays: traced and timed; checked: those compared with the right answer (all
  * but the primary case's, which checks a subsample against a brute-force
  * reference in double); per_million = (W + L) * 1e6 / checked; mrays_s: rays /
- * wall time of tracing them all, median of --repeat runs (the set-up, scene
- * building and checking are not timed). Every ray goes through the packet
+ * wall time of tracing them all, median of --repeat runs, each run tracing the
+ * case as many times over as takes ROBUST_MIN_RUN_S (the set-up, scene building
+ * and checking are not timed). Every ray goes through the packet
  * entry points (accel_intersect_packet, or accel_occluded_packet for shadow
  * rays), 64 at a time, as the renderer's. */
 #include <float.h>
@@ -32,8 +35,15 @@
 
 #define ROBUST_MAX_THREADS 256
 #define ROBUST_MAX_REPEAT 1000
-/* The primary case checks every ROBUST_PRIMARY_STRIDE-th ray against brute force in double. */
-#define ROBUST_PRIMARY_STRIDE 16
+/* A timed run traces its case as many times as takes at least this long (by
+ * the untimed first pass), at most ROBUST_MAX_PASSES times: short cases
+ * (--small) would otherwise be timed over a few milliseconds. */
+#define ROBUST_MIN_RUN_S 0.25
+#define ROBUST_MAX_PASSES 10000
+/* The primary case checks every ROBUST_PRIMARY_STRIDE-th ray against brute
+ * force in double (every ROBUST_PRIMARY_STRIDE_SMALL-th with --small). */
+#define ROBUST_PRIMARY_STRIDE 64
+#define ROBUST_PRIMARY_STRIDE_SMALL 16
 /* Primary case: hit/miss or primitive differences closer than this to being
  * right are not counted (barycentrics of a triangle, relative distance of the
  * ray from a sphere's silhouette, relative t of two crossings: a near tie). A
@@ -70,6 +80,7 @@ typedef struct robust_case {
     size_t batch_count, batch_capacity;
     ray *rays;
     size_t ray_count, ray_capacity;
+    size_t check_stride;       /* primary: check every check_stride-th ray */
     hit *hits;                 /* QUERY_CLOSEST results */
     unsigned char *occluded;   /* QUERY_ANY results */
 } robust_case;
@@ -192,11 +203,14 @@ typedef struct robust_work {
     robust_case *c;
     const robust_item *items;
     size_t item_count;
+    size_t passes;      /* claims run over item_count * passes: the case traced `passes` times */
     atomic_size_t next;
     atomic_bool failed;
 } robust_work;
 
-static void trace_item(robust_case *c, const robust_item *it, ray_packet *p)
+/* Trace one packet; its results are stored when `store` (the first pass over
+ * the items: one thread per item, so no two threads write one result). */
+static void trace_item(robust_case *c, const robust_item *it, ray_packet *p, bool store)
 {
     const robust_batch *b = &c->batches[it->batch];
     packet_reset(p, it->count, 0);
@@ -205,12 +219,12 @@ static void trace_item(robust_case *c, const robust_item *it, ray_packet *p)
     packet_detect_facts(p);
     if (b->query == QUERY_ANY) {
         uint64_t mask = accel_occluded_packet(b->accel, packet_whole(p));
-        for (uint32_t i = 0; i < it->count; i++)
+        for (uint32_t i = 0; i < it->count && store; i++)
             c->occluded[it->first + i] = (unsigned char)(mask >> i & 1u);
         return;
     }
     accel_intersect_packet(b->accel, packet_whole(p));
-    for (uint32_t i = 0; i < it->count; i++)
+    for (uint32_t i = 0; i < it->count && store; i++)
         c->hits[it->first + i] = packet_get_hit(p, i);
 }
 
@@ -224,23 +238,53 @@ static void *trace_worker(void *arg)
     }
     for (;;) {
         size_t k = atomic_fetch_add_explicit(&w->next, 1, memory_order_relaxed);
-        if (k >= w->item_count)
+        if (k >= w->item_count * w->passes)
             break;
-        trace_item(w->c, &w->items[k], p);
+        trace_item(w->c, &w->items[k % w->item_count], p, k < w->item_count);
     }
     free(p);
     return NULL;
 }
 
-/* Trace every ray of c `repeat` times on `threads` threads; the median speed
- * in Mrays/s goes to *mrays_s. False without memory. */
-static bool trace_case(robust_case *c, int threads, int repeat, double *mrays_s)
+/* Trace the case `passes` times on `threads` threads (the caller's
+ * included); its wall time in seconds (and this process's CPU seconds in
+ * *cpu_s), or -1 without memory. */
+static double trace_passes(robust_case *c, const robust_item *items, size_t item_count, size_t passes, int threads,
+                           double *cpu_s)
+{
+    robust_work w = {.c = c, .items = items, .item_count = item_count, .passes = passes};
+    atomic_init(&w.next, 0);
+    atomic_init(&w.failed, false);
+    pthread_t ids[ROBUST_MAX_THREADS];
+    int started = 0;
+    double t0 = cli_now_s(), cpu0 = cli_own_cpu_s();
+    for (int i = 1; i < threads; i++) {
+        if (pthread_create(&ids[started], NULL, trace_worker, &w) != 0)
+            break; /* the threads that started trace every packet */
+        started++;
+    }
+    trace_worker(&w);
+    for (int i = 0; i < started; i++)
+        pthread_join(ids[i], NULL);
+    double seconds = cli_now_s() - t0;
+    *cpu_s = cli_own_cpu_s() - cpu0;
+    return atomic_load(&w.failed) ? -1.0 : seconds;
+}
+
+/* Trace every ray of c once untimed (the results), then `repeat` timed runs,
+ * each tracing the case as many times as takes ROBUST_MIN_RUN_S by the first
+ * pass, on `threads` threads. The median speed in Mrays/s goes to speed[1],
+ * the slowest and fastest run's to speed[0] and speed[2], the median of
+ * millions of rays per CPU second of this process (all threads) to speed[4]
+ * (slowest and fastest run: speed[3], speed[5]): on a busy machine that one
+ * does not count the time others took the CPU. False without memory. */
+static bool trace_case(robust_case *c, int threads, int repeat, double speed[6])
 {
     size_t items_n = 0;
     for (size_t b = 0; b < c->batch_count; b++)
         items_n += (c->batches[b].count + PACKET_MAX_RAYS - 1) / PACKET_MAX_RAYS;
     robust_item *items = malloc((items_n ? items_n : 1) * sizeof *items);
-    double *speeds = malloc((size_t)repeat * sizeof *speeds);
+    double *speeds = malloc(2 * (size_t)repeat * sizeof *speeds), *cpu_speeds = speeds + repeat;
     if (!items || !speeds) {
         free(items);
         free(speeds);
@@ -253,27 +297,30 @@ static bool trace_case(robust_case *c, int threads, int repeat, double *mrays_s)
             items[k++] = (robust_item){(uint32_t)b, c->batches[b].first + off,
                                        left < PACKET_MAX_RAYS ? (uint32_t)left : PACKET_MAX_RAYS};
         }
-    bool ok = true;
+    double cpu_s;
+    double first_s = trace_passes(c, items, items_n, 1, threads, &cpu_s);
+    bool ok = first_s >= 0.0;
+    size_t passes = 1;
+    if (ok && first_s < ROBUST_MIN_RUN_S)
+        passes = first_s > ROBUST_MIN_RUN_S / ROBUST_MAX_PASSES ? (size_t)ceil(ROBUST_MIN_RUN_S / first_s)
+                                                                 : ROBUST_MAX_PASSES;
     for (int r = 0; r < repeat && ok; r++) {
-        robust_work w = {.c = c, .items = items, .item_count = items_n};
-        atomic_init(&w.next, 0);
-        atomic_init(&w.failed, false);
-        pthread_t ids[ROBUST_MAX_THREADS];
-        int started = 0;
-        double t0 = cli_now_s();
-        for (int i = 1; i < threads; i++) {
-            if (pthread_create(&ids[started], NULL, trace_worker, &w) != 0)
-                break; /* the threads that started trace every packet */
-            started++;
-        }
-        trace_worker(&w);
-        for (int i = 0; i < started; i++)
-            pthread_join(ids[i], NULL);
-        double seconds = cli_now_s() - t0;
-        ok = !atomic_load(&w.failed);
-        speeds[r] = seconds > 0.0 ? (double)c->ray_count / seconds * 1e-6 : 0.0;
+        double seconds = trace_passes(c, items, items_n, passes, threads, &cpu_s);
+        ok = seconds >= 0.0;
+        speeds[r] = seconds > 0.0 ? (double)c->ray_count * (double)passes / seconds * 1e-6 : 0.0;
+        cpu_speeds[r] = cpu_s > 0.0 ? (double)c->ray_count * (double)passes / cpu_s * 1e-6 : 0.0;
     }
-    *mrays_s = cli_median(speeds, (size_t)repeat);
+    for (int which = 0; which < 2; which++) { /* wall, then CPU */
+        const double *v = which ? cpu_speeds : speeds;
+        double *out = speed + 3 * which;
+        out[0] = out[2] = v[0];
+        for (int r = 1; r < repeat; r++) {
+            out[0] = v[r] < out[0] ? v[r] : out[0];
+            out[2] = v[r] > out[2] ? v[r] : out[2];
+        }
+    }
+    speed[1] = cli_median(speeds, (size_t)repeat);
+    speed[4] = cli_median(cpu_speeds, (size_t)repeat);
     free(items);
     free(speeds);
     return ok;
@@ -426,7 +473,8 @@ static robust_counts check_lit_plane(const robust_case *c)
  * is hard: it shows what the robust rules cost where they are not needed. */
 static bool make_primary(robust_case *c, bool small, int threads)
 {
-    const int width = small ? 160 : 640, height = small ? 96 : 360; /* multiples of 8 */
+    const int width = small ? 160 : 1280, height = small ? 96 : 720; /* multiples of 8 */
+    c->check_stride = small ? ROBUST_PRIMARY_STRIDE_SMALL : ROBUST_PRIMARY_STRIDE;
     cli_scene cs;
     if (!cli_scene_prepare(NULL, threads, &cs)) {
         cli_scene_finish(&cs);
@@ -517,7 +565,7 @@ static robust_counts check_primary(const robust_case *c)
 {
     robust_counts k = {0, 0, 0};
     const scene *s = c->scenes[0].scene;
-    for (size_t i = 0; i < c->ray_count; i += ROBUST_PRIMARY_STRIDE) {
+    for (size_t i = 0; i < c->ray_count; i += c->check_stride) {
         const hit *h = &c->hits[i];
         ref_nearest ref = reference_nearest(s, &c->rays[i], h->geom_id, h->prim_id);
         k.checked++;
@@ -546,6 +594,9 @@ static void robust_usage(FILE *f)
           "Trace the hard cases of numerical robustness (tools/robust/hard_cases.h, the generators of\n"
           "tests/test_robust.c) and print per case one line:\n"
           "  case=NAME rays=N wrong_hits=W leaks=L per_million=X mrays_s=M checked=C build=B isa=I threads=T\n"
+          "  mrays_s_min=A mrays_s_max=B mrays_cpu_s=P mrays_cpu_s_min=Q mrays_cpu_s_max=R (on the same line:\n"
+          "  the slowest and fastest run; millions of rays per CPU second of this process, all threads:\n"
+          "  median, slowest, fastest run)\n"
           "  --case NAME   one of: primary (the built-in scene's primary rays: nothing hard), closed_sphere\n"
           "                (rays from inside a closed jittered sphere at 1e5 through its vertices and edges:\n"
           "                a miss is a leak), slivers (triangles of aspect 1e6 at scales 1e-8..1e8: a miss is\n"
@@ -554,9 +605,11 @@ static void robust_usage(FILE *f)
           "  --threads N   tracing threads (default 1)\n"
           "  --repeat N    timed runs over the same rays, the median speed is printed (3..1000, default 3)\n"
           "  --small       fewer rays per case (a quick check)\n"
-          "wrong_hits: disagreements with the right answer (primary: with a brute-force reference in double\n"
-          "on every 16th ray, differences within 1e-5 of an edge, silhouette or tie not counted);\n"
-          "per_million = (W + L) * 1e6 / C; mrays_s: rays / tracing wall time (set-up and checks not timed).\n"
+          "wrong_hits: disagreements with the right answer (primary, 1280x720 or 160x96 with --small: with a\n"
+          "brute-force reference in double on every 64th ray (16th), differences within 1e-5 of an edge,\n"
+          "silhouette or tie not counted);\n"
+          "per_million = (W + L) * 1e6 / C; mrays_s: rays / tracing wall time (set-up and checks not timed; a\n"
+          "timed run traces the case as many times over as takes >= 0.25 s).\n"
           "build: robust, or fast for build-unrobust/tessera (make unrobust: engine/intersect.h).\n",
           f);
 }
@@ -620,8 +673,8 @@ static bool run_case(const char *name, const robust_options *o)
                 : !strcmp(name, "closed_sphere") ? make_closed_sphere(&c, o->small)
                 : !strcmp(name, "slivers")       ? make_slivers(&c, o->small)
                                                  : make_lit_plane(&c, o->small, &primary_misses);
-    double mrays_s = 0.0;
-    if (!made || !case_alloc_results(&c) || !trace_case(&c, o->threads, o->repeat, &mrays_s)) {
+    double speed[6] = {0.0}; /* Mrays/s: slowest, median, fastest run; the same per CPU second */
+    if (!made || !case_alloc_results(&c) || !trace_case(&c, o->threads, o->repeat, speed)) {
         cli_error("robust: case %s: could not make or trace it (out of memory, or the scene failed to load)", name);
         case_free(&c);
         return false;
@@ -635,9 +688,10 @@ static bool run_case(const char *name, const robust_options *o)
                 (unsigned long long)primary_misses);
     double per_million = k.checked ? (double)(k.wrong_hits + k.leaks) * 1e6 / (double)k.checked : 0.0;
     printf("case=%s rays=%zu wrong_hits=%llu leaks=%llu per_million=%.2f mrays_s=%.3f checked=%llu build=%s isa=%s "
-           "threads=%d\n",
-           name, c.ray_count, (unsigned long long)k.wrong_hits, (unsigned long long)k.leaks, per_million, mrays_s,
-           (unsigned long long)k.checked, ROBUST_BUILD, accel_isa_name(c.scenes[0].accel), o->threads);
+           "threads=%d mrays_s_min=%.3f mrays_s_max=%.3f mrays_cpu_s=%.3f mrays_cpu_s_min=%.3f mrays_cpu_s_max=%.3f\n",
+           name, c.ray_count, (unsigned long long)k.wrong_hits, (unsigned long long)k.leaks, per_million, speed[1],
+           (unsigned long long)k.checked, ROBUST_BUILD, accel_isa_name(c.scenes[0].accel), o->threads, speed[0],
+           speed[2], speed[4], speed[3], speed[5]);
     fflush(stdout);
     case_free(&c);
     return true;
