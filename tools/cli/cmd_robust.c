@@ -62,6 +62,7 @@ typedef enum robust_query { QUERY_CLOSEST, QUERY_ANY } robust_query;
 /* Rays traced against one accel with one query; results by ray index. */
 typedef struct robust_batch {
     accel *accel;
+    size_t scene;        /* index in the case's scenes of the scene of accel */
     size_t first, count; /* rays [first, first + count) of the case */
     robust_query query;
 } robust_batch;
@@ -158,14 +159,15 @@ static bool case_add_ray(robust_case *c, ray r)
     return true;
 }
 
-/* The rays added since `first` become one batch against a. */
+/* The rays added since `first` become one batch against a, the accel of the
+ * case's latest scene. */
 static bool case_add_batch(robust_case *c, accel *a, size_t first, robust_query q)
 {
     if (c->ray_count == first)
         return true;
     if (!grow((void **)&c->batches, &c->batch_capacity, c->batch_count + 1, sizeof *c->batches))
         return false;
-    c->batches[c->batch_count++] = (robust_batch){a, first, c->ray_count - first, q};
+    c->batches[c->batch_count++] = (robust_batch){a, c->scene_count - 1, first, c->ray_count - first, q};
     return true;
 }
 
@@ -403,7 +405,7 @@ static robust_counts check_slivers(const robust_case *c)
 {
     robust_counts k = {0, 0, 0};
     for (size_t b = 0; b < c->batch_count; b++) {
-        const mesh *m = c->scenes[b].scene->meshes[0].mesh; /* one scene per batch, in order */
+        const mesh *m = c->scenes[c->batches[b].scene].scene->meshes[0].mesh;
         const float *p = m->positions;
         vec3 v0 = v3(p[0], p[1], p[2]), v1 = v3(p[3], p[4], p[5]), v2 = v3(p[6], p[7], p[8]);
         for (size_t i = c->batches[b].first; i < c->batches[b].first + c->batches[b].count; i++) {
