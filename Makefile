@@ -10,6 +10,9 @@ BUILD := build
 WERROR ?= 0
 OPT ?= -O2
 SAN ?=
+# UNROBUST=1: the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST), only ever
+# in their own tree (make unrobust: build-unrobust/tessera)
+UNROBUST ?= 0
 
 # generic x86-64 baseline: SIMD paths are chosen at run time, never -march=native
 WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Wmissing-prototypes
@@ -17,6 +20,9 @@ ifeq ($(WERROR),1)
 WARN += -Werror
 endif
 CPPFLAGS := -D_POSIX_C_SOURCE=200809L -I. $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+ifeq ($(UNROBUST),1)
+CPPFLAGS += -DTESSERA_UNROBUST
+endif
 CFLAGS := -std=c11 $(OPT) -g $(WARN) -ffp-contract=off -fno-math-errno -pthread $(SAN)
 CXXFLAGS := -std=c++17 $(OPT) -g -Wall -Wextra $(if $(filter 1,$(WERROR)),-Werror) -pthread $(SAN)
 LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lm -pthread
@@ -27,6 +33,8 @@ WALL_SRC := $(wildcard wall/*.c)
 WALL_CXX := $(wildcard wall/*.cpp)
 INPUT_SRC := $(wildcard input/*.c)
 METRICS_SRC := $(wildcard metrics/*.c)
+# the hard cases of numerical robustness, shared by tests/test_robust.c and `tessera robust`
+ROBUST_SRC := $(wildcard tools/robust/*.c)
 CLI_SRC := $(wildcard tools/cli/*.c)
 TEST_SRC := $(wildcard tests/*.c)
 
@@ -38,14 +46,14 @@ ISA_FLAGS_sse2 := -DTESS_ISA_SSE2
 ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
 
-LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC) $(METRICS_SRC)) \
+LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-pipeline bench-wall clean check-headers
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-pipeline bench-wall clean check-headers unrobust
 
 all: tessera
 
@@ -70,6 +78,15 @@ $(LIB): $(LIB_OBJ)
 
 tessera: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+
+# the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST) for the report's robustness
+# knob: their own tree build-unrobust/ and binary build-unrobust/tessera; never ./tessera
+unrobust:
+	$(MAKE) BUILD=build-unrobust UNROBUST=1 build-unrobust/tessera
+ifeq ($(UNROBUST),1)
+$(BUILD)/tessera: $(CLI_OBJ) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+endif
 
 # (the suite runs ./tessera too: `make test` builds it; the ASan build makes its own tessera-asan
 # and must never overwrite ./tessera)
@@ -175,7 +192,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h)
+HEADERS := $(wildcard engine/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h tools/robust/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \
@@ -208,11 +225,11 @@ $(BUILD)/report_img: $(BUILD)/tools/report/report_img.o $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(BUILD)/tools/report/report_img.o $(LIB) $(LDLIBS)
 report:
 	@sh tools/deps.sh --report
-	$(MAKE) tessera $(BUILD)/report_img
+	$(MAKE) tessera $(BUILD)/report_img unrobust
 	sh tools/report/report.sh
 
 clean:
-	rm -rf build build-asan build-tsan tessera tessera-asan out
+	rm -rf build build-asan build-tsan build-unrobust tessera tessera-asan out
 
 # dependency files are only read, never remade (else make's built-in rules try)
 %.d: ;

@@ -10,13 +10,21 @@ static float component(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? 
 
 /* 1/x, but +-FLT_MAX for a zero x (signed like the zero), so no product is NaN;
  * box tests treat zero components by containment (ray_derived.zero_axes). */
+#ifndef TESSERA_UNROBUST
 static float safe_reciprocal(float x) { return x != 0.f ? 1.f / x : copysignf(FLT_MAX, x); }
+#else
+static float safe_reciprocal(float x) { return 1.f / x; } /* fast build: +-inf for a zero x */
+#endif
 
 ray_derived ray_derive(const ray *r)
 {
     ray_derived d;
     d.inv_dir = v3(safe_reciprocal(r->dir.x), safe_reciprocal(r->dir.y), safe_reciprocal(r->dir.z));
+#ifndef TESSERA_UNROBUST
     d.zero_axes = (r->dir.x == 0.f ? 1u : 0u) | (r->dir.y == 0.f ? 2u : 0u) | (r->dir.z == 0.f ? 4u : 0u);
+#else
+    d.zero_axes = 0u; /* fast build: no containment rule, every axis a plain slab */
+#endif
     d.cull_slack = 0.f;
     float ax = fabsf(r->dir.x), ay = fabsf(r->dir.y), az = fabsf(r->dir.z);
     d.kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
@@ -37,6 +45,12 @@ ray_derived ray_derive(const ray *r)
 /* gamma(n) = n u / (1 - n u), u = 2^-24 */
 static float gamma_n(int n) { return (float)n * 0x1p-24f / (1.f - (float)n * 0x1p-24f); }
 
+#ifdef TESSERA_UNROBUST
+vec3 ray_offset_origin(surface_point sp, vec3 n)
+{
+    return v3_add(sp.p, v3_scale(n, INTERSECT_UNROBUST_SHADOW_OFFSET)); /* fast build: a fixed epsilon */
+}
+#else
 static int32_t float_bits(float f)
 {
     int32_t i;
@@ -75,6 +89,7 @@ vec3 ray_offset_origin(surface_point sp, vec3 n)
     po.z = step_away(po.z, offset.z);
     return po;
 }
+#endif
 
 static float max3f(float a, float b, float c)
 {
@@ -120,6 +135,7 @@ bool intersect_triangle_degenerate(vec3 v0, vec3 v1, vec3 v2)
     return e1y * e2z - e1z * e2y == 0.0 && e1z * e2x - e1x * e2z == 0.0 && e1x * e2y - e1y * e2x == 0.0;
 }
 
+#ifndef TESSERA_UNROBUST
 /* The watertight test in double, from the original float coordinates: for
  * the rays and triangles float cannot decide. Same conventions as below. */
 static bool triangle_in_double(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, vec3 v2, float *t_out,
@@ -148,6 +164,7 @@ static bool triangle_in_double(const ray *r, const ray_derived *d, vec3 v0, vec3
     *v_out = (float)(w / det);
     return true;
 }
+#endif
 
 bool intersect_triangle(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, vec3 v2, float *t_out, float *u_out,
                         float *v_out)
@@ -166,15 +183,21 @@ bool intersect_triangle(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, ve
     float w = bx * ay - by * ax;
     /* L1 sizes of the vertices relative to the origin (m, which bounds the
      * shear's rounding) and after the shear (p), in the kernels' order */
+#ifndef TESSERA_UNROBUST
     float ma = (fabsf(akx) + fabsf(aky)) + fabsf(az), mb = (fabsf(bkx) + fabsf(bky)) + fabsf(bz),
           mc = (fabsf(ckx) + fabsf(cky)) + fabsf(cz);
     float pa = fabsf(ax) + fabsf(ay), pb = fabsf(bx) + fabsf(by), pc = fabsf(cx) + fabsf(cy);
     if (fabsf(u) <= INTERSECT_EDGE_TOL * (mc * pb + mb * pc) || fabsf(v) <= INTERSECT_EDGE_TOL * (ma * pc + mc * pa) ||
         fabsf(w) <= INTERSECT_EDGE_TOL * (mb * pa + ma * pb))
         return triangle_in_double(r, d, v0, v1, v2, t_out, u_out, v_out);
+#endif
     if ((u < 0.f || v < 0.f || w < 0.f) && (u > 0.f || v > 0.f || w > 0.f))
         return false;
     float det = u + v + w; /* the signs agree and none is 0, so det is not 0 */
+#ifdef TESSERA_UNROBUST
+    if (det == 0.f) /* fast build: all three may be 0 */
+        return false;
+#endif
     float tz = u * (d->shear_z * az) + v * (d->shear_z * bz) + w * (d->shear_z * cz);
     float inv_det = 1.f / det;
     float t = tz * inv_det;

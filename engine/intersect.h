@@ -8,13 +8,37 @@
 #include "aabb.h"
 #include "ray.h"
 
+/* TESSERA_UNROBUST: a fast, NON-robust build for measuring what robustness
+ * costs (the report's robustness knob; `make unrobust` builds
+ * build-unrobust/tessera, never ./tessera). Defined at build time only, it
+ * takes out every robustness rule of the kernels, and nothing else:
+ *   1. the double-precision redo of the watertight test (float decides
+ *      every edge sign, and a zero determinant is a miss, as in the paper);
+ *   2. Ize's far-distance scale of the slab test (INTERSECT_FAR_SCALE 1);
+ *   3. the culling margin: relative (INTERSECT_CULL_SCALE 1) and absolute
+ *      (intersect_cull_slack 0), so boxes are culled at t_far itself;
+ *   4. containment for zero direction components: 1/0 is +-inf and every
+ *      axis gets the plain slab test ((plane - org) * inf may be NaN);
+ *   5. the shadow-ray origin offset from the rounding bound of the hit
+ *      point: a fixed world-space epsilon along the normal instead
+ *      (INTERSECT_UNROBUST_SHADOW_OFFSET), as tracers without error bounds do.
+ * Ties still go to the lowest id (that rule is order independence, not
+ * robustness). The default build never defines it, so its code is unchanged. */
+#ifdef TESSERA_UNROBUST
+#define INTERSECT_UNROBUST_SHADOW_OFFSET 1e-4f /* world units */
+#endif
+
 /* gamma(3) = 3u / (1 - 3u), u = 2^-24: the rounding bound of three float
  * operations (pbrt's notation). Box exit distances are scaled by
  * INTERSECT_FAR_SCALE (Ize 2013), and traversal culls a box only when its
  * entry exceeds t_far * INTERSECT_FAR_SCALE, so a primitive at exactly t_far
  * (a tie) is never culled and results do not depend on traversal order. */
 #define INTERSECT_GAMMA3 (3.f * 0x1p-24f / (1.f - 3.f * 0x1p-24f))
+#ifndef TESSERA_UNROBUST
 #define INTERSECT_FAR_SCALE (1.f + 2.f * INTERSECT_GAMMA3)
+#else
+#define INTERSECT_FAR_SCALE 1.f
+#endif
 
 /* Traversal skips a box only when its entry distance exceeds the closest hit's
  * t by a margin that covers the rounding of both: the hit's t may lie a few
@@ -23,6 +47,7 @@
  * visiting order. The margin is relative (INTERSECT_CULL_SCALE) plus an
  * absolute slack from the magnitude of the coordinates involved, 2^-19 (8
  * ulps) of them, in units of the ray's t (intersect_cull_slack). */
+#ifndef TESSERA_UNROBUST
 #define INTERSECT_CULL_SCALE (1.f + 0x1p-19f)
 #define INTERSECT_CULL_ULPS 0x1p-19f
 
@@ -30,6 +55,15 @@ static inline float intersect_cull_slack(float org_abs_max, float dir_abs_max, f
 {
     return (org_abs_max + coord_abs_max) * INTERSECT_CULL_ULPS / dir_abs_max;
 }
+#else
+#define INTERSECT_CULL_SCALE 1.f
+
+static inline float intersect_cull_slack(float org_abs_max, float dir_abs_max, float coord_abs_max)
+{
+    (void)org_abs_max, (void)dir_abs_max, (void)coord_abs_max;
+    return 0.f; /* the fast build culls at the computed t_far itself */
+}
+#endif
 
 /* The float edge functions of the watertight test carry rounding from the
  * vertex differences, the shear and the products. For the edge of vertices b,

@@ -58,7 +58,11 @@ void packet_detect_facts(ray_packet *p)
     p->flags = (p->flags & ~(uint32_t)(PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED)) | facts;
 }
 
+#ifndef TESSERA_UNROBUST
 static float safe_reciprocal(float x) { return x != 0.f ? 1.f / x : copysignf(FLT_MAX, x); }
+#else
+static float safe_reciprocal(float x) { return 1.f / x; } /* fast build (intersect.h): +-inf for a zero x */
+#endif
 
 void packet_derive_inv_dir(ray_packet *p)
 {

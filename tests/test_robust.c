@@ -23,6 +23,7 @@
 #include "engine/intersect.h"
 #include "engine/packet.h"
 #include "engine/scene.h"
+#include "tools/robust/hard_cases.h"
 
 /* u: the unit roundoff of float, the relative error of one rounding. */
 #define F_ROUNDOFF 0x1p-24
@@ -31,68 +32,9 @@
 #define MAX_REPORTED 5
 
 /* ------------------------------------------------------------------------ */
-/* Helpers: random numbers, double vectors, scenes, hit records. */
-
-typedef struct rng {
-    uint64_t state; /* splitmix64 */
-} rng;
-
-static uint64_t rng_next(rng *g)
-{
-    uint64_t z = (g->state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-static double rng_unit(rng *g) { return (double)(rng_next(g) >> 11) * 0x1p-53; } /* [0, 1) */
-static double rng_range(rng *g, double lo, double hi) { return lo + (hi - lo) * rng_unit(g); }
-static double rng_log_range(rng *g, double lo, double hi) { return exp(rng_range(g, log(lo), log(hi))); }
-
-typedef struct dvec {
-    double x, y, z;
-} dvec;
-
-static dvec dv(double x, double y, double z) { return (dvec){x, y, z}; }
-static dvec dv_of(vec3 a) { return dv(a.x, a.y, a.z); }
-static vec3 dv_round(dvec a) { return v3((float)a.x, (float)a.y, (float)a.z); }
-static dvec dv_add(dvec a, dvec b) { return dv(a.x + b.x, a.y + b.y, a.z + b.z); }
-static dvec dv_sub(dvec a, dvec b) { return dv(a.x - b.x, a.y - b.y, a.z - b.z); }
-static dvec dv_scale(dvec a, double s) { return dv(a.x * s, a.y * s, a.z * s); }
-static double dv_dot(dvec a, dvec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-static dvec dv_cross(dvec a, dvec b) { return dv(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x); }
-static double dv_len(dvec a) { return sqrt(dv_dot(a, a)); }
-static dvec dv_unit(dvec a) { return dv_scale(a, 1.0 / dv_len(a)); }
-static double dv_max_abs(dvec a) { return fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z))); }
-
-static dvec dv_random_unit(rng *g)
-{
-    for (;;) {
-        dvec p = dv(rng_range(g, -1, 1), rng_range(g, -1, 1), rng_range(g, -1, 1));
-        double l2 = dv_dot(p, p);
-        if (l2 > 1e-4 && l2 <= 1.0)
-            return dv_scale(p, 1.0 / sqrt(l2));
-    }
-}
-
-/* A random unit vector perpendicular to the unit vector n. */
-static dvec dv_random_perpendicular(dvec n, rng *g)
-{
-    for (;;) {
-        dvec r = dv_random_unit(g);
-        dvec e = dv_sub(r, dv_scale(n, dv_dot(r, n)));
-        if (dv_len(e) > 0.1)
-            return dv_unit(e);
-    }
-}
-
-/* A random right-handed orthonormal basis (rotation). */
-static void random_basis(rng *g, dvec *e0, dvec *e1, dvec *e2)
-{
-    *e2 = dv_random_unit(g);
-    *e0 = dv_random_perpendicular(*e2, g);
-    *e1 = dv_cross(*e2, *e0);
-}
+/* Helpers: scenes, hit records (random numbers, double vectors and the
+ * generators of the cases: tools/robust/hard_cases.h, shared with `tessera
+ * robust`). */
 
 static scene *scene_new(void)
 {
@@ -189,43 +131,6 @@ static ray_packet *packet_new(void)
     cr_assert(p);
     memset(p, 0, sizeof *p);
     return p;
-}
-
-/* The reference ray/triangle intersection: Moeller-Trumbore in double on the
- * float inputs. Differences of the float coordinates are exact in double (the
- * coordinates here span far fewer than 29 binades), so the only rounding is in
- * the products: relative errors of ~1e-16 / sin(angle to the plane), under
- * 1e-8 for the most grazing ray tested (1e-7 rad) - far inside every band the
- * tests exclude. */
-typedef struct ref_triangle_hit {
-    bool crosses; /* the ray's line is not parallel to the plane */
-    double t;     /* line parameter of the crossing, in units of |dir| */
-    double b[3];  /* barycentric weights of v0, v1, v2 at the crossing */
-} ref_triangle_hit;
-
-static ref_triangle_hit reference_triangle(const ray *r, vec3 v0f, vec3 v1f, vec3 v2f)
-{
-    ref_triangle_hit out = {.crosses = false, .t = NAN, .b = {NAN, NAN, NAN}};
-    dvec o = dv_of(r->org), d = dv_of(r->dir), v0 = dv_of(v0f);
-    dvec e1 = dv_sub(dv_of(v1f), v0), e2 = dv_sub(dv_of(v2f), v0);
-    dvec p = dv_cross(d, e2);
-    double det = dv_dot(e1, p);
-    if (det == 0.0 || !isfinite(det))
-        return out;
-    dvec s = dv_sub(o, v0);
-    dvec q = dv_cross(s, e1);
-    double b1 = dv_dot(s, p) / det, b2 = dv_dot(d, q) / det;
-    out.crosses = true;
-    out.t = dv_dot(e2, q) / det;
-    out.b[0] = 1.0 - b1 - b2;
-    out.b[1] = b1;
-    out.b[2] = b2;
-    return out;
-}
-
-static bool reference_hits(const ref_triangle_hit *h, float t_near, float t_far)
-{
-    return h->crosses && h->b[0] >= 0.0 && h->b[1] >= 0.0 && h->b[2] >= 0.0 && h->t > t_near && h->t <= t_far;
 }
 
 #define RAY_FMT "org (%a, %a, %a) dir (%a, %a, %a) t (%a, %a]"
@@ -367,37 +272,6 @@ TestSuite(robust, .timeout = 300);
 /* a. A closed mesh does not leak: rays from inside aimed at its vertices and
  * at points on its edges all hit it. */
 
-/* A UV sphere around `centre`: `slices` vertices per ring, `stacks` bands from
- * pole to pole, every vertex at radius 1 +- `jitter` (uniform), so no two faces
- * are coplanar. Consistently oriented and closed: every edge belongs to exactly
- * two triangles, once in each direction. The pole fans have `slices` triangles
- * and the triangles next to them are thin: both are hard cases for a
- * watertight test. */
-static mesh *jittered_sphere(int slices, int stacks, double jitter, dvec centre, rng *g)
-{
-    mesh *m = mesh_new();
-    const double pi = 3.14159265358979323846;
-    mesh_put_vertex(m, dv_round(dv_add(centre, dv(0, 1.0 + jitter * rng_range(g, -1, 1), 0))));
-    for (int i = 1; i < stacks; i++)
-        for (int j = 0; j < slices; j++) {
-            double theta = pi * i / stacks, phi = 2.0 * pi * j / slices;
-            double r = 1.0 + jitter * rng_range(g, -1, 1);
-            dvec dir = dv(sin(theta) * cos(phi), cos(theta), sin(theta) * sin(phi));
-            mesh_put_vertex(m, dv_round(dv_add(centre, dv_scale(dir, r))));
-        }
-    uint32_t south = mesh_put_vertex(m, dv_round(dv_add(centre, dv(0, -1.0 - jitter * rng_range(g, -1, 1), 0))));
-#define RING(i, j) (1u + (uint32_t)((i)-1) * (uint32_t)slices + (uint32_t)((j) % slices))
-    for (int j = 0; j < slices; j++) {
-        mesh_put_triangle(m, 0, RING(1, j), RING(1, j + 1));
-        for (int i = 1; i + 1 < stacks; i++) {
-            mesh_put_triangle(m, RING(i, j + 1), RING(i, j), RING(i + 1, j));
-            mesh_put_triangle(m, RING(i, j + 1), RING(i + 1, j), RING(i + 1, j + 1));
-        }
-        mesh_put_triangle(m, RING(stacks - 1, j + 1), RING(stacks - 1, j), south);
-    }
-#undef RING
-    return m;
-}
 
 /* Rays traced in packets of 64 through both packet entry points, counting
  * those that hit nothing. */
@@ -472,44 +346,28 @@ Test(robust, closed_mesh_does_not_leak_at_vertices_or_edges)
         dvec centre = dv(offsets[k], offsets[k], offsets[k]);
         scene *s = scene_new();
         mesh *m = jittered_sphere(slices, stacks, 0.05, centre, &g);
+        cr_assert(m);
         scene_put_mesh(s, m);
         lp.accel = accel_for(s);
-        /* each undirected edge once: the direction with the smaller index first */
-        uint32_t *edge_a = malloc(3 * (size_t)m->triangle_count * sizeof *edge_a);
-        uint32_t *edge_b = malloc(3 * (size_t)m->triangle_count * sizeof *edge_b);
-        cr_assert(edge_a && edge_b);
-        size_t edges = 0;
-        for (uint32_t t = 0; t < m->triangle_count; t++)
-            for (int e = 0; e < 3; e++) {
-                uint32_t a = m->indices[3 * t + e], b = m->indices[3 * t + (e + 1) % 3];
-                if (a < b) {
-                    edge_a[edges] = a;
-                    edge_b[edges++] = b;
-                }
-            }
+        /* every vertex, then points_per_edge points on each undirected edge */
+        vec3 *targets;
+        size_t edges;
+        size_t target_count = closed_mesh_targets(m, points_per_edge, &targets, &edges);
+        cr_assert(target_count > 0);
         /* a closed genus-0 triangle mesh has E = 3V - 6 */
         cr_assert_eq(edges, 3 * (size_t)m->vertex_count - 6, "mesh not closed: %zu edges, %u vertices", edges,
                      m->vertex_count);
         vec3 origins[2] = {dv_round(centre), dv_round(dv_add(centre, dv(0.0731, -0.0412, 0.0253)))};
         uint64_t rays_before = lp.rays, leaks_before = lp.leaks_closest + lp.leaks_any;
-        for (int o = 0; o < 2; o++) {
-            for (uint32_t v = 0; v < m->vertex_count; v++)
-                leak_add(&lp, origins[o], mesh_vertex_at(m, v));
-            for (size_t e = 0; e < edges; e++) {
-                vec3 a = mesh_vertex_at(m, edge_a[e]), b = mesh_vertex_at(m, edge_b[e]);
-                for (int j = 1; j <= points_per_edge; j++) {
-                    float f = (float)j / (float)(points_per_edge + 1);
-                    leak_add(&lp, origins[o], v3_add(a, v3_scale(v3_sub(b, a), f)));
-                }
-            }
-        }
+        for (int o = 0; o < 2; o++)
+            for (size_t i = 0; i < target_count; i++)
+                leak_add(&lp, origins[o], targets[i]);
         leak_flush(&lp);
         uint64_t leaks = lp.leaks_closest + lp.leaks_any - leaks_before;
         cr_log_info("robust/closed mesh: offset %g: %llu rays, %llu leaks (closest-hit + any-hit)", offsets[k],
                     (unsigned long long)(lp.rays - rays_before), (unsigned long long)leaks);
         leaks_total += leaks;
-        free(edge_a);
-        free(edge_b);
+        free(targets);
         accel_destroy(lp.accel);
         scene_destroy(s);
     }
@@ -526,22 +384,6 @@ Test(robust, closed_mesh_does_not_leak_at_vertices_or_edges)
 
 /* ------------------------------------------------------------------------ */
 /* b. Slivers and zero-area triangles. */
-
-/* A sliver of longest edge `len` and height len / 1e6 (aspect ratio 1e6),
- * rotated at random and placed within `len` of the world origin, so its
- * coordinates are of the order of `len`. A needle has its short edge at one
- * end; a cap has its third vertex half-way along the long edge. */
-static void random_sliver(rng *g, double len, bool needle, vec3 v[3])
-{
-    const double aspect = 1e6;
-    double h = len / aspect;
-    dvec e0, e1, e2;
-    random_basis(g, &e0, &e1, &e2);
-    dvec origin = dv(rng_range(g, -len, len), rng_range(g, -len, len), rng_range(g, -len, len));
-    dvec local[3] = {dv(0, 0, 0), dv(len, 0, 0), dv(needle ? len : 0.5 * len, h, 0)};
-    for (int i = 0; i < 3; i++)
-        v[i] = dv_round(dv_add(origin, dv_add(dv_scale(e0, local[i].x), dv_scale(e1, local[i].y))));
-}
 
 Test(robust, slivers_are_hit_at_every_scale)
 {
@@ -567,21 +409,9 @@ Test(robust, slivers_are_hit_at_every_scale)
                 mesh_put_triangle_vertices(m, v[0], v[1], v[2]);
                 scene_put_mesh(s, m);
                 accel *a = accel_for(s);
-                dvec dv0 = dv_of(v[0]), dv1 = dv_of(v[1]), dv2 = dv_of(v[2]);
-                dvec n = dv_unit(dv_cross(dv_sub(dv1, dv0), dv_sub(dv2, dv0)));
                 for (int k = 0; k < rays_per_triangle; k++) {
                     double b1, b2;
-                    do {
-                        b1 = rng_range(&g, 0.2, 0.6);
-                        b2 = rng_range(&g, 0.2, 0.6);
-                    } while (1.0 - b1 - b2 < 0.2);
-                    dvec p = dv_add(dv0, dv_add(dv_scale(dv_sub(dv1, dv0), b1), dv_scale(dv_sub(dv2, dv0), b2)));
-                    dvec w;
-                    do
-                        w = dv_random_unit(&g);
-                    while (fabs(dv_dot(w, n)) < sin(5.0 * 3.14159265358979 / 180.0));
-                    vec3 org = dv_round(dv_add(p, dv_scale(w, len * rng_log_range(&g, 1e-4, 1e-2))));
-                    ray r = make_ray(org, dv_round(dv_sub(p, dv_of(org))), 0.f, FLT_MAX);
+                    ray r = sliver_ray(&g, v, len, &b1, &b2);
                     rays++;
                     ref_triangle_hit ref = reference_triangle(&r, v[0], v[1], v[2]);
                     reference_misses += !reference_hits(&ref, r.t_near, r.t_far);
@@ -1042,7 +872,9 @@ Test(robust, axis_parallel_rays_on_slab_planes_match_brute_force)
 static scene *mixed_scene(rng *g)
 {
     scene *s = scene_new();
-    scene_put_mesh(s, jittered_sphere(24, 12, 0.05, dv(0, 0, 0), g));
+    mesh *ball = jittered_sphere(24, 12, 0.05, dv(0, 0, 0), g);
+    cr_assert(ball);
+    scene_put_mesh(s, ball);
     mesh *ground = mesh_new();
     for (int i = 0; i <= 4; i++)
         for (int j = 0; j <= 4; j++)
@@ -1350,20 +1182,6 @@ Test(robust, packets_match_single_rays_bit_for_bit)
 /* ------------------------------------------------------------------------ */
 /* g. No self-shadowing on a lit plane, near and far from the origin. */
 
-/* What engine/render.c does for a triangle hit: the position from the
- * barycentrics with its rounding bound (surface_point_triangle: on the surface,
- * unlike org + t dir), and the unit geometric normal turned to face the
- * incoming ray. */
-static surface_point surface_at_hit(const mesh *m, const hit *h, vec3 ray_dir, vec3 *normal)
-{
-    vec3 v0, v1, v2;
-    triangle_vertices(m, h->prim_id, &v0, &v1, &v2);
-    *normal = v3_normalize(v3_cross(v3_sub(v1, v0), v3_sub(v2, v0)));
-    if (v3_dot(*normal, ray_dir) > 0.f)
-        *normal = v3_scale(*normal, -1.f);
-    return surface_point_triangle(v0, v1, v2, h->u, h->v);
-}
-
 Test(robust, lit_plane_never_shadows_itself)
 {
     /* A plane 200 units across, translated 0 .. 1e6 from the origin (offsets
@@ -1378,7 +1196,7 @@ Test(robust, lit_plane_never_shadows_itself)
      * a plane cannot shadow itself: the criterion is 0 occluded shadow rays. */
     const double offsets[] = {1, 10, 100, 1e3, 1e4, 1e5, 1e6};
     const double tilts_deg[] = {1, 2, 3, 5, 10, 20, 30};
-    const double pi = 3.14159265358979323846, half = 100.0;
+    const double half = 100.0;
     const int samples = 1500;
     rng g = {0x5AD0};
     uint64_t shadow_rays = 0, false_shadows = 0, primary_misses = 0, unlit = 0;
@@ -1387,45 +1205,16 @@ Test(robust, lit_plane_never_shadows_itself)
     for (size_t oi = 0; oi < sizeof offsets / sizeof offsets[0]; oi++)
         for (size_t ti = 0; ti < sizeof tilts_deg / sizeof tilts_deg[0]; ti++)
             for (int form = 0; form < 2; form++) {
-                dvec shift = dv_scale(dv_unit(dv(1, 0.7, -0.4)), offsets[oi]);
-                dvec e0, e1, n;
+                dvec shift, e0, e1, n;
                 scene *s = scene_new();
-                mesh *m = mesh_new();
-                if (form == 0) {
-                    random_basis(&g, &e0, &e1, &n);
-                    dvec c[3] = {dv(-half, -half, 0), dv(3 * half, -half, 0), dv(-half, 3 * half, 0)};
-                    for (int i = 0; i < 3; i++)
-                        mesh_put_vertex(m, dv_round(dv_add(shift, dv_add(dv_scale(e0, c[i].x), dv_scale(e1, c[i].y)))));
-                    mesh_put_triangle(m, 0, 1, 2);
-                } else {
-                    e0 = dv(1, 0, 0), e1 = dv(0, 0, 1), n = dv(0, 1, 0);
-                    float y = (float)shift.y; /* every vertex has exactly this y */
-                    for (int i = 0; i <= 8; i++)
-                        for (int j = 0; j <= 8; j++)
-                            mesh_put_vertex(m, v3((float)(shift.x - half + 25.0 * i), y,
-                                                  (float)(shift.z - half + 25.0 * j)));
-                    for (uint32_t i = 0; i < 8; i++)
-                        for (uint32_t j = 0; j < 8; j++) {
-                            uint32_t c = i * 9 + j;
-                            mesh_put_triangle(m, c, c + 1, c + 10);
-                            mesh_put_triangle(m, c, c + 10, c + 9);
-                        }
-                }
+                mesh *m = lit_plane_mesh(&g, offsets[oi], form, half, &shift, &e0, &e1, &n);
+                cr_assert(m);
                 scene_put_mesh(s, m);
                 accel *a = accel_for(s);
-                double tilt = tilts_deg[ti] * pi / 180.0;
-                dvec light_dir = dv_add(dv_scale(dv_random_perpendicular(n, &g), cos(tilt)), dv_scale(n, sin(tilt)));
-                vec3 to_light = dv_round(dv_unit(light_dir));
+                vec3 to_light = lit_plane_light(&g, n, tilts_deg[ti]);
                 for (int k = 0; k < samples; k++) {
                     /* a point well inside the square [-half, half]^2 of the plane */
-                    dvec q = dv_add(shift, dv_add(dv_scale(e0, rng_range(&g, -0.95, 0.95) * half),
-                                                  dv_scale(e1, rng_range(&g, -0.95, 0.95) * half)));
-                    dvec view;
-                    do
-                        view = dv_random_unit(&g);
-                    while (dv_dot(view, n) < 0.2);
-                    vec3 eye = dv_round(dv_add(q, dv_scale(view, half * rng_range(&g, 0.2, 2.0))));
-                    ray primary = make_ray(eye, dv_round(dv_sub(q, dv_of(eye))), 0.f, FLT_MAX);
+                    ray primary = lit_plane_primary(&g, shift, e0, e1, n, half);
                     hit h;
                     if (!trace_closest(a, &primary, &h)) {
                         primary_misses++;

@@ -167,6 +167,7 @@ static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const 
     const v4 u = v4_sub(v4_mul(cx, by), v4_mul(cy, bx));
     const v4 v = v4_sub(v4_mul(ax, cy), v4_mul(ay, cx));
     const v4 w = v4_sub(v4_mul(bx, ay), v4_mul(by, ax));
+#ifndef TESSERA_UNROBUST
     const v4 zero = v4_set1(0.f), tol = v4_set1(INTERSECT_EDGE_TOL);
     const v4 ma = v4_add(v4_add(v4_abs(akx), v4_abs(aky)), v4_abs(az));
     const v4 mb = v4_add(v4_add(v4_abs(bkx), v4_abs(bky)), v4_abs(bz));
@@ -180,6 +181,11 @@ static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const 
                             v4_le(v4_abs(v), v4_mul(tol, v4_add(v4_mul(ma, pc), v4_mul(mc, pa))))),
                       v4_le(v4_abs(w), v4_mul(tol, v4_add(v4_mul(mb, pa), v4_mul(ma, pb)))))) &
         valid;
+#else
+    const v4 zero = v4_set1(0.f);
+    const unsigned valid = valid_lanes(b->prim_id);
+    const unsigned on_edge = 0u; /* fast build (intersect.h): float decides every edge */
+#endif
     const v4 any_neg = v4_or(v4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
     const v4 any_pos = v4_or(v4_or(v4_gt(u, zero), v4_gt(v, zero)), v4_gt(w, zero));
     const v4 det = v4_add(v4_add(u, v), w);
@@ -586,6 +592,7 @@ static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, cons
         const vr u = vr_sub(vr_mul(cx, by), vr_mul(cy, bx));
         const vr v = vr_sub(vr_mul(ax, cy), vr_mul(ay, cx));
         const vr w = vr_sub(vr_mul(bx, ay), vr_mul(by, ax));
+#ifndef TESSERA_UNROBUST
         const vr tol = vr_set1(INTERSECT_EDGE_TOL);
         const vr ma = vr_add(vr_add(vr_abs(akx), vr_abs(aky)), vr_abs(az));
         const vr mb = vr_add(vr_add(vr_abs(bkx), vr_abs(bky)), vr_abs(bz));
@@ -597,6 +604,9 @@ static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, cons
                                 vr_le(vr_abs(v), vr_mul(tol, vr_add(vr_mul(ma, pc), vr_mul(mc, pa))))),
                           vr_le(vr_abs(w), vr_mul(tol, vr_add(vr_mul(mb, pa), vr_mul(ma, pb)))))) &
             lanes;
+#else
+        const unsigned on_edge = 0u; /* fast build (intersect.h): float decides every edge */
+#endif
         const vm any_neg = vm_or(vm_or(vr_lt(u, zero), vr_lt(v, zero)), vr_lt(w, zero));
         const vm any_pos = vm_or(vm_or(vr_gt(u, zero), vr_gt(v, zero)), vr_gt(w, zero));
         const vr det = vr_add(vr_add(u, v), w);

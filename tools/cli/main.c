@@ -30,6 +30,7 @@ static const command commands[] = {
     {"trace", cli_trace, "trace rays from a binary file and write their hits (for users and tests)"},
     {"bench", cli_bench, "measure ray throughput, build time and memory (machine-readable lines)"},
     {"compare", cli_compare, "how much an image differs from a reference: FLIP, RMSE, PSNR (one line)"},
+    {"robust", cli_robust, "wrong hits and leaks of the kernels on hard cases, and their speed (one line a case)"},
     {"outputs", cli_outputs, "list DRM cards, connectors, monitors (EDID) and modes, for wall configs"},
 };
 
@@ -56,7 +57,7 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);
-    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, compare, outputs; see 'tessera --help')",
+    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, compare, robust, outputs; see 'tessera --help')",
               argv[1]);
     return 2;
 }

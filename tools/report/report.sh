@@ -3,7 +3,8 @@
 # report/*.png (gnuplot) with one section per quality knob, each a curve of
 # frame time against error (mean FLIP and RMSE, `tessera compare`) on named
 # scenes against a converged reference. `make report` runs it after
-# `tools/deps.sh --report` and building ./tessera and build/report_img.
+# `tools/deps.sh --report` and building ./tessera, build/report_img and
+# build-unrobust/tessera (make unrobust: the robustness knob's fast mode).
 #
 # A knob is one file, tools/report/knob_NAME.sh, defining knob_NAME (called
 # with the scene labels; it writes $WORK/section_NAME.md and its pictures into
@@ -15,6 +16,7 @@
 #   REPORT_FRAMES      frames per timed run [4]
 #   REPORT_THREADS     render threads [2]
 #   REPORT_KNOBS       the knobs to run, a subset of KNOBS [all]
+#   REPORT_ROBUST_SMALL 1: the robustness knob runs `tessera robust --small` [0]
 #   REPORT_REF_K, REPORT_REF_RENDERS  reference: RENDERS renders of jittered:K averaged [16, 4]
 #   REPORT_CACHE       where references are kept between runs [/tmp/report-cache]
 #   REPORT_OUT         where REPORT.md and report/ go [the repository root]
@@ -30,7 +32,7 @@ ROOT=$(pwd)
 . tools/report/lib.sh
 
 # the knobs, in report order (tools/report/knob_NAME.sh each)
-KNOBS="antialiasing render_scale"
+KNOBS="antialiasing render_scale robustness"
 
 SIZE=${REPORT_SIZE:-1920x1080}
 RUNS=${REPORT_RUNS:-3}
