@@ -47,6 +47,7 @@ typedef enum input_action {
     INPUT_ACTION_HIDE_OBJECT, /* hide the object under the cursor */
     INPUT_ACTION_UNHIDE_ALL,
     INPUT_ACTION_FLY_TO,      /* fly to the point under the cursor */
+    INPUT_ACTION_GOVERNOR_STATUS, /* show / hide the frame-budget governor's state in the status line */
     INPUT_ACTION_COUNT
 } input_action;
 

@@ -40,6 +40,7 @@ struct input_controller {
     double cur_x, cur_y;
     bool cursor_visible, cursor_dirty;
     bool status_shown;         /* the last status emitted was not "" */
+    bool governor_status_shown; /* the governor's line is asked for (governor-status toggles it) */
 
     /* a pointer button drag */
     bool dragging;
@@ -287,6 +288,12 @@ static void command(input_controller *c, input_action action, double sx, double 
         input_txn t = {.kind = INPUT_TXN_UNHIDE_ALL};
         emit(c, &t);
         emit_status(c, "all objects shown");
+        break;
+    }
+    case INPUT_ACTION_GOVERNOR_STATUS: {
+        c->governor_status_shown = !c->governor_status_shown;
+        input_txn t = {.kind = INPUT_TXN_GOVERNOR_STATUS, .on = c->governor_status_shown};
+        emit(c, &t);
         break;
     }
     case INPUT_ACTION_FLY_TO: {

@@ -60,6 +60,7 @@ typedef enum input_txn_kind {
     INPUT_TXN_UNHIDE_ALL,
     INPUT_TXN_TOUR,       /* on: start (easing in from the current camera) or stop the tour */
     INPUT_TXN_QUIT,       /* stop the pipeline */
+    INPUT_TXN_GOVERNOR_STATUS, /* on: the governor's state shown in the status line, or not */
     INPUT_TXN_KIND_COUNT
 } input_txn_kind;
 

@@ -15,7 +15,7 @@
 static const char *const kind_names[INPUT_TXN_KIND_COUNT] = {
     [INPUT_TXN_CAMERA] = "camera", [INPUT_TXN_CURSOR] = "cursor",         [INPUT_TXN_STATUS] = "status",
     [INPUT_TXN_HIDE] = "hide",     [INPUT_TXN_UNHIDE_ALL] = "unhide-all", [INPUT_TXN_TOUR] = "tour",
-    [INPUT_TXN_QUIT] = "quit",
+    [INPUT_TXN_QUIT] = "quit",     [INPUT_TXN_GOVERNOR_STATUS] = "governor-status",
 };
 
 const char *input_txn_kind_name(input_txn_kind k)
@@ -53,6 +53,7 @@ bool input_record_write(FILE *f, double time_s, const input_txn *t)
         n = fprintf(f, " %u", (unsigned)t->geom_id);
         break;
     case INPUT_TXN_TOUR:
+    case INPUT_TXN_GOVERNOR_STATUS:
         n = fprintf(f, " %d", t->on ? 1 : 0);
         break;
     default:
@@ -183,7 +184,7 @@ static bool quoted(line_reader *r, char *out, size_t size)
 static bool parse_line(line_reader *r, input_record_entry *e)
 {
     *e = (input_record_entry){0};
-    char kind[16];
+    char kind[24];
     if (!number(r, &e->time_s, "the time") || !word(r, kind, sizeof kind, "the transaction kind"))
         return false;
     if (e->time_s < 0.0)
@@ -194,7 +195,7 @@ static bool parse_line(line_reader *r, input_record_entry *e)
     if (k == INPUT_TXN_KIND_COUNT)
         return tess_error_set(r->err,
                               "%s:%zu: unknown transaction kind '%s' (expected one of: camera, cursor, status, hide, "
-                              "unhide-all, tour, quit)",
+                              "unhide-all, tour, quit, governor-status)",
                               r->name, r->line, kind);
     input_txn *t = &e->txn;
     t->kind = (input_txn_kind)k;
@@ -234,6 +235,10 @@ static bool parse_line(line_reader *r, input_record_entry *e)
     }
     case INPUT_TXN_TOUR:
         if (!flag(r, &t->on, "tour on/off"))
+            return false;
+        break;
+    case INPUT_TXN_GOVERNOR_STATUS:
+        if (!flag(r, &t->on, "governor status on/off"))
             return false;
         break;
     default:

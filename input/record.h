@@ -12,6 +12,7 @@
  *   T unhide-all
  *   T tour ON
  *   T quit
+ *   T governor-status ON
  * Errors name the file, the line and the problem.
  *
  * CUT OFF. A recording that ends mid-line (the kiosk killed or the power cut

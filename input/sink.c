@@ -189,6 +189,9 @@ static void queue(input_sink *s, const input_txn *t)
         count_refused(s, pipeline_transaction(s->p, "input tour", apply_tour, &a, sizeof a));
         break;
     }
+    case INPUT_TXN_GOVERNOR_STATUS:
+        count_refused(s, pipeline_queue_governor_status(s->p, t->on));
+        break;
     case INPUT_TXN_QUIT:
         log_info("input: quit");
         count_refused(s, pipeline_transaction(s->p, "input quit", apply_quit, NULL, 0));

@@ -114,7 +114,8 @@ Test(bindings, defaults_are_as_documented)
         {KEY_MINUS, INPUT_ACTION_SPEED_DOWN}, {KEY_KPMINUS, INPUT_ACTION_SPEED_DOWN},
         {KEY_HOME, INPUT_ACTION_HOME},        {KEY_H, INPUT_ACTION_HIDE_OBJECT},
         {KEY_U, INPUT_ACTION_UNHIDE_ALL},     {KEY_P, INPUT_ACTION_PICK},
-        {KEY_F, INPUT_ACTION_FLY_TO},         {BTN_LEFT, INPUT_ACTION_ORBIT},
+        {KEY_F, INPUT_ACTION_FLY_TO},         {KEY_G, INPUT_ACTION_GOVERNOR_STATUS},
+        {BTN_LEFT, INPUT_ACTION_ORBIT},
         {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PAN},
     };
     size_t n = sizeof want / sizeof want[0];
@@ -314,7 +315,7 @@ Test(bindings, bad_actions)
     expect_members_failure(", \"keys\": {\"KEY_W\": \"fly-fwd\"}", "keys.KEY_W",
                            "unknown action 'fly-fwd' (expected one of: none, orbit, pan, dolly, fly-forward, "
                            "fly-back, fly-left, fly-right, fly-up, fly-down, speed-up, speed-down, home, pick, "
-                           "hide-object, unhide-all, fly-to)");
+                           "hide-object, unhide-all, fly-to, governor-status)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -331,7 +332,7 @@ Test(bindings, drag_actions_need_motion)
                            "'dolly' is a drag action");
     expect_members_failure(", \"gestures\": {\"tap\": \"orbit\"}", "gestures.tap",
                            "'orbit' is a drag action, which follows motion, but tap is a discrete gesture without "
-                           "motion (it takes speed-up, speed-down, home, pick, hide-object, unhide-all, fly-to or none)");
+                           "motion (it takes speed-up, speed-down, home, pick, hide-object, unhide-all, fly-to, governor-status or none)");
     expect_members_failure(", \"gestures\": {\"click\": \"pan\"}", "gestures.click", "'pan' is a drag action");
     expect_members_failure(", \"gestures\": {\"double-tap\": \"dolly\"}", "gestures.double-tap",
                            "'dolly' is a drag action");

@@ -313,6 +313,16 @@ Test(input, click_picks_and_reports_the_object)
     cr_expect_str_eq(last_kind(r, INPUT_TXN_STATUS)->text, "hidden: the sphere set");
     key(r, KEY_U, true);
     cr_expect_eq(count_kind(r, INPUT_TXN_UNHIDE_ALL), 1);
+    /* the governor's line: G shows it, G again hides it */
+    key(r, KEY_G, true);
+    key(r, KEY_G, false);
+    const input_txn *gov = last_kind(r, INPUT_TXN_GOVERNOR_STATUS);
+    cr_assert(gov, "no governor-status transaction for G");
+    cr_expect(gov->on);
+    key(r, KEY_G, true);
+    key(r, KEY_G, false);
+    cr_expect(!last_kind(r, INPUT_TXN_GOVERNOR_STATUS)->on);
+    cr_expect_eq(count_kind(r, INPUT_TXN_GOVERNOR_STATUS), 2);
     rig_free(r);
 }
 
@@ -620,7 +630,7 @@ Test(input, a_touch_on_the_third_output_lands_on_that_place_of_the_wall)
 
 Test(input, record_lines_read_back_bit_for_bit)
 {
-    input_txn in[7] = {
+    input_txn in[8] = {
         {.kind = INPUT_TXN_CAMERA,
          .camera = {v3(0.1f, -1e-7f, 3.4028235e38f), v3(1.f / 3.f, 2.f, -7.f), v3(0.f, 1.f, 1e-20f), 39.99999f}},
         {.kind = INPUT_TXN_CURSOR, .on = true, .sx = -0.3f, .sy = 0.7f},
@@ -629,20 +639,21 @@ Test(input, record_lines_read_back_bit_for_bit)
         {.kind = INPUT_TXN_UNHIDE_ALL},
         {.kind = INPUT_TXN_TOUR, .on = true},
         {.kind = INPUT_TXN_QUIT},
+        {.kind = INPUT_TXN_GOVERNOR_STATUS, .on = true},
     };
     char *buf = NULL;
     size_t len = 0;
     FILE *f = open_memstream(&buf, &len);
     cr_assert(f);
     fprintf(f, "%s\n", INPUT_RECORD_HEADER);
-    for (int i = 0; i < 7; i++)
+    for (int i = 0; i < 8; i++)
         cr_assert(input_record_write(f, 0.25 * i, &in[i]));
     fclose(f);
     input_record rec;
     tess_error err = {{0}};
     cr_assert(input_record_parse("rec.txt", buf, len, &rec, &err), "%s\n%s", err.msg, buf);
-    cr_assert_eq(rec.count, 7u);
-    for (int i = 0; i < 7; i++) {
+    cr_assert_eq(rec.count, 8u);
+    for (int i = 0; i < 8; i++) {
         const input_txn *a = &in[i], *b = &rec.entries[i].txn;
         cr_expect_eq(a->kind, b->kind);
         cr_expect(fabs(rec.entries[i].time_s - 0.25 * i) < 1e-9);
