@@ -159,6 +159,12 @@ Test(pipeline_cli, bad_configs_and_options_get_clear_errors)
     EXPECT_ERROR("render --config %s/syntax.json --out %s/a.png", "syntax.json:2");
     write_file("dump.json", "{\"display\": {\"name\": \"dump\"}}");
     EXPECT_ERROR("render --config %s/dump.json --out %s/a.png", "dump.json", "display.out");
+    write_file("gov.json", "{\"governor\": {\"budget_ms\": -5}}");
+    EXPECT_ERROR("render --config %s/gov.json --out %s/a.png", "gov.json", "governor.budget_ms");
+    write_file("gov2.json", "{\"governor\": {\"budget_ms\": 30, \"upscale\": \"lanczos\"}}");
+    EXPECT_ERROR("render --config %s/gov2.json --out %s/a.png", "gov2.json", "governor.upscale", "lanczos");
+    write_file("gov3.json", "{\"governor\": {\"budget_ms\": 30, \"refine\": 4}}");
+    EXPECT_ERROR("render --config %s/gov3.json --out %s/a.png", "gov3.json", "refine", "unknown field");
     write_file("tile.json", "{\"traverser\": {\"tile_px\": 1000}}");
     EXPECT_ERROR("render --config %s/tile.json --out %s/a.png", "tile.json", "tile_px");
     EXPECT_ERROR("render --config %s/missing.json --out %s/a.png", "missing.json", "cannot open");

@@ -177,6 +177,26 @@ static bool load_time(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
     return ok;
 }
 
+/* "governor": {"budget_ms", "refine_k", "still_s", "upscale"} (pipeline.h, GOVERNOR). */
+static bool load_governor(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    static const char *const fields[] = {"budget_ms", "refine_k", "still_s", "upscale", NULL};
+    static const char *const filters[] = {"bilinear", "clamped-cubic", NULL};
+    json_object *m;
+    if (!jr_get_member(root, "governor", &m))
+        return true;
+    size_t saved = jr_field_key(c, "governor");
+    int filter = s->upscale == UPSCALE_CLAMPED_CUBIC ? 1 : 0;
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) &&
+              jr_opt_double(c, m, "budget_ms", (jr_range){0.0, 1e6, false, false}, &s->budget_ms) &&
+              opt_int(c, m, "refine_k", 1, PIXEL_SAMPLER_MAX_K, &s->refine_k) &&
+              jr_opt_double(c, m, "still_s", (jr_range){0.0, 3600.0, false, false}, &s->still_s) &&
+              jr_opt_choice(c, m, "upscale", filters, &filter);
+    jr_field_leave(c, saved);
+    s->upscale = filter == 1 ? UPSCALE_CLAMPED_CUBIC : UPSCALE_BILINEAR;
+    return ok;
+}
+
 static bool load_traverser(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
 {
     static const char *const fields[] = {"name", "tile_px", "order", "seed", NULL};
@@ -286,7 +306,7 @@ bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
 bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, cli_pipeline_spec *s)
 {
     static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
-                                         "camera", "display", "path", "channels", "input", NULL};
+                                         "camera", "display", "path", "channels", "input", "governor", NULL};
     tess_error err = {{0}};
     json_object *root = NULL;
     bool ok = jr_parse(file, text, len, &root, &err);
@@ -296,6 +316,7 @@ bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, c
          opt_int(&c, root, "threads", 1, PIPELINE_MAX_THREADS, &s->threads) &&
          opt_int(&c, root, "frames", 0, 100000000, &s->frames) && load_time(&c, root, s) &&
          load_traverser(&c, root, s) && load_sampler(&c, root, s) && load_renderer(&c, root, s) &&
+         load_governor(&c, root, s) &&
          opt_size(&c, root, &s->channels[0].width_px, &s->channels[0].height_px) &&
          opt_camera(&c, root, &s->channels[0]) && opt_display(&c, root, &s->channels[0]) &&
          opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s) &&
