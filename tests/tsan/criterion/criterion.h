@@ -9,8 +9,8 @@
  * message and exits 1; a test's .timeout (default 600 s) is an alarm that
  * kills the run, so a deadlock fails instead of hanging.
  * Supports only what those files use: Test(suite, name[, .timeout = N]),
- * cr_assert, cr_assert_not, cr_assert_eq, cr_assert_null, cr_expect*,
- * cr_expect_str_eq. Several test files link into one binary: the registry and
+ * cr_assert, cr_assert_not, cr_assert_eq, cr_assert_null, cr_assert_geq,
+ * cr_expect*, cr_expect_str_eq, cr_expect_geq, cr_log_info. Several test files link into one binary: the registry and
  * main() are weak definitions, so each file's copy is the same one. */
 #ifndef TESSERA_TSAN_CRITERION_SHIM_H
 #define TESSERA_TSAN_CRITERION_SHIM_H
@@ -79,6 +79,10 @@ static inline void shim_check(bool ok, const char *file, int line, const char *e
 #define cr_expect_not(cond, ...) cr_assert_not(cond, __VA_ARGS__)
 #define cr_expect_eq(a, b, ...) cr_assert_eq(a, b, __VA_ARGS__)
 #define cr_expect_str_eq(a, b, ...) shim_check(strcmp((a), (b)) == 0, __FILE__, __LINE__, #a " == " #b, " " __VA_ARGS__)
+#define cr_assert_geq(a, b, ...) shim_check((a) >= (b), __FILE__, __LINE__, #a " >= " #b, " " __VA_ARGS__)
+#define cr_expect_geq(a, b, ...) cr_assert_geq(a, b, __VA_ARGS__)
+/* Criterion's info log: printed to stderr here. */
+#define cr_log_info(...) (fprintf(stderr, "  info: " __VA_ARGS__), fputc('\n', stderr))
 
 /* Run every test whose "suite/name" starts with argv[1] (all without one). */
 int main(int argc, char **argv);
