@@ -173,6 +173,10 @@ struct pipeline {
      * `reduced` and the upscale fields, which render threads read in the
      * step the serial section prepared */
     bool governed;
+    bool fixed_scale;                    /* cfg.render_scale < 1 without a governor: every frame at rung 1 */
+    double rung_scale[GOVERNOR_RUNGS];   /* the scale of each rung in use: the governor's ladder, or
+                                            {1, render_scale}; rung_count of them */
+    int rung_count;
     governor gov;
     governor_frame frame_plan;           /* of the frame being rendered */
     pixel_sampler frame_sampler;         /* its sampler */
@@ -327,6 +331,7 @@ pipeline_config pipeline_config_default(const struct scene *s, const struct acce
     c.still_s = GOVERNOR_DEFAULT_STILL_S;
     c.refine_k = GOVERNOR_DEFAULT_REFINE_K;
     c.upscale = UPSCALE_BILINEAR;
+    c.render_scale = 1.0;
     return c;
 }
 
@@ -355,6 +360,13 @@ bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
         return tess_error_set(err, "pipeline: sampler: a stratum sampler is the governor's, not a config's");
     if (!(cfg->budget_ms >= 0.0) || !isfinite(cfg->budget_ms))
         return tess_error_set(err, "pipeline: budget_ms: %g is not a time >= 0 (0: no governor)", cfg->budget_ms);
+    if (!upscale_scale_validate(cfg->render_scale, err)) {
+        tess_error_prefix(err, "pipeline: render_scale: ");
+        return false;
+    }
+    if (cfg->render_scale < 1.0 && cfg->budget_ms > 0.0)
+        return tess_error_set(err, "pipeline: render_scale %g with budget_ms %g: the governor picks the scale",
+                              cfg->render_scale, cfg->budget_ms);
     if ((unsigned)cfg->upscale > UPSCALE_CLAMPED_CUBIC)
         return tess_error_set(err, "pipeline: unknown upscale filter %d", (int)cfg->upscale);
     if (cfg->budget_ms > 0.0) {
@@ -1120,10 +1132,13 @@ static void finish_previous_step(pipeline *p)
     p->stats.rays.shadow_rays += sum.shadow_rays;
     if (prev->render)
         p->stats.frames_rendered++;
+    if (prev->render && p->reduced) {
+        p->stats.upscale_s += longest_upscale_s;
+        p->stats.frames_reduced++;
+    }
     if (prev->render && p->governed) {
         const governor_frame *f = &p->frame_plan;
         p->stats.frames_scaled += f->kind == GOVERNOR_FRAME_SCALED;
-        p->stats.frames_reduced += f->kind == GOVERNOR_FRAME_SCALED && f->rung > 0;
         p->stats.frames_accumulated += f->kind == GOVERNOR_FRAME_ACCUMULATE;
         p->stats.frames_resolved += f->kind == GOVERNOR_FRAME_RESOLVE;
     }
@@ -1155,7 +1170,7 @@ static void freeze_frame(pipeline *p)
     traverser_target targets[PIPELINE_MAX_CHANNELS];
     const governor_frame *plan = &p->frame_plan;
     const bool accumulate = plan->kind == GOVERNOR_FRAME_ACCUMULATE || plan->kind == GOVERNOR_FRAME_RESOLVE;
-    const double scale = GOVERNOR_SCALES[plan->rung];
+    const double scale = p->rung_scale[plan->rung];
     uint32_t bands = 0;
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
@@ -1217,6 +1232,31 @@ static void wait_while_idle(pipeline *p)
     pthread_mutex_unlock(&p->queue_lock);
 }
 
+/* A reduced frame needs every thread's upscale scratch (made once per thread,
+ * here in the serial section); false, logged, when there is no memory for it
+ * (the frame is then rendered at full size). */
+static bool have_upscale_scratch(pipeline *p, int threads)
+{
+    for (int i = 0; i < threads; i++)
+        if (!p->threads[i].upscale_scratch) {
+            p->threads[i].upscale_scratch = malloc(p->upscale_scratch_floats * sizeof(float));
+            if (!p->threads[i].upscale_scratch) {
+                log_error("pipeline: no memory for upscaling on thread %d: this frame renders at full size", i);
+                return false;
+            }
+        }
+    return true;
+}
+
+/* A fixed render scale (no governor): every frame at rung 1, with the config's sampler. */
+static void plan_fixed_scale_frame(pipeline *p, int threads)
+{
+    bool scratch = have_upscale_scratch(p, threads);
+    p->frame_plan = (governor_frame){GOVERNOR_FRAME_SCALED, scratch ? 1 : 0, 0, 1};
+    p->reduced = scratch;
+    p->frame_sampler = p->cfg.sampler;
+}
+
 /* Governor: feed it what the previous frame cost, plan this one, and make
  * sure the threads have upscale scratch for a reduced frame. Sets
  * frame_plan, frame_sampler and reduced. */
@@ -1238,15 +1278,8 @@ static void plan_governed_frame(pipeline *p, int threads)
     governor_mode before = p->gov.mode;
     int rung_before = p->frame_plan.rung;
     governor_frame f = governor_plan(&p->gov, s->info.time_s, picture_changed, overlay_changed, p->rung_pixels);
-    /* a reduced frame needs every thread's scratch: without it (no memory), full size */
-    for (int i = 0; f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0 && i < threads; i++)
-        if (!p->threads[i].upscale_scratch) {
-            p->threads[i].upscale_scratch = malloc(p->upscale_scratch_floats * sizeof(float));
-            if (!p->threads[i].upscale_scratch) {
-                log_error("pipeline: governor: no memory for upscaling on thread %d: rendering at full size", i);
-                f.rung = 0;
-            }
-        }
+    if (f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0 && !have_upscale_scratch(p, threads))
+        f.rung = 0;
     p->frame_plan = f;
     p->planned_picture_serial = p->picture_serial;
     if (p->governor_status_shown)
@@ -1266,7 +1299,7 @@ static void plan_governed_frame(pipeline *p, int threads)
         log_info("pipeline: frame %llu: %s", (unsigned long long)s->info.frame, line);
     } else if (f.kind == GOVERNOR_FRAME_SCALED && f.rung != rung_before)
         log_debug("pipeline: frame %llu: governor: scale %.3g -> %.3g (predicted %.1f ms, budget %.1f ms)",
-                  (unsigned long long)s->info.frame, GOVERNOR_SCALES[rung_before], GOVERNOR_SCALES[f.rung],
+                  (unsigned long long)s->info.frame, p->rung_scale[rung_before], p->rung_scale[f.rung],
                   1e3 * governor_predict_s(&p->gov, f.rung, p->rung_pixels), p->cfg.budget_ms);
     p->last_step_pixels = 0.0;
     if (f.kind == GOVERNOR_FRAME_SCALED || f.kind == GOVERNOR_FRAME_ACCUMULATE) {
@@ -1274,8 +1307,8 @@ static void plan_governed_frame(pipeline *p, int threads)
             if (p->channels[i].active) {
                 double w = p->channels[i].width_px, h = p->channels[i].height_px;
                 if (p->reduced) {
-                    w = upscale_low_res_px(p->channels[i].width_px, GOVERNOR_SCALES[f.rung]);
-                    h = upscale_low_res_px(p->channels[i].height_px, GOVERNOR_SCALES[f.rung]);
+                    w = upscale_low_res_px(p->channels[i].width_px, p->rung_scale[f.rung]);
+                    h = upscale_low_res_px(p->channels[i].height_px, p->rung_scale[f.rung]);
                 }
                 p->last_step_pixels += w * h;
             }
@@ -1344,9 +1377,10 @@ static int serial_section_steps(pipeline *p)
             tls_serial_owner = NULL;
             return threads;
         }
-        if (p->reduced)
-            barrier_set_participants(&p->upscale_barrier, threads);
-    }
+    } else if (p->fixed_scale)
+        plan_fixed_scale_frame(p, threads);
+    if (p->reduced)
+        barrier_set_participants(&p->upscale_barrier, threads);
     s->render = true;
     s->animate_parallel = p->parallel_anim_count > 0;
     if (s->animate_parallel)
@@ -1485,22 +1519,19 @@ static void *thread_main(void *arg)
     return NULL;
 }
 
-/* The governor's buffers, plans and per-rung traversers (pipeline_run, before
- * the loop): everything a governed frame needs except per-thread scratch. */
-static bool governor_setup(pipeline *p, const int *widths, const int *heights, tess_error *err)
+/* Reduced frames (a governor, or a fixed render scale): per rung above 0 a
+ * tiled traverser of the low-res sizes and each channel's upscale plan, the
+ * low-res buffers (rung 1 is the largest) and, with a governor, the
+ * accumulation buffers. pipeline_run, before the loop; per-thread scratch
+ * comes later (have_upscale_scratch). */
+static bool reduced_setup(pipeline *p, const int *widths, const int *heights, tess_error *err)
 {
-    governor_config g = {p->cfg.budget_ms * 1e-3, p->cfg.still_s, p->cfg.refine_k};
-    double output_pixels = 0.0;
-    for (int i = 0; i < p->channel_count; i++)
-        output_pixels += (double)widths[i] * (double)heights[i];
-    governor_init(&p->gov, &g, output_pixels);
-    for (int r = 0; r < GOVERNOR_RUNGS; r++)
-        p->rung_pixels[r] = governor_rung_pixels(r, widths, heights, p->channel_count);
-    for (int r = 1; r < GOVERNOR_RUNGS; r++) {
+    const char *who = p->governed ? "governor" : "render scale";
+    for (int r = 1; r < p->rung_count; r++) {
         int low_w[PIPELINE_MAX_CHANNELS], low_h[PIPELINE_MAX_CHANNELS];
         for (int i = 0; i < p->channel_count; i++) {
-            low_w[i] = upscale_low_res_px(widths[i], GOVERNOR_SCALES[r]);
-            low_h[i] = upscale_low_res_px(heights[i], GOVERNOR_SCALES[r]);
+            low_w[i] = upscale_low_res_px(widths[i], p->rung_scale[r]);
+            low_h[i] = upscale_low_res_px(heights[i], p->rung_scale[r]);
         }
         p->rung_traversers[r] = traverser_tiled_create(p->cfg.tile_px, p->cfg.order, p->cfg.order_seed, low_w, low_h,
                                                        p->channel_count, err);
@@ -1510,7 +1541,7 @@ static bool governor_setup(pipeline *p, const int *widths, const int *heights, t
             pipe_channel *c = &p->channels[i];
             c->plans[r] = upscale_plan_create(low_w[i], low_h[i], widths[i], heights[i], p->cfg.upscale, err);
             if (!c->plans[r]) {
-                tess_error_prefix(err, "pipeline: governor: channel %d: ", i);
+                tess_error_prefix(err, "pipeline: %s: channel %d: ", who, i);
                 return false;
             }
             size_t need = upscale_plan_scratch_floats(c->plans[r]);
@@ -1521,21 +1552,50 @@ static bool governor_setup(pipeline *p, const int *widths, const int *heights, t
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
         size_t full = (size_t)widths[i] * (size_t)heights[i] * 3;
-        size_t low = (size_t)upscale_low_res_px(widths[i], GOVERNOR_SCALES[1]) *
-                     (size_t)upscale_low_res_px(heights[i], GOVERNOR_SCALES[1]) * 3;
-        c->accum = calloc(full, sizeof(float));
+        size_t low = (size_t)upscale_low_res_px(widths[i], p->rung_scale[1]) *
+                     (size_t)upscale_low_res_px(heights[i], p->rung_scale[1]) * 3;
         c->lowres = calloc(low, sizeof(float));
-        if (!c->accum || !c->lowres)
-            return tess_error_set(err, "pipeline: governor: channel %d: out of memory for its %dx%d buffers", i,
+        if (p->governed)
+            c->accum = calloc(full, sizeof(float));
+        if (!c->lowres || (p->governed && !c->accum))
+            return tess_error_set(err, "pipeline: %s: channel %d: out of memory for its %dx%d buffers", who, i,
                                   widths[i], heights[i]);
     }
-    p->governed = true;
+    return true;
+}
+
+/* The governor (budget_ms > 0) or a fixed render scale (render_scale < 1):
+ * the rungs in use, the governor's state, the buffers. */
+static bool scale_setup(pipeline *p, const int *widths, const int *heights, tess_error *err)
+{
+    if (p->cfg.budget_ms > 0.0) {
+        governor_config g = {p->cfg.budget_ms * 1e-3, p->cfg.still_s, p->cfg.refine_k};
+        double output_pixels = 0.0;
+        for (int i = 0; i < p->channel_count; i++)
+            output_pixels += (double)widths[i] * (double)heights[i];
+        governor_init(&p->gov, &g, output_pixels);
+        for (int r = 0; r < GOVERNOR_RUNGS; r++) {
+            p->rung_pixels[r] = governor_rung_pixels(r, widths, heights, p->channel_count);
+            p->rung_scale[r] = GOVERNOR_SCALES[r];
+        }
+        p->rung_count = GOVERNOR_RUNGS;
+        p->governed = true;
+        p->frame_sampler = pixel_sampler_single();
+    } else if (p->cfg.render_scale < 1.0) {
+        p->rung_scale[0] = 1.0;
+        p->rung_scale[1] = p->cfg.render_scale;
+        p->rung_count = 2;
+        p->fixed_scale = true;
+    } else
+        return true;
+    if (!reduced_setup(p, widths, heights, err))
+        return false;
     p->frame_plan = (governor_frame){GOVERNOR_FRAME_SCALED, 0, 0, 1};
-    p->frame_sampler = pixel_sampler_single();
-    log_info("pipeline: governor: budget %.1f ms, scales 1..%.3g (%s upscaling), refining to jittered:%d after "
-             "%.2f s still",
-             p->cfg.budget_ms, GOVERNOR_SCALES[GOVERNOR_RUNGS - 1], upscale_filter_name(p->cfg.upscale),
-             p->cfg.refine_k, p->cfg.still_s);
+    if (p->governed)
+        log_info("pipeline: governor: budget %.1f ms, scales 1..%.3g (%s upscaling), refining to jittered:%d after "
+                 "%.2f s still",
+                 p->cfg.budget_ms, GOVERNOR_SCALES[GOVERNOR_RUNGS - 1], upscale_filter_name(p->cfg.upscale),
+                 p->cfg.refine_k, p->cfg.still_s);
     return true;
 }
 
@@ -1559,7 +1619,7 @@ bool pipeline_run(pipeline *p, tess_error *err)
                                           p->channel_count, err);
     if (!p->traverser)
         return false;
-    if (p->cfg.budget_ms > 0.0 && !governor_setup(p, widths, heights, err))
+    if (!scale_setup(p, widths, heights, err))
         return false;
     p->ran = true;
     atomic_store(&p->running, true);

@@ -97,7 +97,10 @@
  * count as movement. max_frames counts loop steps, idle ones included, and
  * in PIPELINE_TIME_FIXED_RATE time is steps / rate_hz (without the governor
  * both are frames, as before). A governor costs nothing when off: no
- * buffers, no upscale barrier, the same frames. */
+ * buffers, no upscale barrier, the same frames.
+ *
+ * RENDER SCALE (config render_scale < 1, no governor): every frame is a
+ * reduced frame as above at that one scale, with the config's sampler. */
 #ifndef TESSERA_PIPELINE_H
 #define TESSERA_PIPELINE_H
 
@@ -160,6 +163,10 @@ typedef struct pipeline_config {
     double still_s;            /* still this long (frame time) before refining */
     int refine_k;              /* 1..PIXEL_SAMPLER_MAX_K */
     upscale_filter upscale;    /* how reduced frames are enlarged */
+    /* without a governor: every frame rendered at this scale of its channel's
+     * size (upscale.h, RENDER SCALE) with `sampler`, upscaled as the governor's
+     * reduced frames are; (0, 1], 1 = full size; < 1 only with budget_ms 0 */
+    double render_scale;
 } pipeline_config;
 
 /* Defaults: 1 thread, real time (rate 30 for FIXED_RATE), no frame limit,
@@ -342,8 +349,12 @@ typedef struct pipeline_stats {
                                        leaving it (idle at the end of frames + serial sections) */
     /* the governor (all 0 without one): rendered frames by kind, idle steps,
      * moving frames whose loop step took longer than the budget */
-    uint64_t frames_scaled, frames_reduced, frames_accumulated, frames_resolved, idle_steps;
+    uint64_t frames_scaled, frames_accumulated, frames_resolved, idle_steps;
     uint64_t frames_over_budget;
+    /* frames rendered at a reduced scale (governor or render_scale), and the
+     * seconds their upscaling took (per frame the longest thread's share) */
+    uint64_t frames_reduced;
+    double upscale_s;
 } pipeline_stats;
 
 /* Counters so far (exact after run returns; may lag while running). */

@@ -257,13 +257,13 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
            s->threads == 1 ? "" : "s", fps,
            fps > 0.0 ? 1e3 / fps : 0.0, pixels * fps * 1e-6, ch->display,
            st.frames_displayed ? 1e3 * st.display_s / (double)st.frames_displayed : 0.0);
-    uint64_t upscaled;
-    double upscale_s;
-    if (cli_pipeline_upscale_time(&upscaled, &upscale_s)) {
-        camera_basis b = pipeline_channel_basis(p, 0);
-        printf("render scale %s: %dx%d rendered, upscaled to %dx%d (%s): %.2f ms/frame upscaling on thread 0\n",
-               s->render_scale_text, b.width_px, b.height_px, ch->width_px, ch->height_px,
-               upscale_filter_name(s->upscale), upscaled ? 1e3 * upscale_s / (double)upscaled : 0.0);
+    if (s->render_scale < 1.0 && st.frames_reduced) {
+        int low_w = upscale_low_res_px(ch->width_px, s->render_scale);
+        int low_h = upscale_low_res_px(ch->height_px, s->render_scale);
+        printf("render scale %s: %dx%d rendered, upscaled to %dx%d (%s): %.2f ms/frame upscaling on the render "
+               "threads\n",
+               s->render_scale_text, low_w, low_h, ch->width_px, ch->height_px, upscale_filter_name(s->upscale),
+               1e3 * st.upscale_s / (double)st.frames_reduced);
     }
     cli_pipeline_report(p, s);
     code = 0;

@@ -46,12 +46,7 @@ void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s
     if (s->path_file[0] && !live_input && !s->input.replay_file[0] && cli_given_has(g, "--camera"))
         cli_warn("--camera is ignored with --path (the path sets the camera from the first frame)");
     const bool governed = s->budget_ms > 0.0;
-    if (s->wall_file[0])
-        for (const char *const *o = (const char *const[]){"--scale", "--upscale", NULL}; *o; o++)
-            if (cli_given_has(g, *o) && !(governed && !strcmp(*o, "--upscale")))
-                cli_warn("%s is ignored with --wall (a wall renders every output at full size%s)", *o,
-                         governed ? "" : " unless --budget-ms gives its governor a budget");
-    if (!governed && !s->wall_file[0] && s->render_scale >= 1.0 && cli_given_has(g, "--upscale"))
+    if (!governed && s->render_scale >= 1.0 && cli_given_has(g, "--upscale"))
         cli_warn("--upscale is ignored at --scale 1 without --budget-ms (the image is rendered at full size: "
                  "nothing is upscaled)");
     if (!governed)

@@ -14,7 +14,6 @@
 #include "engine/scene.h"
 #include "option_check.h"
 #include "wall/display.h"
-#include "wall/display_upscale.h"
 #include "wall/drm.h"
 #include "wall/session.h"
 #include "wall/wall_headless.h"
@@ -516,10 +515,6 @@ void cli_pipeline_usage(FILE *f)
  * by cli_pipeline_release_outputs). */
 static drm_card *active_card;
 static session *active_session;
-/* The upscaling displays of the pipeline cli_pipeline_create made (owned by
- * it; forgotten by cli_pipeline_release_outputs, after pipeline_destroy). */
-static image_display *upscale_displays[PIPELINE_MAX_CHANNELS];
-static int upscale_display_count;
 
 /* The wall cli_pipeline_create laid out (for input: where each output is). */
 static struct {
@@ -557,21 +552,6 @@ void cli_pipeline_release_outputs(void)
     session_close(active_session);
     active_session = NULL;
     active_layout.valid = false;
-    upscale_display_count = 0;
-}
-
-bool cli_pipeline_upscale_time(uint64_t *frames, double *upscale_s)
-{
-    *frames = 0;
-    *upscale_s = 0.0;
-    for (int i = 0; i < upscale_display_count; i++) {
-        uint64_t n;
-        double t;
-        display_upscale_time(upscale_displays[i], &n, &t);
-        *frames += n;
-        *upscale_s += t;
-    }
-    return upscale_display_count > 0;
 }
 
 /* Open the card, match the wall's outputs to its connectors (which resolves
@@ -675,6 +655,7 @@ pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene 
     cfg.refine_k = s->refine_k;
     cfg.still_s = s->still_s;
     cfg.upscale = s->upscale;
+    cfg.render_scale = s->render_scale;
     return cfg;
 }
 
@@ -682,7 +663,6 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
 {
     tess_error err = {{0}};
     pipeline_config cfg = cli_pipeline_config(s, cs);
-    upscale_display_count = 0;
     pipeline *p = pipeline_create(&cfg, &err);
     if (!p) {
         cli_error("%s", err.msg);
@@ -707,20 +687,7 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
         image_display *d = display_create(ch->display, ch->out, s->frames != 1, &err);
         if (d && s->wrap_display)
             d = s->wrap_display(s->wrap_ctx, i, d, &err);
-        int added;
-        if (!d || s->render_scale >= 1.0) {
-            added = d ? pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) : -1;
-        } else {
-            /* the reduced image covers the same plane: the output's aspect, the whole window */
-            int low_w = upscale_low_res_px(ch->width_px, s->render_scale);
-            int low_h = upscale_low_res_px(ch->height_px, s->render_scale);
-            d = display_upscale_create(d, low_w, low_h, ch->width_px, ch->height_px, s->upscale, &err);
-            if (d)
-                upscale_displays[upscale_display_count++] = d;
-            added = d ? pipeline_add_channel_window(p, &cam, (float)ch->width_px / (float)ch->height_px,
-                                                    CAMERA_WINDOW_FULL, low_w, low_h, d, &err)
-                      : -1;
-        }
+        int added = d ? pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) : -1;
         if (added < 0) {
             cli_error("channel %d: %s", i, err.msg);
             pipeline_destroy(p);

@@ -47,9 +47,9 @@ typedef struct cli_pipeline_spec {
     char card_path[CLI_PATTERN_BYTES];   /* --card: the DRM card for display drm, "" = the first connected */
     bool display_given, frames_given, time_given; /* on the command line or in --config */
     cli_input_spec input;        /* --input ..., the config's "input" object */
-    /* render --scale / --upscale (engine/upscale.h): every channel but a wall's renders at
-     * render_scale of its size, the same view, and is upscaled with `upscale` before its
-     * display sees it; 1 (nothing scaled) for the other commands */
+    /* render --scale / --upscale (engine/upscale.h; pipeline.h, RENDER SCALE): every channel
+     * renders at render_scale of its size, the same view, and the render threads upscale it
+     * with `upscale`; 1 (nothing scaled) for the other commands */
     double render_scale;         /* (0, 1] */
     upscale_filter upscale;
     char render_scale_text[32];  /* as given ("3/4"), for messages; "1" by default */
@@ -107,10 +107,6 @@ struct session *cli_pipeline_session(void);
 /* The DRM card cli_pipeline_create opened for a wall, else NULL. */
 struct drm_card *cli_pipeline_card(void);
 
-/* With render_scale < 1: the frames cli_pipeline_create's upscaling displays
- * have upscaled and their time in seconds, summed over channels (false when
- * there are none). While the pipeline exists and does not run. */
-bool cli_pipeline_upscale_time(uint64_t *frames, double *upscale_s);
 
 /* Release what cli_pipeline_create opened besides the pipeline (a DRM card:
  * its CRTCs are restored): after pipeline_destroy. */
