@@ -47,7 +47,7 @@ gv_path() { # scene label
         dragon)
             gv_dragon_path
             GV_PATH=$WORK/governor-dragon-orbit.json
-            GV_PATH_NOTE="\`$GV_ORBIT\` scaled by $GV_DRAGON_SCALE and moved onto the dragon: centred on ($GV_DRAGON_LOOK), the look-at point of \`$GV_DRAGON_SCENE\`'s camera, at that camera's distance ($GV_DRAGON_DIST) and field of view ($GV_DRAGON_FOV°); the same key times and angles (made in the work directory each run; report/governor-dragon-orbit.json)"
+            GV_PATH_NOTE="\`$GV_ORBIT\` scaled by $GV_DRAGON_SCALE and moved onto the dragon: centred on ($GV_DRAGON_LOOK), the look-at point of \`$GV_DRAGON_SCENE\`'s camera, at that camera's distance ($GV_DRAGON_DIST) and field of view ($GV_DRAGON_FOV°); the same key times and angles (made afresh on each run, in the work directory)"
             ;;
         *) report_fail "knob governor: no camera path for scene '$1' (see tools/report/knob_governor.sh)" ;;
     esac
@@ -96,12 +96,16 @@ gv_dragon_path() {
         }' "$WORK/governor-orbit-keys.txt" > "$WORK/governor-dragon-orbit.json"
 }
 
-# CPU seconds (all CPUs, /proc/stat) and this shell's children's CPU seconds
-# (times), so that what other programs took during a run is the difference.
+# CPU seconds of all CPUs (/proc/stat), this shell's children's CPU seconds
+# (the shell's `times`: run here, not in a $(...), whose subshell has children
+# of its own) and the clock, appended to GV_CPU: what other programs took
+# during a run is the difference of the first two between two calls.
 gv_cpu() {
-    gc_all=$(awk '$1 == "cpu" { print ($2 + $3 + $4 + $7 + $8 + $9) / 100; exit }' /proc/stat 2>/dev/null)
-    gc_own=$(times | tail -n 1 | awk '{ s = 0; for (i = 1; i <= 2; i++) { split($i, p, "m"); s += p[1] * 60 + p[2] } print s }')
-    echo "${gc_all:-0} ${gc_own:-0} $(date +%s)"
+    times > "$WORK/governor-times.txt"
+    GV_CPU="$GV_CPU $(awk '$1 == "cpu" { print ($2 + $3 + $4 + $7 + $8 + $9) / 100; exit }' /proc/stat 2>/dev/null || echo 0)"
+    GV_CPU="$GV_CPU $(tail -n 1 "$WORK/governor-times.txt" |
+        awk '{ s = 0; for (i = 1; i <= 2; i++) { split($i, p, "m"); s += p[1] * 60 + p[2] } print s }')"
+    GV_CPU="$GV_CPU $(date +%s)"
 }
 
 knob_governor() { # scene labels...
@@ -113,14 +117,15 @@ knob_governor() { # scene labels...
     for gv_scene in "$@"; do
         gv_path "$gv_scene"
         echo "report: governor, $gv_scene: bench --path along $GV_PATH, budget $BUDGET_MS ms" >&2
-        gv_before=$(gv_cpu)
+        GV_CPU=""
+        gv_cpu
         report_run "$TESSERA" bench --path "$GV_PATH" --rate "$GV_RATE" --scene "$(report_scene_arg "$gv_scene")" \
             --size "$SIZE" --threads "$THREADS" --budget-ms "$BUDGET_MS" --flip-samples "$GV_FLIP_SAMPLES"
-        gv_after=$(gv_cpu)
+        gv_cpu
         cp "$WORK/cmd.out" "$WORK/governor-$gv_scene.out"
         cp "$WORK/cmd.err" "$WORK/governor-$gv_scene.err"
         # other programs' CPU seconds, the run's seconds, their share of all CPUs
-        gv_other=$(echo "$gv_before $gv_after" | awk -v n="$(nproc)" '{
+        gv_other=$(echo "$GV_CPU" | awk -v n="$(nproc)" '{
                 other = ($4 - $1) - ($5 - $2); if (other < 0) other = 0; wall = $6 - $3; if (wall < 1) wall = 1
                 printf "%.1f %d %.0f", other, wall, 100 * other / (n * wall) }')
         gv_line=$(grep '^BENCH_PATH ' "$WORK/cmd.out" || true)
@@ -162,7 +167,7 @@ knob_governor() { # scene labels...
             echo "- $gv_scene: $GV_PATH_NOTE."
         done
         echo
-        echo "| scene | transactions | frames | p50 ms | p95 ms | p95 / budget | worst ms | over budget | at a reduced scale | settled scale | mean FLIP (sampled) |"
+        echo "| scene | transactions | frames | p50 ms | p95 ms | p95 / budget | worst ms | over budget | at a reduced scale | commonest scale, 2nd half | mean FLIP (sampled) |"
         echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
         while read -r txns frames p50 p95 worst _refused flip nflip scene moving reduced over _refining _other _wall _share; do
             gv_settle "$scene"
@@ -173,7 +178,7 @@ knob_governor() { # scene labels...
         echo
         echo "Frames: every frame rendered (more than the transactions: a frame that showed no new"
         echo "transaction counts too); over budget, at a reduced scale: of the moving frames, as counted by"
-        echo "the pipeline (stderr's \`tessera: governor\` line). Settled scale: the scale most transactions of"
+        echo "the pipeline (stderr's \`tessera: governor\` line). Commonest scale: the scale most transactions of"
         echo "the path's second half were first shown at. The numbers per transaction:"
         echo "[report/governor.tsv](report/governor.tsv) (tab-separated: scene, transaction, time s, frame,"
         echo "frame ms, scale, FLIP or \`-\`)."
@@ -192,7 +197,6 @@ knob_governor() { # scene labels...
         echo "tools/report/knob_governor.sh; the verdicts above are computed from the runs.)*"
     } > "$gv_out"
     cp "$gv_tsv" "$WORK/plots/governor.tsv"
-    [ ! -f "$WORK/governor-dragon-orbit.json" ] || cp "$WORK/governor-dragon-orbit.json" "$WORK/plots/"
 }
 
 # The scale most transactions of the second half of the path were first shown
@@ -227,12 +231,17 @@ gv_sentences() {
     printf 'On %s the p95 frame time is %s ms, %s× the %s ms budget, %s; the median is %s ms and the worst frame %s ms. ' \
         "$scene" "$p95" "$(gv_ratio "$p95" "$BUDGET_MS")" "$BUDGET_MS" "$verdict" "$p50" "$worst"
     gv_settle "$scene"
-    first=$(awk -F '\t' -v s="$scene" '$1 == s && $6 + 0 < 1 { print $3; exit }' "$WORK/governor.tsv")
+    first=$(awk -F '\t' -v s="$scene" '$1 == s && $6 + 0 < 1 { printf "%.2f\n", $3; exit }' "$WORK/governor.tsv")
     if [ -z "$first" ]; then
         printf 'The scale never went below 1: at %s the full-size frame fits the budget, so the governor had nothing to do. ' "$SIZE"
     else
-        printf 'The scale first went below 1 at %s s and settled at %s (%s %% of the transactions of the second half of the path; range %s to %s there); %s of the %s moving frames (%s %%) were at a reduced scale. ' \
-            "$first" "$GV_SETTLED" "$GV_SETTLED_SHARE" "$GV_SETTLED_LO" "$GV_SETTLED_HI" "$reduced" "$moving" \
+        if [ "$GV_SETTLED_SHARE" -ge 50 ]; then
+            settled="settled at $GV_SETTLED ($GV_SETTLED_SHARE % of the transactions of the second half of the path"
+        else
+            settled="did not settle (in the second half of the path its commonest value, $GV_SETTLED, showed only $GV_SETTLED_SHARE % of the transactions"
+        fi
+        printf 'The scale first went below 1 at %s s and %s; range %s to %s there); %s of the %s moving frames (%s %%) were at a reduced scale. ' \
+            "$first" "$settled" "$GV_SETTLED_LO" "$GV_SETTLED_HI" "$reduced" "$moving" \
             "$(gv_percent "$reduced" "$moving")"
     fi
     # the sampled FLIPs of frames at a reduced scale: count, mean, worst
@@ -304,7 +313,7 @@ gv_plot() { # scene
         echo "set y2range [0:1.1]"
         echo "set y2tics ('1/4' 0.25, '3/8' 0.375, '1/2' 0.5, '5/8' 0.625, '3/4' 0.75, '7/8' 0.875, '1' 1)"
         echo "set ytics nomirror"
-        echo "set key bottom left box opaque"
+        echo "set key outside top center horizontal"
         printf "plot '%s' using 1:2 with lines lw 1 lc rgb '#1f5fbf' title 'frame time (ms)', " "$gp_dat"
         printf "%s with lines dashtype 2 lw 2 lc rgb '#2a9d3a' title 'budget %s ms', " "$BUDGET_MS" "$BUDGET_MS"
         printf "%s with lines dashtype 2 lw 2 lc rgb '#c0392b' title 'budget x 1.1 = %s ms', " "$gp_limit" "$gp_limit"
@@ -319,8 +328,8 @@ gv_plot() { # scene
         echo "set xlabel 'time along the path (s; one transaction per 1/$GV_RATE s)'"
         echo "set ylabel 'mean FLIP vs full size'"
         echo "set yrange [0:$gp_flip_top]"
-        echo "set key top left box opaque"
-        printf "plot '%s' using 1:4 with points pointtype 7 pointsize 1.2 lc rgb '#7b3fa0' title 'sampled frames: mean FLIP against the full-size frame of the same camera'\n" "$gp_dat"
+        echo "unset key"
+        printf "plot '%s' using 1:4 with points pointtype 7 pointsize 1.2 lc rgb '#7b3fa0' notitle\n" "$gp_dat"
         echo "unset multiplot"
     } > "$gp"
     report_run "$GNUPLOT" "$gp"
