@@ -17,6 +17,7 @@
 #   REPORT_THREADS     render threads [2]
 #   REPORT_KNOBS       the knobs to run, a subset of KNOBS [all]
 #   REPORT_ROBUST_SMALL 1: the robustness knob runs `tessera robust --small` [0]
+#   REPORT_BUDGET_MS   the governor knob's frame budget in ms (`--budget-ms`) [40]
 #   REPORT_REF_K, REPORT_REF_RENDERS  reference: RENDERS renders of jittered:K averaged [16, 4]
 #   REPORT_CACHE       where references are kept between runs [/tmp/report-cache]
 #   REPORT_OUT         where REPORT.md and report/ go [the repository root]
@@ -32,12 +33,13 @@ ROOT=$(pwd)
 . tools/report/lib.sh
 
 # the knobs, in report order (tools/report/knob_NAME.sh each)
-KNOBS="antialiasing render_scale robustness"
+KNOBS="antialiasing render_scale governor robustness"
 
 SIZE=${REPORT_SIZE:-1920x1080}
 RUNS=${REPORT_RUNS:-3}
 FRAMES=${REPORT_FRAMES:-4}
 THREADS=${REPORT_THREADS:-2}
+BUDGET_MS=${REPORT_BUDGET_MS:-40}
 REFERENCE_K=${REPORT_REF_K:-16}
 REFERENCE_RENDERS=${REPORT_REF_RENDERS:-4}
 CACHE=${REPORT_CACHE:-/tmp/report-cache}
@@ -60,6 +62,10 @@ for v in RUNS FRAMES THREADS REFERENCE_K REFERENCE_RENDERS; do
         '' | *[!0-9]* | 0) report_fail "REPORT_$v '$val': expected a whole number >= 1" ;;
     esac
 done
+case $BUDGET_MS in
+    '' | *[!0-9.]* | *.*.* | .*) report_fail "REPORT_BUDGET_MS '$BUDGET_MS': expected milliseconds > 0, e.g. 40 or 33.3" ;;
+esac
+awk -v b="$BUDGET_MS" 'BEGIN { exit !(b > 0) }' || report_fail "REPORT_BUDGET_MS '$BUDGET_MS': expected milliseconds > 0"
 [ $((REFERENCE_RENDERS % 2)) -eq 0 ] || report_fail "REPORT_REF_RENDERS $REFERENCE_RENDERS: expected an even number (the halves check convergence)"
 command -v "$GNUPLOT" > /dev/null 2>&1 ||
     report_fail "gnuplot not found ('$GNUPLOT'): install Debian gnuplot-nox (sh tools/deps.sh --report, as root)"
