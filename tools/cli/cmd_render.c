@@ -295,7 +295,7 @@ static void render_usage(FILE *f)
           "  --frames N       render and write N frames (default 1; with --path the camera moves)\n"
           "  --scale S        render at S of --size and upscale to --size: S in (0, 1], a fraction\n"
           "                   (3/4, 1/3) or a decimal (0.5); each edge max(1, round(edge * S)) pixels,\n"
-          "                   the same view (default 1: no upscaling; not with --wall); --upscale\n"
+          "                   the same view (default 1: no upscaling; a wall: every output); --upscale\n"
           "                   (below) is its filter\n",
           f);
     cli_pipeline_usage(f);

@@ -188,12 +188,11 @@ knob_render_scale() { # scene labels...
         echo
         echo "Frame time: as for every knob, \`tessera render --display null --frames $FRAMES --threads $THREADS\`, the"
         echo "ms/frame it prints (pipeline_run's wall time over the frames rendered), median of $RUNS runs"
-        echo "taken in turn over the settings. **The upscale is inside it**: it runs in the display stage"
-        echo "(wall/display_upscale.c, in front of the null display) on render thread 0, at the start of the"
-        echo "next frame's step, while the other thread already renders that frame (the pipeline's own"
-        echo "overlap, as in \`tessera run\`); the last frame's upscale runs alone before pipeline_run returns."
-        echo "The upscale column is its own time alone (the \`render scale\` line's ms/frame, median of the"
-        echo "same runs): part of it is hidden by that overlap, so it is not simply added. Error: the"
+        echo "taken in turn over the settings. **The upscale is inside it**: the render threads render the"
+        echo "low-res frame, meet at the upscale barrier, then upscale bands of tile rows between them"
+        echo "(engine/pipeline.h, RENDER SCALE; the governor's reduced frames are made the same way). The"
+        echo "upscale column is that stage's time per frame (the \`render scale\` line's ms/frame: per frame"
+        echo "the longest thread's share, median of the same runs), a part of the frame time. Error: the"
         echo "upscaled $SIZE image (EXR) against the same full-size reference as every knob."
         echo
         echo "| scene | scale | filter | rendered | frame ms (min-max) | upscale ms | × scale 1 | mean FLIP | FLIP median | FLIP q3 | RMSE | PSNR dB |"
@@ -239,14 +238,11 @@ knob_render_scale() { # scene labels...
             fi
         done
         echo "where bilinear does not lose at equal time, its lower cost decides; where clamped-cubic wins,"
-        echo "the default is to be reconsidered on a full-size run on a quiet machine. Where the"
-        echo "upscale runs differs between the two: the governor upscales on all render threads inside the"
-        echo "pipeline (bands of tile rows handed out after an upscale barrier, engine/pipeline.h GOVERNOR),"
-        echo "so it is split over the threads but sits between the render and the frame's end, not"
-        echo "overlapped with the next frame; \`tessera render --scale\`, which this section measures, still"
-        echo "upscales in the display stage on thread 0 (wall/display_upscale.c), partly hidden by that"
-        echo "overlap. The frame times and the upscale column here are that path's, not the governor's (its"
-        echo "frame times, upscale included, are in the governor section). *(This reason is the project's"
+        echo "the default is to be reconsidered on a full-size run on a quiet machine. \`tessera render"
+        echo "--scale\`, which this section measures, makes its frames as the governor makes its reduced"
+        echo "ones (the same pipeline stage: low-res tiles, the upscale barrier, bands of rows upscaled by"
+        echo "every render thread), so these frame times are the governor's at a fixed scale (its own run"
+        echo "along a path is in the governor section). *(This reason is the project's"
         echo "choice, written in tools/report/knob_render_scale.sh; the knees and equal-time verdicts are"
         echo "computed from the table.)*"
         for scene in "$@"; do

@@ -83,7 +83,7 @@ report_time_run() { # scene_arg, then render options
         --display null "$@"
     MS_RUN=$(sed -n 's/.*(\([0-9.]*\) ms\/frame.*/\1/p' "$WORK/cmd.out")
     [ -n "$MS_RUN" ] || report_fail "no 'ms/frame' in the output of: $TESSERA render ... $*"
-    # with --scale < 1, the upscale's share (on thread 0, inside the frame time above)
+    # with --scale < 1, the upscale stage's share (render threads, inside the frame time above)
     UPSCALE_RUN=$(sed -n 's/^render scale .*: \([0-9.]*\) ms\/frame upscaling.*/\1/p' "$WORK/cmd.out")
 }
 
