@@ -802,9 +802,17 @@ bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera)
         log_error("pipeline: camera change for channel %d refused: %s", channel, err.msg);
         return false;
     }
+    /* the same camera again (a path player holding its last key, every frame) is no change of
+     * the picture: the governor may refine behind it */
+    const camera_desc *old = &p->channels[channel].camera;
+    bool same = old->eye.x == camera->eye.x && old->eye.y == camera->eye.y && old->eye.z == camera->eye.z &&
+                old->look_at.x == camera->look_at.x && old->look_at.y == camera->look_at.y &&
+                old->look_at.z == camera->look_at.z && old->up.x == camera->up.x && old->up.y == camera->up.y &&
+                old->up.z == camera->up.z && old->fov_deg == camera->fov_deg;
     p->channels[channel].camera = *camera;
     p->channels[channel].camera_serial++;
-    p->picture_serial++;
+    if (!same)
+        p->picture_serial++;
     return true;
 }
 

@@ -410,6 +410,37 @@ Test(governor, a_still_camera_converges_to_jittered_k_bit_for_bit_and_a_camera_c
     fixture_free(&fx);
 }
 
+/* Serial animation: the same camera again every frame (a path player holding its last key). */
+static void same_camera(pipeline *p, void *ctx, const frame_info *fi)
+{
+    (void)fi;
+    pipeline_set_camera(p, 0, ctx);
+}
+
+Test(governor, setting_the_same_camera_again_is_no_change)
+{
+    fixture fx = fixture_make();
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 2;
+    cfg.budget_ms = 1000.0;
+    cfg.refine_k = 2;
+    cfg.still_s = 0.0;
+    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
+    cfg.max_frames = 4 + 4;
+    tess_error err = {{0}};
+    pipeline *p = pipeline_create(&cfg, &err);
+    cr_assert(p, "%s", err.msg);
+    record_display *out = record_create();
+    cr_assert(pipeline_add_channel(p, &fx.camera, 40, 24, &out->base, &err) == 0, "%s", err.msg);
+    cr_assert(pipeline_add_serial_animation(p, "same camera", same_camera, &fx.camera));
+    cr_assert(pipeline_run(p, &err), "%s", err.msg);
+    pipeline_stats st = pipeline_get_stats(p);
+    cr_expect_eq(st.frames_accumulated, 4, "it refined behind the repeated camera");
+    cr_expect_eq(st.idle_steps, 4);
+    pipeline_destroy(p);
+    fixture_free(&fx);
+}
+
 /* Serial animation: at step `at_step`, show the governor's line and move the cursor. */
 static void overlay_once(pipeline *p, void *ctx, const frame_info *fi)
 {
@@ -516,6 +547,46 @@ Test(governor, a_stop_ends_an_idle_pipeline)
     fixture_free(&fx);
 }
 
+/* A reduced frame is the low-res render of the same view upscaled: exactly
+ * what render_image + upscale_image give (bench --path makes its sampled
+ * frames again this way to measure them). */
+Test(governor, a_reduced_frame_is_the_low_res_render_upscaled_bit_for_bit)
+{
+    fixture fx = fixture_make();
+    const int w = 96, h = 54;
+    for (int f = 0; f < 2; f++) {
+        pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+        cfg.threads = 2;
+        cfg.tile_px = 8;
+        cfg.order = TILE_ORDER_SHUFFLE;
+        cfg.render_scale = 0.375;
+        cfg.upscale = f ? UPSCALE_CLAMPED_CUBIC : UPSCALE_BILINEAR;
+        cfg.max_frames = 2;
+        tess_error err = {{0}};
+        pipeline *p = pipeline_create(&cfg, &err);
+        cr_assert(p, "%s", err.msg);
+        record_display *out = record_create();
+        cr_assert(pipeline_add_channel(p, &fx.camera, w, h, &out->base, &err) == 0, "%s", err.msg);
+        cr_assert(pipeline_run(p, &err), "%s", err.msg);
+        cr_expect_eq(out->scale[1], 0.375);
+        int lw = upscale_low_res_px(w, 0.375), lh = upscale_low_res_px(h, 0.375);
+        float *low = calloc((size_t)lw * lh * 3, sizeof(float)), *want = calloc((size_t)w * h * 3, sizeof(float));
+        cr_assert(low && want);
+        render_view v = {fx.scene, fx.accel,
+                         camera_basis_window(&fx.camera, (float)w / (float)h, CAMERA_WINDOW_FULL, lw, lh), true,
+                         RENDER_SHADE_PHONG};
+        render_image(&v, 1, low, NULL);
+        cr_assert(upscale_image(low, lw, lh, want, w, h, cfg.upscale, &err), "%s", err.msg);
+        cr_expect(memcmp(out->last, want, (size_t)w * h * 3 * sizeof(float)) == 0,
+                  "%s: the pipeline's reduced frame differs from render + upscale", upscale_filter_name(cfg.upscale));
+        cr_expect_eq(pipeline_get_stats(p).frames_reduced, 2);
+        free(low);
+        free(want);
+        pipeline_destroy(p);
+    }
+    fixture_free(&fx);
+}
+
 Test(governor, bad_pipeline_configs_are_named)
 {
     fixture fx = fixture_make();
@@ -534,5 +605,15 @@ Test(governor, bad_pipeline_configs_are_named)
     err = (tess_error){{0}};
     cr_expect(!pipeline_config_validate(&cfg, &err));
     cr_expect(strstr(err.msg, "stratum"), "%s", err.msg);
+    cfg.sampler = pixel_sampler_single();
+    cfg.render_scale = 0.5;
+    err = (tess_error){{0}};
+    cr_expect(!pipeline_config_validate(&cfg, &err), "a fixed scale and a budget at once");
+    cr_expect(strstr(err.msg, "the governor picks the scale"), "%s", err.msg);
+    cfg.budget_ms = 0.0;
+    cfg.render_scale = 1.5;
+    err = (tess_error){{0}};
+    cr_expect(!pipeline_config_validate(&cfg, &err));
+    cr_expect(strstr(err.msg, "render_scale"), "%s", err.msg);
     fixture_free(&fx);
 }

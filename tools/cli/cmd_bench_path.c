@@ -97,7 +97,10 @@ typedef struct flip_sample {
     size_t txn;         /* the transaction it measures */
     bool captured;
     camera_desc camera; /* of the frame */
-    uint8_t *srgb;      /* the frame as scan-out shows it: 8-bit sRGB, w * h * 3 */
+    double scale;       /* its render scale. The frame is a pure function of camera and scale
+                           (pipeline.h, DETERMINISM), so it is made again after the run instead of
+                           kept: keeping 16 frames of 1080p (copying them out on the display thread)
+                           slowed the frame after each by 50-100 ms on this VM (cold pages) */
     double flip;        /* mean FLIP against the full-size frame of the camera; NAN: not measured */
 } flip_sample;
 
@@ -110,8 +113,7 @@ typedef struct frame_tap {
     size_t sample_count;
     double *frame_scale;     /* frame_scale[f]: render scale of frame f (display thread while running) */
     size_t frame_count, frame_capacity;
-    int width_px, height_px;
-    bool out_of_memory;
+    int width_px, height_px; /* channel 0's size */
 } frame_tap;
 
 static uint8_t srgb_byte(float linear)
@@ -151,17 +153,9 @@ static bool tap_show(image_display *d, const frame_image *img, tess_error *err)
         flip_sample *s = &t->samples[i];
         if (s->captured || t->sender->applied_at[s->txn] != img->frame)
             continue;
-        size_t floats = (size_t)img->width_px * (size_t)img->height_px * 3;
-        s->srgb = malloc(floats);
-        if (!s->srgb) {
-            t->out_of_memory = true;
-            continue;
-        }
-        to_srgb8(img->rgb, floats, s->srgb);
         s->camera = img->camera;
+        s->scale = img->render_scale;
         s->captured = true;
-        t->width_px = img->width_px;
-        t->height_px = img->height_px;
     }
     return t->inner->ops->show(t->inner, img, err);
 }
@@ -208,8 +202,9 @@ static bool measure_flips(frame_tap *t, const cli_pipeline_spec *spec, const cli
     size_t pixels = (size_t)w * (size_t)h;
     float *full = malloc(pixels * 3 * sizeof *full), *a = malloc(pixels * 3 * sizeof *a);
     float *b = malloc(pixels * 3 * sizeof *b), *map = malloc(pixels * sizeof *map);
-    uint8_t *full8 = malloc(pixels * 3);
-    bool ok = full && a && b && map && full8;
+    float *low = malloc(pixels * 3 * sizeof *low), *shown = malloc(pixels * 3 * sizeof *shown);
+    uint8_t *full8 = malloc(pixels * 3), *test8 = malloc(pixels * 3);
+    bool ok = full && a && b && map && full8 && test8 && low && shown;
     if (!ok)
         cli_error("bench --path: out of memory for the FLIP measurement at %dx%d", w, h);
     float decode[256];
@@ -222,10 +217,27 @@ static bool measure_flips(frame_tap *t, const cli_pipeline_spec *spec, const cli
         render_view v = {cs->scene, cs->accel, camera_basis_make(&s->camera, w, h), spec->shadows,
                          spec->renderer->shading};
         render_image(&v, spec->threads, full, NULL);
+        if (s->scale >= 1.0) {
+            s->flip = 0.0; /* the full-size frame itself */
+            continue;
+        }
+        /* the shown frame again, as the pipeline made it: the low-res frame of the same view
+         * (the output's plane aspect, the whole window), upscaled with the same filter */
+        int low_w = upscale_low_res_px(w, s->scale), low_h = upscale_low_res_px(h, s->scale);
+        render_view lv = v;
+        lv.camera = camera_basis_window(&s->camera, (float)w / (float)h, CAMERA_WINDOW_FULL, low_w, low_h);
+        render_image(&lv, spec->threads, low, NULL);
+        tess_error uerr = {{0}};
+        if (!upscale_image(low, low_w, low_h, shown, w, h, spec->upscale, &uerr)) {
+            cli_error("bench --path: upscaling for FLIP: %s", uerr.msg);
+            ok = false;
+            break;
+        }
         to_srgb8(full, pixels * 3, full8);
+        to_srgb8(shown, pixels * 3, test8);
         for (size_t k = 0; k < pixels * 3; k++) {
             a[k] = decode[full8[k]];
-            b[k] = decode[s->srgb[k]];
+            b[k] = decode[test8[k]];
         }
         tess_error err = {{0}};
         if (!flip_ldr_map(a, b, w, h, FLIP_DEFAULT_PPD, spec->threads, map, &err)) {
@@ -243,6 +255,9 @@ static bool measure_flips(frame_tap *t, const cli_pipeline_spec *spec, const cli
     free(b);
     free(map);
     free(full8);
+    free(test8);
+    free(low);
+    free(shown);
     return ok;
 }
 
@@ -341,8 +356,8 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_sam
         s.applied_at[k] = UINT64_MAX; /* not applied yet */
     frame_clock fc = {NULL, 0, 0, false};
     /* the sampled transactions: evenly spread over the path, the first and the last included */
-    frame_tap tap = {.sender = &s};
-    size_t want = (size_t)flip_samples < s.transactions ? (size_t)flip_samples : s.transactions;
+    frame_tap tap = {.sender = &s, .width_px = spec->channels[0].width_px, .height_px = spec->channels[0].height_px};
+    size_t want = spec->wall_file[0] ? 0 : (size_t)flip_samples < s.transactions ? (size_t)flip_samples : s.transactions;
     tap.samples = want ? calloc(want, sizeof *tap.samples) : NULL;
     for (size_t i = 0; tap.samples && i < want; i++) {
         size_t txn = want == 1 ? 0 : (size_t)llround((double)i * (double)(s.transactions - 1) / (double)(want - 1));
@@ -350,6 +365,7 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_sam
             continue;
         tap.samples[tap.sample_count++] = (flip_sample){.txn = txn, .flip = NAN};
     }
+
     if (!spec->wall_file[0]) {
         spec->wrap_display = wrap_with_tap;
         spec->wrap_ctx = &tap;
@@ -370,9 +386,7 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_sam
             pthread_join(sender, NULL);
             if (!ok)
                 cli_error("%s", err.msg);
-            else if (tap.out_of_memory) {
-                cli_error("bench --path: out of memory keeping the frames to measure");
-            } else if (measure_flips(&tap, spec, cs)) {
+            else if (measure_flips(&tap, spec, cs)) {
                 print_path_report(&s, &fc, &tap, spec);
                 cli_pipeline_report(p, spec);
                 code = 0;
@@ -382,8 +396,6 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_sam
     pipeline_destroy(p);
     if (!p)
         image_display_destroy(tap.inner);
-    for (size_t i = 0; i < tap.sample_count; i++)
-        free(tap.samples[i].srgb);
     free(tap.samples);
     free(tap.frame_scale);
     free(s.applied_at);
@@ -535,7 +547,8 @@ static void usage(FILE *f)
           "  median, p95 and worst frame time and the mean FLIP. With --budget-ms the governor\n"
           "  picks the scale.\n"
           "  --flip-samples N --path: transactions measured with FLIP, spread over the path (default\n"
-          "                   16 with --budget-ms, else 0; each keeps one 8-bit frame until the end)\n"
+          "                   16 with --budget-ms, else 0; the frames are made again after the run from\n"
+          "                   their camera and scale, as the pipeline made them, not kept)\n"
           "--scaling: renders the same animation (the path, or a 2 s orbit) in fixed-rate time at\n"
           "  1..N threads (--threads, default the number of CPUs), --rounds times each (default 3,\n"
           "  alternating), and prints per thread count a SCALING line: median wall time, speed-up\n"
