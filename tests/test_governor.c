@@ -252,6 +252,32 @@ static void fixture_free(fixture *fx)
     scene_destroy(fx->scene);
 }
 
+/* A config for the refining tests: 2 threads, a budget no frame reaches
+ * (never reduced), refining to jittered:k as soon as nothing changes, at
+ * most `steps` loop steps in fixed-rate time. */
+static pipeline_config refining_config(const fixture *fx, int k, uint64_t steps)
+{
+    pipeline_config cfg = pipeline_config_default(fx->scene, fx->accel);
+    cfg.threads = 2;
+    cfg.budget_ms = 1000.0;
+    cfg.refine_k = k;
+    cfg.still_s = 0.0;
+    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
+    cfg.max_frames = steps;
+    return cfg;
+}
+
+/* A pipeline of cfg with one w x h channel on fx's camera, recorded into *out. */
+static pipeline *one_channel(const fixture *fx, const pipeline_config *cfg, int w, int h, record_display **out)
+{
+    tess_error err = {{0}};
+    pipeline *p = pipeline_create(cfg, &err);
+    cr_assert(p, "%s", err.msg);
+    *out = record_create();
+    cr_assert(pipeline_add_channel(p, &fx->camera, w, h, &(*out)->base, &err) == 0, "%s", err.msg);
+    return p;
+}
+
 /* The camera turned by `turn` radians about its look-at point. */
 static camera_desc turned(camera_desc c, float turn)
 {
@@ -371,20 +397,13 @@ Test(governor, a_still_camera_converges_to_jittered_k_bit_for_bit_and_a_camera_c
 {
     fixture fx = fixture_make();
     const int w = 72, h = 40, k = 3;
-    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
-    cfg.threads = 2;
+    /* refine, idle, moved, refine, idle (loop steps) */
+    pipeline_config cfg = refining_config(&fx, k, 9 + 5 + 1 + 9 + 3);
     cfg.tile_px = 8;
     cfg.order = TILE_ORDER_SHUFFLE; /* the sum must not depend on who renders what */
-    cfg.budget_ms = 1000.0;         /* never reduced: this is about refining */
-    cfg.refine_k = k;
-    cfg.still_s = 0.0;
-    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
-    cfg.max_frames = 9 + 5 + 1 + 9 + 3; /* refine, idle, moved, refine, idle (loop steps) */
+    record_display *out;
+    pipeline *p = one_channel(&fx, &cfg, w, h, &out);
     tess_error err = {{0}};
-    pipeline *p = pipeline_create(&cfg, &err);
-    cr_assert(p, "%s", err.msg);
-    record_display *out = record_create();
-    cr_assert(pipeline_add_channel(p, &fx.camera, w, h, &out->base, &err) == 0, "%s", err.msg);
     late_change lc = {0, 9 + 3, turned(fx.camera, 0.5f), false};
     cr_assert(pipeline_add_serial_animation(p, "change once", change_once, &lc));
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
@@ -420,18 +439,10 @@ static void same_camera(pipeline *p, void *ctx, const frame_info *fi)
 Test(governor, setting_the_same_camera_again_is_no_change)
 {
     fixture fx = fixture_make();
-    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
-    cfg.threads = 2;
-    cfg.budget_ms = 1000.0;
-    cfg.refine_k = 2;
-    cfg.still_s = 0.0;
-    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
-    cfg.max_frames = 4 + 4;
+    pipeline_config cfg = refining_config(&fx, 2, 4 + 4);
+    record_display *out;
+    pipeline *p = one_channel(&fx, &cfg, 40, 24, &out);
     tess_error err = {{0}};
-    pipeline *p = pipeline_create(&cfg, &err);
-    cr_assert(p, "%s", err.msg);
-    record_display *out = record_create();
-    cr_assert(pipeline_add_channel(p, &fx.camera, 40, 24, &out->base, &err) == 0, "%s", err.msg);
     cr_assert(pipeline_add_serial_animation(p, "same camera", same_camera, &fx.camera));
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
     pipeline_stats st = pipeline_get_stats(p);
@@ -456,18 +467,10 @@ Test(governor, an_overlay_change_on_a_converged_picture_redraws_it_without_rays_
 {
     fixture fx = fixture_make();
     const int w = 96, h = 64;
-    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
-    cfg.threads = 2;
-    cfg.budget_ms = 1000.0;
-    cfg.refine_k = 2;
-    cfg.still_s = 0.0;
-    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
-    cfg.max_frames = 4 + 3 + 1 + 3;
+    pipeline_config cfg = refining_config(&fx, 2, 4 + 3 + 1 + 3);
+    record_display *out;
+    pipeline *p = one_channel(&fx, &cfg, w, h, &out);
     tess_error err = {{0}};
-    pipeline *p = pipeline_create(&cfg, &err);
-    cr_assert(p, "%s", err.msg);
-    record_display *out = record_create();
-    cr_assert(pipeline_add_channel(p, &fx.camera, w, h, &out->base, &err) == 0, "%s", err.msg);
     late_change lc = {0, 4 + 2, fx.camera, false};
     cr_assert(pipeline_add_serial_animation(p, "overlay once", overlay_once, &lc));
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
@@ -494,17 +497,11 @@ Test(governor, an_overlay_change_on_a_converged_picture_redraws_it_without_rays_
 Test(governor, an_idle_pipeline_waits_for_work_instead_of_spinning)
 {
     fixture fx = fixture_make();
-    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
-    cfg.threads = 2;
-    cfg.budget_ms = 1000.0;
-    cfg.refine_k = 1;
-    cfg.still_s = 0.0;
-    cfg.max_frames = 1 + 10;
+    pipeline_config cfg = refining_config(&fx, 1, 1 + 10);
+    cfg.time_mode = PIPELINE_TIME_REAL; /* where idle steps wait */
+    record_display *out;
+    pipeline *p = one_channel(&fx, &cfg, 32, 18, &out);
     tess_error err = {{0}};
-    pipeline *p = pipeline_create(&cfg, &err);
-    cr_assert(p, "%s", err.msg);
-    record_display *out = record_create();
-    cr_assert(pipeline_add_channel(p, &fx.camera, 32, 18, &out->base, &err) == 0, "%s", err.msg);
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
     pipeline_stats st = pipeline_get_stats(p);
     cr_expect_eq(st.frames_rendered, 1);
@@ -528,16 +525,11 @@ static void *stop_later(void *arg)
 Test(governor, a_stop_ends_an_idle_pipeline)
 {
     fixture fx = fixture_make();
-    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
-    cfg.threads = 2;
-    cfg.budget_ms = 1000.0;
-    cfg.refine_k = 1;
-    cfg.still_s = 0.0;
+    pipeline_config cfg = refining_config(&fx, 1, 0 /* until stopped */);
+    cfg.time_mode = PIPELINE_TIME_REAL;
+    record_display *out;
+    pipeline *p = one_channel(&fx, &cfg, 32, 18, &out);
     tess_error err = {{0}};
-    pipeline *p = pipeline_create(&cfg, &err);
-    cr_assert(p, "%s", err.msg);
-    record_display *out = record_create();
-    cr_assert(pipeline_add_channel(p, &fx.camera, 32, 18, &out->base, &err) == 0, "%s", err.msg);
     pthread_t t;
     cr_assert_eq(pthread_create(&t, NULL, stop_later, p), 0);
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
@@ -562,11 +554,9 @@ Test(governor, a_reduced_frame_is_the_low_res_render_upscaled_bit_for_bit)
         cfg.render_scale = 0.375;
         cfg.upscale = f ? UPSCALE_CLAMPED_CUBIC : UPSCALE_BILINEAR;
         cfg.max_frames = 2;
+        record_display *out;
+        pipeline *p = one_channel(&fx, &cfg, w, h, &out);
         tess_error err = {{0}};
-        pipeline *p = pipeline_create(&cfg, &err);
-        cr_assert(p, "%s", err.msg);
-        record_display *out = record_create();
-        cr_assert(pipeline_add_channel(p, &fx.camera, w, h, &out->base, &err) == 0, "%s", err.msg);
         cr_assert(pipeline_run(p, &err), "%s", err.msg);
         cr_expect_eq(out->scale[1], 0.375);
         int lw = upscale_low_res_px(w, 0.375), lh = upscale_low_res_px(h, 0.375);
