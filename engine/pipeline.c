@@ -1222,6 +1222,17 @@ static void freeze_frame(pipeline *p)
         p->traverser->ops->begin_frame(p->traverser, targets);
 }
 
+/* Whether a one-shot is due at `frame` (queue_lock held). One due at a later
+ * frame is not work for an idle step: frames do not advance while idle, so
+ * waking for it would spin. */
+static bool oneshot_due(const pipeline *p, uint64_t frame)
+{
+    for (size_t i = 0; i < p->oneshot_count; i++)
+        if (p->oneshots[i].due_frame <= frame)
+            return true;
+    return false;
+}
+
 /* Governor, real time: the previous step was idle; wait (in the serial
  * section, every render thread asleep at the barrier) until a transaction, a
  * one-shot or a stop arrives, or PIPELINE_IDLE_POLL_S passes (serial
@@ -1234,7 +1245,7 @@ static void wait_while_idle(pipeline *p)
     until.tv_sec += ns / 1000000000L;
     until.tv_nsec = ns % 1000000000L;
     pthread_mutex_lock(&p->queue_lock);
-    while (p->queue_count == 0 && p->oneshot_count == 0 && !atomic_load(&p->stop_requested))
+    while (p->queue_count == 0 && !oneshot_due(p, p->next_frame) && !atomic_load(&p->stop_requested))
         if (pthread_cond_timedwait(&p->queue_changed, &p->queue_lock, &until) == ETIMEDOUT)
             break;
     pthread_mutex_unlock(&p->queue_lock);

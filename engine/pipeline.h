@@ -87,7 +87,7 @@
  *   - a converged picture renders nothing: such a loop step is IDLE (no frame
  *     number is used, no display gets a frame, parallel animation is skipped;
  *     serial animation and transactions still run). In real time an idle step
- *     first waits up to PIPELINE_IDLE_POLL_S for a transaction, a one-shot or
+ *     first waits up to PIPELINE_IDLE_POLL_S for a transaction, a one-shot due or
  *     a stop, so an idle wall costs no CPU; an overlay change alone makes one
  *     RESOLVE frame (the converged mean, new overlay, no rays).
  * What counts as a change of the picture: the setters of cameras, hidden
@@ -219,7 +219,9 @@ bool pipeline_transaction(pipeline *p, const char *name, pipeline_fn fn, const v
 
 /* Queue fn to run once in the serial section of frame `frame`, after that
  * barrier's transactions and before serial animation; if that frame has
- * already started, at the next barrier. Same limits as pipeline_transaction. */
+ * already started, at the next barrier. Same limits as pipeline_transaction.
+ * With a governor, frame numbers do not advance while it idles: a one-shot
+ * due at a later frame waits until the picture changes again. */
 bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_fn fn, const void *args,
                        size_t args_bytes);
 

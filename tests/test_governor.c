@@ -491,6 +491,12 @@ Test(governor, an_overlay_change_on_a_converged_picture_redraws_it_without_rays_
     fixture_free(&fx);
 }
 
+static void noop_oneshot(pipeline *p, void *args)
+{
+    (void)p;
+    (void)args;
+}
+
 /* In real time a converged pipeline waits for work between idle steps
  * instead of spinning: 10 idle steps take at least 10 polls. A lower bound on
  * time holds on any machine, however fast or slow. */
@@ -502,6 +508,8 @@ Test(governor, an_idle_pipeline_waits_for_work_instead_of_spinning)
     record_display *out;
     pipeline *p = one_channel(&fx, &cfg, 32, 18, &out);
     tess_error err = {{0}};
+    /* a one-shot due at a frame the idle pipeline never reaches is no work: no spinning for it */
+    cr_assert(pipeline_at_frame(p, 100, "far away", noop_oneshot, NULL, 0));
     cr_assert(pipeline_run(p, &err), "%s", err.msg);
     pipeline_stats st = pipeline_get_stats(p);
     cr_expect_eq(st.frames_rendered, 1);
