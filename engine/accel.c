@@ -1,9 +1,11 @@
-/* accel.c - two levels: a wide BVH per geometry (wbvh.h) traced by the
- * kernels of the best instruction set (kernels.h), under a small binary BVH
- * over the geometries' bounds for single rays. */
+/* accel.c - two levels: a wide BVH per geometry (wbvh.h), stored once
+ * however many instances place it, under a wide BVH over the instances'
+ * world boxes; both traced by the kernels of the best instruction set
+ * (kernels.h), single rays and packets alike. */
 #include "accel.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,137 +18,140 @@
 #include "wbvh.h"
 
 struct accel {
-    wbvh *geoms;               /* geom_count entries; index = geometry id */
+    wbvh *geoms;                 /* geom_count bottom levels; index = scene geometry index */
     uint32_t geom_count;
-    bvh top;                   /* over the geometries' bounds; prim ids are geometry ids */
+    wbvh_instance *instances;    /* instance_count; index = instance id (hit.geom_id) */
+    aabb *instance_bounds;       /* world box of each instance (empty: nothing to hit) */
+    uint32_t instance_count;
+    wbvh top;                    /* over the instances */
     const kernel_table *kernels; /* resolved once at build */
-    float coord_abs_max;         /* largest |coordinate| of the scene bounds (cull slack) */
-    /* geom_count flags, nonzero: hidden. The only mutable part (see accel.h):
-     * relaxed loads in the loops over geometries, one byte per geometry visit */
+    /* instance_count flags, nonzero: hidden. Set in serial sections (accel.h);
+     * relaxed loads in the traversal, one byte per instance visit */
     atomic_uchar *hidden;
+    /* the top level's boxes leave out instances hidden when it was last
+     * refitted (shown ones are always in: showing refits at once) */
+    atomic_bool refit_pending; /* something was hidden since: accel_commit would shrink boxes */
+    /* guards the top level's boxes between a refit (accel_set_hidden,
+     * accel_commit, in a serial section) and accel_pick on another thread;
+     * render threads never trace while a refit runs, so they do not take it */
+    pthread_mutex_t refit_lock;
+    bool lock_ready;
 };
 
-static float abs_max(vec3 a)
-{
-    float x = fabsf(a.x), y = fabsf(a.y), z = fabsf(a.z);
-    float m = x > y ? x : y;
-    return m > z ? m : z;
-}
-
-static bool build_geometry(wbvh *out, const aabb *boxes, uint32_t count, const mesh *m, const uint32_t *prim_ids,
-                           const sphere_set *spheres, int threads, tess_error *err)
-{
-    bvh binary;
-    if (!bvh_build(&binary, boxes, count, threads, err))
-        return false;
-    bool ok = m ? wbvh_build_triangles(out, &binary, m, prim_ids, err) : wbvh_build_spheres(out, &binary, spheres, err);
-    bvh_finish(&binary);
-    return ok;
-}
-
-static vec3 mesh_point(const mesh *m, uint32_t i)
-{
-    const float *p = m->positions + 3 * (size_t)i;
-    return v3(p[0], p[1], p[2]);
-}
-
-/* Shared by the threads computing triangle boxes. */
+/* Shared by the threads computing primitive boxes. */
 typedef struct box_job {
-    const mesh *m;
-    aabb *boxes;        /* per triangle; empty for one of zero area */
+    const geometry_ops *ops;
+    const void *data;
+    aabb *boxes; /* per primitive; empty for one that can never be hit */
 } box_job;
 
-static void triangle_boxes(void *ctx, size_t begin, size_t end, int worker)
+static void prim_boxes(void *ctx, size_t begin, size_t end, int worker)
 {
     (void)worker;
     box_job *job = ctx;
-    const mesh *m = job->m;
-    for (size_t i = begin; i < end; i++) {
-        const uint32_t *t = m->indices + 3 * i;
-        vec3 v0 = mesh_point(m, t[0]), v1 = mesh_point(m, t[1]), v2 = mesh_point(m, t[2]);
-        job->boxes[i] = intersect_triangle_degenerate(v0, v1, v2)
-                            ? aabb_empty()
-                            : aabb_grow_point(aabb_grow_point(aabb_grow_point(aabb_empty(), v0), v1), v2);
-    }
+    for (size_t i = begin; i < end; i++)
+        if (!job->ops->prim_bounds(job->data, (uint32_t)i, &job->boxes[i]))
+            job->boxes[i] = aabb_empty();
 }
 
-/* Triangles per parallel chunk of box computation. */
+/* Primitives per parallel chunk of box computation. */
 #define ACCEL_BOX_GRAIN 16384
 
-/* Triangles of zero area can never be hit: they are left out of the BVH. */
-static bool build_triangles(wbvh *out, const mesh *m, aabb *bounds, int threads, tess_error *err)
+/* One geometry's wide BVH; primitives that can never be hit are left out. */
+static bool build_geometry(wbvh *out, const scene_geometry *g, int threads, tess_error *err)
 {
-    aabb *boxes = malloc(((size_t)m->triangle_count + 1) * sizeof *boxes);
-    uint32_t *prim_ids = malloc(((size_t)m->triangle_count + 1) * sizeof *prim_ids);
+    uint32_t count = g->ops->prim_count(g->data);
+    aabb *boxes = malloc(((size_t)count + 1) * sizeof *boxes);
+    uint32_t *prim_ids = malloc(((size_t)count + 1) * sizeof *prim_ids);
     if (!boxes || !prim_ids) {
         free(boxes);
         free(prim_ids);
-        return tess_error_set(err, "accel: out of memory for %u triangle bounds", m->triangle_count);
+        return tess_error_set(err, "accel: out of memory for %u bounds of geometry '%s'", count, g->name);
     }
-    box_job job = {m, boxes};
-    parallel_for(threads, m->triangle_count, ACCEL_BOX_GRAIN, triangle_boxes, &job);
+    box_job job = {g->ops, g->data, boxes};
+    parallel_for(threads, count, ACCEL_BOX_GRAIN, prim_boxes, &job);
     /* compact (in order, so the result does not depend on the thread count) */
-    *bounds = aabb_empty();
     uint32_t kept = 0;
-    for (uint32_t i = 0; i < m->triangle_count; i++) {
+    for (uint32_t i = 0; i < count; i++) {
         if (aabb_is_empty(boxes[i]))
             continue;
-        *bounds = aabb_grow(*bounds, boxes[i]);
         boxes[kept] = boxes[i];
         prim_ids[kept++] = i;
     }
-    bool ok = build_geometry(out, boxes, kept, m, prim_ids, NULL, threads, err);
+    bvh binary;
+    bool ok = bvh_build(&binary, boxes, kept, threads, err);
+    if (ok) {
+        ok = wbvh_build(out, &binary, g->ops, g->data, prim_ids, err);
+        bvh_finish(&binary);
+    }
     free(boxes);
     free(prim_ids);
     return ok;
 }
 
-static bool build_spheres(wbvh *out, const sphere_set *s, aabb *bounds, int threads, tess_error *err)
+/* World box of an instance from its geometry's tree (the root's children). */
+static aabb instance_box(const scene_instance *si, const wbvh *w)
 {
-    aabb *boxes = malloc(((size_t)s->count + 1) * sizeof *boxes);
-    if (!boxes)
-        return tess_error_set(err, "accel: out of memory for %u sphere bounds", s->count);
-    *bounds = aabb_empty();
-    for (uint32_t i = 0; i < s->count; i++) {
-        vec3 c = v3(s->center_x[i], s->center_y[i], s->center_z[i]);
-        vec3 r = v3(s->radius[i], s->radius[i], s->radius[i]);
-        boxes[i] = (aabb){v3_sub(c, r), v3_add(c, r)};
-        *bounds = aabb_grow(*bounds, boxes[i]);
-    }
-    bool ok = build_geometry(out, boxes, s->count, NULL, NULL, s, threads, err);
-    free(boxes);
-    return ok;
+    aabb b = aabb_empty();
+    if (w->node_count == 0)
+        return b;
+    const wbvh_node *root = &w->nodes[0];
+    for (int i = 0; i < WBVH_WIDTH; i++)
+        if (root->child_mask >> i & 1u)
+            b = aabb_grow(b, (aabb){v3(root->lo_x[i], root->lo_y[i], root->lo_z[i]),
+                                    v3(root->hi_x[i], root->hi_y[i], root->hi_z[i])});
+    return si->identity ? b : affine3_box(&si->to_world, b);
 }
 
 accel *accel_build(const scene *s, int threads, tess_error *err)
 {
     accel *a = calloc(1, sizeof *a);
-    uint32_t count = s->mesh_count + (s->spheres.count > 0 ? 1u : 0u);
-    aabb *geom_bounds = calloc((size_t)count + 1, sizeof *geom_bounds);
-    if (!a || !geom_bounds || !(a->geoms = calloc((size_t)count + 1, sizeof *a->geoms)) ||
-        !(a->hidden = calloc((size_t)count + 1, sizeof *a->hidden))) {
-        tess_error_set(err, "accel: out of memory");
-        goto fail;
-    }
+    if (!a)
+        goto oom;
+    uint32_t n = s->instance_count;
+    a->geom_count = s->geometry_count;
+    a->instance_count = n;
+    if (!(a->geoms = calloc((size_t)a->geom_count + 1, sizeof *a->geoms)) ||
+        !(a->instances = calloc((size_t)n + 1, sizeof *a->instances)) ||
+        !(a->instance_bounds = calloc((size_t)n + 1, sizeof *a->instance_bounds)) ||
+        !(a->hidden = calloc((size_t)n + 1, sizeof *a->hidden)))
+        goto oom;
+    if (pthread_mutex_init(&a->refit_lock, NULL) != 0)
+        goto oom;
+    a->lock_ready = true;
+    atomic_init(&a->refit_pending, false);
     a->kernels = kernels_select();
-    a->geom_count = count;
-    for (uint32_t i = 0; i < s->mesh_count; i++)
-        if (!build_triangles(&a->geoms[i], s->meshes[i].mesh, &geom_bounds[i], threads, err))
+    for (uint32_t g = 0; g < a->geom_count; g++)
+        if (!build_geometry(&a->geoms[g], &s->geometries[g], threads, err))
             goto fail;
-    if (s->spheres.count > 0 &&
-        !build_spheres(&a->geoms[s->mesh_count], &s->spheres, &geom_bounds[s->mesh_count], threads, err))
+    /* the instance level: empty instances keep a point box at the origin,
+     * so the tree stays finite (they hold nothing to hit) */
+    aabb *build_boxes = malloc(((size_t)n + 1) * sizeof *build_boxes);
+    if (!build_boxes)
+        goto oom;
+    for (uint32_t i = 0; i < n; i++) {
+        const scene_instance *si = &s->instances[i];
+        a->instances[i] = (wbvh_instance){.geometry = &a->geoms[si->geometry], .to_object = si->to_object,
+                                          .identity = si->identity};
+        a->instance_bounds[i] = instance_box(si, &a->geoms[si->geometry]);
+        build_boxes[i] = aabb_is_empty(a->instance_bounds[i]) ? (aabb){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f)}
+                                                              : a->instance_bounds[i];
+    }
+    bvh binary;
+    bool ok = bvh_build(&binary, build_boxes, n, 1, err);
+    free(build_boxes);
+    if (!ok)
         goto fail;
-    for (uint32_t i = 0; i < count; i++)
-        if (aabb_is_empty(geom_bounds[i])) /* nothing to hit: a point box keeps the top level finite */
-            geom_bounds[i] = (aabb){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f)};
-    if (!bvh_build(&a->top, geom_bounds, count, 1, err))
+    ok = wbvh_build_instances(&a->top, &binary, a->instances, a->hidden, err);
+    bvh_finish(&binary);
+    if (!ok)
         goto fail;
-    for (uint32_t i = 0; i < count; i++)
-        a->coord_abs_max = fmaxf(a->coord_abs_max, fmaxf(abs_max(geom_bounds[i].lo), abs_max(geom_bounds[i].hi)));
-    free(geom_bounds);
+    /* boxes from the instances' own bounds (empty ones masked off) */
+    wbvh_refit_instances(&a->top, a->instance_bounds);
     return a;
+oom:
+    tess_error_set(err, "accel: out of memory");
 fail:
-    free(geom_bounds);
     accel_destroy(a);
     return NULL;
 }
@@ -159,41 +164,72 @@ void accel_destroy(accel *a)
         for (uint32_t i = 0; i < a->geom_count; i++)
             wbvh_finish(&a->geoms[i]);
     free(a->geoms);
+    wbvh_finish(&a->top);
+    free(a->instances);
+    free(a->instance_bounds);
     free(a->hidden);
-    bvh_finish(&a->top);
+    if (a->lock_ready)
+        pthread_mutex_destroy(&a->refit_lock);
     free(a);
 }
 
 size_t accel_bytes(const accel *a)
 {
-    size_t bytes = sizeof *a + bvh_bytes(&a->top) + a->geom_count * sizeof *a->geoms;
+    size_t bytes = sizeof *a + wbvh_bytes(&a->top) + a->geom_count * sizeof *a->geoms +
+                   a->instance_count * (sizeof *a->instances + sizeof *a->instance_bounds + sizeof *a->hidden);
     for (uint32_t i = 0; i < a->geom_count; i++)
         bytes += wbvh_bytes(&a->geoms[i]);
     return bytes;
 }
 
-uint32_t accel_geometry_count(const accel *a) { return a->geom_count; }
+uint32_t accel_geometry_count(const accel *a) { return a->instance_count; }
 
-void accel_set_hidden(const accel *a, uint32_t geom_id, bool hidden)
+/* Refit the instance level under the lock accel_pick takes. */
+static void refit(accel *a)
 {
-    if (geom_id < a->geom_count)
-        atomic_store_explicit(&a->hidden[geom_id], hidden ? 1u : 0u, memory_order_relaxed);
+    pthread_mutex_lock(&a->refit_lock);
+    wbvh_refit_instances(&a->top, a->instance_bounds);
+    pthread_mutex_unlock(&a->refit_lock);
+    atomic_store_explicit(&a->refit_pending, false, memory_order_relaxed);
 }
 
-void accel_unhide_all(const accel *a)
+/* The accel is logically const for tracing; hiding changes its mutable part. */
+static accel *mutable_accel(const accel *a) { return (accel *)(uintptr_t)a; }
+
+void accel_set_hidden_range(const accel *ca, uint32_t first, uint32_t count, bool hidden)
 {
-    for (uint32_t g = 0; g < a->geom_count; g++)
-        atomic_store_explicit(&a->hidden[g], 0u, memory_order_relaxed);
+    accel *a = mutable_accel(ca);
+    if (first >= a->instance_count)
+        return;
+    uint32_t end = count > a->instance_count - first ? a->instance_count : first + count;
+    bool showed = false, hid = false;
+    for (uint32_t i = first; i < end; i++) {
+        unsigned char old = atomic_exchange_explicit(&a->hidden[i], hidden ? 1u : 0u, memory_order_relaxed);
+        showed |= old && !hidden;
+        hid |= !old && hidden;
+    }
+    if (showed) /* a shown instance must be inside the boxes before anything traces again */
+        refit(a);
+    else if (hid)
+        atomic_store_explicit(&a->refit_pending, true, memory_order_relaxed);
 }
+
+void accel_set_hidden(const accel *a, uint32_t geom_id, bool hidden) { accel_set_hidden_range(a, geom_id, 1, hidden); }
+
+void accel_unhide_all(const accel *a) { accel_set_hidden_range(a, 0, a->instance_count, false); }
 
 bool accel_hidden(const accel *a, uint32_t geom_id)
 {
-    return geom_id < a->geom_count && atomic_load_explicit(&a->hidden[geom_id], memory_order_relaxed) != 0;
+    return geom_id < a->instance_count && atomic_load_explicit(&a->hidden[geom_id], memory_order_relaxed) != 0;
 }
 
-static inline bool is_hidden(const accel *a, uint32_t geom_id)
+bool accel_commit(const accel *ca)
 {
-    return atomic_load_explicit(&a->hidden[geom_id], memory_order_relaxed) != 0;
+    accel *a = mutable_accel(ca);
+    if (!atomic_load_explicit(&a->refit_pending, memory_order_relaxed))
+        return false;
+    refit(a);
+    return true;
 }
 
 const char *accel_isa_name(const accel *a) { return a->kernels->isa_name; }
@@ -210,40 +246,13 @@ bool accel_use_isa(accel *a, const char *isa_name)
     return false;
 }
 
-/* Single ray through the top level, then each geometry's wide BVH. */
+/* One ray from the root of the instance level. */
 static bool trace(const accel *a, ray *r, hit *h, bool any)
 {
-    const bvh *b = &a->top;
-    if (b->node_count == 0 || ray_is_degenerate(r))
+    if (a->top.node_count == 0 || ray_is_degenerate(r))
         return false;
     ray_derived d = ray_derive(r);
-    d.cull_slack = intersect_cull_slack(abs_max(r->org), abs_max(r->dir), a->coord_abs_max);
-    uint32_t stack[BVH_MAX_DEPTH + 1];
-    int top = 0;
-    stack[top++] = 0;
-    bool found = false;
-    while (top > 0) {
-        const bvh_node *n = &b->nodes[stack[--top]];
-        float t_entry;
-        if (!intersect_box(r, &d, &n->bounds, &t_entry))
-            continue;
-        if (n->count == 0) {
-            stack[top++] = n->first + 1;
-            stack[top++] = n->first;
-            continue;
-        }
-        for (uint32_t i = n->first; i < n->first + n->count; i++) {
-            uint32_t geom_id = b->prim_order[i];
-            if (is_hidden(a, geom_id))
-                continue;
-            if (a->kernels->intersect1(&a->geoms[geom_id], geom_id, r, &d, h, any)) {
-                found = true;
-                if (any)
-                    return true;
-            }
-        }
-    }
-    return found;
+    return a->kernels->intersect1(&a->top, 0, r, &d, h, any);
 }
 
 bool accel_intersect(const accel *a, const ray *r, hit *h)
@@ -260,27 +269,31 @@ bool accel_occluded(const accel *a, const ray *r)
     return trace(a, &local, &unused, true);
 }
 
+bool accel_pick(const accel *ca, const ray *r, hit *h)
+{
+    accel *a = mutable_accel(ca);
+    pthread_mutex_lock(&a->refit_lock);
+    bool found = accel_intersect(a, r, h);
+    pthread_mutex_unlock(&a->refit_lock);
+    return found;
+}
+
 void accel_intersect_packet(const accel *a, packet_range r)
 {
     /* hits change: what was derived from them is stale */
     r.packet->flags &= ~(uint32_t)(PACKET_HAVE_HIT_POSITION | PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL);
     uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r));
-    if (!mask)
+    if (!mask || a->top.node_count == 0)
         return;
     packet_derive_inv_dir(r.packet);
-    for (uint32_t g = 0; g < a->geom_count; g++)
-        if (!is_hidden(a, g))
-            a->kernels->intersect_packet(&a->geoms[g], g, r.packet, mask, false);
+    a->kernels->intersect_packet(&a->top, 0, r.packet, mask, false);
 }
 
 uint64_t accel_occluded_packet(const accel *a, packet_range r)
 {
-    uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r)), occluded = 0;
-    if (!mask)
+    uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r));
+    if (!mask || a->top.node_count == 0)
         return 0;
     packet_derive_inv_dir(r.packet);
-    for (uint32_t g = 0; g < a->geom_count && (mask & ~occluded); g++)
-        if (!is_hidden(a, g))
-            occluded |= a->kernels->intersect_packet(&a->geoms[g], g, r.packet, mask & ~occluded, true);
-    return occluded;
+    return a->kernels->intersect_packet(&a->top, 0, r.packet, mask, true);
 }

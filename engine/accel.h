@@ -1,16 +1,24 @@
-/* accel.h - the scene's acceleration structure: one BVH per geometry (mesh or
- * sphere set) under a top-level BVH over the geometries' bounds.
+/* accel.h - the scene's acceleration structure, two levels: one wide BVH per
+ * geometry (stored once, however many instances place it) under a wide BVH
+ * over the instances' world boxes (the top level). Single rays and packets
+ * traverse both with the same kernels; a packet meets an instance with a
+ * transform in that instance's object space (rays mapped once per visit).
  *
  * Built once per scene; read-only afterwards, so any number of render threads
  * may trace through it concurrently without locks, with one exception: the
- * per-geometry HIDDEN flags (accel_set_hidden). A hidden geometry is not hit
- * by any query here (so it is not seen and casts no shadows). The flags are
- * relaxed atomics, so reading them while they change is not a data race, but
- * a frame traced while one changes mixes both states: change them only where
- * nothing traces for a picture, i.e. in a pipeline's serial section (what
- * pipeline_queue_hide does; hiding is a property of the accel, seen by every
- * pipeline using it) or while no pipeline or render runs. Another thread may
- * query the accel meanwhile (picking), seeing each flag old or new. */
+ * per-instance HIDDEN flags (accel_set_hidden) and the top level's boxes that
+ * follow them. A hidden instance is not hit by any query here (so it is not
+ * seen and casts no shadows). Change them only where nothing traces for a
+ * picture, i.e. in a pipeline's serial section (what pipeline_queue_hide
+ * does; hiding is a property of the accel, seen by every pipeline using it)
+ * or while no pipeline or render runs. Another thread may pick meanwhile
+ * through accel_pick (which takes the lock a refit holds), seeing the state
+ * before or after the change.
+ *
+ * Showing an instance refits the top level at once (O(top nodes)); hiding
+ * only sets the flag (traversal skips the instance) and leaves the boxes for
+ * accel_commit to shrink, so a hidden subtree of parts costs no traversal
+ * after the next commit. Results never depend on whether a commit ran. */
 #ifndef TESSERA_ACCEL_H
 #define TESSERA_ACCEL_H
 
@@ -46,14 +54,23 @@ void accel_intersect_packet(const accel *a, packet_range r);
  * (bits as in packet->active) that are occluded. */
 uint64_t accel_occluded_packet(const accel *a, packet_range r);
 
-/* Geometries: ids 0..count-1 as in scene.h (meshes, then the sphere set). */
+/* The closest hit like accel_intersect, from a thread other than the render
+ * threads while a serial section may change hidden flags (picking). */
+bool accel_pick(const accel *a, const ray *r, hit *h);
+
+/* Instances: ids 0..count-1 as in scene.h (hit.geom_id). */
 uint32_t accel_geometry_count(const accel *a);
 
-/* Hide geometry geom_id from every query above, or show it again; ids out of
- * range are ignored. Who may call these: see the header comment. New accels
- * hide nothing. */
+/* Hide instance geom_id (or ids [first, first + count)) from every query
+ * above, or show it again; ids out of range are ignored. Who may call these:
+ * see the header comment. New accels hide nothing. */
 void accel_set_hidden(const accel *a, uint32_t geom_id, bool hidden);
+void accel_set_hidden_range(const accel *a, uint32_t first, uint32_t count, bool hidden);
 void accel_unhide_all(const accel *a);
+/* Shrink the top level's boxes to the instances still shown, if anything was
+ * hidden since the last refit; returns whether it refitted. Same callers as
+ * accel_set_hidden. */
+bool accel_commit(const accel *a);
 /* Whether geom_id is hidden (false out of range). Any thread. */
 bool accel_hidden(const accel *a, uint32_t geom_id);
 

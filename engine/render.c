@@ -22,58 +22,60 @@ typedef struct surface {
     const material *mat;
 } surface;
 
-static vec3 mesh_vertex(const float *array, uint32_t i)
-{
-    const float *p = array + 3 * (size_t)i;
-    return v3(p[0], p[1], p[2]);
-}
-
-static vec3 interpolate(const float *array, const uint32_t *idx, float u, float v)
-{
-    vec3 a = mesh_vertex(array, idx[0]), b = mesh_vertex(array, idx[1]), c = mesh_vertex(array, idx[2]);
-    return v3_add(v3_scale(a, 1.f - u - v), v3_add(v3_scale(b, u), v3_scale(c, v)));
-}
-
 /* Eyelight without shadow rays looks at normals only. */
 static bool needs_position(const render_view *v)
 {
     return v->shading != RENDER_SHADE_EYELIGHT || (v->shadows && v->scene->light_count > 0);
 }
 
-/* Describe the hit surface; the position (and its error bound) only when
- * `need_position`, i.e. when shading will cast a shadow ray or light a point. */
+/* A world position's rounding bound after the instance's transform: the
+ * object-space bound carried through |L|, plus the transform's own rounding
+ * (a few ulps of each term, gamma(4) of |L| |p| + |t|). */
+static vec3 transformed_error(const affine3 *m, vec3 p, vec3 error)
+{
+    const float *a = m->m;
+    const float g = 4.f * 0x1p-24f / (1.f - 4.f * 0x1p-24f);
+    float out[3];
+    for (int r = 0; r < 3; r++) {
+        float l0 = fabsf(a[4 * r]), l1 = fabsf(a[4 * r + 1]), l2 = fabsf(a[4 * r + 2]);
+        float carried = l0 * error.x + l1 * error.y + l2 * error.z;
+        float magnitude = l0 * fabsf(p.x) + l1 * fabsf(p.y) + l2 * fabsf(p.z) + fabsf(a[4 * r + 3]);
+        out[r] = (carried + g * magnitude) * (1.f + 2.f * g);
+    }
+    return v3(out[0], out[1], out[2]);
+}
+
+/* Describe the hit surface in the world: its instance's geometry describes it
+ * in object space (the ray mapped there as traversal mapped it), then the
+ * instance's transform places it. The position (and its error bound) only
+ * when `need_position`, i.e. when shading will cast a shadow ray or light a
+ * point. */
 static surface describe_hit(const scene *s, const ray *r, const hit *h, bool need_position)
 {
+    const scene_instance *inst = &s->instances[h->geom_id];
+    const scene_geometry *g = &s->geometries[inst->geometry];
+    geometry_surface gs;
     surface sf;
-    if (h->geom_id < s->mesh_count) {
-        const scene_mesh *sm = &s->meshes[h->geom_id];
-        const mesh *m = sm->mesh;
-        const uint32_t *idx = m->indices + 3 * (size_t)h->prim_id;
-        vec3 v0 = mesh_vertex(m->positions, idx[0]), v1 = mesh_vertex(m->positions, idx[1]),
-             v2 = mesh_vertex(m->positions, idx[2]);
-        /* from barycentrics rather than org + t dir: on the surface, with a known error */
-        if (need_position) {
-            surface_point sp = surface_point_triangle(v0, v1, v2, h->u, h->v);
-            sf.position = sp.p;
-            sf.position_error = sp.error;
-        }
-        sf.geometric_n = v3_normalize(v3_cross(v3_sub(v1, v0), v3_sub(v2, v0)));
-        sf.shading_n = m->normals ? v3_normalize(interpolate(m->normals, idx, h->u, h->v)) : sf.geometric_n;
-        uint32_t mat_id = sm->material_id;
-        if (sm->mesh_material_ids && m->triangle_material)
-            mat_id = sm->mesh_material_ids[m->triangle_material[h->prim_id]];
-        sf.mat = &s->materials[mat_id];
-        sf.kd = m->colors ? interpolate(m->colors, idx, h->u, h->v) : sf.mat->diffuse;
+    if (inst->identity) {
+        g->ops->describe(g->data, h->prim_id, r, h, need_position, &gs);
+        sf.position = gs.position;
+        sf.position_error = gs.position_error;
+        sf.geometric_n = gs.geometric_n;
+        sf.shading_n = gs.shading_n;
     } else {
-        const sphere_set *sp = &s->spheres;
-        vec3 c = v3(sp->center_x[h->prim_id], sp->center_y[h->prim_id], sp->center_z[h->prim_id]);
-        surface_point pt = surface_point_sphere(r->org, r->dir, h->t, c, sp->radius[h->prim_id], &sf.geometric_n);
-        sf.position = pt.p;
-        sf.position_error = pt.error;
-        sf.shading_n = sf.geometric_n;
-        sf.mat = &s->materials[sp->material_id[h->prim_id]];
-        sf.kd = sf.mat->diffuse;
+        ray local = {affine3_point(&inst->to_object, r->org), affine3_vector(&inst->to_object, r->dir), r->t_near,
+                     r->t_far};
+        g->ops->describe(g->data, h->prim_id, &local, h, need_position, &gs);
+        if (need_position) {
+            sf.position = affine3_point(&inst->to_world, gs.position);
+            sf.position_error = transformed_error(&inst->to_world, gs.position, gs.position_error);
+        }
+        /* normals by the inverse transpose: the transpose of world -> object */
+        sf.geometric_n = v3_normalize(affine3_vector_transposed(&inst->to_object, gs.geometric_n));
+        sf.shading_n = v3_normalize(affine3_vector_transposed(&inst->to_object, gs.shading_n));
     }
+    sf.mat = &s->materials[gs.material_id];
+    sf.kd = gs.has_colour ? gs.colour : sf.mat->diffuse;
     /* two-sided: face the viewer */
     if (v3_dot(sf.geometric_n, r->dir) > 0.f)
         sf.geometric_n = v3_scale(sf.geometric_n, -1.f);
@@ -220,14 +222,16 @@ static void packet_derive_hit_surfaces(const scene *s, ray_packet *p, packet_sha
      * (indices, then vertices) before reading any, so the waits overlap */
     for (uint64_t m = ps->hits; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
-        if (p->geom_id[i] < s->mesh_count)
-            __builtin_prefetch(s->meshes[p->geom_id[i]].mesh->indices + 3 * (size_t)p->prim_id[i]);
+        const scene_geometry *g = scene_instance_geometry(s, p->geom_id[i]);
+        if (g->ops == &geometry_triangles_ops)
+            __builtin_prefetch(((const scene_mesh *)g->data)->mesh->indices + 3 * (size_t)p->prim_id[i]);
     }
     for (uint64_t m = ps->hits; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
-        if (p->geom_id[i] >= s->mesh_count)
+        const scene_geometry *g = scene_instance_geometry(s, p->geom_id[i]);
+        if (g->ops != &geometry_triangles_ops)
             continue;
-        const mesh *mh = s->meshes[p->geom_id[i]].mesh;
+        const mesh *mh = ((const scene_mesh *)g->data)->mesh;
         const uint32_t *idx = mh->indices + 3 * (size_t)p->prim_id[i];
         for (int k = 0; k < 3; k++)
             __builtin_prefetch(mh->positions + 3 * (size_t)idx[k]);

@@ -28,6 +28,7 @@ scene *scene_create(void)
     s->background = scene_default_background;
     s->ambient = scene_default_ambient;
     s->has_camera = false;
+    s->sphere_instance = RAY_INVALID_ID;
     return s;
 }
 
@@ -45,11 +46,17 @@ void scene_destroy(scene *s)
 {
     if (!s)
         return;
+    for (uint32_t g = 0; g < s->geometry_count; g++)
+        if (s->geometries[g].ops->destroy)
+            s->geometries[g].ops->destroy(s->geometries[g].data);
     for (uint32_t i = 0; i < s->mesh_count; i++) {
-        mesh_destroy(s->meshes[i].mesh);
-        free(s->meshes[i].mesh_material_ids);
+        mesh_destroy(s->meshes[i]->mesh);
+        free(s->meshes[i]->mesh_material_ids);
+        free(s->meshes[i]);
     }
     free(s->meshes);
+    free(s->geometries);
+    free(s->instances);
     sphere_set_finish(&s->spheres);
     free(s->materials);
     free(s->lights);
@@ -143,35 +150,87 @@ static bool add_mesh_materials(scene *s, const mesh *m, uint32_t *ids)
     return true;
 }
 
+/* Make room for one more element of a growing array. */
+static bool reserve_one(void **array, uint32_t count, uint32_t *capacity, size_t item_bytes)
+{
+    if (count < *capacity)
+        return true;
+    uint32_t cap = grown_capacity(*capacity, (uint64_t)count + 1);
+    void *p = cap ? resize_array(*array, cap, item_bytes) : NULL;
+    if (!p)
+        return false;
+    *array = p;
+    *capacity = cap;
+    return true;
+}
+
+int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char *name)
+{
+    bool ops_ok = ops && ops->prim_count && ops->prim_bounds && ops->intersect && ops->describe &&
+                  (ops->leaf == GEOMETRY_LEAF_PRIMS || ops->fill_lane);
+    if (!ops_ok || !reserve_one((void **)&s->geometries, s->geometry_count, &s->geometry_capacity,
+                                sizeof *s->geometries)) {
+        if (ops && ops->destroy)
+            ops->destroy(data);
+        return -1;
+    }
+    scene_geometry *g = &s->geometries[s->geometry_count];
+    g->ops = ops;
+    g->data = data;
+    snprintf(g->name, sizeof g->name, "%.*s", (int)(sizeof g->name - 1), name ? name : "");
+    return (int)s->geometry_count++;
+}
+
+int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uint32_t part)
+{
+    if (geometry >= s->geometry_count)
+        return -1;
+    scene_instance inst = {.geometry = geometry, .to_world = affine3_identity(), .to_object = affine3_identity(),
+                           .identity = true, .part = part};
+    if (to_world && !affine3_is_identity(to_world)) {
+        if (!affine3_invert(to_world, &inst.to_object))
+            return -1;
+        inst.to_world = *to_world;
+        inst.identity = false;
+    }
+    if (!reserve_one((void **)&s->instances, s->instance_count, &s->instance_capacity, sizeof *s->instances))
+        return -1;
+    s->instances[s->instance_count] = inst;
+    return (int)s->instance_count++;
+}
+
 int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name)
 {
     uint32_t *ids = NULL;
+    scene_mesh *sm = NULL;
     if (!m)
         return -1;
-    if (s->mesh_count == s->mesh_capacity) {
-        uint32_t cap = grown_capacity(s->mesh_capacity, (uint64_t)s->mesh_count + 1);
-        scene_mesh *p = cap ? resize_array(s->meshes, cap, sizeof *p) : NULL;
-        if (!p)
-            goto fail;
-        s->meshes = p;
-        s->mesh_capacity = cap;
-    }
+    if (!reserve_one((void **)&s->meshes, s->mesh_count, &s->mesh_capacity, sizeof *s->meshes) ||
+        !(sm = calloc(1, sizeof *sm)))
+        goto fail;
     bool own_materials = m->material_count > 0 && m->triangle_material != NULL;
     if (own_materials) {
         ids = malloc((size_t)m->material_count * sizeof *ids);
         if (!ids || !add_mesh_materials(s, m, ids))
             goto fail;
     }
-    scene_mesh *sm = &s->meshes[s->mesh_count];
-    memset(sm, 0, sizeof *sm);
     sm->mesh = m;
     sm->material_id = material_id;
     sm->mesh_material_ids = ids;
     snprintf(sm->name, sizeof sm->name, "%.*s", (int)(sizeof sm->name - 1), name ? name : "");
+    /* the geometry does not own sm (ops.destroy is NULL): the meshes array does */
+    int g = scene_add_geometry(s, &geometry_triangles_ops, sm, sm->name);
+    if (g < 0 || scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART) < 0) {
+        if (g >= 0)
+            s->geometry_count--;
+        goto fail;
+    }
+    s->meshes[s->mesh_count] = sm;
     return (int)s->mesh_count++;
 
 fail:
     free(ids);
+    free(sm);
     mesh_destroy(m);
     return -1;
 }
@@ -215,6 +274,16 @@ int scene_add_sphere(scene *s, vec3 center, float radius, uint32_t material_id)
     sphere_set *ss = &s->spheres;
     if (!sphere_set_reserve(ss, (uint64_t)ss->count + 1))
         return -1;
+    if (s->sphere_instance == RAY_INVALID_ID) {
+        int g = scene_add_geometry(s, &geometry_spheres_ops, ss, "spheres");
+        int inst = g >= 0 ? scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART) : -1;
+        if (inst < 0) {
+            if (g >= 0)
+                s->geometry_count--;
+            return -1;
+        }
+        s->sphere_instance = (uint32_t)inst;
+    }
     ss->center_x[ss->count] = center.x;
     ss->center_y[ss->count] = center.y;
     ss->center_z[ss->count] = center.z;
@@ -223,40 +292,63 @@ int scene_add_sphere(scene *s, vec3 center, float radius, uint32_t material_id)
     return (int)ss->count++;
 }
 
+bool scene_geometry_bounds(const scene *s, uint32_t geometry, aabb *out)
+{
+    const scene_geometry *g = &s->geometries[geometry];
+    if (g->ops->bounds)
+        return g->ops->bounds(g->data, out);
+    aabb box = aabb_empty();
+    uint32_t n = g->ops->prim_count(g->data);
+    for (uint32_t i = 0; i < n; i++) {
+        aabb b;
+        if (g->ops->prim_bounds(g->data, i, &b))
+            box = aabb_grow(box, b);
+    }
+    *out = box;
+    return !aabb_is_empty(box);
+}
+
+bool scene_instance_bounds(const scene *s, uint32_t instance, aabb *out)
+{
+    const scene_instance *inst = &s->instances[instance];
+    aabb box;
+    if (!scene_geometry_bounds(s, inst->geometry, &box))
+        return false;
+    *out = inst->identity ? box : affine3_box(&inst->to_world, box);
+    return true;
+}
+
 bool scene_bounds(const scene *s, vec3 *lo, vec3 *hi)
 {
-    bool found = false;
-    vec3 box_lo = v3(0.f, 0.f, 0.f), box_hi = v3(0.f, 0.f, 0.f);
-    for (uint32_t i = 0; i < s->mesh_count; i++) {
-        float mlo[3], mhi[3];
-        if (!mesh_bounds(s->meshes[i].mesh, mlo, mhi))
-            continue;
-        vec3 a = v3(mlo[0], mlo[1], mlo[2]), b = v3(mhi[0], mhi[1], mhi[2]);
-        box_lo = found ? v3_min(box_lo, a) : a;
-        box_hi = found ? v3_max(box_hi, b) : b;
-        found = true;
+    aabb all = aabb_empty();
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        aabb b;
+        if (scene_instance_bounds(s, i, &b))
+            all = aabb_grow(all, b);
     }
-    const sphere_set *ss = &s->spheres;
-    for (uint32_t i = 0; i < ss->count; i++) {
-        vec3 c = v3(ss->center_x[i], ss->center_y[i], ss->center_z[i]);
-        vec3 r = v3(ss->radius[i], ss->radius[i], ss->radius[i]);
-        vec3 a = v3_sub(c, r), b = v3_add(c, r);
-        box_lo = found ? v3_min(box_lo, a) : a;
-        box_hi = found ? v3_max(box_hi, b) : b;
-        found = true;
-    }
-    if (found) {
-        *lo = box_lo;
-        *hi = box_hi;
-    }
-    return found;
+    if (aabb_is_empty(all))
+        return false;
+    *lo = all.lo;
+    *hi = all.hi;
+    return true;
 }
 
 size_t scene_triangle_count(const scene *s)
 {
     size_t total = 0;
     for (uint32_t i = 0; i < s->mesh_count; i++)
-        total += s->meshes[i].mesh->triangle_count;
+        total += s->meshes[i]->mesh->triangle_count;
+    return total;
+}
+
+size_t scene_instanced_triangle_count(const scene *s)
+{
+    size_t total = 0;
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        const scene_geometry *g = scene_instance_geometry(s, i);
+        if (g->ops == &geometry_triangles_ops)
+            total += g->ops->prim_count(g->data);
+    }
     return total;
 }
 

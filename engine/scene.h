@@ -1,9 +1,15 @@
 /* scene.h - what is rendered: geometry, materials, lights, camera, background.
  *
- * A scene owns its meshes (already transformed to world space at load time)
- * and its spheres. Geometry ids: meshes are 0..mesh_count-1 in order, the
- * sphere set (if any) is mesh_count. Primitive ids are per geometry
- * (triangle index in its mesh, sphere index in the sphere set).
+ * GEOMETRIES AND INSTANCES. A geometry is a kind's ops (geometry.h) and its
+ * data, stored once; an instance places a geometry in the world by an affine
+ * transform (a part used many times is stored once). Hits name an instance
+ * (hit.geom_id, "geometry id" in older code and messages) and a primitive of
+ * its geometry (hit.prim_id); both resolve through the scene
+ * (scene_instance_geometry), never by ranges of ids.
+ * The built-in kinds' data lives in `meshes` (each also a geometry with one
+ * identity instance, added by scene_add_mesh; loaders bake their transforms
+ * in) and in the sphere set (one geometry and one instance, made when the
+ * first sphere is added).
  * The scene is immutable while frames render; changes go through transactions
  * (the pipeline issue). */
 #ifndef TESSERA_SCENE_H
@@ -15,6 +21,7 @@
 
 #include "camera.h"
 #include "err.h"
+#include "geometry.h"
 #include "mesh.h"
 #include "vec3.h"
 
@@ -65,10 +72,34 @@ typedef struct sphere_set {
     uint32_t *material_id;                  /* per sphere */
 } sphere_set;
 
+/* A geometry: a kind and its data (ops->destroy frees data with the scene). */
+typedef struct scene_geometry {
+    const geometry_ops *ops;
+    void *data;
+    char name[SCENE_NAME_BYTES];
+} scene_geometry;
+
+#define SCENE_NO_PART 0xFFFFFFFFu
+
+/* A geometry placed in the world. */
+typedef struct scene_instance {
+    uint32_t geometry;   /* index into scene.geometries */
+    affine3 to_world;    /* object -> world */
+    affine3 to_object;   /* world -> object (the inverse) */
+    bool identity;       /* to_world is the identity: nothing is transformed, results are the
+                            geometry's own bit for bit */
+    uint32_t part;       /* the part it belongs to, or SCENE_NO_PART */
+} scene_instance;
+
 typedef struct scene {
-    scene_mesh *meshes;
+    scene_mesh **meshes;  /* each allocated apart, so a geometry's data pointer stays valid */
     uint32_t mesh_count, mesh_capacity;
     sphere_set spheres;
+    uint32_t sphere_instance; /* the sphere set's instance, RAY_INVALID_ID before the first sphere */
+    scene_geometry *geometries;
+    uint32_t geometry_count, geometry_capacity;
+    scene_instance *instances;
+    uint32_t instance_count, instance_capacity;
     material *materials;
     uint32_t material_count, material_capacity;
     light *lights;
@@ -85,15 +116,45 @@ void scene_destroy(scene *s); /* NULL is fine */
 /* Append; return the new element's index, or -1 on allocation failure. */
 int scene_add_material(scene *s, const material *m);
 int scene_add_light(scene *s, const light *l);
-/* Takes ownership of `m` (also on failure). */
+/* Takes ownership of `m` (also on failure). Adds the mesh as a geometry of
+ * the triangles kind and one identity instance of it; returns the mesh index
+ * (into meshes), which is also that instance's id while no other geometry
+ * was placed before it. */
 int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name);
+/* The first sphere also adds the sphere set's geometry and instance
+ * (sphere_instance). */
 int scene_add_sphere(scene *s, vec3 center, float radius, uint32_t material_id);
 
-/* World-space bounds of all geometry; false for an empty scene. */
+/* Register a geometry of any kind (geometry.h: this is the whole
+ * registration). The ops must outlive the scene and give every operation a
+ * kind needs (prim_count, prim_bounds, intersect, describe; fill_lane for the
+ * SIMD layouts); the scene owns `data` from now on when ops->destroy is set
+ * (also on failure). Returns the geometry index, or -1 (allocation, bad ops). */
+int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char *name);
+/* Place geometry `geometry` by `to_world` (NULL: identity) as part `part`
+ * (SCENE_NO_PART: none). Returns the instance id, or -1 for a geometry the
+ * scene does not have, a transform that is singular or not finite, or no
+ * memory. */
+int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uint32_t part);
+
+/* The instance's geometry (instance < instance_count). */
+static inline const scene_geometry *scene_instance_geometry(const scene *s, uint32_t instance)
+{
+    return &s->geometries[s->instances[instance].geometry];
+}
+
+/* World bounds of one instance; false when its geometry has nothing to hit. */
+bool scene_instance_bounds(const scene *s, uint32_t instance, aabb *out);
+/* Object-space bounds of a geometry; false when it has nothing to hit. */
+bool scene_geometry_bounds(const scene *s, uint32_t geometry, aabb *out);
+
+/* World-space bounds of all instances; false for an empty scene. */
 bool scene_bounds(const scene *s, vec3 *lo, vec3 *hi);
 
-/* Total triangles over all meshes. */
+/* Total triangles over all meshes (each stored once). */
 size_t scene_triangle_count(const scene *s);
+/* Triangles over all instances (a mesh placed twice counts twice). */
+size_t scene_instanced_triangle_count(const scene *s);
 
 /* Defaults used by loaders. */
 material material_default(void);          /* grey Lambert */

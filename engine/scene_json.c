@@ -459,7 +459,7 @@ static bool load_mesh(loader *L, json_object *v)
     int id = scene_add_mesh(L->s, m, (uint32_t)material_id, base_name(resolved));
     if (id < 0)
         return out_of_memory(L);
-    scene_mesh *sm = &L->s->meshes[id];
+    scene_mesh *sm = L->s->meshes[id];
     if (sm->mesh_material_ids) /* keep material_id a valid index even where it is unused */
         sm->material_id = sm->mesh_material_ids[0];
     return true;

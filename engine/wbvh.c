@@ -5,37 +5,18 @@
 #include <string.h>
 
 #include "memory.h"
-#include "mesh.h"
 #include "ray.h"
-#include "scene.h"
 
 
 /* Fills one block lane from a primitive; the block was zeroed, so unused
  * lanes stay degenerate. */
 typedef void (*fill_lane_fn)(void *block, int lane, uint32_t prim, const void *source);
 
-static void fill_triangle(void *block, int lane, uint32_t prim, const void *source)
+/* Prim-id blocks: the id is all there is. */
+static void fill_prim_id(void *block, int lane, uint32_t prim, const void *source)
 {
-    wbvh_tri_block *b = block;
-    const mesh *m = source;
-    const uint32_t *idx = m->indices + 3 * (size_t)prim;
-    const float *p0 = m->positions + 3 * (size_t)idx[0], *p1 = m->positions + 3 * (size_t)idx[1],
-                *p2 = m->positions + 3 * (size_t)idx[2];
-    b->v0x[lane] = p0[0], b->v0y[lane] = p0[1], b->v0z[lane] = p0[2];
-    b->v1x[lane] = p1[0], b->v1y[lane] = p1[1], b->v1z[lane] = p1[2];
-    b->v2x[lane] = p2[0], b->v2y[lane] = p2[1], b->v2z[lane] = p2[2];
-    b->prim_id[lane] = prim;
-}
-
-static void fill_sphere(void *block, int lane, uint32_t prim, const void *source)
-{
-    wbvh_sphere_block *b = block;
-    const sphere_set *s = source;
-    b->cx[lane] = s->center_x[prim];
-    b->cy[lane] = s->center_y[prim];
-    b->cz[lane] = s->center_z[prim];
-    b->r[lane] = s->radius[prim];
-    b->prim_id[lane] = prim;
+    (void)source;
+    ((wbvh_prim_block *)block)->prim_id[lane] = prim;
 }
 
 typedef struct collapse {
@@ -51,7 +32,7 @@ static void init_block(collapse *c, uint32_t index)
 {
     char *block = (char *)c->out->blocks + (size_t)index * c->block_bytes;
     memset(block, 0, c->block_bytes);
-    /* prim_id is the last member of both block types */
+    /* prim_id is the last member of every block type */
     uint32_t *ids = (uint32_t *)(block + c->block_bytes - WBVH_BLOCK * sizeof(uint32_t));
     for (int i = 0; i < WBVH_BLOCK; i++)
         ids[i] = RAY_INVALID_ID;
@@ -154,6 +135,7 @@ static bool run_collapse(collapse *c, tess_error *err)
             node->lo_x[i] = k->bounds.lo.x, node->lo_y[i] = k->bounds.lo.y, node->lo_z[i] = k->bounds.lo.z;
             node->hi_x[i] = k->bounds.hi.x, node->hi_y[i] = k->bounds.hi.y, node->hi_z[i] = k->bounds.hi.z;
             node->child_mask |= (uint8_t)(1u << i);
+            node->slot_mask |= (uint8_t)(1u << i);
             if (k->count > 0) {
                 node->child[i] = emit_leaf(c, k, &node->leaf_blocks[i]);
             } else {
@@ -181,14 +163,86 @@ static bool build(wbvh *out, wbvh_kind kind, const bvh *binary, size_t block_byt
     return true;
 }
 
-bool wbvh_build_triangles(wbvh *out, const bvh *binary, const mesh *m, const uint32_t *prim_ids, tess_error *err)
+static size_t block_bytes_of(wbvh_kind kind)
 {
-    return build(out, WBVH_TRIANGLES, binary, sizeof(wbvh_tri_block), fill_triangle, m, prim_ids, err);
+    switch (kind) {
+    case WBVH_TRIANGLES: return sizeof(wbvh_tri_block);
+    case WBVH_SPHERES: return sizeof(wbvh_sphere_block);
+    case WBVH_PRIMS:
+    case WBVH_INSTANCES: return sizeof(wbvh_prim_block);
+    }
+    return sizeof(wbvh_prim_block);
 }
 
-bool wbvh_build_spheres(wbvh *out, const bvh *binary, const sphere_set *s, tess_error *err)
+bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const void *data, const uint32_t *prim_ids,
+                tess_error *err)
 {
-    return build(out, WBVH_SPHERES, binary, sizeof(wbvh_sphere_block), fill_sphere, s, NULL, err);
+    wbvh_kind kind = ops->leaf == GEOMETRY_LEAF_TRIANGLES ? WBVH_TRIANGLES
+                     : ops->leaf == GEOMETRY_LEAF_SPHERES ? WBVH_SPHERES
+                                                          : WBVH_PRIMS;
+    fill_lane_fn fill = kind == WBVH_PRIMS ? fill_prim_id : ops->fill_lane;
+    if (!build(out, kind, binary, block_bytes_of(kind), fill, data, prim_ids, err))
+        return false;
+    out->ops = ops;
+    out->data = data;
+    return true;
+}
+
+bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *instances, const atomic_uchar *hidden,
+                          tess_error *err)
+{
+    if (!build(out, WBVH_INSTANCES, binary, sizeof(wbvh_prim_block), fill_prim_id, NULL, NULL, err))
+        return false;
+    out->instances = instances;
+    out->hidden = hidden;
+    return true;
+}
+
+static void set_slot(wbvh_node *n, int i, aabb b)
+{
+    n->lo_x[i] = b.lo.x, n->lo_y[i] = b.lo.y, n->lo_z[i] = b.lo.z;
+    n->hi_x[i] = b.hi.x, n->hi_y[i] = b.hi.y, n->hi_z[i] = b.hi.z;
+    if (aabb_is_empty(b))
+        n->child_mask &= (uint8_t)~(1u << i);
+    else
+        n->child_mask |= (uint8_t)(1u << i);
+}
+
+static aabb node_box(const wbvh_node *n)
+{
+    aabb b = aabb_empty();
+    for (int i = 0; i < WBVH_WIDTH; i++)
+        if (n->child_mask >> i & 1u)
+            b = aabb_grow(b, (aabb){v3(n->lo_x[i], n->lo_y[i], n->lo_z[i]), v3(n->hi_x[i], n->hi_y[i], n->hi_z[i])});
+    return b;
+}
+
+void wbvh_refit_instances(wbvh *w, const aabb *instance_bounds)
+{
+    /* children always have larger indices than their parents (the collapse
+     * numbers them as it goes down), so one backward sweep sees every child
+     * before its parent */
+    const wbvh_prim_block *blocks = w->blocks;
+    for (uint32_t k = w->node_count; k-- > 0;) {
+        wbvh_node *n = &w->nodes[k];
+        for (int i = 0; i < WBVH_WIDTH; i++) {
+            if (!(n->slot_mask >> i & 1u))
+                continue;
+            aabb b = aabb_empty();
+            if (n->leaf_blocks[i]) {
+                for (uint32_t blk = n->child[i]; blk < n->child[i] + n->leaf_blocks[i]; blk++)
+                    for (int lane = 0; lane < WBVH_BLOCK; lane++) {
+                        uint32_t id = blocks[blk].prim_id[lane];
+                        if (id != RAY_INVALID_ID &&
+                            !atomic_load_explicit(&w->hidden[id], memory_order_relaxed))
+                            b = aabb_grow(b, instance_bounds[id]);
+                    }
+            } else {
+                b = node_box(&w->nodes[n->child[i]]);
+            }
+            set_slot(n, i, b);
+        }
+    }
 }
 
 void wbvh_finish(wbvh *w)
@@ -202,6 +256,5 @@ void wbvh_finish(wbvh *w)
 
 size_t wbvh_bytes(const wbvh *w)
 {
-    size_t block_bytes = w->kind == WBVH_TRIANGLES ? sizeof(wbvh_tri_block) : sizeof(wbvh_sphere_block);
-    return (size_t)w->node_count * sizeof(wbvh_node) + (size_t)w->block_count * block_bytes;
+    return (size_t)w->node_count * sizeof(wbvh_node) + (size_t)w->block_count * block_bytes_of(w->kind);
 }

@@ -17,8 +17,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include <stdatomic.h>
+
 #include "bvh.h"
 #include "err.h"
+#include "geometry.h"
 
 #define WBVH_WIDTH 8
 #define WBVH_BLOCK 4
@@ -36,8 +39,10 @@ typedef struct wbvh_node {
     float hi_z[WBVH_WIDTH];
     uint32_t child[WBVH_WIDTH];      /* inner child: node index; leaf child: first block index */
     uint8_t leaf_blocks[WBVH_WIDTH]; /* 0: inner child; n > 0: leaf of n consecutive blocks */
-    uint8_t child_mask;              /* bit i: slot i holds a child */
-    uint8_t pad[23];
+    uint8_t child_mask;              /* bit i: slot i holds a child that may be hit (an instance
+                                        level's refit clears the bits of children left empty) */
+    uint8_t slot_mask;               /* bit i: slot i holds a child (as built) */
+    uint8_t pad[22];
 } wbvh_node; /* 256 bytes: four cache lines */
 
 /* Four triangles, vertices as SoA (lane i = triangle i of the block). */
@@ -54,7 +59,23 @@ typedef struct wbvh_sphere_block {
     uint32_t prim_id[WBVH_BLOCK];
 } wbvh_sphere_block;
 
-typedef enum wbvh_kind { WBVH_TRIANGLES, WBVH_SPHERES } wbvh_kind;
+/* Four primitive ids, for kinds without a SIMD layout (GEOMETRY_LEAF_PRIMS)
+ * and for the instance level (ids of instances). */
+typedef struct wbvh_prim_block {
+    uint32_t prim_id[WBVH_BLOCK];
+} wbvh_prim_block;
+
+typedef enum wbvh_kind { WBVH_TRIANGLES, WBVH_SPHERES, WBVH_PRIMS, WBVH_INSTANCES } wbvh_kind;
+
+struct wbvh;
+
+/* One leaf entry of the instance level: a geometry's tree and where rays
+ * meet it. */
+typedef struct wbvh_instance {
+    const struct wbvh *geometry; /* the bottom level (shared by every instance of the geometry) */
+    affine3 to_object;           /* world -> object */
+    bool identity;               /* no transform: rays go down unchanged */
+} wbvh_instance;
 
 typedef struct wbvh {
     wbvh_kind kind;
@@ -63,17 +84,32 @@ typedef struct wbvh {
     void *blocks;       /* wbvh_tri_block or wbvh_sphere_block array, by kind */
     uint32_t block_count;
     float coord_abs_max; /* largest |coordinate| of the bounds: scales the cull slack */
+    /* WBVH_PRIMS: the kind whose `intersect` tests each primitive, and its data */
+    const geometry_ops *ops;
+    const void *data;
+    /* WBVH_INSTANCES: the instances (prim ids index this) and their hidden
+     * flags (nonzero: not hit; relaxed atomics, see accel.h) */
+    const wbvh_instance *instances;
+    const atomic_uchar *hidden;
 } wbvh;
 
-struct mesh;
-struct sphere_set;
 
 /* Build from a binary BVH over the mesh's triangles / the spheres. The
  * binary BVH's primitive i is triangle prim_ids[i] of the mesh (prim_ids NULL:
  * triangle i), so triangles that can never be hit may be left out. */
-bool wbvh_build_triangles(wbvh *out, const bvh *binary, const struct mesh *m, const uint32_t *prim_ids,
+/* Build from a binary BVH over the primitives of a geometry of kind `ops`
+ * (its leaf layout decides the blocks). The binary BVH's primitive i is
+ * primitive prim_ids[i] of the geometry (prim_ids NULL: primitive i), so
+ * primitives that can never be hit may be left out. */
+bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const void *data, const uint32_t *prim_ids,
+                tess_error *err);
+/* The instance level: the binary BVH's primitive i is instance i. */
+bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *instances, const atomic_uchar *hidden,
                           tess_error *err);
-bool wbvh_build_spheres(wbvh *out, const bvh *binary, const struct sphere_set *s, tess_error *err);
+/* Recompute an instance level's boxes from each instance's world box,
+ * leaving hidden instances out; children left empty are masked off
+ * (child_mask), so traversal never enters them. O(nodes + instances). */
+void wbvh_refit_instances(wbvh *w, const aabb *instance_bounds);
 void wbvh_finish(wbvh *w);
 size_t wbvh_bytes(const wbvh *w);
 

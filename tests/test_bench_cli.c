@@ -191,7 +191,7 @@ Test(bench_cli, default_scene)
     cr_assert(s, "%s", err.msg);
     size_t mesh_b = 0;
     for (uint32_t i = 0; i < s->mesh_count; i++)
-        mesh_b += mesh_bytes(s->meshes[i].mesh);
+        mesh_b += mesh_bytes(s->meshes[i]->mesh);
     cr_expect_eq(field(line, "triangles"), (double)scene_triangle_count(s));
     cr_expect_eq(field(line, "spheres"), (double)s->spheres.count);
     cr_expect_eq(field(line, "mesh_bytes"), (double)mesh_b);

@@ -697,7 +697,7 @@ static void check_path_in_default_scene(const char *file, const camera_path *p, 
 {
     vec3 torus_lo, torus_hi;
     cr_assert_eq(s->mesh_count, 2, "default scene: ground and torus");
-    mesh_box(s->meshes[1].mesh, &torus_lo, &torus_hi);
+    mesh_box(s->meshes[1]->mesh, &torus_lo, &torus_hi);
     double end = p->keys[p->count - 1].time_s;
     for (double t = p->keys[0].time_s - 1.0; t <= end + 1.0; t += 0.01) {
         camera_desc c = camera_path_eval(p, t);

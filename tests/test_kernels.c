@@ -101,7 +101,7 @@ static hit brute_force(const scene *s, const ray *r)
     hit best = hit_none();
     ray_derived d = ray_derive(r);
     for (uint32_t g = 0; g < s->mesh_count; g++) {
-        const mesh *m = s->meshes[g].mesh;
+        const mesh *m = s->meshes[g]->mesh;
         for (uint32_t t = 0; t < m->triangle_count; t++) {
             const uint32_t *idx = m->indices + 3 * (size_t)t;
             vec3 v[3];

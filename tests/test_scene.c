@@ -208,8 +208,8 @@ Test(scene, create_destroy_and_growth)
     cr_assert_eq(scene_triangle_count(s), 20);
     cr_assert_eq(scene_add_mesh(s, NULL, 0, "none"), -1);
     cr_assert_eq(s->mesh_count, 20);
-    cr_assert_str_eq(s->meshes[19].name, "tri");
-    cr_assert_null(s->meshes[19].mesh_material_ids);
+    cr_assert_str_eq(s->meshes[19]->name, "tri");
+    cr_assert_null(s->meshes[19]->mesh_material_ids);
     scene_destroy(s);
 }
 
@@ -256,7 +256,7 @@ Test(scene, add_mesh_with_own_materials_adds_scene_materials)
     m->triangle_material[1] = 1;
     cr_assert_eq(scene_add_mesh(s, m, 0, "walls"), 0);
     cr_assert_eq(s->material_count, 3);
-    const uint32_t *ids = s->meshes[0].mesh_material_ids;
+    const uint32_t *ids = s->meshes[0]->mesh_material_ids;
     cr_assert_not_null(ids);
     cr_assert_eq(ids[0], 1u);
     cr_assert_eq(ids[1], 2u);
@@ -276,7 +276,7 @@ static void check_bare_mesh_scene(const char *rel, uint32_t triangles)
     scene *s = scene_load(tmp_path(path, sizeof path, rel), &err);
     cr_assert_not_null(s, "%s", err.msg);
     cr_assert_eq(s->mesh_count, 1);
-    cr_assert_eq(s->meshes[0].mesh->triangle_count, triangles);
+    cr_assert_eq(s->meshes[0]->mesh->triangle_count, triangles);
     cr_assert_eq(s->spheres.count, 0);
     cr_assert_eq(s->light_count, 1);
     light def = light_default_directional();
@@ -285,7 +285,7 @@ static void check_bare_mesh_scene(const char *rel, uint32_t triangles)
     cr_assert_not(s->has_camera);
     assert_vec3(s->background, 0.02f, 0.02f, 0.03f, 0.f);
     assert_vec3(s->ambient, 0.1f, 0.1f, 0.1f, 0.f);
-    uint32_t mid = s->meshes[0].material_id;
+    uint32_t mid = s->meshes[0]->material_id;
     cr_assert_lt(mid, s->material_count);
     cr_assert_str_eq(s->materials[mid].name, "default");
     scene_destroy(s);
@@ -300,7 +300,7 @@ Test(scene, load_bare_ply_in_file_coordinates)
     scene *s = scene_load(tmp_path(path, sizeof path, "tri.ply"), &err);
     cr_assert_eq(s->material_count, 1);
     for (uint32_t i = 0; i < 3; i++)
-        assert_vec3(vertex(s->meshes[0].mesh, i), tri_pos[i][0], tri_pos[i][1], tri_pos[i][2], 0.f);
+        assert_vec3(vertex(s->meshes[0]->mesh, i), tri_pos[i][0], tri_pos[i][1], tri_pos[i][2], 0.f);
     scene_destroy(s);
 }
 
@@ -384,10 +384,10 @@ Test(scene, full_scene_loads_exact_values)
     cr_assert(s->lights[1].casts_shadows);
 
     cr_assert_eq(s->mesh_count, 1);
-    cr_assert_eq(s->meshes[0].material_id, 1u);
-    cr_assert_null(s->meshes[0].mesh_material_ids);
-    cr_assert_str_eq(s->meshes[0].name, "tri.ply");
-    assert_vec3(vertex(s->meshes[0].mesh, 0), 2.f, 2.f, 3.f, 0.f);
+    cr_assert_eq(s->meshes[0]->material_id, 1u);
+    cr_assert_null(s->meshes[0]->mesh_material_ids);
+    cr_assert_str_eq(s->meshes[0]->name, "tri.ply");
+    assert_vec3(vertex(s->meshes[0]->mesh, 0), 2.f, 2.f, 3.f, 0.f);
 
     cr_assert_eq(s->spheres.count, 2);
     cr_assert_eq(s->spheres.center_x[0], 1.f);
@@ -476,7 +476,7 @@ Test(scene, relative_mesh_path_is_resolved_against_the_scene_directory)
     scene *s = scene_load(tmp_path(path, sizeof path, "scenes/s.json"), &err);
     cr_assert_not_null(s, "%s", err.msg);
     cr_assert_eq(s->mesh_count, 1);
-    cr_assert_eq(s->meshes[0].mesh->vertex_count, 3);
+    cr_assert_eq(s->meshes[0]->mesh->vertex_count, 3);
     scene_destroy(s);
 
     /* an absolute path is used as it is */
@@ -507,8 +507,8 @@ static const mesh *load_tri_with(const char *xform, scene **out)
     snprintf(text, sizeof text, "{\"meshes\": [{\"file\": \"tri.ply\", %s}]}", xform);
     *out = load_text(text, &err);
     cr_assert_not_null(*out, "%s\n%s", text, err.msg);
-    cr_assert_eq((*out)->meshes[0].mesh->vertex_count, 3);
-    return (*out)->meshes[0].mesh;
+    cr_assert_eq((*out)->meshes[0]->mesh->vertex_count, 3);
+    return (*out)->meshes[0]->mesh;
 }
 
 /* Each vertex i of the transformed mesh equals f(tri_pos[i]); normals (if the
@@ -600,7 +600,7 @@ Test(scene, mesh_with_mtl_materials_gets_scene_materials)
     tess_error err = {{0}};
     scene *s = load_text("{\"materials\": {\"unused\": {}}, \"meshes\": [{\"file\": \"colored.obj\"}]}", &err);
     cr_assert_not_null(s, "%s", err.msg);
-    const scene_mesh *sm = &s->meshes[0];
+    const scene_mesh *sm = s->meshes[0];
     const mesh *m = sm->mesh;
     cr_assert_gt(m->material_count, 0, "the loader kept no MTL materials");
     cr_assert_not_null(sm->mesh_material_ids);
@@ -636,9 +636,9 @@ Test(scene, named_material_overrides_mtl_materials)
                          &err);
     cr_assert_not_null(s, "%s", err.msg);
     cr_assert_eq(s->material_count, 1);
-    cr_assert_eq(s->meshes[0].material_id, 0u);
-    cr_assert_null(s->meshes[0].mesh_material_ids);
-    cr_assert_eq(s->meshes[0].mesh->material_count, 0);
+    cr_assert_eq(s->meshes[0]->material_id, 0u);
+    cr_assert_null(s->meshes[0]->mesh_material_ids);
+    cr_assert_eq(s->meshes[0]->mesh->material_count, 0);
     scene_destroy(s);
 }
 
@@ -651,7 +651,7 @@ Test(scene, missing_optional_mesh_is_skipped)
                          &err);
     cr_assert_not_null(s, "%s", err.msg);
     cr_assert_eq(s->mesh_count, 1);
-    cr_assert_eq(s->meshes[0].mesh->vertex_count, 3);
+    cr_assert_eq(s->meshes[0]->mesh->vertex_count, 3);
     scene_destroy(s);
 }
 

@@ -238,14 +238,83 @@ static bool sphere_block1(const wbvh_sphere_block *b, uint32_t geom_id, ray *r, 
     return found;
 }
 
+/* One ray against up to 4 primitives of a kind without a SIMD layout: its
+ * scalar `intersect`. */
+static bool prim_block1(const wbvh *w, const wbvh_prim_block *b, uint32_t geom_id, ray *r, hit *h, bool any)
+{
+    bool found = false;
+    for (int i = 0; i < WBVH_BLOCK; i++) {
+        if (b->prim_id[i] == RAY_INVALID_ID)
+            continue;
+        float t, u, v;
+        if (w->ops->intersect(w->data, b->prim_id[i], r, &t, &u, &v)) {
+            if (any)
+                return true;
+            found |= offer1(r, h, t, u, v, geom_id, b->prim_id[i]);
+        }
+    }
+    return found;
+}
+
+static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d_in, hit *h, bool any);
+
+static inline bool instance_hidden(const wbvh *w, uint32_t id)
+{
+    return atomic_load_explicit(&w->hidden[id], memory_order_relaxed) != 0;
+}
+
+/* The ray in an instance's object space: the same t measures the same point
+ * (the direction is mapped, not renormalised). */
+static inline ray ray_to_object(const wbvh_instance *inst, const ray *r)
+{
+    return (ray){affine3_point(&inst->to_object, r->org), affine3_vector(&inst->to_object, r->dir), r->t_near,
+                 r->t_far};
+}
+
+/* One ray against up to 4 instances: down into each geometry's tree. */
+static bool instance_block1(const wbvh *w, const wbvh_prim_block *b, ray *r, const ray_derived *d, hit *h, bool any)
+{
+    bool found = false;
+    for (int i = 0; i < WBVH_BLOCK; i++) {
+        uint32_t id = b->prim_id[i];
+        if (id == RAY_INVALID_ID || instance_hidden(w, id))
+            continue;
+        const wbvh_instance *inst = &w->instances[id];
+        if (inst->geometry->node_count == 0)
+            continue;
+        bool hit_here;
+        if (inst->identity) {
+            hit_here = traverse1(inst->geometry, 0, id, r, d, h, any);
+        } else {
+            ray local = ray_to_object(inst, r);
+            if (ray_is_degenerate(&local))
+                continue;
+            ray_derived ld = ray_derive(&local);
+            hit_here = traverse1(inst->geometry, 0, id, &local, &ld, h, any);
+            if (hit_here && !any)
+                r->t_far = local.t_far;
+        }
+        if (hit_here && any)
+            return true;
+        found |= hit_here;
+    }
+    return found;
+}
+
+/* The one switch on the kind of leaf in the single-ray loop. */
 static bool leaf1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
 {
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
     bool found = false;
     for (uint32_t k = first; k < first + count; k++) {
-        bool hit_here = w->kind == WBVH_TRIANGLES
-                            ? tri_block1((const wbvh_tri_block *)w->blocks + k, geom_id, r, d, h, any)
-                            : sphere_block1((const wbvh_sphere_block *)w->blocks + k, geom_id, r, h, any);
+        bool hit_here;
+        switch (w->kind) {
+        case WBVH_TRIANGLES: hit_here = tri_block1((const wbvh_tri_block *)w->blocks + k, geom_id, r, d, h, any); break;
+        case WBVH_SPHERES: hit_here = sphere_block1((const wbvh_sphere_block *)w->blocks + k, geom_id, r, h, any); break;
+        case WBVH_PRIMS: hit_here = prim_block1(w, (const wbvh_prim_block *)w->blocks + k, geom_id, r, h, any); break;
+        case WBVH_INSTANCES:
+        default: hit_here = instance_block1(w, (const wbvh_prim_block *)w->blocks + k, r, d, h, any); break;
+        }
         if (hit_here && any)
             return true;
         found |= hit_here;
@@ -700,11 +769,102 @@ static void finish_single(packet_ctx *c, uint32_t ref, uint64_t mask)
     }
 }
 
+static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ray_packet *p, uint64_t mask, bool any);
+
+/* The rays of `mask` against one instance whose transform is not the
+ * identity: mapped into its object space once per packet visit (the origin
+ * once when the packet has a common origin), traced there, and the hits that
+ * improved copied back. */
+static uint64_t instance_packet(const wbvh_instance *inst, uint32_t id, ray_packet *p, uint64_t mask, bool any)
+{
+    ray_packet local;
+    local.flags = 0;
+    local.count = p->count;
+    local.active = mask;
+    const affine3 *m = &inst->to_object;
+    const bool common_origin = (p->flags & PACKET_COMMON_ORIGIN) != 0;
+    vec3 shared_org = common_origin ? affine3_point(m, v3(p->org_x[0], p->org_y[0], p->org_z[0])) : v3(0.f, 0.f, 0.f);
+    uint64_t traceable = 0;
+    for (uint64_t rest = mask; rest; rest &= rest - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(rest);
+        vec3 o = common_origin ? shared_org : affine3_point(m, v3(p->org_x[i], p->org_y[i], p->org_z[i]));
+        vec3 dv = affine3_vector(m, v3(p->dir_x[i], p->dir_y[i], p->dir_z[i]));
+        ray one = {o, dv, p->t_near[i], p->t_far[i]};
+        if (ray_is_degenerate(&one))
+            continue;
+        traceable |= 1ull << i;
+        local.org_x[i] = o.x, local.org_y[i] = o.y, local.org_z[i] = o.z;
+        local.dir_x[i] = dv.x, local.dir_y[i] = dv.y, local.dir_z[i] = dv.z;
+        local.t_near[i] = p->t_near[i];
+        local.t_far[i] = p->t_far[i];
+        local.hit_t[i] = p->hit_t[i];
+        local.hit_u[i] = p->hit_u[i];
+        local.hit_v[i] = p->hit_v[i];
+        local.prim_id[i] = p->prim_id[i];
+        local.geom_id[i] = p->geom_id[i];
+    }
+    /* lanes outside the mask are never read by the kernels but for the
+     * interval setup, which looks at masked lanes only; zero them anyway */
+    for (uint32_t i = 0; i < PACKET_MAX_RAYS; i++)
+        if (!(traceable >> i & 1u)) {
+            local.org_x[i] = local.org_y[i] = local.org_z[i] = 0.f;
+            local.dir_x[i] = local.dir_y[i] = local.dir_z[i] = 0.f;
+            local.t_near[i] = local.t_far[i] = 0.f;
+            local.hit_t[i] = INFINITY;
+            local.hit_u[i] = local.hit_v[i] = 0.f;
+            local.prim_id[i] = local.geom_id[i] = RAY_INVALID_ID;
+        }
+    if (!traceable)
+        return 0;
+    packet_derive_inv_dir(&local);
+    uint64_t result = ISA_SUFFIX(intersect_packet)(inst->geometry, id, &local, traceable, any);
+    if (!any)
+        for (uint64_t rest = result; rest; rest &= rest - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(rest);
+            p->hit_t[i] = local.hit_t[i];
+            p->hit_u[i] = local.hit_u[i];
+            p->hit_v[i] = local.hit_v[i];
+            p->prim_id[i] = local.prim_id[i];
+            p->geom_id[i] = local.geom_id[i];
+            p->t_far[i] = local.t_far[i];
+        }
+    return result;
+}
+
+/* The rays of `mask` against the instances of a leaf of the instance level. */
+static void instances_leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
+{
+    const wbvh *w = c->w;
+    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    for (uint32_t k = first; k < first + count; k++) {
+        const wbvh_prim_block *b = (const wbvh_prim_block *)w->blocks + k;
+        for (int lane = 0; lane < WBVH_BLOCK; lane++) {
+            uint32_t id = b->prim_id[lane];
+            uint64_t m = mask & ~c->done;
+            if (!m)
+                return;
+            if (id == RAY_INVALID_ID || instance_hidden(w, id))
+                continue;
+            const wbvh_instance *inst = &w->instances[id];
+            uint64_t r = inst->identity ? ISA_SUFFIX(intersect_packet)(inst->geometry, id, c->p, m, c->any)
+                                        : instance_packet(inst, id, c->p, m, c->any);
+            if (c->any)
+                c->done |= r;
+            else
+                c->improved |= r;
+        }
+    }
+}
+
 static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
 {
     const wbvh *w = c->w;
+    if (w->kind == WBVH_INSTANCES) {
+        instances_leaf_packet(c, ref, mask);
+        return;
+    }
     if (w->kind != WBVH_TRIANGLES || __builtin_popcountll(mask) <= RAY_LANES / 2) {
-        /* few rays, or spheres: one ray at a time against 4 primitives */
+        /* few rays, spheres, or a kind without a SIMD layout: one ray at a time */
         finish_single(c, ref, mask);
         return;
     }

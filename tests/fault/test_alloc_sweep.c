@@ -165,11 +165,11 @@ static bool scene_same(const scene *a, const scene *b)
         a->light_count != b->light_count || a->spheres.count != b->spheres.count || a->has_camera != b->has_camera)
         return false;
     for (uint32_t i = 0; i < a->mesh_count; i++)
-        if (!mesh_same(a->meshes[i].mesh, b->meshes[i].mesh) ||
-            a->meshes[i].material_id != b->meshes[i].material_id ||
-            !same_array(a->meshes[i].mesh_material_ids, b->meshes[i].mesh_material_ids,
-                        a->meshes[i].mesh->material_count * sizeof(uint32_t)) ||
-            strcmp(a->meshes[i].name, b->meshes[i].name) != 0)
+        if (!mesh_same(a->meshes[i]->mesh, b->meshes[i]->mesh) ||
+            a->meshes[i]->material_id != b->meshes[i]->material_id ||
+            !same_array(a->meshes[i]->mesh_material_ids, b->meshes[i]->mesh_material_ids,
+                        a->meshes[i]->mesh->material_count * sizeof(uint32_t)) ||
+            strcmp(a->meshes[i]->name, b->meshes[i]->name) != 0)
             return false;
     for (uint32_t i = 0; i < a->material_count; i++)
         if (!material_same(&a->materials[i], &b->materials[i]))

@@ -43,7 +43,7 @@ static void check_scene(const scene *s, const char *name)
             fuzz_fail("%s: light %u: direction not unit (|d|^2 = %g)", name, i, (double)len2);
     }
     for (uint32_t i = 0; i < s->mesh_count; i++) {
-        const scene_mesh *sm = &s->meshes[i];
+        const scene_mesh *sm = s->meshes[i];
         fuzz_check_mesh(sm->mesh, name);
         if (sm->material_id >= s->material_count)
             fuzz_fail("%s: mesh %u: material %u of %u", name, i, sm->material_id, s->material_count);

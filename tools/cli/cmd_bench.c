@@ -318,7 +318,7 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
 
     size_t triangles = scene_triangle_count(s), mesh_total = 0, accel_total = accel_bytes(a);
     for (uint32_t i = 0; i < s->mesh_count; i++)
-        mesh_total += mesh_bytes(s->meshes[i].mesh);
+        mesh_total += mesh_bytes(s->meshes[i]->mesh);
     double bytes_per_tri = triangles ? (double)(mesh_total + accel_total) / (double)triangles : 0.0;
 
     printf("BENCH scene=");

@@ -342,7 +342,7 @@ static bool make_closed_sphere(robust_case *c, bool small)
     accel *a = case_add_mesh_scene(c, jittered_sphere(slices, stacks, 0.05, centre, &g));
     if (!a)
         return false;
-    const mesh *m = c->scenes[c->scene_count - 1].scene->meshes[0].mesh;
+    const mesh *m = c->scenes[c->scene_count - 1].scene->meshes[0]->mesh;
     vec3 *targets;
     size_t edges;
     size_t n = closed_mesh_targets(m, points_per_edge, &targets, &edges);
@@ -405,7 +405,7 @@ static robust_counts check_slivers(const robust_case *c)
 {
     robust_counts k = {0, 0, 0};
     for (size_t b = 0; b < c->batch_count; b++) {
-        const mesh *m = c->scenes[c->batches[b].scene].scene->meshes[0].mesh;
+        const mesh *m = c->scenes[c->batches[b].scene].scene->meshes[0]->mesh;
         const float *p = m->positions;
         vec3 v0 = v3(p[0], p[1], p[2]), v1 = v3(p[3], p[4], p[5]), v2 = v3(p[6], p[7], p[8]);
         for (size_t i = c->batches[b].first; i < c->batches[b].first + c->batches[b].count; i++) {
@@ -439,7 +439,7 @@ static bool make_lit_plane(robust_case *c, bool small, uint64_t *primary_misses)
                 accel *a = case_add_mesh_scene(c, lit_plane_mesh(&g, offsets[oi], form, half, &shift, &e0, &e1, &n));
                 if (!a)
                     return false;
-                const mesh *m = c->scenes[c->scene_count - 1].scene->meshes[0].mesh;
+                const mesh *m = c->scenes[c->scene_count - 1].scene->meshes[0]->mesh;
                 vec3 to_light = lit_plane_light(&g, n, tilts_deg[ti]);
                 size_t first = c->ray_count;
                 for (int k = 0; k < samples; k++) {
@@ -534,7 +534,7 @@ static ref_nearest reference_nearest(const scene *s, const ray *r, uint32_t want
 {
     ref_nearest out = {.found = false, .want_t = INFINITY, .want_margin = -INFINITY};
     for (uint32_t gi = 0; gi < s->mesh_count; gi++) {
-        const mesh *m = s->meshes[gi].mesh;
+        const mesh *m = s->meshes[gi]->mesh;
         for (uint32_t t = 0; t < m->triangle_count; t++) {
             const uint32_t *idx = m->indices + 3 * (size_t)t;
             const float *a = m->positions + 3 * (size_t)idx[0], *b = m->positions + 3 * (size_t)idx[1],

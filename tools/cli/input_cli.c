@@ -318,21 +318,24 @@ static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
     ray r = {.org = origin, .dir = dir, .t_near = 0.f, .t_far = INFINITY};
     hit h;
     *out = (input_hit){.hit = false};
-    if (!accel_intersect(cs->accel, &r, &h))
+    if (!accel_pick(cs->accel, &r, &h))
         return;
     out->hit = true;
     out->point = v3_add(origin, v3_scale(dir, h.t));
     out->geom_id = h.geom_id;
     out->prim_id = h.prim_id;
     const scene *s = cs->scene;
-    if (h.geom_id < s->mesh_count) {
-        snprintf(out->what, sizeof out->what, "mesh %u '%s' triangle %u", h.geom_id, s->meshes[h.geom_id].name,
-                 h.prim_id);
-        snprintf(out->object, sizeof out->object, "mesh %u '%s'", h.geom_id, s->meshes[h.geom_id].name);
-    } else {
+    const scene_geometry *g = scene_instance_geometry(s, h.geom_id);
+    if (g->ops == &geometry_triangles_ops) {
+        snprintf(out->what, sizeof out->what, "mesh %u '%s' triangle %u", h.geom_id, g->name, h.prim_id);
+        snprintf(out->object, sizeof out->object, "mesh %u '%s'", h.geom_id, g->name);
+    } else if (g->ops == &geometry_spheres_ops) {
         /* spheres are one geometry: hiding one hides the set (per-sphere hiding is not there yet) */
         snprintf(out->what, sizeof out->what, "sphere %u", h.prim_id);
         snprintf(out->object, sizeof out->object, "the sphere set (%u spheres)", s->spheres.count);
+    } else {
+        snprintf(out->what, sizeof out->what, "%s %u '%s' primitive %u", g->ops->name, h.geom_id, g->name, h.prim_id);
+        snprintf(out->object, sizeof out->object, "%s %u '%s'", g->ops->name, h.geom_id, g->name);
     }
 }
 

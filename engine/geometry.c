@@ -1,0 +1,220 @@
+/* geometry.c - the affine helpers of geometry.h and the two built-in kinds:
+ * triangle meshes (data: a scene_mesh) and sphere sets (data: a sphere_set). */
+#include "geometry.h"
+
+#include <math.h>
+
+#include "intersect.h"
+#include "mesh.h"
+#include "scene.h"
+#include "wbvh.h"
+
+bool affine3_invert(const affine3 *a, affine3 *inverse)
+{
+    const float *m = a->m;
+    for (int i = 0; i < 12; i++)
+        if (!isfinite(m[i]))
+            return false;
+    double l[3][3] = {{m[0], m[1], m[2]}, {m[4], m[5], m[6]}, {m[8], m[9], m[10]}};
+    double t[3] = {m[3], m[7], m[11]};
+    double c00 = l[1][1] * l[2][2] - l[1][2] * l[2][1], c01 = l[1][2] * l[2][0] - l[1][0] * l[2][2],
+           c02 = l[1][0] * l[2][1] - l[1][1] * l[2][0];
+    double det = l[0][0] * c00 + l[0][1] * c01 + l[0][2] * c02;
+    if (!(fabs(det) > 0.0) || !isfinite(det))
+        return false;
+    double inv[3][3] = {
+        {c00 / det, (l[0][2] * l[2][1] - l[0][1] * l[2][2]) / det, (l[0][1] * l[1][2] - l[0][2] * l[1][1]) / det},
+        {c01 / det, (l[0][0] * l[2][2] - l[0][2] * l[2][0]) / det, (l[0][2] * l[1][0] - l[0][0] * l[1][2]) / det},
+        {c02 / det, (l[0][1] * l[2][0] - l[0][0] * l[2][1]) / det, (l[0][0] * l[1][1] - l[0][1] * l[1][0]) / det},
+    };
+    for (int r = 0; r < 3; r++) {
+        double shift = -(inv[r][0] * t[0] + inv[r][1] * t[1] + inv[r][2] * t[2]);
+        for (int c = 0; c < 3; c++)
+            inverse->m[4 * r + c] = (float)inv[r][c];
+        inverse->m[4 * r + 3] = (float)shift;
+    }
+    for (int i = 0; i < 12; i++)
+        if (!isfinite(inverse->m[i]))
+            return false;
+    return true;
+}
+
+aabb affine3_box(const affine3 *a, aabb b)
+{
+    if (aabb_is_empty(b))
+        return b;
+    aabb out = aabb_empty();
+    for (int k = 0; k < 8; k++) {
+        vec3 corner = v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
+        out = aabb_grow_point(out, affine3_point(a, corner));
+    }
+    /* the corners' rounding: widen by a few ulps of the magnitudes so no
+     * transformed point of the box falls outside */
+    float mag = fmaxf(fmaxf(fmaxf(fabsf(out.lo.x), fabsf(out.hi.x)), fmaxf(fabsf(out.lo.y), fabsf(out.hi.y))),
+                      fmaxf(fabsf(out.lo.z), fabsf(out.hi.z)));
+    float pad = mag * 0x1p-20f;
+    out.lo = v3_sub(out.lo, v3(pad, pad, pad));
+    out.hi = v3_add(out.hi, v3(pad, pad, pad));
+    return out;
+}
+
+/* ---- triangles ---------------------------------------------------------- */
+
+static vec3 mesh_point(const mesh *m, uint32_t i)
+{
+    const float *p = m->positions + 3 * (size_t)i;
+    return v3(p[0], p[1], p[2]);
+}
+
+static vec3 interpolate(const float *array, const uint32_t *idx, float u, float v)
+{
+    const float *a = array + 3 * (size_t)idx[0], *b = array + 3 * (size_t)idx[1], *c = array + 3 * (size_t)idx[2];
+    return v3_add(v3_scale(v3(a[0], a[1], a[2]), 1.f - u - v),
+                  v3_add(v3_scale(v3(b[0], b[1], b[2]), u), v3_scale(v3(c[0], c[1], c[2]), v)));
+}
+
+static uint32_t triangles_count(const void *data) { return ((const scene_mesh *)data)->mesh->triangle_count; }
+
+static bool triangles_bounds(const void *data, aabb *out)
+{
+    float lo[3], hi[3];
+    if (!mesh_bounds(((const scene_mesh *)data)->mesh, lo, hi))
+        return false;
+    *out = (aabb){v3(lo[0], lo[1], lo[2]), v3(hi[0], hi[1], hi[2])};
+    return true;
+}
+
+/* A triangle of zero area can never be hit: left out of the BVH. */
+static bool triangles_prim_bounds(const void *data, uint32_t prim, aabb *out)
+{
+    const mesh *m = ((const scene_mesh *)data)->mesh;
+    const uint32_t *t = m->indices + 3 * (size_t)prim;
+    vec3 v0 = mesh_point(m, t[0]), v1 = mesh_point(m, t[1]), v2 = mesh_point(m, t[2]);
+    if (intersect_triangle_degenerate(v0, v1, v2))
+        return false;
+    *out = aabb_grow_point(aabb_grow_point(aabb_grow_point(aabb_empty(), v0), v1), v2);
+    return true;
+}
+
+static void triangles_fill_lane(void *block, int lane, uint32_t prim, const void *data)
+{
+    wbvh_tri_block *b = block;
+    const mesh *m = ((const scene_mesh *)data)->mesh;
+    const uint32_t *idx = m->indices + 3 * (size_t)prim;
+    const float *p0 = m->positions + 3 * (size_t)idx[0], *p1 = m->positions + 3 * (size_t)idx[1],
+                *p2 = m->positions + 3 * (size_t)idx[2];
+    b->v0x[lane] = p0[0], b->v0y[lane] = p0[1], b->v0z[lane] = p0[2];
+    b->v1x[lane] = p1[0], b->v1y[lane] = p1[1], b->v1z[lane] = p1[2];
+    b->v2x[lane] = p2[0], b->v2y[lane] = p2[1], b->v2z[lane] = p2[2];
+    b->prim_id[lane] = prim;
+}
+
+static bool triangles_intersect(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v)
+{
+    const mesh *m = ((const scene_mesh *)data)->mesh;
+    const uint32_t *idx = m->indices + 3 * (size_t)prim;
+    ray_derived d = ray_derive(r);
+    return intersect_triangle(r, &d, mesh_point(m, idx[0]), mesh_point(m, idx[1]), mesh_point(m, idx[2]), t, u, v);
+}
+
+static void triangles_describe(const void *data, uint32_t prim, const ray *r, const hit *h, bool need_position,
+                               geometry_surface *out)
+{
+    (void)r;
+    const scene_mesh *sm = data;
+    const mesh *m = sm->mesh;
+    const uint32_t *idx = m->indices + 3 * (size_t)prim;
+    vec3 v0 = mesh_point(m, idx[0]), v1 = mesh_point(m, idx[1]), v2 = mesh_point(m, idx[2]);
+    /* from barycentrics rather than org + t dir: on the surface, with a known error */
+    if (need_position) {
+        surface_point sp = surface_point_triangle(v0, v1, v2, h->u, h->v);
+        out->position = sp.p;
+        out->position_error = sp.error;
+    }
+    out->geometric_n = v3_normalize(v3_cross(v3_sub(v1, v0), v3_sub(v2, v0)));
+    out->shading_n = m->normals ? v3_normalize(interpolate(m->normals, idx, h->u, h->v)) : out->geometric_n;
+    out->material_id = sm->mesh_material_ids && m->triangle_material
+                           ? sm->mesh_material_ids[m->triangle_material[prim]]
+                           : sm->material_id;
+    out->has_colour = m->colors != NULL;
+    if (out->has_colour)
+        out->colour = interpolate(m->colors, idx, h->u, h->v);
+}
+
+static size_t triangles_bytes(const void *data) { return mesh_bytes(((const scene_mesh *)data)->mesh); }
+
+const geometry_ops geometry_triangles_ops = {
+    .name = "triangles",
+    .leaf = GEOMETRY_LEAF_TRIANGLES,
+    .prim_count = triangles_count,
+    .bounds = triangles_bounds,
+    .prim_bounds = triangles_prim_bounds,
+    .fill_lane = triangles_fill_lane,
+    .intersect = triangles_intersect,
+    .describe = triangles_describe,
+    .bytes = triangles_bytes,
+    .destroy = NULL, /* the scene's meshes array owns its scene_mesh */
+};
+
+/* ---- spheres -------------------------------------------------------------- */
+
+static uint32_t spheres_count(const void *data) { return ((const sphere_set *)data)->count; }
+
+static bool spheres_prim_bounds(const void *data, uint32_t prim, aabb *out)
+{
+    const sphere_set *s = data;
+    vec3 c = v3(s->center_x[prim], s->center_y[prim], s->center_z[prim]);
+    vec3 r = v3(s->radius[prim], s->radius[prim], s->radius[prim]);
+    *out = (aabb){v3_sub(c, r), v3_add(c, r)};
+    return true;
+}
+
+static void spheres_fill_lane(void *block, int lane, uint32_t prim, const void *data)
+{
+    wbvh_sphere_block *b = block;
+    const sphere_set *s = data;
+    b->cx[lane] = s->center_x[prim];
+    b->cy[lane] = s->center_y[prim];
+    b->cz[lane] = s->center_z[prim];
+    b->r[lane] = s->radius[prim];
+    b->prim_id[lane] = prim;
+}
+
+static bool spheres_intersect(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v)
+{
+    const sphere_set *s = data;
+    *u = *v = 0.f;
+    return intersect_sphere(r, v3(s->center_x[prim], s->center_y[prim], s->center_z[prim]), s->radius[prim], t);
+}
+
+static void spheres_describe(const void *data, uint32_t prim, const ray *r, const hit *h, bool need_position,
+                             geometry_surface *out)
+{
+    (void)need_position; /* the normal comes with the point */
+    const sphere_set *s = data;
+    vec3 c = v3(s->center_x[prim], s->center_y[prim], s->center_z[prim]);
+    surface_point pt = surface_point_sphere(r->org, r->dir, h->t, c, s->radius[prim], &out->geometric_n);
+    out->position = pt.p;
+    out->position_error = pt.error;
+    out->shading_n = out->geometric_n;
+    out->material_id = s->material_id[prim];
+    out->has_colour = false;
+}
+
+static size_t spheres_bytes(const void *data)
+{
+    return (size_t)((const sphere_set *)data)->count * (4 * sizeof(float) + sizeof(uint32_t));
+}
+
+const geometry_ops geometry_spheres_ops = {
+    .name = "spheres",
+    .leaf = GEOMETRY_LEAF_SPHERES,
+    .prim_count = spheres_count,
+    .bounds = NULL,
+    .prim_bounds = spheres_prim_bounds,
+    .fill_lane = spheres_fill_lane,
+    .intersect = spheres_intersect,
+    .describe = spheres_describe,
+    .bytes = spheres_bytes,
+    .destroy = NULL, /* the scene's sphere set */
+};

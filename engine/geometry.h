@@ -1,0 +1,133 @@
+/* geometry.h - geometry kinds: what the engine needs of a kind of primitive
+ * (triangles, spheres, or one a user adds), as one static const table of
+ * operations, the shape of image_display_ops.
+ *
+ * A scene holds geometries (scene.h: a kind's ops and its data) and places
+ * them by instances; hits name the instance (hit.geom_id) and the primitive
+ * within the instance's geometry (hit.prim_id), and everything else about a
+ * hit resolves through the scene (scene_instance_geometry), never by ranges
+ * of ids.
+ *
+ * REGISTRATION. scene_add_geometry(scene, ops, data, name) is the whole of it:
+ * a kind needs no change anywhere in the engine. Built-in kinds declare a
+ * SIMD leaf layout (their blocks are tested by the per-ISA kernels, which the
+ * tests hold to the kind's scalar `intersect`); any other kind uses
+ * GEOMETRY_LEAF_PRIMS: its leaves hold primitive ids and every ray meets them
+ * through `intersect`, one primitive at a time.
+ *
+ * Threading: every operation may be called from any number of render threads
+ * at once; `data` is read-only while an accel built from it exists. */
+#ifndef TESSERA_GEOMETRY_H
+#define TESSERA_GEOMETRY_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "aabb.h"
+#include "ray.h"
+#include "vec3.h"
+
+/* How a kind's primitives sit in the leaves of its wide BVH (wbvh.h). */
+typedef enum geometry_leaf_layout {
+    GEOMETRY_LEAF_TRIANGLES, /* wbvh_tri_block, filled by fill_lane: the SIMD watertight kernels */
+    GEOMETRY_LEAF_SPHERES,   /* wbvh_sphere_block, filled by fill_lane */
+    GEOMETRY_LEAF_PRIMS,     /* wbvh_prim_block (ids only): `intersect` decides, one ray at a time */
+} geometry_leaf_layout;
+
+/* The surface at a hit, in the geometry's own (object) space; render.c
+ * places it in the world by the instance's transform. */
+typedef struct geometry_surface {
+    vec3 position;       /* on the surface (only when asked for: need_position) */
+    vec3 position_error; /* componentwise bound of position's rounding (ray.h surface_point) */
+    vec3 geometric_n;    /* unit; either side (shading makes it face the ray) */
+    vec3 shading_n;      /* unit */
+    bool has_colour;     /* colour below overrides the material's diffuse colour (vertex colours) */
+    vec3 colour;         /* linear RGB in [0, 1] */
+    uint32_t material_id; /* index into scene.materials */
+} geometry_surface;
+
+typedef struct geometry_ops {
+    const char *name; /* the kind, for logs and `tessera parts` ("triangles", "spheres", ...) */
+    geometry_leaf_layout leaf;
+    /* Primitives, ids 0..count-1. */
+    uint32_t (*prim_count)(const void *data);
+    /* Bounds of the whole geometry (what frames the camera); false when it
+     * has nothing. NULL: the union of prim_bounds. */
+    bool (*bounds)(const void *data, aabb *out);
+    /* Bounds of primitive `prim`; false when it can never be hit (it is left
+     * out of the BVH: a degenerate triangle, a sphere of radius 0). */
+    bool (*prim_bounds)(const void *data, uint32_t prim, aabb *out);
+    /* TRIANGLES and SPHERES layouts: write primitive `prim` into lane `lane`
+     * of a zeroed block of that layout (unused for PRIMS; may be NULL). */
+    void (*fill_lane)(void *block, int lane, uint32_t prim, const void *data);
+    /* The scalar reference: the hit of ray r with primitive `prim` in
+     * (r->t_near, r->t_far], its t and its (u, v) (what describe reads back).
+     * The SIMD kernels of the built-in layouts give exactly its results; for
+     * PRIMS leaves it is what traversal calls. */
+    bool (*intersect)(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v);
+    /* The surface at hit h of ray r (both in object space). The position and
+     * its error only when need_position (shading lights the point or casts
+     * a ray from it); the rest always. */
+    void (*describe)(const void *data, uint32_t prim, const ray *r, const hit *h, bool need_position,
+                     geometry_surface *out);
+    /* Bytes of the kind's own data (for memory reports); NULL: 0. */
+    size_t (*bytes)(const void *data);
+    /* Free `data` when the scene is destroyed; NULL: the caller owns it. */
+    void (*destroy)(void *data);
+} geometry_ops;
+
+/* An affine map, row-major 3x4 [L | t]: p' = L p + t. */
+typedef struct affine3 {
+    float m[12];
+} affine3;
+
+static inline affine3 affine3_identity(void)
+{
+    return (affine3){{1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f}};
+}
+
+static inline bool affine3_is_identity(const affine3 *a)
+{
+    affine3 id = affine3_identity();
+    for (int i = 0; i < 12; i++)
+        if (a->m[i] != id.m[i])
+            return false;
+    return true;
+}
+
+static inline vec3 affine3_point(const affine3 *a, vec3 p)
+{
+    const float *m = a->m;
+    return v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+              m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+
+static inline vec3 affine3_vector(const affine3 *a, vec3 v)
+{
+    const float *m = a->m;
+    return v3(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+              m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+
+/* Transposed linear part times v: normals go object -> world by the
+ * transpose of the world -> object map. */
+static inline vec3 affine3_vector_transposed(const affine3 *a, vec3 v)
+{
+    const float *m = a->m;
+    return v3(m[0] * v.x + m[4] * v.y + m[8] * v.z, m[1] * v.x + m[5] * v.y + m[9] * v.z,
+              m[2] * v.x + m[6] * v.y + m[10] * v.z);
+}
+
+/* The inverse (in double, rounded once); false when the linear part is
+ * singular or anything is not finite. */
+bool affine3_invert(const affine3 *a, affine3 *inverse);
+
+/* Bounds of box b mapped by a (the 8 corners' box). */
+aabb affine3_box(const affine3 *a, aabb b);
+
+/* The built-in kinds: data is a scene_mesh (scene.h) / a sphere_set. */
+extern const geometry_ops geometry_triangles_ops;
+extern const geometry_ops geometry_spheres_ops;
+
+#endif
