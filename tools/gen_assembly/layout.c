@@ -83,7 +83,9 @@ static int32_t add_node(struct ga_layout *layout, int32_t parent, enum ga_node_k
 {
     if (layout->failed)
         return -1;
-    if (layout->node_count == layout->node_cap) {
+    if (layout->count_only) {
+        /* the density search needs the totals only */
+    } else if (layout->node_count == layout->node_cap) {
         size_t cap = layout->node_cap ? 2 * layout->node_cap : 1024;
         struct ga_node *nodes = realloc(layout->nodes, cap * sizeof *nodes);
         if (!nodes) {
@@ -93,8 +95,8 @@ static int32_t add_node(struct ga_layout *layout, int32_t parent, enum ga_node_k
         layout->nodes = nodes;
         layout->node_cap = cap;
     }
-    struct ga_node *n = &layout->nodes[layout->node_count];
-    *n = (struct ga_node){parent, shape, kind, number, {x, y, z}, rotation_x};
+    if (!layout->count_only)
+        layout->nodes[layout->node_count] = (struct ga_node){parent, shape, kind, number, {x, y, z}, rotation_x};
     if (shape >= 0) {
         layout->part_count++;
         layout->shape_uses[shape]++;
@@ -159,8 +161,17 @@ static void place_bracket(struct ga_layout *layout, const struct hardware *hw, i
 static void place_rivets(struct ga_layout *layout, const struct hardware *hw, int32_t section, uint32_t *number,
                          double x, double radius, long count)
 {
-    if (count <= 0)
+    if (count <= 0 || layout->failed)
         return;
+    if (layout->count_only) {
+        /* the bulk of the parts: the density search counts them without placing them */
+        layout->node_count += (size_t)count;
+        layout->part_count += (size_t)count;
+        layout->shape_uses[hw->rivet] += (uint64_t)count;
+        layout->triangles_placed += (uint64_t)count * ga_shape_triangles(&layout->shapes[hw->rivet]);
+        *number += (uint32_t)count;
+        return;
+    }
     long per_row_max = (long)floor(2.0 * PI * radius / RIVET_MIN_PITCH);
     long rows = (count + per_row_max - 1) / per_row_max;
     long left = count;
@@ -176,10 +187,12 @@ static void place_rivets(struct ga_layout *layout, const struct hardware *hw, in
     }
 }
 
-bool ga_layout_build(struct ga_layout *layout, const struct ga_layout_params *params, double s)
+/* The layout at density s; with count_only, the totals without the nodes. */
+static bool build(struct ga_layout *layout, const struct ga_layout_params *params, double s, bool count_only)
 {
     memset(layout, 0, sizeof *layout);
     layout->density = s;
+    layout->count_only = count_only;
     struct ga_rng rng;
     ga_rng_seed(&rng, params->seed);
     struct hardware hw;
@@ -240,8 +253,8 @@ bool ga_layout_build(struct ga_layout *layout, const struct ga_layout_params *pa
                      2.0 * PI * (i + 0.5) / stringers - PI / 2);
 
         struct ga_shape skin = ga_shape_make(GA_SHAPE_SKIN);
-        skin.segments[0] = segments(12.0, s, 4, 4096);
-        skin.segments[1] = segments(2.0, s, 1, 1024);
+        skin.segments[0] = segments(12.0, s, 4, 1024);
+        skin.segments[1] = segments(2.0, s, 1, 256);
         skin.size[0] = length;
         skin.size[1] = radius - SKIN_THICKNESS;
         skin.size[2] = SKIN_THICKNESS;
@@ -272,6 +285,11 @@ bool ga_layout_build(struct ga_layout *layout, const struct ga_layout_params *pa
     return !layout->failed;
 }
 
+bool ga_layout_build(struct ga_layout *layout, const struct ga_layout_params *params, double s)
+{
+    return build(layout, params, s, false);
+}
+
 bool ga_layout_fit(struct ga_layout *layout, const struct ga_layout_params *params)
 {
     double lo = log(DENSITY_MIN), hi = log(DENSITY_MAX), best_s = 1.0, best_err = INFINITY;
@@ -280,7 +298,7 @@ bool ga_layout_fit(struct ga_layout *layout, const struct ga_layout_params *para
     for (int step = 0; step < DENSITY_STEPS; step++) {
         double s = exp(0.5 * (lo + hi));
         struct ga_layout trial;
-        if (!ga_layout_build(&trial, params, s)) {
+        if (!build(&trial, params, s, true)) {
             ga_layout_finish(&trial);
             return false;
         }
@@ -299,7 +317,7 @@ bool ga_layout_fit(struct ga_layout *layout, const struct ga_layout_params *para
     const double ends[2] = {DENSITY_MIN, DENSITY_MAX};
     for (int i = 0; i < 2; i++) {
         struct ga_layout trial;
-        if (!ga_layout_build(&trial, params, ends[i])) {
+        if (!build(&trial, params, ends[i], true)) {
             ga_layout_finish(&trial);
             return false;
         }

@@ -63,6 +63,7 @@ struct ga_layout {
     size_t part_count;         /* nodes with a shape */
     uint64_t triangles_placed; /* sum over parts of their shape's triangles */
     double density;            /* the tessellation scale s it was made with */
+    bool count_only;           /* totals only, `nodes` not kept (the density search) */
     bool failed;               /* out of memory */
 };
 
