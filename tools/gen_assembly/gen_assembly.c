@@ -4,6 +4,7 @@
  * part trees. The command line and the summary line; layout.h places the
  * parts, shapes.h tessellates them, glb.h writes the file. */
 #include <errno.h>
+#include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -50,11 +51,17 @@ static bool parse_count(const char *text, uint64_t lo, uint64_t hi, uint64_t *ou
     return true;
 }
 
-static int fail(const char *fmt, const char *a, const char *b)
+/* One error line on stderr; the exit status of a command-line error. */
+static int usage_error(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+static int usage_error(const char *fmt, ...)
 {
+    va_list ap;
+    va_start(ap, fmt);
     fprintf(stderr, "gen-assembly: error: ");
-    fprintf(stderr, fmt, a, b);
+    vfprintf(stderr, fmt, ap);
     fprintf(stderr, " (see gen-assembly --help)\n");
+    va_end(ap);
     return 2;
 }
 
@@ -75,29 +82,33 @@ int main(int argc, char **argv)
         } else if (!strcmp(opt, "--parts")) {
             ok = parse_count(val, GA_LAYOUT_MIN_PARTS, GA_LAYOUT_MAX_PARTS, &params.parts);
             if (!ok && val)
-                return fail("--parts: expected a whole number from 50 to 2000000, got '%s'%s", val, "");
+                return usage_error("--parts: expected a whole number from %d to %d, got '%s'", GA_LAYOUT_MIN_PARTS,
+                                   GA_LAYOUT_MAX_PARTS, val);
         } else if (!strcmp(opt, "--triangles")) {
             ok = parse_count(val, 1, MAX_TRIANGLES, &params.triangles);
             if (!ok && val)
-                return fail("--triangles: expected a whole number from 1 to 10000000000, got '%s'%s", val, "");
+                return usage_error("--triangles: expected a whole number from 1 to %llu, got '%s'", MAX_TRIANGLES, val);
         } else if (!strcmp(opt, "--seed")) {
             ok = parse_count(val, 0, UINT64_MAX, &params.seed);
             if (!ok && val)
-                return fail("--seed: expected a whole number from 0 to 18446744073709551615, got '%s'%s", val, "");
+                return usage_error("--seed: expected a whole number from 0 to %llu, got '%s'",
+                                   (unsigned long long)UINT64_MAX, val);
         } else {
-            return fail("unknown option '%s'%s", opt, "");
+            return usage_error("unknown option '%s'", opt);
         }
         if (!ok)
-            return fail("%s needs a value%s", opt, "");
+            return usage_error("%s needs a value", opt);
         i++;
     }
     if (!path)
-        return fail("-o FILE is required: where to write the assembly%s%s", "", "");
+        return usage_error("-o FILE is required: where to write the assembly");
 
     /* open first, so an unwritable path costs no generation */
     FILE *out = fopen(path, "wb");
-    if (!out)
-        return fail("cannot write %s: %s", path, strerror(errno));
+    if (!out) {
+        fprintf(stderr, "gen-assembly: error: cannot write %s: %s\n", path, strerror(errno));
+        return 2;
+    }
 
     struct ga_layout layout;
     struct ga_glb_stats stats;
