@@ -108,7 +108,7 @@ static int32_t add_node(struct ga_layout *layout, int32_t parent, enum ga_node_k
 /* The hardware shared by every section. */
 struct hardware {
     int32_t bolt, rivet, bracket;
-    double bracket_leg_y, bracket_leg_z, bracket_t, bracket_w, bolt_length;
+    double bracket_leg_y, bracket_leg_z, bracket_t, bracket_w; /* metres, where the bolts go */
 };
 
 static void make_hardware(struct ga_layout *layout, double s, struct hardware *hw)
@@ -118,7 +118,7 @@ static void make_hardware(struct ga_layout *layout, double s, struct hardware *h
     bolt.size[0] = 0.0058; /* M6: 10 mm across flats */
     bolt.size[1] = 0.004;
     bolt.size[2] = 0.003;
-    bolt.size[3] = hw->bolt_length = 0.02;
+    bolt.size[3] = 0.02;
     hw->bolt = shape_id(layout, &bolt);
 
     struct ga_shape rivet = ga_shape_make(GA_SHAPE_RIVET);
