@@ -36,6 +36,8 @@ METRICS_SRC := $(wildcard metrics/*.c)
 # the hard cases of numerical robustness, shared by tests/test_robust.c and `tessera robust`
 ROBUST_SRC := $(wildcard tools/robust/*.c)
 CLI_SRC := $(wildcard tools/cli/*.c)
+# tools/gen_assembly/README.md: the assembly generator, a program of its own (libm only)
+GEN_ASSEMBLY_SRC := $(wildcard tools/gen_assembly/*.c)
 TEST_SRC := $(wildcard tests/*.c)
 
 # traversal kernels: one source compiled per instruction set, picked at run time
@@ -49,11 +51,13 @@ ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw
 LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
+GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
 TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-pipeline bench-wall clean check-headers unrobust
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-pipeline bench-wall clean check-headers unrobust \
+        gen-assembly
 
 all: tessera
 
@@ -78,6 +82,11 @@ $(LIB): $(LIB_OBJ)
 
 tessera: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+
+# the CAD-like assembly generator (tools/gen_assembly/README.md); the suite runs it
+$(BUILD)/gen-assembly: $(GEN_ASSEMBLY_OBJ)
+	$(CC) $(LDFLAGS) $(SAN) -o $@ $(GEN_ASSEMBLY_OBJ) -lm
+gen-assembly: $(BUILD)/gen-assembly
 
 # the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST) for the report's robustness
 # knob: their own tree build-unrobust/ and binary build-unrobust/tessera; never ./tessera
@@ -121,7 +130,7 @@ run: deps
 # qemu guest (tests/vm_wall.sh) and input driving it there (tests/vm_input.sh): each its own
 # summary line; SKIPPED, said so, when qemu cannot be installed
 test: deps
-	$(MAKE) $(TEST_BIN) tessera check-headers
+	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
@@ -129,8 +138,8 @@ test: deps
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan: deps
 	$(MAKE) BUILD=build-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
-	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests
-	cd tests && TESSERA_BIN=../tessera-asan ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
+	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests build-asan/gen-assembly
+	cd tests && TESSERA_BIN=../tessera-asan TESSERA_GEN_ASSEMBLY=../build-asan/gen-assembly ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
 	cd tests && ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_fault_tests --jobs 2
 
 # the threaded tests under ThreadSanitizer; any report fails the run. Criterion
@@ -192,7 +201,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h tools/robust/*.h)
+HEADERS := $(wildcard engine/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \
