@@ -89,7 +89,10 @@ part_counts *part_tree_counts(part_tree *t, int32_t id);
 const part_counts *part_tree_counts_const(const part_tree *t, int32_t id);
 
 /* Call fn for every part but the root whose path matches pattern, in id
- * order (preorder), with the path; fn returns false to stop. Returns the
+ * order (preorder), with the path; fn returns false to stop. Paths are built
+ * incrementally (O(1) a part), a match costs up to the path's length times
+ * the pattern's "**" count, so deep trees with "**" patterns cost the sum of
+ * their path lengths. Returns the
  * number of parts matched (fn calls), or -1 when out of memory. */
 typedef bool (*part_match_fn)(void *ctx, int32_t id, const char *path);
 long part_tree_match(const part_tree *t, const char *pattern, part_match_fn fn, void *ctx);
