@@ -326,6 +326,6 @@ done:
     part_tree_destroy(L.names);
     free(L.mesh_ids);
     free(L.material_ids);
-    aiReleaseImport(L.scene);
+    assimp_release(L.scene);
     return ok;
 }

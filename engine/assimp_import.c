@@ -370,11 +370,50 @@ bool assimp_append_triangles(mesh *m, const struct aiMesh *am, uint32_t first_ve
     return true;
 }
 
-const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_error *err)
+/* ---- on a deep stack ------------------------------------------------------ */
+
+/* assimp walks and frees the node tree recursively (the glTF importer,
+ * ValidateDataStructure, aiNode's destructor), 400 to 800 bytes of stack a
+ * level: a glTF file of 0.5 MB nesting 20,000 nodes overflows a main thread's
+ * 8 MiB and crashes. Importing and releasing run on a thread of their own
+ * with this much stack (address space: pages are only backed as they are
+ * touched), over a million levels; when such a thread cannot be made they
+ * run on the caller's. */
+#define DEEP_STACK_BYTES ((size_t)1 << 30)
+
+/* Run fn(arg) on a thread with DEEP_STACK_BYTES of stack and wait for it. */
+static void run_deep(void *(*fn)(void *), void *arg)
 {
+    pthread_attr_t attr;
+    pthread_t thread;
+    bool made = false;
+    if (pthread_attr_init(&attr) == 0) {
+        made = pthread_attr_setstacksize(&attr, DEEP_STACK_BYTES) == 0 &&
+               pthread_create(&thread, &attr, fn, arg) == 0;
+        pthread_attr_destroy(&attr);
+    }
+    if (made)
+        pthread_join(thread, NULL);
+    else
+        fn(arg);
+}
+
+/* One import: its arguments and result. */
+typedef struct import_job {
+    const char *path;
+    unsigned flags;
+    tess_error *err;
+    const struct aiScene *scene; /* the result, NULL on failure */
+} import_job;
+
+static void *import_on_deep_stack(void *arg)
+{
+    import_job *job = arg;
+    const char *path = job->path;
+    tess_error *err = job->err;
     if (has_extension(path, ".obj") && !check_obj_numbers(path, err))
         return NULL;
-    const struct aiScene *scene = import_scene(path, BASE_FLAGS | flags, err);
+    const struct aiScene *scene = import_scene(path, BASE_FLAGS | job->flags, err);
     if (!scene)
         return NULL;
     if (!check_scene_finite(scene, path, err)) {
@@ -385,5 +424,25 @@ const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_
     scene = aiApplyPostProcessing(scene, JOIN_FLAGS);
     if (!scene)
         tess_error_set(err, "%s: assimp: joining identical vertices failed", path);
-    return scene;
+    job->scene = scene;
+    return NULL;
+}
+
+const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_error *err)
+{
+    import_job job = {.path = path, .flags = flags, .err = err};
+    run_deep(import_on_deep_stack, &job);
+    return job.scene;
+}
+
+static void *release_on_deep_stack(void *scene)
+{
+    aiReleaseImport(scene);
+    return NULL;
+}
+
+void assimp_release(const struct aiScene *scene)
+{
+    if (scene)
+        run_deep(release_on_deep_stack, (void *)scene);
 }

@@ -21,9 +21,12 @@ struct mesh;
  * | extra_flags, after checking an .obj's numbers, indices and material
  * libraries ourselves; then check every triangle mesh's positions and normals
  * are finite and join identical vertices. The scene (free with
- * aiReleaseImport), or NULL with err naming the file and the problem.
- * Thread-safe. */
+ * assimp_release), or NULL with err naming the file and the problem.
+ * Thread-safe. Runs on a thread with a deep stack (assimp recurses over the
+ * node tree: assimp_import.c). */
 const struct aiScene *assimp_import_file(const char *path, unsigned extra_flags, tess_error *err);
+/* aiReleaseImport on a deep stack (aiNode's destructor recurses); NULL is fine. */
+void assimp_release(const struct aiScene *scene);
 
 /* Only triangles (after SortByPType), at least one, with vertices: the meshes
  * the loaders keep (points and lines are dropped). */

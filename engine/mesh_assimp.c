@@ -189,7 +189,7 @@ mesh *mesh_load_assimp(const char *path, tess_error *err)
     if (!scene)
         return NULL;
     mesh *m = convert_scene(scene, path, err);
-    aiReleaseImport(scene);
+    assimp_release(scene);
     if (m && !mesh_validate(m, path, err)) {
         mesh_destroy(m);
         return NULL;

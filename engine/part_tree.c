@@ -377,6 +377,8 @@ static bool glob_from(const char *p, const char *s)
         size_t pn = strcspn(p, "/");
         if (pn == 2 && p[0] == '*' && p[1] == '*') {
             const char *rest = p[2] == '/' ? p + 3 : p + 2;
+            if (*rest == '\0') /* a last "**" takes whatever is left */
+                return true;
             for (const char *q = s;;) { /* "**" takes 0, 1, 2, ... segments */
                 if (glob_from(rest, q))
                     return true;

@@ -441,6 +441,35 @@ Test(assembly_load, sink_refusal_aborts)
     }
 }
 
+/* A chain of nodes 100,000 deep (assimp recurses over it: 20,000 levels
+ * overflowed the 8 MiB main stack): both assimp loaders survive it. */
+Test(assembly_load, deep_hierarchy, .timeout = 120)
+{
+    enum { DEPTH = 100000 };
+    size_t size = 64 * (size_t)DEPTH + 1024;
+    char *body = malloc(size);
+    cr_assert_not_null(body);
+    size_t n = (size_t)snprintf(body, size, "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[");
+    for (int i = 0; i < DEPTH; i++)
+        n += (size_t)(i + 1 < DEPTH ? snprintf(body + n, size - n, "{\"name\":\"n\",\"children\":[%d]},", i + 1)
+                                    : snprintf(body + n, size - n, "{\"name\":\"n\",\"mesh\":0}],"));
+    snprintf(body + n, size - n,
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"indices\":1}]}]");
+    char path[PATH_BYTES];
+    write_gltf(path, "deep.gltf", body, false);
+    free(body);
+    recorder r;
+    rec_load_ok(&r, path);
+    cr_expect_eq(part_tree_count(r.tree), 1 + DEPTH);
+    cr_expect_eq(part_tree_depth(r.tree, DEPTH), DEPTH);
+    cr_expect_eq(r.instances, 1);
+    part_tree_destroy(r.tree);
+    tess_error err = {{0}};
+    mesh *m = mesh_load_assimp(path, &err);
+    cr_expect_not_null(m, "%s", err.msg);
+    mesh_destroy(m);
+}
+
 /* ---- tessera parts --------------------------------------------------------- */
 
 Test(parts_cli, prints_the_tree)
