@@ -36,6 +36,9 @@
  * is linear already), else the diffuse colour (OBJ's MTL "Kd"), else 0.6
  * grey; clamped to [0, 1]; a non-finite colour is an error.
  *
+ * Any callback returning a negative value stops the load (instance: any
+ * value >= 0 goes on).
+ *
  * Errors: false with err naming the file and the problem (missing file, not
  * a model, broken JSON, an index out of range, a NaN, a non-finite
  * transform, a sink returning -1). Everything assembly_load allocated is

@@ -25,11 +25,14 @@
  * own name starts with "bolt-", at any depth; "* / frame-?" the parts
  * frame-0 .. frame-9 one level down.
  *
- * Cost: per part a name in one string arena, a parent, a subtree end, two
- * counters and a slot in a hash table over (parent, name) that serves
- * sibling-uniqueness checks and part_tree_find (one probe per segment): about
- * 40 bytes plus the name. Not thread-safe; a tree is used by one thread at a
- * time. */
+ * Cost: per part a name in one string arena, a parent, a subtree end, the
+ * counters and a slot in a hash table over (parent, name), at most half
+ * full, that serves sibling-uniqueness checks and part_tree_find (one probe
+ * per segment): about 40 bytes plus the name. Measured on 100,101 parts
+ * (100 sections x 10 frames x 99 bolts, names uniquified), 2-CPU AMD EPYC:
+ * 6.3 MB with the arrays' doubling slack, building 0.5 to 1.3 us a part,
+ * part_tree_find 0.1 to 0.25 us a path. Not thread-safe; a tree is used by
+ * one thread at a time. */
 #ifndef TESSERA_PART_TREE_H
 #define TESSERA_PART_TREE_H
 
