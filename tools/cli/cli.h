@@ -86,5 +86,6 @@ int cli_bench_path(int argc, char **argv); /* tessera bench --path / --scaling (
 int cli_bench_wall(int argc, char **argv); /* tessera bench --wall without --path / --scaling (cmd_bench_wall.c) */
 int cli_compare(int argc, char **argv); /* tessera compare ... (cmd_compare.c) */
 int cli_robust(int argc, char **argv);  /* tessera robust ... (cmd_robust.c) */
+int cli_parts(int argc, char **argv);   /* tessera parts FILE ... (cmd_parts.c) */
 
 #endif

@@ -31,6 +31,7 @@ static const command commands[] = {
     {"bench", cli_bench, "measure ray throughput, build time and memory (machine-readable lines)"},
     {"compare", cli_compare, "how much an image differs from a reference: FLIP, RMSE, PSNR (one line)"},
     {"robust", cli_robust, "wrong hits and leaks of the kernels on hard cases, and their speed (one line a case)"},
+    {"parts", cli_parts, "the part tree of an assembly (glTF nodes, OBJ groups): paths, instances, triangles"},
     {"outputs", cli_outputs, "list DRM cards, connectors, monitors (EDID) and modes, for wall configs"},
 };
 
@@ -57,7 +58,7 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);
-    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, compare, robust, outputs; see 'tessera --help')",
+    cli_error("unknown command '%s' (expected one of: run, render, trace, bench, compare, robust, parts, outputs; see 'tessera --help')",
               argv[1]);
     return 2;
 }

@@ -1,0 +1,448 @@
+/* assimp_import.c - what both assimp loaders share (assimp_import.h): the
+ * checks that plug assimp 5.2's holes, the import under the one lock around
+ * assimp's error string, and copying a triangle mesh into a tessera mesh.
+ *
+ * The holes (each found by tests or fuzzing, each checked here before or
+ * instead of trusting assimp):
+ *  - its OBJ parser drops a "v" line with a non-numeric coordinate ("v 1 abc 2")
+ *    without a word, shifting every later vertex index, and reads "2abc" as 2;
+ *    check_obj_numbers() reads the numbers of .obj files itself first;
+ *  - its MTL reader dereferences a NULL material for a texture statement
+ *    (map_Kd, bump, disp, norm, ...) before the first "newmtl" and crashes
+ *    (found by fuzzing), and drops colours given there silently;
+ *    check_mtllib() reads the material libraries an .obj names first;
+ *  - a vertex index of an "f", "l" or "p" line out of range after a second
+ *    group ("g") makes it throw with the group's mesh half built and leak it
+ *    (found by fuzzing); the check counts vertices and checks the indices;
+ *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
+ *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
+ *    therefore checked for non-finite values before that step runs. */
+#include "assimp_import.h"
+
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include "mesh.h"
+
+/* ValidateDataStructure turns out-of-range indices into an import failure
+ * instead of a scene we would have to distrust. JoinIdenticalVertices runs
+ * afterwards, once the scene is known to be finite. */
+#define BASE_FLAGS (aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure)
+#define JOIN_FLAGS aiProcess_JoinIdenticalVertices
+
+/* aiPrimitiveType bits that name a primitive (5.2 adds an n-gon encoding flag) */
+#define PRIMITIVE_MASK                                                                                            \
+    (aiPrimitiveType_POINT | aiPrimitiveType_LINE | aiPrimitiveType_TRIANGLE | aiPrimitiveType_POLYGON)
+
+/* assimp's C API keeps the last import error in one process-wide string,
+ * written inside a failing aiImportFile and read by aiGetErrorString. This lock
+ * makes the pair atomic so concurrent loads report their own errors; it is the
+ * only shared state of the assimp loaders and guards nothing else. */
+static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* ---- OBJ numbers, checked before assimp sees them ---------------------- */
+
+static bool has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* How many numbers an OBJ vertex-data line holds. */
+static const struct obj_vertex_data {
+    const char *keyword; /* first word of the line */
+    int min, max;        /* numbers it may carry */
+} obj_vertex_data[] = {
+    {"v", 3, 7},  /* x y z, optional w, or x y z r g b (a common extension) */
+    {"vn", 3, 3}, /* normal */
+    {"vt", 1, 3}, /* u, optional v w */
+};
+
+/* assimp's OBJ and MTL readers end a line at '\n', '\r', '\f' and '\0' alike
+ * ("#\0mtllib x.mtl" names a library for them; found by fuzzing): the next
+ * such line of the bytes from *p to `end` (as getline gave them),
+ * NUL-terminated in place, or NULL after the last. */
+static char *next_logical_line(char **p, char *end)
+{
+    if (*p >= end)
+        return NULL;
+    char *line = *p, *q = line;
+    while (q < end && *q != '\n' && *q != '\r' && *q != '\f' && *q != '\0')
+        q++;
+    if (q < end)
+        *q++ = '\0';
+    *p = q;
+    return line;
+}
+
+/* Every statement of material library `mtl_path` must follow a "newmtl" (see
+ * the top of the file). A library that is not a regular file, or cannot be
+ * read, is left to assimp (which goes on without its materials). */
+static bool check_mtl_file(const char *mtl_path, const char *obj_path, unsigned long obj_line, tess_error *err)
+{
+    FILE *file = fopen(mtl_path, "r");
+    if (!file) /* out of memory is no reason to skip the check (assimp would read it unchecked) */
+        return errno != ENOMEM ||
+               tess_error_set(err, "%s:%lu: material library %s: out of memory opening it", obj_path, obj_line,
+                              mtl_path);
+    struct stat st;
+    bool ok = true;
+    char *line = NULL;
+    size_t capacity = 0;
+    unsigned long line_no = 0;
+    ssize_t got = 0;
+    errno = 0;
+    bool named = false; /* a "newmtl" was seen: the rest is assimp's */
+    while (ok && !named && fstat(fileno(file), &st) == 0 && S_ISREG(st.st_mode) &&
+           (got = getline(&line, &capacity, file)) >= 0) {
+        line_no++;
+        char *p = line, *part;
+        while (ok && !named && (part = next_logical_line(&p, line + got))) {
+            char *save;
+            char *word = strtok_r(part, " \t\v", &save);
+            if (!word || word[0] == '#')
+                continue;
+            named = strcmp(word, "newmtl") == 0;
+            if (!named)
+                ok = tess_error_set(err, "%s:%lu: material library %s:%lu: '%.40s' before any 'newmtl' (a "
+                                         "material statement needs its material)",
+                                    obj_path, obj_line, mtl_path, line_no, word);
+        }
+    }
+    if (ok && got < 0 && !feof(file) && errno == ENOMEM) /* getline's -1 without the end: as in check_obj_numbers */
+        ok = tess_error_set(err, "%s:%lu: material library %s:%lu: out of memory reading the line", obj_path, obj_line,
+                            mtl_path, line_no + 1);
+    free(line);
+    fclose(file);
+    return ok;
+}
+
+/* An "mtllib" line (`rest`: after the keyword). assimp 5.2 reads the first
+ * name, relative to the .obj's directory unless absolute, and when that does
+ * not exist, the .obj's own name with ".mtl" for ".obj". */
+static bool check_mtllib(char *rest, const char *obj_path, unsigned long obj_line, tess_error *err)
+{
+    char *save;
+    const char *name = strtok_r(rest, " \t\r\n\v\f", &save);
+    if (!name)
+        return true;
+    char mtl[4096];
+    const char *slash = strrchr(obj_path, '/');
+    int dir_len = name[0] == '/' || !slash ? 0 : (int)(slash - obj_path + 1);
+    if (snprintf(mtl, sizeof mtl, "%.*s%s", dir_len, obj_path, name) >= (int)sizeof mtl)
+        return true;
+    struct stat st;
+    if (stat(mtl, &st) != 0) {
+        size_t n = strlen(obj_path); /* ends in ".obj" */
+        if (n + 1 > sizeof mtl)
+            return true;
+        snprintf(mtl, sizeof mtl, "%.*smtl", (int)(n - 3), obj_path);
+    }
+    return check_mtl_file(mtl, obj_path, obj_line, err);
+}
+
+/* What the check carries from line to line: vertex positions are counted, and
+ * of the positive vertex indices (which may point forward) the largest is
+ * kept, to be checked against the count at the end. */
+typedef struct obj_check {
+    const char *path;
+    tess_error *err;
+    unsigned long line_no;    /* the current line, from 1 */
+    long long vertices;       /* "v" lines so far */
+    long long max_index;      /* largest positive vertex index so far, 0 if none */
+    unsigned long max_line;   /* where it was */
+} obj_check;
+
+/* The vertex indices of an element line ("f 1/2/3 -1//4 ..."): a negative one
+ * counts back from the vertices so far and must land on one; positive ones are
+ * checked at the end. Components that are not integers (and 0) are assimp's
+ * to report. */
+static bool check_obj_indices(obj_check *c, const char *keyword, char **save)
+{
+    for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", save)) && token[0] != '#';) {
+        char *end;
+        errno = 0;
+        long long index = strtoll(token, &end, 10);
+        if (end == token || (*end != '\0' && *end != '/') || errno == ERANGE)
+            continue;
+        if (index < 0 && -index > c->vertices)
+            return tess_error_set(c->err, "%s:%lu: '%s' line: vertex index %lld is before the first vertex (%lld so far)",
+                                  c->path, c->line_no, keyword, index, c->vertices);
+        if (index > c->max_index) {
+            c->max_index = index;
+            c->max_line = c->line_no;
+        }
+    }
+    return true;
+}
+
+/* Check one line: a vertex-data line must carry only finite numbers, as many
+ * as its keyword takes; an element line's vertex indices must be in range
+ * (check_obj_indices); an "mtllib" line has its libraries checked
+ * (check_mtllib). Other lines are assimp's business. */
+static bool check_obj_line(obj_check *c, char *line)
+{
+    const char *path = c->path;
+    unsigned long line_no = c->line_no;
+    tess_error *err = c->err;
+    char *save;
+    char *word = strtok_r(line, " \t\r\n\v\f", &save);
+    if (word && strcmp(word, "mtllib") == 0)
+        return check_mtllib(save, path, line_no, err);
+    if (word && (strcmp(word, "f") == 0 || strcmp(word, "l") == 0 || strcmp(word, "p") == 0))
+        return check_obj_indices(c, word, &save);
+    if (word && strcmp(word, "v") == 0)
+        c->vertices++;
+    const struct obj_vertex_data *kind = NULL;
+    for (size_t i = 0; word && i < sizeof obj_vertex_data / sizeof obj_vertex_data[0]; i++)
+        if (strcmp(word, obj_vertex_data[i].keyword) == 0)
+            kind = &obj_vertex_data[i];
+    if (!kind)
+        return true;
+    int count = 0;
+    for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", &save)) && token[0] != '#'; count++) {
+        char *end;
+        double v = strtod(token, &end);
+        if (end == token || *end != '\0')
+            return tess_error_set(err, "%s:%lu: '%s' line: expected a number, got '%.40s'", path, line_no,
+                                  kind->keyword, token);
+        if (!isfinite(v))
+            return tess_error_set(err, "%s:%lu: '%s' line: value %d is %.40s (must be finite)", path, line_no,
+                                  kind->keyword, count + 1, token);
+    }
+    if (count < kind->min || count > kind->max)
+        return tess_error_set(err, "%s:%lu: '%s' line: expected %d to %d numbers, got %d", path, line_no,
+                              kind->keyword, kind->min, kind->max, count);
+    return true;
+}
+
+static bool check_obj_numbers(const char *path, tess_error *err)
+{
+    FILE *file = fopen(path, "r");
+    if (!file) {
+        char text[128];
+        if (strerror_r(errno, text, sizeof text) != 0)
+            snprintf(text, sizeof text, "error %d", errno);
+        return tess_error_set(err, "%s: cannot open: %s", path, text);
+    }
+    char *line = NULL;
+    size_t capacity = 0;
+    obj_check c = {.path = path, .err = err};
+    bool ok = true;
+    errno = 0;
+    ssize_t got;
+    while (ok && (got = getline(&line, &capacity, file)) >= 0) {
+        c.line_no++;
+        char *p = line, *part;
+        while (ok && (part = next_logical_line(&p, line + got)))
+            ok = check_obj_line(&c, part);
+        errno = 0;
+    }
+    unsigned long line_no = c.line_no;
+    /* getline's -1 is the end, a read error, or (without the error flag)
+     * no memory for a longer line: anything but the end stops the load */
+    if (ok && !feof(file)) {
+        int e = errno ? errno : EIO;
+        char text[128];
+        if (strerror_r(e, text, sizeof text) != 0)
+            snprintf(text, sizeof text, "error %d", e);
+        ok = e == ENOMEM ? tess_error_set(err, "%s:%lu: out of memory reading the line", path, line_no + 1)
+                         : tess_error_set(err, "%s: read error: %s", path, text);
+    }
+    if (ok && c.max_index > c.vertices)
+        ok = tess_error_set(err, "%s:%lu: vertex index %lld out of range (the file has %lld vertices)", path,
+                            c.max_line, c.max_index, c.vertices);
+    free(line);
+    fclose(file);
+    return ok;
+}
+
+bool assimp_has_extension(const char *path, const char *ext) { return has_extension(path, ext); }
+
+/* ---- the scene ---------------------------------------------------------- */
+
+static const struct aiScene *import_scene(const char *path, unsigned flags, tess_error *err)
+{
+    pthread_mutex_lock(&import_lock);
+    const struct aiScene *scene = aiImportFile(path, flags);
+    if (!scene)
+        tess_error_set(err, "%s: assimp: %s", path, aiGetErrorString());
+    pthread_mutex_unlock(&import_lock);
+    return scene;
+}
+
+bool assimp_is_triangle_mesh(const struct aiMesh *am)
+{
+    return (am->mPrimitiveTypes & PRIMITIVE_MASK) == aiPrimitiveType_TRIANGLE && am->mNumFaces > 0 &&
+           am->mNumVertices > 0;
+}
+
+/* Where a vector array first holds a non-finite component. */
+typedef struct nonfinite {
+    unsigned index; /* which vector */
+    int axis;       /* 0, 1, 2 for x, y, z */
+    float value;    /* NaN or an infinity */
+} nonfinite;
+
+static bool vectors_finite(const struct aiVector3D *v, unsigned n, nonfinite *bad)
+{
+    for (unsigned i = 0; i < n; i++) {
+        const float c[3] = {v[i].x, v[i].y, v[i].z};
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(c[k])) {
+                *bad = (nonfinite){i, k, c[k]};
+                return false;
+            }
+    }
+    return true;
+}
+
+/* Every position and normal of every triangle mesh is finite (before
+ * JoinIdenticalVertices can hide a NaN by merging it away). */
+static bool check_scene_finite(const struct aiScene *scene, const char *path, tess_error *err)
+{
+    nonfinite bad;
+    for (unsigned i = 0; i < scene->mNumMeshes; i++) {
+        const struct aiMesh *am = scene->mMeshes[i];
+        if (!assimp_is_triangle_mesh(am))
+            continue;
+        if (!vectors_finite(am->mVertices, am->mNumVertices, &bad))
+            return tess_error_set(err, "%s: mesh %u ('%s') vertex %u: coordinate '%c' is %g (must be finite)", path,
+                                  i, am->mName.data, bad.index, "xyz"[bad.axis], (double)bad.value);
+        if (am->mNormals && !vectors_finite(am->mNormals, am->mNumVertices, &bad))
+            return tess_error_set(err, "%s: mesh %u ('%s') vertex %u: normal component '%c' is not finite", path, i,
+                                  am->mName.data, bad.index, "xyz"[bad.axis]);
+    }
+    return true;
+}
+
+static inline float clamp_unit(float v) { return v < 0.f ? 0.f : v > 1.f ? 1.f : v; } /* NaN passes through */
+
+/* Append one triangle mesh's vertices (and attributes) at m->vertex_count. */
+void assimp_append_vertices(mesh *m, const struct aiMesh *am)
+{
+    size_t base = 3 * (size_t)m->vertex_count;
+    for (unsigned v = 0; v < am->mNumVertices; v++) {
+        float *p = m->positions + base + 3 * (size_t)v;
+        p[0] = am->mVertices[v].x;
+        p[1] = am->mVertices[v].y;
+        p[2] = am->mVertices[v].z;
+        if (m->normals) {
+            float *n = m->normals + base + 3 * (size_t)v;
+            n[0] = am->mNormals[v].x;
+            n[1] = am->mNormals[v].y;
+            n[2] = am->mNormals[v].z;
+        }
+        if (m->colors) {
+            float *c = m->colors + base + 3 * (size_t)v;
+            c[0] = clamp_unit(am->mColors[0][v].r);
+            c[1] = clamp_unit(am->mColors[0][v].g);
+            c[2] = clamp_unit(am->mColors[0][v].b);
+        }
+    }
+}
+
+/* Append one triangle mesh's faces, offset by its first vertex. */
+bool assimp_append_triangles(mesh *m, const struct aiMesh *am, uint32_t first_vertex, uint32_t material,
+                             const char *path, tess_error *err)
+{
+    for (unsigned f = 0; f < am->mNumFaces; f++) {
+        const struct aiFace *face = &am->mFaces[f];
+        if (face->mNumIndices != 3) /* SortByPType promises triangles; trust, but check */
+            return tess_error_set(err, "%s: mesh '%s' face %u has %u indices after triangulation", path,
+                                  am->mName.data, f, face->mNumIndices);
+        uint32_t *t = m->indices + 3 * (size_t)m->triangle_count;
+        for (int k = 0; k < 3; k++)
+            t[k] = first_vertex + face->mIndices[k];
+        if (m->triangle_material)
+            m->triangle_material[m->triangle_count] = material;
+        m->triangle_count++;
+    }
+    return true;
+}
+
+/* ---- on a deep stack ------------------------------------------------------ */
+
+/* assimp walks and frees the node tree recursively (the glTF importer,
+ * ValidateDataStructure, aiNode's destructor), 400 to 800 bytes of stack a
+ * level: a glTF file of 0.5 MB nesting 20,000 nodes overflows a main thread's
+ * 8 MiB and crashes. Importing and releasing run on a thread of their own
+ * with this much stack (address space: pages are only backed as they are
+ * touched), over a million levels; when such a thread cannot be made they
+ * run on the caller's. */
+#define DEEP_STACK_BYTES ((size_t)1 << 30)
+
+/* Run fn(arg) on a thread with DEEP_STACK_BYTES of stack and wait for it. */
+static void run_deep(void *(*fn)(void *), void *arg)
+{
+    pthread_attr_t attr;
+    pthread_t thread;
+    bool made = false;
+    if (pthread_attr_init(&attr) == 0) {
+        made = pthread_attr_setstacksize(&attr, DEEP_STACK_BYTES) == 0 &&
+               pthread_create(&thread, &attr, fn, arg) == 0;
+        pthread_attr_destroy(&attr);
+    }
+    if (made)
+        pthread_join(thread, NULL);
+    else
+        fn(arg);
+}
+
+/* One import: its arguments and result. */
+typedef struct import_job {
+    const char *path;
+    unsigned flags;
+    tess_error *err;
+    const struct aiScene *scene; /* the result, NULL on failure */
+} import_job;
+
+static void *import_on_deep_stack(void *arg)
+{
+    import_job *job = arg;
+    const char *path = job->path;
+    tess_error *err = job->err;
+    if (has_extension(path, ".obj") && !check_obj_numbers(path, err))
+        return NULL;
+    const struct aiScene *scene = import_scene(path, BASE_FLAGS | job->flags, err);
+    if (!scene)
+        return NULL;
+    if (!check_scene_finite(scene, path, err)) {
+        aiReleaseImport(scene);
+        return NULL;
+    }
+    /* on failure aiApplyPostProcessing releases the scene itself */
+    scene = aiApplyPostProcessing(scene, JOIN_FLAGS);
+    if (!scene)
+        tess_error_set(err, "%s: assimp: joining identical vertices failed", path);
+    job->scene = scene;
+    return NULL;
+}
+
+const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_error *err)
+{
+    import_job job = {.path = path, .flags = flags, .err = err};
+    run_deep(import_on_deep_stack, &job);
+    return job.scene;
+}
+
+static void *release_on_deep_stack(void *scene)
+{
+    aiReleaseImport(scene);
+    return NULL;
+}
+
+void assimp_release(const struct aiScene *scene)
+{
+    if (scene)
+        run_deep(release_on_deep_stack, (void *)scene);
+}
