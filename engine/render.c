@@ -74,7 +74,7 @@ static surface describe_hit(const scene *s, const ray *r, const hit *h, bool nee
         sf.geometric_n = v3_normalize(affine3_vector_transposed(&inst->to_object, gs.geometric_n));
         sf.shading_n = v3_normalize(affine3_vector_transposed(&inst->to_object, gs.shading_n));
     }
-    sf.mat = &s->materials[gs.material_id];
+    sf.mat = &s->materials[inst->material != SCENE_NO_MATERIAL ? inst->material : gs.material_id];
     sf.kd = gs.has_colour ? gs.colour : sf.mat->diffuse;
     /* two-sided: face the viewer */
     if (v3_dot(sf.geometric_n, r->dir) > 0.f)

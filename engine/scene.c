@@ -9,6 +9,8 @@
 #include <string.h>
 #include <strings.h>
 
+#include "part_tree.h"
+
 /* First capacity of a growing array; it doubles from there. Small because most
  * scenes hold a handful of materials, lights and meshes. */
 #define SCENE_FIRST_CAPACITY 8u
@@ -57,6 +59,7 @@ void scene_destroy(scene *s)
     free(s->meshes);
     free(s->geometries);
     free(s->instances);
+    part_tree_destroy(s->parts);
     sphere_set_finish(&s->spheres);
     free(s->materials);
     free(s->lights);
@@ -186,7 +189,15 @@ int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uin
     if (geometry >= s->geometry_count)
         return -1;
     scene_instance inst = {.geometry = geometry, .to_world = affine3_identity(), .to_object = affine3_identity(),
-                           .identity = true, .part = part};
+                           .identity = true, .part = part, .material = SCENE_NO_MATERIAL};
+    /* instances with parts come in preorder of their parts (scene.h PARTS) */
+    if (part != SCENE_NO_PART)
+        for (uint32_t i = s->instance_count; i-- > 0;)
+            if (s->instances[i].part != SCENE_NO_PART) {
+                if (s->instances[i].part > part)
+                    return -1;
+                break;
+            }
     if (to_world && !affine3_is_identity(to_world)) {
         if (!affine3_invert(to_world, &inst.to_object))
             return -1;
@@ -199,7 +210,7 @@ int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uin
     return (int)s->instance_count++;
 }
 
-int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name)
+int scene_add_mesh_geometry(scene *s, mesh *m, uint32_t material_id, const char *name)
 {
     uint32_t *ids = NULL;
     scene_mesh *sm = NULL;
@@ -220,19 +231,33 @@ int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name)
     snprintf(sm->name, sizeof sm->name, "%.*s", (int)(sizeof sm->name - 1), name ? name : "");
     /* the geometry does not own sm (ops.destroy is NULL): the meshes array does */
     int g = scene_add_geometry(s, &geometry_triangles_ops, sm, sm->name);
-    if (g < 0 || scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART) < 0) {
-        if (g >= 0)
-            s->geometry_count--;
+    if (g < 0)
         goto fail;
-    }
-    s->meshes[s->mesh_count] = sm;
-    return (int)s->mesh_count++;
+    s->meshes[s->mesh_count++] = sm;
+    return g;
 
 fail:
     free(ids);
     free(sm);
     mesh_destroy(m);
     return -1;
+}
+
+int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name)
+{
+    int g = scene_add_mesh_geometry(s, m, material_id, name);
+    if (g < 0)
+        return -1;
+    if (scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART) < 0) {
+        /* undo the geometry: the mesh was taken, so it is freed here */
+        scene_mesh *sm = s->meshes[--s->mesh_count];
+        s->geometry_count--;
+        mesh_destroy(sm->mesh);
+        free(sm->mesh_material_ids);
+        free(sm);
+        return -1;
+    }
+    return (int)s->mesh_count - 1;
 }
 
 /* Grow every array of the sphere set to hold at least `needed` spheres. An
@@ -415,9 +440,33 @@ static scene *scene_load_mesh_file(const char *path, tess_error *err)
     return s;
 }
 
+/* A scene of one assembly file (its parts and instances), the default light. */
+static scene *scene_load_assembly_file(const char *path, tess_error *err)
+{
+    scene *s = scene_create();
+    light def_light = light_default_directional();
+    if (!s || scene_add_light(s, &def_light) < 0) {
+        scene_destroy(s);
+        tess_error_set(err, "%s: out of memory building the scene", path);
+        return NULL;
+    }
+    if (!scene_load_assembly(s, path, NULL, err)) {
+        scene_destroy(s);
+        return NULL;
+    }
+    if (scene_instanced_triangle_count(s) == 0) {
+        scene_destroy(s);
+        tess_error_set(err, "%s: scene has no geometry (no part has triangles)", path);
+        return NULL;
+    }
+    return s;
+}
+
 scene *scene_load(const char *path, tess_error *err)
 {
     if (has_extension(path, ".json"))
         return scene_load_json(path, err);
+    if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
+        return scene_load_assembly_file(path, err);
     return scene_load_mesh_file(path, err);
 }

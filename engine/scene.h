@@ -80,6 +80,9 @@ typedef struct scene_geometry {
 } scene_geometry;
 
 #define SCENE_NO_PART 0xFFFFFFFFu
+#define SCENE_NO_MATERIAL 0xFFFFFFFFu
+
+struct part_tree;
 
 /* A geometry placed in the world. */
 typedef struct scene_instance {
@@ -88,7 +91,9 @@ typedef struct scene_instance {
     affine3 to_object;   /* world -> object (the inverse) */
     bool identity;       /* to_world is the identity: nothing is transformed, results are the
                             geometry's own bit for bit */
-    uint32_t part;       /* the part it belongs to, or SCENE_NO_PART */
+    uint32_t part;       /* the part it belongs to (scene.parts), or SCENE_NO_PART */
+    uint32_t material;   /* a material replacing the geometry's own everywhere on this instance
+                            (a colour given to a part by the scene file), or SCENE_NO_MATERIAL */
 } scene_instance;
 
 typedef struct scene {
@@ -100,6 +105,12 @@ typedef struct scene {
     uint32_t geometry_count, geometry_capacity;
     scene_instance *instances;
     uint32_t instance_count, instance_capacity;
+    /* PARTS. The part tree of an assembly (part_tree.h), or NULL when the
+     * scene has none (then it costs nothing). Instances with a part come in
+     * preorder of their parts (part ids never decrease along the instances
+     * that have one), so the instances of a part's subtree are one id range
+     * (scene_part_instances): hiding a subtree is hiding a range. */
+    struct part_tree *parts;
     material *materials;
     uint32_t material_count, material_capacity;
     light *lights;
@@ -136,6 +147,28 @@ int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char
  * scene does not have, a transform that is singular or not finite, or no
  * memory. */
 int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uint32_t part);
+
+/* A geometry of the triangles kind without an instance (an assembly places
+ * it by scene_add_instance). Takes ownership of `m` (also on failure).
+ * Returns the geometry index, or -1. */
+int scene_add_mesh_geometry(scene *s, mesh *m, uint32_t material_id, const char *name);
+
+/* The instance id range [*first, *end) of part `part`'s subtree (the part
+ * and every part under it); empty when it has no instances. Any thread,
+ * O(log instances). */
+void scene_part_instances(const scene *s, uint32_t part, uint32_t *first, uint32_t *end);
+
+/* Load an assembly (assembly_load.h: glTF 2.0 .gltf/.glb, OBJ groups, ...)
+ * into s: its materials, meshes (stored once) and parts (under the root of
+ * s->parts, made on first use) with their instances, each placed by
+ * `placement` (NULL: as in the file) after its own transform. An error names
+ * the file. */
+bool scene_load_assembly(scene *s, const char *path, const affine3 *placement, tess_error *err);
+
+/* Give the instances of every part whose path matches `pattern`
+ * (part_tree.h patterns) and of their subtrees material `material_id`.
+ * Returns the number of parts matched (0 is not an error). */
+long scene_colour_parts(scene *s, const char *pattern, uint32_t material_id);
 
 /* The instance's geometry (instance < instance_count). */
 static inline const scene_geometry *scene_instance_geometry(const scene *s, uint32_t instance)
