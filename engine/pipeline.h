@@ -116,10 +116,12 @@
 #include "sampler.h"
 #include "tile_order.h"
 #include "traverser.h"
+#include "txn.h"
 #include "upscale.h"
 
 struct scene;
 struct accel;
+struct frame_state;
 
 #define PIPELINE_MAX_THREADS 256
 #define PIPELINE_MAX_CHANNELS 16
@@ -233,6 +235,15 @@ void pipeline_stop(pipeline *p);
  * something outside tessera looks here so it never outlasts a stop). */
 bool pipeline_stop_requested(const pipeline *p);
 
+/* Queue a transaction record (txn.h) for the next barrier, where it is
+ * applied to the frame state in FIFO order with the other transactions.
+ * Validated here (txn_validate, then this pipeline's geometry and channel
+ * ranges; input-level kinds are refused): false, logged, when invalid or
+ * refused as pipeline_transaction is. */
+bool pipeline_submit(pipeline *p, const txn_record *r);
+
+/* The setting-by-setting calls below build a record and submit it. */
+
 /* A camera change for a channel, as a transaction (what input and camera
  * paths send). The camera is validated here: false with err if invalid. */
 bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err);
@@ -302,6 +313,15 @@ bool pipeline_add_termination(pipeline *p, const char *name, pipeline_terminatio
 
 /* ---- state: read anywhere the state cannot change under you (serial
  * section, or before/after run); set only inside the serial section ---- */
+/* Apply a record to the frame state now (the setters below are this with
+ * a record built for them): serial section, or while no loop runs; false,
+ * logged, elsewhere or when the record is invalid for this pipeline. */
+bool pipeline_apply(pipeline *p, const txn_record *r);
+/* The frame state (frame_state.h). It changes only in the serial section,
+ * so besides there (and before/after run) render threads and parallel
+ * animation callbacks may read it during a frame: it is that frame's
+ * snapshot. */
+const struct frame_state *pipeline_frame_state(const pipeline *p);
 bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera);
 bool pipeline_set_threads(pipeline *p, int threads);
 bool pipeline_set_channel_active(pipeline *p, int channel, bool active);
