@@ -691,7 +691,10 @@ static bool apply_record(pipeline *p, const txn_record *r)
     case TXN_SHOW:
     case TXN_ISOLATE:
     case TXN_SHOW_ALL:
-        frame_state_sync_accel(&p->state, p->cfg.accel); /* only the flags that differ */
+        /* the accel's flags follow at the end of the serial section (once for all of its
+         * records: only the flags that differ); outside a loop at once */
+        if (tls_serial_owner != p)
+            frame_state_sync_accel(&p->state, p->cfg.accel);
         break;
     default:
         break;
@@ -904,7 +907,14 @@ bool pipeline_unhide_all(pipeline *p)
     return apply_record(p, &r);
 }
 
-bool pipeline_hidden(const pipeline *p, uint32_t geom_id) { return accel_hidden(p->cfg.accel, geom_id); }
+bool pipeline_hidden(const pipeline *p, uint32_t geom_id)
+{
+    /* the state is what was asked for; the accel (what traversal sees) follows it at the end
+     * of each serial section, and is what other threads may read while the loop runs */
+    if (tls_serial_owner == p || !atomic_load(&p->running))
+        return frame_state_hidden(&p->state, geom_id);
+    return accel_hidden(p->cfg.accel, geom_id);
+}
 
 uint32_t pipeline_geometry_count(const pipeline *p) { return accel_geometry_count(p->cfg.accel); }
 
@@ -1370,6 +1380,9 @@ static int serial_section_steps(pipeline *p)
         run_serial_animation(p);
         stop = atomic_load(&p->stop_requested);
     }
+    /* visibility changed by this barrier's records reaches the accel: one pass over the ids
+     * they touched, accel_set_hidden only where a flag differs */
+    frame_state_sync_accel(&p->state, p->cfg.accel);
     bool any_queued = false;
     for (int i = 0; i < p->channel_count; i++)
         any_queued = any_queued || p->channels[i].queued_valid;
