@@ -726,9 +726,9 @@ static float get_f32(const unsigned char *b)
     return v;
 }
 
-/* The binary layout of one record (encode: write; decode: read), so the two never disagree.
- * `used` is set to the bytes the arguments take after the kind. */
-static void layout(txn_record *t, unsigned char *b, bool write, size_t *used)
+/* The binary layout of one record's arguments (encode: write t into b; decode: read b into
+ * t), one description for both so they never disagree. */
+static void layout(txn_record *t, unsigned char *b, bool write)
 {
 #define U32(off, lv)                                                                                                   \
     do {                                                                                                               \
@@ -758,7 +758,6 @@ static void layout(txn_record *t, unsigned char *b, bool write, size_t *used)
         else                                                                                                           \
             (lv) = b[off] != 0;                                                                                        \
     } while (0)
-    *used = 0;
     switch (t->kind) {
     case TXN_CAMERA: {
         camera_desc *c = &t->args.camera.camera;
@@ -767,47 +766,40 @@ static void layout(txn_record *t, unsigned char *b, bool write, size_t *used)
         I32(4, t->args.camera.channel);
         for (int i = 0; i < 10; i++)
             F32(8 + 4 * i, *v[i]);
-        *used = 44;
         break;
     }
     case TXN_CURSOR:
         U8(4, t->args.cursor.on);
         F32(8, t->args.cursor.sx);
         F32(12, t->args.cursor.sy);
-        *used = 12;
         break;
     case TXN_STATUS:
         if (write)
             memcpy(b + 4, t->args.status.text, strnlen(t->args.status.text, TXN_TEXT_BYTES));
         else
             memcpy(t->args.status.text, b + 4, TXN_TEXT_BYTES);
-        *used = TXN_TEXT_BYTES;
         break;
     case TXN_RENDERER:
         if (write)
             memcpy(b + 4, t->args.renderer.name, strnlen(t->args.renderer.name, TXN_NAME_BYTES));
         else
             memcpy(t->args.renderer.name, b + 4, TXN_NAME_BYTES);
-        *used = TXN_NAME_BYTES;
         break;
     case TXN_GOVERNOR_STATUS:
     case TXN_SHADOWS:
     case TXN_TOUR:
         U8(4, t->args.flag.on);
-        *used = 1;
         break;
     case TXN_HIDE:
     case TXN_SHOW:
     case TXN_ISOLATE:
         U32(4, t->args.geoms.first);
         U32(8, t->args.geoms.count);
-        *used = 8;
         break;
     case TXN_HIGHLIGHT:
         U32(4, t->args.highlight.geoms.first);
         U32(8, t->args.highlight.geoms.count);
         U8(12, t->args.highlight.on);
-        *used = 9;
         break;
     case TXN_COLOUR:
         U32(4, t->args.colour.geoms.first);
@@ -815,16 +807,13 @@ static void layout(txn_record *t, unsigned char *b, bool write, size_t *used)
         U8(12, t->args.colour.reset);
         for (int i = 0; i < 3; i++)
             F32(16 + 4 * i, t->args.colour.rgb[i]);
-        *used = 24;
         break;
     case TXN_THREADS:
         I32(4, t->args.threads.count);
-        *used = 4;
         break;
     case TXN_CHANNEL_ACTIVE:
         I32(4, t->args.channel.channel);
         U8(8, t->args.channel.on);
-        *used = 5;
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
@@ -843,10 +832,9 @@ bool txn_encode_binary(const txn_record *r, unsigned char out[TXN_BINARY_BYTES])
     memset(out, 0, TXN_BINARY_BYTES);
     if (!txn_validate(r, &err))
         return false;
-    txn_record copy = *r;
-    size_t used;
+    txn_record copy = *r; /* layout takes a writable record (it reads it here) */
     put_u32(out, (uint32_t)r->kind);
-    layout(&copy, out, true, &used);
+    layout(&copy, out, true);
     return true;
 }
 
@@ -856,8 +844,9 @@ bool txn_decode_binary(const unsigned char in[TXN_BINARY_BYTES], txn_record *out
     if (kind >= TXN_KIND_COUNT)
         return tess_error_set(err, "kind: %u is not a transaction kind", kind);
     txn_record t = blank((txn_kind)kind);
-    size_t used;
-    layout(&t, (unsigned char *)in, false, &used);
+    unsigned char bytes[TXN_BINARY_BYTES];
+    memcpy(bytes, in, sizeof bytes);
+    layout(&t, bytes, false);
     /* every byte the layout does not use must be zero; so must flag bytes other than 0/1 and the
      * padding inside the layout: re-encode and compare */
     unsigned char again[TXN_BINARY_BYTES];
