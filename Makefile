@@ -145,7 +145,8 @@ test-asan: deps
 # the threaded tests under ThreadSanitizer; any report fails the run. Criterion
 # cannot start under TSan (its issue #274), so these files are compiled against
 # tests/tsan/criterion/criterion.h, a stand-in that runs the same Test() bodies.
-TSAN_TESTS := tests/test_pipeline.c tests/test_overlay.c tests/test_input.c tests/test_governor.c
+TSAN_TESTS := tests/test_pipeline.c tests/test_overlay.c tests/test_input.c tests/test_governor.c \
+              tests/test_frame_state.c
 TSAN_BIN := build-tsan/tessera_tsan_tests
 test-tsan: deps
 	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)

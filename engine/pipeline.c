@@ -15,16 +15,22 @@
 #include <time.h>
 
 #include "accel.h"
+#include "frame_state.h"
 #include "log.h"
 #include "overlay.h"
 #include "thread_name.h"
 #include "clock.h"
 
 _Static_assert(PIPELINE_STATUS_BYTES == OVERLAY_TEXT_BYTES, "the status line is the overlay's text");
+_Static_assert(PIPELINE_STATUS_BYTES == TXN_TEXT_BYTES, "the status line is a status record's text");
+_Static_assert(PIPELINE_MAX_CHANNELS == TXN_MAX_CHANNELS, "records name the pipeline's channels");
+_Static_assert(PIPELINE_MAX_THREADS == TXN_MAX_THREADS, "records give the pipeline's thread counts");
+_Static_assert(sizeof(txn_record) <= PIPELINE_ARGS_MAX, "a record rides in a queue slot");
 
-/* A queued callback with its own copy of the arguments. */
+/* A queued callback with its own copy of the arguments, or a record
+ * (fn NULL: args holds a txn_record, applied to the frame state). */
 typedef struct queued_call {
-    pipeline_fn fn;
+    pipeline_fn fn;     /* NULL: a record */
     const char *name;
     uint64_t due_frame; /* one-shots: the frame it runs at; transactions: 0 */
     size_t args_bytes;
@@ -61,10 +67,7 @@ typedef struct frame_buffer {
 } frame_buffer;
 
 typedef struct pipe_channel {
-    /* live state: changed only in the serial section (or before run) */
-    camera_desc camera;
-    uint64_t camera_serial;
-    bool active;           /* rendered and displayed (off: e.g. its monitor was unplugged) */
+    /* its camera and active flag live in the frame state (pipeline.state) */
     /* fixed after pipeline_add_channel */
     int width_px, height_px;
     float plane_aspect;    /* width / height of the image plane the window is part of */
@@ -159,15 +162,14 @@ struct pipeline {
     termination_callback terminations[PIPELINE_MAX_CALLBACKS];
     int termination_count;
 
-    /* live render state other than cameras: serial section only */
-    int threads_wanted;
-    bool shadows;
-    overlay_state overlay; /* status line and cursor */
-    char user_status[PIPELINE_STATUS_BYTES]; /* the status text asked for (overlay.status adds the
-                                                governor's line to it when that is shown) */
-    bool governor_status_shown;
-    uint64_t picture_serial; /* bumped by every setter that changes what the picture shows */
-    uint64_t overlay_serial; /* bumped by every change of the overlay (status text, cursor) */
+    /* What transactions change (cameras, channel switches, threads, overlay inputs, render
+     * options, per-geometry flags): written only in the serial section (or while no loop
+     * runs), read by render threads during the frame through render_view.state: the state at
+     * the barrier is the frame's snapshot (frame_state.h). */
+    frame_state state;
+    overlay_state overlay;     /* as drawn: derived from the state (status composed with the
+                                  governor's line, cursor) in the serial section */
+    const renderer *frame_renderer; /* the state's renderer frozen for the frame being rendered */
 
     /* the governor: serial section only, except `frame_plan`, `frame_sampler`,
      * `reduced` and the upscale fields, which render threads read in the
@@ -399,8 +401,17 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
     p->queue = queue;
     p->oneshots = oneshots;
     p->oneshot_scratch = scratch;
-    p->threads_wanted = cfg->threads;
-    p->shadows = cfg->shadows;
+    frame_state_init(&p->state, cfg->renderer, cfg->shadows, cfg->threads, accel_geometry_count(cfg->accel));
+    p->frame_renderer = cfg->renderer;
+    if (!frame_state_adopt_hidden(&p->state, cfg->accel)) { /* an earlier user's hidden flags */
+        frame_state_finish(&p->state);
+        free(p);
+        free(queue);
+        free(oneshots);
+        free(scratch);
+        tess_error_set(err, "pipeline: out of memory");
+        return NULL;
+    }
     pthread_mutex_init(&p->queue_lock, NULL);
     pthread_cond_init(&p->queue_changed, NULL);
     pthread_mutex_init(&p->stats_lock, NULL);
@@ -465,7 +476,6 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     }
     pipe_channel *c = &p->channels[p->channel_count];
     memset(c, 0, sizeof *c);
-    c->camera = *camera;
     c->width_px = width_px;
     c->height_px = height_px;
     c->plane_aspect = plane_aspect;
@@ -499,7 +509,7 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     c->pending = 0;
     c->queued = 1;
     c->on_screen = 2;
-    c->active = true;
+    frame_state_add_channel(&p->state, camera); /* its index is channel_count: both stop at the same maximum */
     return p->channel_count++;
 }
 
@@ -508,10 +518,6 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
 static bool queue_call(pipeline *p, bool oneshot, uint64_t frame, const char *name, pipeline_fn fn,
                        const void *args, size_t args_bytes)
 {
-    if (!fn) {
-        log_error("pipeline: transaction '%s' has no function", name ? name : "?");
-        return false;
-    }
     if (args_bytes > PIPELINE_ARGS_MAX) {
         log_error("pipeline: transaction '%s': %zu bytes of arguments (at most %d are copied)", name, args_bytes,
                   PIPELINE_ARGS_MAX);
@@ -565,15 +571,22 @@ static bool queue_call(pipeline *p, bool oneshot, uint64_t frame, const char *na
     return true;
 }
 
+static bool has_fn(pipeline_fn fn, const char *name)
+{
+    if (!fn)
+        log_error("pipeline: transaction '%s' has no function", name ? name : "?");
+    return fn != NULL;
+}
+
 bool pipeline_transaction(pipeline *p, const char *name, pipeline_fn fn, const void *args, size_t args_bytes)
 {
-    return queue_call(p, false, 0, name, fn, args, args_bytes);
+    return has_fn(fn, name) && queue_call(p, false, 0, name, fn, args, args_bytes);
 }
 
 bool pipeline_at_frame(pipeline *p, uint64_t frame, const char *name, pipeline_fn fn, const void *args,
                        size_t args_bytes)
 {
-    return queue_call(p, true, frame, name, fn, args, args_bytes);
+    return has_fn(fn, name) && queue_call(p, true, frame, name, fn, args, args_bytes);
 }
 
 void pipeline_stop(pipeline *p)
@@ -586,163 +599,7 @@ void pipeline_stop(pipeline *p)
 
 bool pipeline_stop_requested(const pipeline *p) { return atomic_load(&p->stop_requested); }
 
-typedef struct camera_args {
-    int channel;
-    camera_desc camera;
-} camera_args;
-
-static void apply_camera(pipeline *p, void *args)
-{
-    camera_args *a = args;
-    pipeline_set_camera(p, a->channel, &a->camera);
-}
-
-bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err)
-{
-    if (channel < 0 || channel >= p->channel_count)
-        return tess_error_set(err, "pipeline: no channel %d (there are %d)", channel, p->channel_count);
-    if (!camera_validate(camera, err))
-        return false;
-    camera_args a = {channel, *camera};
-    if (!pipeline_transaction(p, "camera", apply_camera, &a, sizeof a))
-        return tess_error_set(err, "pipeline: camera transaction refused (queue full or pipeline stopped)");
-    return true;
-}
-
-typedef struct channel_switch_args {
-    int channel;
-    bool active;
-} channel_switch_args;
-
-static void apply_channel_switch(pipeline *p, void *args)
-{
-    channel_switch_args *a = args;
-    pipeline_set_channel_active(p, a->channel, a->active);
-}
-
-bool pipeline_queue_channel_active(pipeline *p, int channel, bool active)
-{
-    if (channel < 0 || channel >= p->channel_count) {
-        log_error("pipeline: switching channel %d: there are %d channels", channel, p->channel_count);
-        return false;
-    }
-    channel_switch_args a = {channel, active};
-    return pipeline_transaction(p, "channel switch", apply_channel_switch, &a, sizeof a);
-}
-
-static void apply_threads(pipeline *p, void *args)
-{
-    int n;
-    memcpy(&n, args, sizeof n);
-    pipeline_set_threads(p, n);
-}
-
-bool pipeline_queue_threads(pipeline *p, int threads)
-{
-    if (threads < 1 || threads > PIPELINE_MAX_THREADS) {
-        log_error("pipeline: thread count %d is not in 1..%d", threads, PIPELINE_MAX_THREADS);
-        return false;
-    }
-    return pipeline_transaction(p, "threads", apply_threads, &threads, sizeof threads);
-}
-
-typedef struct status_args {
-    char text[PIPELINE_STATUS_BYTES];
-} status_args;
-
-static void apply_status(pipeline *p, void *args)
-{
-    pipeline_set_status(p, ((status_args *)args)->text);
-}
-
-bool pipeline_queue_status(pipeline *p, const char *text)
-{
-    if (!text) {
-        log_error("pipeline: status line: no text (\"\" hides the line)");
-        return false;
-    }
-    status_args a;
-    size_t n = strnlen(text, PIPELINE_STATUS_BYTES - 1);
-    memcpy(a.text, text, n);
-    a.text[n] = '\0';
-    return pipeline_transaction(p, "status", apply_status, &a, sizeof a);
-}
-
-typedef struct cursor_args {
-    bool visible;
-    float sx, sy;
-} cursor_args;
-
-static void apply_cursor(pipeline *p, void *args)
-{
-    cursor_args *a = args;
-    pipeline_set_cursor(p, a->visible, a->sx, a->sy);
-}
-
-static void apply_governor_status(pipeline *p, void *args)
-{
-    bool shown;
-    memcpy(&shown, args, sizeof shown);
-    pipeline_set_governor_status(p, shown);
-}
-
-bool pipeline_queue_governor_status(pipeline *p, bool shown)
-{
-    return pipeline_transaction(p, "governor status", apply_governor_status, &shown, sizeof shown);
-}
-
-bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy)
-{
-    if (!isfinite(sx) || !isfinite(sy)) {
-        log_error("pipeline: cursor position (%g, %g) is not finite", (double)sx, (double)sy);
-        return false;
-    }
-    cursor_args a = {visible, sx, sy};
-    return pipeline_transaction(p, "cursor", apply_cursor, &a, sizeof a);
-}
-
-typedef struct hide_args {
-    uint32_t geom_id;
-    bool hidden;
-} hide_args;
-
-static void apply_hide(pipeline *p, void *args)
-{
-    hide_args *a = args;
-    pipeline_set_hidden(p, a->geom_id, a->hidden);
-}
-
-/* Whether geom_id names a geometry of the pipeline's accel; logs why not. */
-static bool geometry_exists(const pipeline *p, uint32_t geom_id, const char *what)
-{
-    uint32_t count = accel_geometry_count(p->cfg.accel);
-    if (geom_id < count)
-        return true;
-    log_error("pipeline: %s geometry %u: there are %u geometries (ids 0..%u)", what, geom_id, count,
-              count ? count - 1 : 0);
-    return false;
-}
-
-bool pipeline_queue_hide(pipeline *p, uint32_t geom_id, bool hidden)
-{
-    if (!geometry_exists(p, geom_id, hidden ? "hiding" : "showing"))
-        return false;
-    hide_args a = {geom_id, hidden};
-    return pipeline_transaction(p, hidden ? "hide" : "show", apply_hide, &a, sizeof a);
-}
-
-static void apply_unhide_all(pipeline *p, void *args)
-{
-    (void)args;
-    pipeline_unhide_all(p);
-}
-
-bool pipeline_queue_unhide_all(pipeline *p)
-{
-    return pipeline_transaction(p, "unhide all", apply_unhide_all, NULL, 0);
-}
-
-/* ---------------------------------------------------------------- state */
+/* ---------------------------------------------------------------- records */
 
 bool pipeline_in_serial_section(const pipeline *p) { return tls_serial_owner == p; }
 
@@ -757,14 +614,179 @@ static bool may_change_state(const pipeline *p, const char *what)
     return false;
 }
 
+/* What a record may name must exist in this pipeline: its geometries, its channels. */
+static bool record_in_range(const pipeline *p, const txn_record *r, tess_error *err)
+{
+    const txn_geoms *g = r->kind == TXN_HIGHLIGHT ? &r->args.highlight.geoms
+                         : r->kind == TXN_COLOUR  ? &r->args.colour.geoms
+                         : r->kind == TXN_HIDE || r->kind == TXN_SHOW || r->kind == TXN_ISOLATE ? &r->args.geoms
+                                                                                                 : NULL;
+    uint32_t count = p->state.geometry_count;
+    if (g && (uint64_t)g->first + g->count > count)
+        return tess_error_set(err, "%s geometries %u..%llu: there are %u geometries (ids 0..%u)",
+                              txn_kind_name(r->kind), g->first, (unsigned long long)g->first + g->count - 1, count,
+                              count ? count - 1 : 0);
+    int channel = r->kind == TXN_CAMERA ? r->args.camera.channel
+                  : r->kind == TXN_CHANNEL_ACTIVE ? r->args.channel.channel
+                                                  : TXN_ALL_CHANNELS;
+    if (channel >= p->channel_count)
+        return tess_error_set(err, "%s: no channel %d (there are %d)", txn_kind_name(r->kind), channel,
+                              p->channel_count);
+    return true;
+}
+
+/* Validate a record for queueing: its own checks, this pipeline's ranges, an engine kind. */
+static bool record_ok(const pipeline *p, const txn_record *r, tess_error *err)
+{
+    if (!txn_validate(r, err) || !record_in_range(p, r, err))
+        return false;
+    if (txn_kind_input_level(r->kind))
+        return tess_error_set(err, "%s: an input-level transaction (input/sink.h carries it out)",
+                              txn_kind_name(r->kind));
+    return true;
+}
+
+static bool submit(pipeline *p, const txn_record *r, tess_error *err)
+{
+    if (!record_ok(p, r, err))
+        return false;
+    if (!queue_call(p, false, 0, txn_kind_name(r->kind), NULL, r, sizeof *r))
+        return tess_error_set(err, "pipeline: %s transaction refused (queue full or pipeline stopped)",
+                              txn_kind_name(r->kind));
+    return true;
+}
+
+bool pipeline_submit(pipeline *p, const txn_record *r)
+{
+    tess_error err = {{0}};
+    if (!record_ok(p, r, &err)) {
+        log_error("pipeline: transaction refused: %s", err.msg);
+        return false;
+    }
+    return submit(p, r, &err); /* a refusal by the queue is logged there */
+}
+
+static void compose_status(pipeline *p);
+
+/* Apply a record to the state (serial section, or no loop running) and carry
+ * out what follows from it: the drawn overlay, the accel's hidden flags. */
+static bool apply_record(pipeline *p, const txn_record *r)
+{
+    tess_error err = {{0}};
+    if (!txn_apply(r, &p->state, &err)) {
+        log_error("pipeline: %s refused: %s", txn_kind_name(r->kind), err.msg);
+        return false;
+    }
+    switch (r->kind) {
+    case TXN_STATUS:
+    case TXN_GOVERNOR_STATUS:
+        compose_status(p);
+        break;
+    case TXN_CURSOR:
+        p->overlay.cursor_visible = p->state.cursor_visible;
+        p->overlay.cursor_sx = p->state.cursor_sx;
+        p->overlay.cursor_sy = p->state.cursor_sy;
+        break;
+    case TXN_HIDE:
+    case TXN_SHOW:
+    case TXN_ISOLATE:
+    case TXN_SHOW_ALL:
+        /* the accel's flags follow at the end of the serial section (once for all of its
+         * records: only the flags that differ); outside a loop at once */
+        if (tls_serial_owner != p)
+            frame_state_sync_accel(&p->state, p->cfg.accel);
+        break;
+    default:
+        break;
+    }
+    return true;
+}
+
+bool pipeline_apply(pipeline *p, const txn_record *r)
+{
+    if (!may_change_state(p, txn_kind_name(r->kind)))
+        return false;
+    tess_error err = {{0}};
+    if (!record_ok(p, r, &err)) {
+        log_error("pipeline: %s refused: %s", txn_kind_name(r->kind), err.msg);
+        return false;
+    }
+    return apply_record(p, r);
+}
+
+/* ---- the setting-by-setting API: records built here ---- */
+
+bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err)
+{
+    if (channel < 0 || channel >= p->channel_count)
+        return tess_error_set(err, "pipeline: no channel %d (there are %d)", channel, p->channel_count);
+    if (!camera_validate(camera, err))
+        return false;
+    txn_record r = txn_camera(channel, camera);
+    return submit(p, &r, err);
+}
+
+bool pipeline_queue_channel_active(pipeline *p, int channel, bool active)
+{
+    if (channel < 0 || channel >= p->channel_count) {
+        log_error("pipeline: switching channel %d: there are %d channels", channel, p->channel_count);
+        return false;
+    }
+    txn_record r = txn_channel_active(channel, active);
+    return pipeline_submit(p, &r);
+}
+
+bool pipeline_queue_threads(pipeline *p, int threads)
+{
+    txn_record r = txn_threads(threads);
+    return pipeline_submit(p, &r);
+}
+
+bool pipeline_queue_status(pipeline *p, const char *text)
+{
+    if (!text) {
+        log_error("pipeline: status line: no text (\"\" hides the line)");
+        return false;
+    }
+    txn_record r = txn_status(text);
+    return pipeline_submit(p, &r);
+}
+
+bool pipeline_queue_governor_status(pipeline *p, bool shown)
+{
+    txn_record r = txn_flag(TXN_GOVERNOR_STATUS, shown);
+    return pipeline_submit(p, &r);
+}
+
+bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy)
+{
+    txn_record r = txn_cursor(visible, sx, sy);
+    return pipeline_submit(p, &r);
+}
+
+bool pipeline_queue_hide(pipeline *p, uint32_t geom_id, bool hidden)
+{
+    txn_record r = txn_geoms_record(hidden ? TXN_HIDE : TXN_SHOW, geom_id, 1);
+    return pipeline_submit(p, &r);
+}
+
+bool pipeline_queue_unhide_all(pipeline *p)
+{
+    txn_record r = txn_simple(TXN_SHOW_ALL);
+    return pipeline_submit(p, &r);
+}
+
+/* ---------------------------------------------------------------- state */
+
 /* overlay.status from the status text asked for and, when shown, the
- * governor's line for the frame being planned; bumps overlay_serial when the
- * drawn text changes. */
+ * governor's line for the frame being planned; bumps the state's
+ * overlay_serial when the drawn text changes. */
 static void compose_status(pipeline *p)
 {
+    const frame_state *st = &p->state;
     char text[PIPELINE_STATUS_BYTES];
-    if (!p->governor_status_shown)
-        snprintf(text, sizeof text, "%s", p->user_status);
+    if (!st->governor_status_shown)
+        snprintf(text, sizeof text, "%s", st->status);
     else {
         char line[PIPELINE_STATUS_BYTES];
         if (p->governed)
@@ -772,8 +794,8 @@ static void compose_status(pipeline *p)
         else
             snprintf(line, sizeof line, "governor: off (no frame budget)");
         /* the asked-for text first, the governor's line after it, cut at the end */
-        size_t used = strlen(p->user_status);
-        memcpy(text, p->user_status, used + 1);
+        size_t used = strlen(st->status);
+        memcpy(text, st->status, used + 1);
         if (used && used + 3 < sizeof text) {
             memcpy(text + used, " | ", 4);
             used += 3;
@@ -786,34 +808,21 @@ static void compose_status(pipeline *p)
     memcpy(before, p->overlay.status, sizeof before);
     overlay_set_status(&p->overlay, text);
     if (strcmp(before, p->overlay.status) != 0)
-        p->overlay_serial++;
+        frame_state_bump_overlay(&p->state);
 }
+
+/* The setters: records applied at once (serial section, or no loop running). */
 
 bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera)
 {
     if (!may_change_state(p, "camera change"))
         return false;
-    tess_error err = {{0}};
     if (channel < 0 || channel >= p->channel_count) {
         log_error("pipeline: camera change for channel %d: there are %d channels", channel, p->channel_count);
         return false;
     }
-    if (!camera_validate(camera, &err)) {
-        log_error("pipeline: camera change for channel %d refused: %s", channel, err.msg);
-        return false;
-    }
-    /* the same camera again (a path player holding its last key, every frame) is no change of
-     * the picture: the governor may refine behind it */
-    const camera_desc *old = &p->channels[channel].camera;
-    bool same = old->eye.x == camera->eye.x && old->eye.y == camera->eye.y && old->eye.z == camera->eye.z &&
-                old->look_at.x == camera->look_at.x && old->look_at.y == camera->look_at.y &&
-                old->look_at.z == camera->look_at.z && old->up.x == camera->up.x && old->up.y == camera->up.y &&
-                old->up.z == camera->up.z && old->fov_deg == camera->fov_deg;
-    p->channels[channel].camera = *camera;
-    p->channels[channel].camera_serial++;
-    if (!same)
-        p->picture_serial++;
-    return true;
+    txn_record r = txn_camera(channel, camera);
+    return apply_record(p, &r);
 }
 
 bool pipeline_set_channel_active(pipeline *p, int channel, bool active)
@@ -824,27 +833,21 @@ bool pipeline_set_channel_active(pipeline *p, int channel, bool active)
         log_error("pipeline: switching channel %d: there are %d channels", channel, p->channel_count);
         return false;
     }
-    if (active != p->channels[channel].active)
-        p->picture_serial++;
-    p->channels[channel].active = active;
-    return true;
+    txn_record r = txn_channel_active(channel, active);
+    return apply_record(p, &r);
 }
 
 bool pipeline_channel_active(const pipeline *p, int channel)
 {
-    return channel >= 0 && channel < p->channel_count && p->channels[channel].active;
+    return channel >= 0 && channel < p->channel_count && p->state.active[channel];
 }
 
 bool pipeline_set_threads(pipeline *p, int threads)
 {
     if (!may_change_state(p, "thread-count change"))
         return false;
-    if (threads < 1 || threads > PIPELINE_MAX_THREADS) {
-        log_error("pipeline: thread count %d is not in 1..%d", threads, PIPELINE_MAX_THREADS);
-        return false;
-    }
-    p->threads_wanted = threads;
-    return true;
+    txn_record r = txn_threads(threads);
+    return apply_record(p, &r);
 }
 
 bool pipeline_set_status(pipeline *p, const char *text)
@@ -855,18 +858,16 @@ bool pipeline_set_status(pipeline *p, const char *text)
         log_error("pipeline: status line: no text (\"\" hides the line)");
         return false;
     }
-    snprintf(p->user_status, sizeof p->user_status, "%s", text);
-    compose_status(p);
-    return true;
+    txn_record r = txn_status(text);
+    return apply_record(p, &r);
 }
 
 bool pipeline_set_governor_status(pipeline *p, bool shown)
 {
     if (!may_change_state(p, "governor status change"))
         return false;
-    p->governor_status_shown = shown;
-    compose_status(p);
-    return true;
+    txn_record r = txn_flag(TXN_GOVERNOR_STATUS, shown);
+    return apply_record(p, &r);
 }
 
 governor_frame pipeline_governor_frame(const pipeline *p) { return p->frame_plan; }
@@ -877,71 +878,69 @@ bool pipeline_set_cursor(pipeline *p, bool visible, float sx, float sy)
 {
     if (!may_change_state(p, "cursor change"))
         return false;
-    if (!isfinite(sx) || !isfinite(sy)) {
-        log_error("pipeline: cursor position (%g, %g) is not finite", (double)sx, (double)sy);
-        return false;
-    }
-    if (visible != p->overlay.cursor_visible || sx != p->overlay.cursor_sx || sy != p->overlay.cursor_sy)
-        p->overlay_serial++;
-    p->overlay.cursor_visible = visible;
-    p->overlay.cursor_sx = sx;
-    p->overlay.cursor_sy = sy;
-    return true;
+    txn_record r = txn_cursor(visible, sx, sy);
+    return apply_record(p, &r);
 }
 
 bool pipeline_cursor(const pipeline *p, float *sx, float *sy)
 {
     if (sx)
-        *sx = p->overlay.cursor_sx;
+        *sx = p->state.cursor_sx;
     if (sy)
-        *sy = p->overlay.cursor_sy;
-    return p->overlay.cursor_visible;
+        *sy = p->state.cursor_sy;
+    return p->state.cursor_visible;
 }
 
 bool pipeline_set_hidden(pipeline *p, uint32_t geom_id, bool hidden)
 {
-    if (!may_change_state(p, hidden ? "hiding a geometry" : "showing a geometry") ||
-        !geometry_exists(p, geom_id, hidden ? "hiding" : "showing"))
+    if (!may_change_state(p, hidden ? "hiding a geometry" : "showing a geometry"))
         return false;
-    if (accel_hidden(p->cfg.accel, geom_id) != hidden)
-        p->picture_serial++;
-    accel_set_hidden(p->cfg.accel, geom_id, hidden);
-    return true;
+    txn_record r = txn_geoms_record(hidden ? TXN_HIDE : TXN_SHOW, geom_id, 1);
+    return apply_record(p, &r);
 }
 
 bool pipeline_unhide_all(pipeline *p)
 {
     if (!may_change_state(p, "showing every geometry"))
         return false;
-    p->picture_serial++;
-    accel_unhide_all(p->cfg.accel);
-    return true;
+    txn_record r = txn_simple(TXN_SHOW_ALL);
+    return apply_record(p, &r);
 }
 
-bool pipeline_hidden(const pipeline *p, uint32_t geom_id) { return accel_hidden(p->cfg.accel, geom_id); }
+bool pipeline_hidden(const pipeline *p, uint32_t geom_id)
+{
+    /* the state is what was asked for; the accel (what traversal sees) follows it at the end
+     * of each serial section, and is what other threads may read while the loop runs */
+    if (tls_serial_owner == p || !atomic_load(&p->running))
+        return frame_state_hidden(&p->state, geom_id);
+    return accel_hidden(p->cfg.accel, geom_id);
+}
 
 uint32_t pipeline_geometry_count(const pipeline *p) { return accel_geometry_count(p->cfg.accel); }
+
+const frame_state *pipeline_frame_state(const pipeline *p) { return &p->state; }
 
 camera_desc pipeline_camera(const pipeline *p, int channel)
 {
     if (channel < 0 || channel >= p->channel_count)
-        return p->channels[0].camera;
-    return p->channels[channel].camera;
+        return p->state.cameras[0];
+    return p->state.cameras[channel];
 }
 
 uint64_t pipeline_camera_serial(const pipeline *p, int channel)
 {
     if (channel < 0 || channel >= p->channel_count)
         return 0;
-    return p->channels[channel].camera_serial;
+    return p->state.camera_serials[channel];
 }
 
 int pipeline_channel_count(const pipeline *p) { return p->channel_count; }
 
 camera_basis pipeline_channel_basis(const pipeline *p, int channel)
 {
-    const pipe_channel *c = &p->channels[channel < 0 || channel >= p->channel_count ? 0 : channel];
-    return camera_basis_window(&c->camera, c->plane_aspect, c->window, c->width_px, c->height_px);
+    int i = channel < 0 || channel >= p->channel_count ? 0 : channel;
+    const pipe_channel *c = &p->channels[i];
+    return camera_basis_window(&p->state.cameras[i], c->plane_aspect, c->window, c->width_px, c->height_px);
 }
 uint64_t pipeline_frame(const pipeline *p) { return p->step.info.frame; }
 
@@ -1016,7 +1015,10 @@ static void run_transactions(pipeline *p)
     for (size_t i = 0; i < count; i++) {
         queued_call *c = &p->queue[(head + i) % PIPELINE_QUEUE_MAX];
         double t0 = now_s();
-        c->fn(p, c->args.bytes);
+        if (c->fn)
+            c->fn(p, c->args.bytes);
+        else
+            apply_record(p, (const txn_record *)(const void *)c->args.bytes);
         note_duration(p, "transaction", c->name, t0);
     }
     pthread_mutex_lock(&p->queue_lock);
@@ -1079,7 +1081,7 @@ static void join_departed(pipeline *p, int keep_below)
  * highest-numbered ones leave after the barrier. Returns the new count. */
 static int change_thread_count(pipeline *p)
 {
-    int want = p->threads_wanted, have = p->thread_count;
+    int want = p->state.threads, have = p->thread_count;
     if (want == have)
         return have;
     if (want > have) {
@@ -1096,7 +1098,7 @@ static int change_thread_count(pipeline *p)
             if (rc != 0) {
                 log_warn("pipeline: could start only %d of %d render threads: %s", id, want, strerror(rc));
                 want = id;
-                p->threads_wanted = id;
+                p->state.threads = id; /* serial section: what the state can have */
                 break;
             }
             t->joinable = true;
@@ -1179,33 +1181,41 @@ static void freeze_frame(pipeline *p)
     const governor_frame *plan = &p->frame_plan;
     const bool accumulate = plan->kind == GOVERNOR_FRAME_ACCUMULATE || plan->kind == GOVERNOR_FRAME_RESOLVE;
     const double scale = p->rung_scale[plan->rung];
+    const frame_state *st = &p->state; /* the frame's snapshot: unchanged until the next barrier */
+    p->frame_renderer = st->renderer;
     uint32_t bands = 0;
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
-        c->view = (render_view){p->cfg.scene, p->cfg.accel,
-                                camera_basis_window(&c->camera, c->plane_aspect, c->window, c->width_px, c->height_px),
-                                p->shadows, p->cfg.renderer->shading};
+        const camera_desc *camera = &st->cameras[i];
+        const bool active = st->active[i];
+        c->view = (render_view){.scene = p->cfg.scene,
+                                .accel = p->cfg.accel,
+                                .camera = camera_basis_window(camera, c->plane_aspect, c->window, c->width_px,
+                                                              c->height_px),
+                                .shadows = st->shadows,
+                                .shading = st->renderer->shading,
+                                .state = st};
         frame_buffer *b = &c->buffers[c->pending];
         b->meta = (frame_image){b->rgb, c->width_px, c->height_px, p->step.info.frame, p->step.info.time_s, i,
-                                c->camera, c->camera_serial, p->reduced ? scale : 1.0,
+                                *camera, st->camera_serials[i], p->reduced ? scale : 1.0,
                                 p->governed ? plan->samples : p->cfg.sampler.kind == PIXEL_SAMPLER_SINGLE
                                                                   ? 1
                                                                   : p->cfg.sampler.k * p->cfg.sampler.k};
-        b->rendered = c->active;
+        b->rendered = active;
         image_display *sink = c->display->ops->write_tile ? c->display : NULL;
         c->overlay_on = overlay_plan_make(&c->overlay, &p->overlay, c->window, c->width_px, c->height_px);
         if (p->reduced) {
             int w = upscale_low_res_px(c->width_px, scale), h = upscale_low_res_px(c->height_px, scale);
             c->lowres_view = c->view;
-            c->lowres_view.camera = camera_basis_window(&c->camera, c->plane_aspect, c->window, w, h);
-            targets[i] = (traverser_target){.view = &c->lowres_view, .rgb = c->active ? c->lowres : NULL,
+            c->lowres_view.camera = camera_basis_window(camera, c->plane_aspect, c->window, w, h);
+            targets[i] = (traverser_target){.view = &c->lowres_view, .rgb = active ? c->lowres : NULL,
                                             .img = &b->meta};
             c->first_band = bands;
-            if (c->active)
+            if (active)
                 bands += (uint32_t)((c->height_px + p->cfg.tile_px - 1) / p->cfg.tile_px);
             continue;
         }
-        targets[i] = (traverser_target){.view = &c->view, .rgb = c->active ? b->rgb : NULL, .sink = sink,
+        targets[i] = (traverser_target){.view = &c->view, .rgb = active ? b->rgb : NULL, .sink = sink,
                                         .img = &b->meta, .overlay = c->overlay_on ? &c->overlay : NULL};
         if (accumulate) {
             targets[i].accum = c->accum;
@@ -1292,21 +1302,21 @@ static void plan_governed_frame(pipeline *p, int threads)
             pthread_mutex_unlock(&p->stats_lock);
         }
     }
-    bool picture_changed = p->picture_serial != p->planned_picture_serial || p->parallel_anim_count > 0;
-    bool overlay_changed = p->overlay_serial != p->planned_overlay_serial;
+    bool picture_changed = p->state.picture_serial != p->planned_picture_serial || p->parallel_anim_count > 0;
+    bool overlay_changed = p->state.overlay_serial != p->planned_overlay_serial;
     governor_mode before = p->gov.mode;
     int rung_before = p->frame_plan.rung;
     governor_frame f = governor_plan(&p->gov, s->info.time_s, picture_changed, overlay_changed, p->rung_pixels);
     if (f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0 && !have_upscale_scratch(p, threads))
         f.rung = 0;
     p->frame_plan = f;
-    p->planned_picture_serial = p->picture_serial;
-    if (p->governor_status_shown)
+    p->planned_picture_serial = p->state.picture_serial;
+    if (p->state.governor_status_shown)
         compose_status(p); /* the line describes this frame's plan */
     /* the drawn text changed while idle: show it */
-    if (p->overlay_serial != p->planned_overlay_serial && p->frame_plan.kind == GOVERNOR_FRAME_IDLE)
+    if (p->state.overlay_serial != p->planned_overlay_serial && p->frame_plan.kind == GOVERNOR_FRAME_IDLE)
         p->frame_plan.kind = GOVERNOR_FRAME_RESOLVE;
-    p->planned_overlay_serial = p->overlay_serial;
+    p->planned_overlay_serial = p->state.overlay_serial;
     f = p->frame_plan;
     p->reduced = f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0;
     p->frame_sampler = f.kind == GOVERNOR_FRAME_ACCUMULATE
@@ -1323,7 +1333,7 @@ static void plan_governed_frame(pipeline *p, int threads)
     p->last_step_pixels = 0.0;
     if (f.kind == GOVERNOR_FRAME_SCALED || f.kind == GOVERNOR_FRAME_ACCUMULATE) {
         for (int i = 0; i < p->channel_count; i++)
-            if (p->channels[i].active) {
+            if (p->state.active[i]) {
                 double w = p->channels[i].width_px, h = p->channels[i].height_px;
                 if (p->reduced) {
                     w = upscale_low_res_px(p->channels[i].width_px, p->rung_scale[f.rung]);
@@ -1370,6 +1380,9 @@ static int serial_section_steps(pipeline *p)
         run_serial_animation(p);
         stop = atomic_load(&p->stop_requested);
     }
+    /* visibility changed by this barrier's records reaches the accel: one pass over the ids
+     * they touched, accel_set_hidden only where a flag differs */
+    frame_state_sync_accel(&p->state, p->cfg.accel);
     bool any_queued = false;
     for (int i = 0; i < p->channel_count; i++)
         any_queued = any_queued || p->channels[i].queued_valid;
@@ -1487,13 +1500,13 @@ static void render_stage(pipeline *p, render_thread *t)
     double t0 = now_s();
     if (p->reduced) {
         image_traverser *lowres = p->rung_traversers[p->frame_plan.rung];
-        lowres->ops->render(lowres, p->cfg.renderer, &p->frame_sampler, &counts);
+        lowres->ops->render(lowres, p->frame_renderer, &p->frame_sampler, &counts);
         barrier_wait(&p->upscale_barrier, p, NULL);
         double t1 = now_s();
         upscale_stage(p, t);
         t->upscale_stage_s = now_s() - t1;
     } else
-        p->traverser->ops->render(p->traverser, p->cfg.renderer, &p->frame_sampler, &counts);
+        p->traverser->ops->render(p->traverser, p->frame_renderer, &p->frame_sampler, &counts);
     t->render_stage_s = now_s() - t0;
     t->counts = counts;
 }
@@ -1701,5 +1714,6 @@ void pipeline_destroy(pipeline *p)
     free(p->queue);
     free(p->oneshots);
     free(p->oneshot_scratch);
+    frame_state_finish(&p->state);
     free(p);
 }

@@ -6,8 +6,9 @@
  *   1. frame barrier. The last thread to arrive runs the serial section while
  *      the others wait: buffers rotate (below), frame f's time is set, queued
  *      transactions run in FIFO order, then one-shot callbacks due at frame f,
- *      then serial animation callbacks; the thread count may change; each
- *      channel's camera is frozen for frame f; the tile counter is reset.
+ *      then serial animation callbacks; hidden-geometry changes reach the
+ *      accel; the thread count may change; the frame state (below) is frozen
+ *      as frame f's snapshot; the tile counter is reset.
  *   2. parallel animation callbacks (inherently balanced work), each called on
  *      every thread with (thread, threads). Only when some are registered, a
  *      second barrier follows, because rendering reads what they write; a
@@ -29,13 +30,35 @@
  * pending <- old on screen. Only the serial section changes states, so a
  * buffer's owner never changes while anybody touches it.
  *
- * TRANSACTIONS. Any thread may queue a transaction: a callback plus a copy of
- * up to PIPELINE_ARGS_MAX bytes of arguments. The serial section runs them in
- * the order they were queued (one FIFO; the order between two queueing threads
- * is the order their pipeline_transaction calls took the queue lock). While it
- * runs, no render thread touches renderer state, so a transaction may change
- * anything: cameras, render options, thread count, callbacks. What it logs
- * (log.h) is kept and written by render thread 0 after the barrier.
+ * FRAME STATE. Everything transactions change between frames lives in one
+ * versioned object owned by the pipeline (frame_state.h): per-channel
+ * cameras (with change serials) and active flags, the thread count, the
+ * overlay's inputs (status text, cursor, governor line shown), render
+ * options (renderer, shadows) and per-geometry visibility, highlight and
+ * colour (arrays allocated only when a scene first uses them). It is
+ * written only in the serial section (or while no loop runs), so the state
+ * at a barrier is that frame's SNAPSHOT: render threads read it through a
+ * const pointer (render_view.state, pipeline_frame_state) without locks, and
+ * a change queued while frame f renders shows from frame f+1, never in the
+ * middle of a frame. The renderer and shadows of a frame come from it.
+ *
+ * TRANSACTIONS. Any thread may queue a transaction, in one FIFO of two forms:
+ *   - a RECORD (txn.h: a kind and its arguments by value, pipeline_submit):
+ *     validated when queued (its own checks, then this pipeline's geometry
+ *     and channel ranges), applied to the frame state at the barrier
+ *     (txn_apply), so it can be recorded, replayed and sent to another
+ *     process. Every built-in setting is a record: the pipeline_queue_*
+ *     calls build one and submit it, the pipeline_set_* setters build one and
+ *     apply it at once (pipeline_apply), so one path changes the state;
+ *   - a CALLBACK plus a copy of up to PIPELINE_ARGS_MAX bytes of arguments
+ *     (pipeline_transaction), for what needs arbitrary code (tests, the input
+ *     sink's camera mailbox and tour).
+ * The serial section runs them in the order they were queued (the order
+ * between two queueing threads is the order their calls took the queue
+ * lock). While it runs, no render thread touches renderer state, so a
+ * callback may change anything: the frame state (through pipeline_apply or
+ * the setters), thread count, callbacks. What it logs (log.h) is kept and
+ * written by render thread 0 after the barrier.
  * A transaction (and any serial callback) MUST NOT
  *   - block: no waiting on locks other threads hold across frames, on I/O that
  *     may stall, on frames (it runs inside the frame the others wait for);
@@ -44,9 +67,10 @@
  *     (pipeline_stats.slow_callbacks);
  *   - keep pointers to its argument copy after returning (the slot is reused);
  *   - call pipeline_run or pipeline_destroy (refused: they return an error).
- * Enforced: argument size and queue length (pipeline_transaction returns
- * false), the state setters below run only inside the serial section (called
- * anywhere else they log an error and return false), the time budget (logged
+ * Enforced: argument size and queue length (pipeline_transaction and
+ * pipeline_submit return false), the state setters and pipeline_apply run
+ * only inside the serial section or while no loop runs (called anywhere
+ * else they log an error and return false), the time budget (logged
  * and counted), no re-entry of pipeline_run. Transactions queued while the
  * serial section runs (by a transaction) run at the next frame's barrier, so
  * one barrier always ends.
@@ -60,9 +84,12 @@
  * status line at the plane's bottom-left corner, a cursor, both in plane
  * coordinates, drawn by every channel they fall on) composited right after
  * they are rendered, before a display's write_tile sees them. Geometries may
- * be hidden (accel.h: not seen, no shadows, not hit by any accel query). Both
- * change only through transactions or in the serial section, like the rest
- * of the state; a pipeline with neither pays one branch per tile.
+ * be hidden (accel.h: not seen, no shadows, not hit by any accel query): the
+ * frame state says which, and at the end of each serial section the accel's
+ * flags are brought in line (accel_set_hidden only where a flag differs,
+ * accel_unhide_all after a show-all). Both change only through transactions
+ * or in the serial section, like the rest of the state; a pipeline with
+ * neither pays one branch per tile.
  *
  * DETERMINISM. A pixel's value depends on the scene (with its hidden
  * geometries), the channel's camera, the sampler, the renderer and the
@@ -90,9 +117,10 @@
  *     first waits up to PIPELINE_IDLE_POLL_S for a transaction, a one-shot due or
  *     a stop, so an idle wall costs no CPU; an overlay change alone makes one
  *     RESOLVE frame (the converged mean, new overlay, no rays).
- * What counts as a change of the picture: the setters of cameras, hidden
- * geometries and channel switches (each bumps a serial), and any registered
- * parallel animation (it may change anything rendering reads, every frame).
+ * What counts as a change of the picture: a record that bumps the frame
+ * state's picture_serial (a different camera, a channel switched, visibility,
+ * highlight, colour, shadows or renderer changed; frame_state.h), and any
+ * registered parallel animation (it may change anything rendering reads, every frame).
  * The attract tour and camera paths change the camera every frame, so they
  * count as movement. max_frames counts loop steps, idle ones included, and
  * in PIPELINE_TIME_FIXED_RATE time is steps / rate_hz (without the governor
@@ -116,10 +144,12 @@
 #include "sampler.h"
 #include "tile_order.h"
 #include "traverser.h"
+#include "txn.h"
 #include "upscale.h"
 
 struct scene;
 struct accel;
+struct frame_state;
 
 #define PIPELINE_MAX_THREADS 256
 #define PIPELINE_MAX_CHANNELS 16
@@ -233,6 +263,15 @@ void pipeline_stop(pipeline *p);
  * something outside tessera looks here so it never outlasts a stop). */
 bool pipeline_stop_requested(const pipeline *p);
 
+/* Queue a transaction record (txn.h) for the next barrier, where it is
+ * applied to the frame state in FIFO order with the other transactions.
+ * Validated here (txn_validate, then this pipeline's geometry and channel
+ * ranges; input-level kinds are refused): false, logged, when invalid or
+ * refused as pipeline_transaction is. */
+bool pipeline_submit(pipeline *p, const txn_record *r);
+
+/* The setting-by-setting calls below build a record and submit it. */
+
 /* A camera change for a channel, as a transaction (what input and camera
  * paths send). The camera is validated here: false with err if invalid. */
 bool pipeline_queue_camera(pipeline *p, int channel, const camera_desc *camera, tess_error *err);
@@ -264,10 +303,12 @@ bool pipeline_queue_cursor(pipeline *p, bool visible, float sx, float sy);
 bool pipeline_queue_governor_status(pipeline *p, bool shown);
 
 /* Hide geometry geom_id (ids as in scene.h) or show it again, as a
- * transaction: a hidden geometry is not seen and casts no shadows. False,
- * logged, for an id the scene does not have or when refused. The flags live
- * in the pipeline's accel (accel_set_hidden), so every user of that accel
- * sees them, and they stay after the pipeline is destroyed. */
+ * transaction (a hide or show record of count 1): a hidden geometry is not
+ * seen and casts no shadows. False, logged, for an id the scene does not
+ * have or when refused. The frame state holds the flags and the pipeline's
+ * accel follows it (accel_set_hidden), so every user of that accel sees
+ * them, and they stay after the pipeline is destroyed (a later pipeline on
+ * the same accel starts from them). */
 bool pipeline_queue_hide(pipeline *p, uint32_t geom_id, bool hidden);
 /* Show every geometry again, as a transaction. */
 bool pipeline_queue_unhide_all(pipeline *p);
@@ -302,6 +343,15 @@ bool pipeline_add_termination(pipeline *p, const char *name, pipeline_terminatio
 
 /* ---- state: read anywhere the state cannot change under you (serial
  * section, or before/after run); set only inside the serial section ---- */
+/* Apply a record to the frame state now (the setters below are this with
+ * a record built for them): serial section, or while no loop runs; false,
+ * logged, elsewhere or when the record is invalid for this pipeline. */
+bool pipeline_apply(pipeline *p, const txn_record *r);
+/* The frame state (frame_state.h). It changes only in the serial section,
+ * so besides there (and before/after run) render threads and parallel
+ * animation callbacks may read it during a frame: it is that frame's
+ * snapshot. */
+const struct frame_state *pipeline_frame_state(const pipeline *p);
 bool pipeline_set_camera(pipeline *p, int channel, const camera_desc *camera);
 bool pipeline_set_threads(pipeline *p, int threads);
 bool pipeline_set_channel_active(pipeline *p, int channel, bool active);
@@ -325,7 +375,10 @@ bool pipeline_set_governor_status(pipeline *p, bool shown);
 governor_frame pipeline_governor_frame(const pipeline *p);
 bool pipeline_set_hidden(pipeline *p, uint32_t geom_id, bool hidden);
 bool pipeline_unhide_all(pipeline *p);
-bool pipeline_hidden(const pipeline *p, uint32_t geom_id); /* any thread */
+/* Whether geom_id is hidden: in the serial section or while no loop runs,
+ * as the frame state says (at once after a setter); on other threads while
+ * running, the accel's flag (as of the last serial section). */
+bool pipeline_hidden(const pipeline *p, uint32_t geom_id);
 uint32_t pipeline_geometry_count(const pipeline *p);       /* ids 0..count-1 */
 /* The frame the current serial section prepares (serial section only). */
 uint64_t pipeline_frame(const pipeline *p);

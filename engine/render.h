@@ -40,6 +40,8 @@ typedef struct render_view {
     camera_basis camera;        /* includes the image size */
     bool shadows;               /* trace shadow rays (lights may also opt out) */
     render_shading shading;
+    const struct frame_state *state; /* the frame's snapshot of the pipeline's frame state (frame_state.h:
+                                        per-geometry highlight and colour); NULL outside a pipeline */
 } render_view;
 
 /* Rays traced, for benchmarks. */

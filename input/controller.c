@@ -129,12 +129,12 @@ static void emit(input_controller *c, input_txn *t) { c->hooks.emit(c->hooks.ctx
 static void emit_status(input_controller *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 static void emit_status(input_controller *c, const char *fmt, ...)
 {
-    input_txn t = {.kind = INPUT_TXN_STATUS};
+    input_txn t = txn_status("");
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(t.text, sizeof t.text, fmt, ap);
+    vsnprintf(t.args.status.text, sizeof t.args.status.text, fmt, ap);
     va_end(ap);
-    c->status_shown = t.text[0] != '\0';
+    c->status_shown = t.args.status.text[0] != '\0';
     emit(c, &t);
 }
 
@@ -142,12 +142,12 @@ static void emit_status(input_controller *c, const char *fmt, ...)
 static void flush(input_controller *c)
 {
     if (c->cam_dirty) {
-        input_txn t = {.kind = INPUT_TXN_CAMERA, .camera = c->cam};
+        input_txn t = txn_camera(TXN_ALL_CHANNELS, &c->cam);
         emit(c, &t);
         c->cam_dirty = false;
     }
     if (c->cursor_dirty) {
-        input_txn t = {.kind = INPUT_TXN_CURSOR, .on = c->cursor_visible, .sx = (float)c->cur_x, .sy = (float)c->cur_y};
+        input_txn t = txn_cursor(c->cursor_visible, (float)c->cur_x, (float)c->cur_y);
         emit(c, &t);
         c->cursor_dirty = false;
     }
@@ -277,7 +277,7 @@ static void command(input_controller *c, input_action action, double sx, double 
     case INPUT_ACTION_HIDE_OBJECT:
         point_under(c, sx, sy, &hit);
         if (hit.hit) {
-            input_txn t = {.kind = INPUT_TXN_HIDE, .geom_id = hit.geom_id};
+            input_txn t = txn_geoms_record(TXN_HIDE, hit.geom_id, 1);
             emit(c, &t);
             emit_status(c, "hidden: %s", hit.object[0] ? hit.object : hit.what);
         } else {
@@ -285,14 +285,14 @@ static void command(input_controller *c, input_action action, double sx, double 
         }
         break;
     case INPUT_ACTION_UNHIDE_ALL: {
-        input_txn t = {.kind = INPUT_TXN_UNHIDE_ALL};
+        input_txn t = txn_simple(TXN_SHOW_ALL);
         emit(c, &t);
         emit_status(c, "all objects shown");
         break;
     }
     case INPUT_ACTION_GOVERNOR_STATUS: {
         c->governor_status_shown = !c->governor_status_shown;
-        input_txn t = {.kind = INPUT_TXN_GOVERNOR_STATUS, .on = c->governor_status_shown};
+        input_txn t = txn_flag(TXN_GOVERNOR_STATUS, c->governor_status_shown);
         emit(c, &t);
         break;
     }
@@ -334,7 +334,7 @@ static void user_input(input_controller *c, uint64_t now_us)
     c->touring = false;
     c->cam = c->hooks.current_camera(c->hooks.ctx);
     c->cam_dirty = false;
-    input_txn t = {.kind = INPUT_TXN_TOUR, .on = false};
+    input_txn t = txn_flag(TXN_TOUR, false);
     emit(c, &t);
 }
 
@@ -348,7 +348,7 @@ static void start_tour(input_controller *c)
     flush(c);
     if (c->status_shown) /* the tour shows no status line */
         emit_status(c, "%s", "");
-    input_txn t = {.kind = INPUT_TXN_TOUR, .on = true};
+    input_txn t = txn_flag(TXN_TOUR, true);
     emit(c, &t);
 }
 
@@ -382,7 +382,7 @@ static void key_or_button(input_controller *c, const input_event *e)
     if (chord_held(c)) {
         if (!c->chord_fired) {
             c->chord_fired = true;
-            input_txn t = {.kind = INPUT_TXN_QUIT};
+            input_txn t = txn_simple(TXN_QUIT);
             emit(c, &t);
         }
     } else {

@@ -26,14 +26,14 @@
  *    point], swipe [pan];
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
- *    (INPUT_TXN_TOUR on; the tour player eases into the path); the first
+ *    (TXN_TOUR on; the tour player eases into the path); the first
  *    event afterwards stops it (TOUR off) and steering starts from the
  *    camera the tour showed (the current_camera callback). With a tour it
  *    starts in tour mode (nobody is there yet).
  *
  * COALESCING. Camera changes accumulate while one input frame (up to
  * INPUT_FRAME or INPUT_TOUCH_FRAME) is handled and go out as at most one
- * INPUT_TXN_CAMERA at its end; the same for the cursor. Animations (flight,
+ * TXN_CAMERA at its end; the same for the cursor. Animations (flight,
  * fly-to, home) advance in input_controller_tick, one camera per tick.
  *
  * Threading: one thread (the input thread) calls everything; the callbacks
@@ -45,33 +45,20 @@
 #include <stdint.h>
 
 #include "engine/camera.h"
+#include "engine/txn.h"
 #include "engine/vec3.h"
 #include "input/bindings.h"
 #include "input/event.h"
 
-#define INPUT_TEXT_BYTES 128 /* status text, as PIPELINE_STATUS_BYTES */
+#define INPUT_TEXT_BYTES TXN_TEXT_BYTES /* status text, as PIPELINE_STATUS_BYTES */
 
-/* What input asks the renderer to do; one becomes one transaction. */
-typedef enum input_txn_kind {
-    INPUT_TXN_CAMERA,     /* camera: the wall's camera (every channel) */
-    INPUT_TXN_CURSOR,     /* on, sx, sy: the cursor shown at plane point (sx, sy), or hidden */
-    INPUT_TXN_STATUS,     /* text: the status line ("" hides it) */
-    INPUT_TXN_HIDE,       /* geom_id: hide that geometry */
-    INPUT_TXN_UNHIDE_ALL,
-    INPUT_TXN_TOUR,       /* on: start (easing in from the current camera) or stop the tour */
-    INPUT_TXN_QUIT,       /* stop the pipeline */
-    INPUT_TXN_GOVERNOR_STATUS, /* on: the governor's state shown in the status line, or not */
-    INPUT_TXN_KIND_COUNT
-} input_txn_kind;
-
-typedef struct input_txn {
-    input_txn_kind kind;
-    camera_desc camera;
-    bool on;
-    float sx, sy;
-    uint32_t geom_id;
-    char text[INPUT_TEXT_BYTES];
-} input_txn;
+/* What input asks the renderer to do: a transaction record (engine/txn.h),
+ * the same records the pipeline applies (pipeline_submit) and the record
+ * file stores (input/record.h). The controller emits camera (always
+ * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide (one geometry:
+ * count 1), show-all, governor-status, and the input-level tour and quit. */
+typedef txn_record input_txn;
+typedef txn_kind input_txn_kind;
 
 /* A pick: the first visible surface along a ray. */
 typedef struct input_hit {

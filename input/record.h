@@ -1,27 +1,38 @@
 /* record.h - input transactions in a file (--record-input, --replay-input).
  *
- * FORMAT. Text, one transaction per line, after the header line
- * "tessera-input-record 1"; blank lines and lines starting with '#' are
- * skipped. Each line: TIME KIND ARGS, TIME in seconds since recording
- * started (non-decreasing), floats in C99 hexadecimal (%a) so that a replay
- * reproduces every camera bit for bit:
- *   T camera EX EY EZ LX LY LZ UX UY UZ FOV   eye, look_at, up, fov_deg
- *   T cursor ON SX SY                         ON 0 or 1, plane coordinates
- *   T status "TEXT"                           \" \\ and \xHH escapes
- *   T hide GEOM_ID
- *   T unhide-all
- *   T tour ON
- *   T quit
- *   T governor-status ON
+ * FORMAT. Text, one transaction per line, after a header line; blank lines
+ * and lines starting with '#' are skipped. Each line: TIME RECORD, TIME in
+ * seconds since recording started (non-decreasing), RECORD a transaction
+ * record in txn.h's text form (floats in C99 hexadecimal, %a, so a replay
+ * reproduces every camera bit for bit). Two versions are read:
+ *
+ *   "tessera-input-record 2" (written now): RECORD is txn.h's TEXT FORM of
+ *   any kind, e.g.
+ *     T camera all EX EY EZ LX LY LZ UX UY UZ FOV    (or a channel number for all)
+ *     T cursor ON SX SY          T status "TEXT"        T governor-status ON
+ *     T hide FIRST COUNT         T show FIRST COUNT     T isolate FIRST COUNT
+ *     T show-all                 T highlight FIRST COUNT ON
+ *     T colour FIRST COUNT R G B | T colour FIRST COUNT reset
+ *     T shadows ON               T renderer NAME        T threads N
+ *     T channel-active CH ON     T tour ON              T quit
+ *   "tessera-input-record 1" (written before; still replayed): the kinds
+ *     T camera EX EY EZ LX LY LZ UX UY UZ FOV   the wall's camera (all channels)
+ *     T cursor ON SX SY                         ON 0 or 1, plane coordinates
+ *     T status "TEXT"                           \" \\ and \xHH escapes
+ *     T hide GEOM_ID                            read as hide GEOM_ID 1
+ *     T unhide-all                              read as show-all
+ *     T tour ON
+ *     T quit
+ *     T governor-status ON
  * Errors name the file, the line and the problem.
  *
  * CUT OFF. A recording that ends mid-line (the kiosk killed or the power cut
  * while it wrote) still replays: tessera ends every line it writes with a
  * newline, so a last line without one may be the start of a longer line
- * ("0.5 hide 12" of "0.5 hide 123") and is left out, whether it parses or not,
- * with a warning naming the file and line; the complete lines before it play.
- * An operator wants the session back up to where the recording stopped rather
- * than nothing; a broken line anywhere else is an error. */
+ * ("0.5 hide 12 1" of "0.5 hide 123 1") and is left out, whether it parses or
+ * not, with a warning naming the file and line; the complete lines before it
+ * play. An operator wants the session back up to where the recording
+ * stopped rather than nothing; a broken line anywhere else is an error. */
 #ifndef TESSERA_INPUT_RECORD_H
 #define TESSERA_INPUT_RECORD_H
 
@@ -32,7 +43,8 @@
 #include "engine/err.h"
 #include "input/controller.h"
 
-#define INPUT_RECORD_HEADER "tessera-input-record 1"
+#define INPUT_RECORD_HEADER "tessera-input-record 2"    /* what input_sink writes */
+#define INPUT_RECORD_HEADER_V1 "tessera-input-record 1" /* older recordings: read only */
 
 typedef struct input_record_entry {
     double time_s;
@@ -55,7 +67,7 @@ bool input_record_load(const char *file, input_record *out, tess_error *err);
 bool input_record_parse(const char *name, const char *text, size_t len, input_record *out, tess_error *err);
 void input_record_free(input_record *r);
 
-/* The name of a transaction kind as in the file ("camera", ...). */
+/* The name of a transaction kind as in the file ("camera", ...): txn_kind_name. */
 const char *input_txn_kind_name(input_txn_kind k);
 
 #endif

@@ -54,8 +54,8 @@ struct input_sink {
 
 static void show_camera(input_sink *s, pipeline *p, const camera_desc *c)
 {
-    for (int i = 0; i < pipeline_channel_count(p); i++)
-        pipeline_set_camera(p, i, c);
+    txn_record r = txn_camera(TXN_ALL_CHANNELS, c); /* the wall's camera: every channel */
+    pipeline_apply(p, &r);
     pthread_mutex_lock(&s->lock);
     s->shown = *c;
     pthread_mutex_unlock(&s->lock);
@@ -76,8 +76,10 @@ static void apply_mail(pipeline *p, void *args)
         show_camera(s, p, &cam);
         atomic_fetch_add(&s->camera_applied, 1);
     }
-    if (has_cursor)
-        pipeline_set_cursor(p, on, sx, sy);
+    if (has_cursor) {
+        txn_record r = txn_cursor(on, sx, sy);
+        pipeline_apply(p, &r);
+    }
 }
 
 typedef struct tour_args {
@@ -135,15 +137,15 @@ static void count_refused(input_sink *s, bool queued)
 static void queue_mail(input_sink *s, const input_txn *t)
 {
     pthread_mutex_lock(&s->lock);
-    if (t->kind == INPUT_TXN_CAMERA) {
+    if (t->kind == TXN_CAMERA) {
         atomic_fetch_add(&s->camera_changes, 1);
         s->mail_has_camera = true;
-        s->mail_camera = t->camera;
+        s->mail_camera = t->args.camera.camera;
     } else {
         s->mail_has_cursor = true;
-        s->mail_cursor_on = t->on;
-        s->mail_sx = t->sx;
-        s->mail_sy = t->sy;
+        s->mail_cursor_on = t->args.cursor.on;
+        s->mail_sx = t->args.cursor.sx;
+        s->mail_sy = t->args.cursor.sy;
     }
     bool need_queue = !s->mail_queued;
     s->mail_queued = true;
@@ -159,44 +161,42 @@ static void queue_mail(input_sink *s, const input_txn *t)
     }
 }
 
-/* Queue one transaction (live or replayed; a status text is also printed). */
+/* Queue one transaction (live or replayed; a status text is also printed).
+ * The wall's camera and the cursor go through the mailbox, tour and quit are
+ * carried out here (input-level kinds), every other record is submitted to
+ * the pipeline as it is. */
 static void queue(input_sink *s, const input_txn *t)
 {
-    if (s->cfg.print_status && t->kind == INPUT_TXN_STATUS && t->text[0]) {
-        printf("status: %s\n", t->text);
+    if (s->cfg.print_status && t->kind == TXN_STATUS && t->args.status.text[0]) {
+        printf("status: %s\n", t->args.status.text);
         fflush(stdout);
     }
     switch (t->kind) {
-    case INPUT_TXN_CAMERA:
-    case INPUT_TXN_CURSOR:
+    case TXN_CAMERA:
+        if (t->args.camera.channel != TXN_ALL_CHANNELS) { /* one channel's (a replayed record) */
+            count_refused(s, pipeline_submit(s->p, t));
+            break;
+        }
         queue_mail(s, t);
         break;
-    case INPUT_TXN_STATUS:
-        count_refused(s, pipeline_queue_status(s->p, t->text));
+    case TXN_CURSOR:
+        queue_mail(s, t);
         break;
-    case INPUT_TXN_HIDE:
-        count_refused(s, pipeline_queue_hide(s->p, t->geom_id, true));
-        break;
-    case INPUT_TXN_UNHIDE_ALL:
-        count_refused(s, pipeline_queue_unhide_all(s->p));
-        break;
-    case INPUT_TXN_TOUR: {
+    case TXN_TOUR: {
         /* logged here, when queued (no I/O at the barrier): the tour then starts or stops at
          * the next frame; tests/vm_input.sh waits for these lines */
         if (s->cfg.tour)
-            log_info(t->on ? "input: the attract tour starts" : "input: the attract tour stops (input)");
-        tour_args a = {s, t->on};
+            log_info(t->args.flag.on ? "input: the attract tour starts" : "input: the attract tour stops (input)");
+        tour_args a = {s, t->args.flag.on};
         count_refused(s, pipeline_transaction(s->p, "input tour", apply_tour, &a, sizeof a));
         break;
     }
-    case INPUT_TXN_GOVERNOR_STATUS:
-        count_refused(s, pipeline_queue_governor_status(s->p, t->on));
-        break;
-    case INPUT_TXN_QUIT:
+    case TXN_QUIT:
         log_info("input: quit");
         count_refused(s, pipeline_transaction(s->p, "input quit", apply_quit, NULL, 0));
         break;
     default:
+        count_refused(s, pipeline_submit(s->p, t));
         break;
     }
 }

@@ -1,14 +1,18 @@
-/* sink.h - input transactions (controller.h's input_txn) into a running
- * pipeline: each becomes a pipeline transaction, recorded to a file when
- * asked (record.h); recorded ones play back through the same path; the
- * attract tour runs here as a serial animation.
+/* sink.h - input transactions (controller.h's input_txn: txn.h records)
+ * into a running pipeline: each record is submitted to the pipeline as it is
+ * (pipeline_submit), recorded to a file when asked (record.h); recorded ones
+ * play back through the same path; the input-level kinds (tour, quit) are
+ * carried out here: the attract tour runs as a serial animation, quit stops
+ * the pipeline.
  *
  * COALESCING. Camera and cursor changes go through a one-slot mailbox: the
  * first change queues one transaction and later ones only overwrite the slot
  * until that transaction runs at the barrier and empties it. So however fast
  * input arrives, at most one camera transaction waits at a time, and the one
- * that runs applies the newest camera. Everything else (status, hide,
- * unhide, tour, quit) is queued in order as its own transaction.
+ * that runs applies the newest camera (a camera record for all channels:
+ * one for a single channel, replayed, is submitted as it is). Everything else
+ * (status, hide, show-all, ..., tour, quit) is queued in order as its own
+ * transaction.
  *
  * THE TOUR. TOUR on: from the next frame the wall's camera follows the tour
  * path (looping, from its first key), eased in from the camera shown when it

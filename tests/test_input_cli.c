@@ -177,7 +177,7 @@ Test(input_cli, replay_of_a_missing_file_names_it)
 /* A camera line in %a as the recorder writes it (time 0.5). */
 static void camera_line(FILE *f, camera_desc c)
 {
-    input_txn t = {.kind = INPUT_TXN_CAMERA, .camera = c};
+    input_txn t = txn_camera(TXN_ALL_CHANNELS, &c);
     cr_assert(input_record_write(f, 0.5, &t));
 }
 
@@ -198,7 +198,7 @@ static void write_record(const char *name, const char *tail)
 
 Test(input_cli, a_broken_record_names_the_file_the_line_and_the_problem)
 {
-    write_record("bad_number.rec", "0.75 camera 0x1p+0 zz 0x0p+0 0x0p+0 0x0p+0 0x0p+0 0x0p+0 0x1p+0 0x0p+0 "
+    write_record("bad_number.rec", "0.75 camera all 0x1p+0 zz 0x0p+0 0x0p+0 0x0p+0 0x0p+0 0x0p+0 0x1p+0 0x0p+0 "
                                    "0x1.ep+5\n");
     EXPECT_ERROR(1, "render --replay-input %s/bad_number.rec --out %s/a.exr --size 32x18 --threads 1",
                  "--replay-input", "bad_number.rec:4:", "camera eye.y", "'zz'");

@@ -36,12 +36,17 @@ static void note_problem(garbage_sink *g, const char *what, const input_txn *t)
 {
     if (g->problem[0])
         return;
-    snprintf(g->problem, sizeof g->problem,
-             "%s: eye (%g, %g, %g) look_at (%g, %g, %g) up (%g, %g, %g) fov %g cursor (%g, %g)", what,
-             (double)t->camera.eye.x, (double)t->camera.eye.y, (double)t->camera.eye.z, (double)t->camera.look_at.x,
-             (double)t->camera.look_at.y, (double)t->camera.look_at.z, (double)t->camera.up.x,
-             (double)t->camera.up.y, (double)t->camera.up.z, (double)t->camera.fov_deg, (double)t->sx,
-             (double)t->sy);
+    const camera_desc *c = &t->args.camera.camera;
+    if (t->kind == TXN_CAMERA)
+        snprintf(g->problem, sizeof g->problem, "%s: eye (%g, %g, %g) look_at (%g, %g, %g) up (%g, %g, %g) fov %g",
+                 what, (double)c->eye.x, (double)c->eye.y, (double)c->eye.z, (double)c->look_at.x,
+                 (double)c->look_at.y, (double)c->look_at.z, (double)c->up.x, (double)c->up.y, (double)c->up.z,
+                 (double)c->fov_deg);
+    else if (t->kind == TXN_CURSOR)
+        snprintf(g->problem, sizeof g->problem, "%s: cursor (%g, %g)", what, (double)t->args.cursor.sx,
+                 (double)t->args.cursor.sy);
+    else
+        snprintf(g->problem, sizeof g->problem, "%s: %s", what, txn_kind_name(t->kind));
 }
 
 static void emit(void *ctx, const input_txn *t)
@@ -49,21 +54,21 @@ static void emit(void *ctx, const input_txn *t)
     garbage_sink *g = ctx;
     tess_error err = {{0}};
     switch (t->kind) {
-    case INPUT_TXN_CAMERA:
+    case TXN_CAMERA:
         g->cameras++;
-        if (!camera_validate(&t->camera, &err))
+        if (!camera_validate(&t->args.camera.camera, &err))
             note_problem(g, err.msg, t);
         else
-            g->shown = t->camera;
+            g->shown = t->args.camera.camera;
         break;
-    case INPUT_TXN_CURSOR:
+    case TXN_CURSOR:
         g->cursors++;
-        if (t->on && !(isfinite(t->sx) && isfinite(t->sy)))
+        if (t->args.cursor.on && !(isfinite(t->args.cursor.sx) && isfinite(t->args.cursor.sy)))
             note_problem(g, "cursor not finite", t);
         break;
-    case INPUT_TXN_STATUS:
+    case TXN_STATUS:
         g->others++;
-        if (!memchr(t->text, '\0', sizeof t->text))
+        if (!memchr(t->args.status.text, '\0', sizeof t->args.status.text))
             note_problem(g, "status text not terminated", t);
         break;
     default:
@@ -184,6 +189,35 @@ Test(input_faults, random_events_never_give_a_bad_camera, .timeout = 60)
 
 /* ---- record files cut off ------------------------------------------------- */
 
+/* A valid record of kind i % TXN_KIND_COUNT with arguments that depend on i. */
+static input_txn sample_record(int i)
+{
+    camera_desc cam = {v3(1.f + (float)i, 2.5f, -3.f), v3(0.125f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 41.f};
+    const float rgb[3] = {0.25f, 0.5f, (float)i};
+    char text[64];
+    snprintf(text, sizeof text, "picked mesh %d", i);
+    switch ((txn_kind)(i % TXN_KIND_COUNT)) {
+    case TXN_CAMERA: return txn_camera(i % 3 == 0 ? TXN_ALL_CHANNELS : i % 3, &cam);
+    case TXN_CURSOR: return txn_cursor(true, 0.25f, -0.75f);
+    case TXN_STATUS: return txn_status(text);
+    case TXN_HIDE: return txn_geoms_record(TXN_HIDE, 123, 1 + (uint32_t)i);
+    case TXN_SHOW_ALL: return txn_simple(TXN_SHOW_ALL);
+    case TXN_TOUR: return txn_flag(TXN_TOUR, true);
+    case TXN_QUIT: return txn_simple(TXN_QUIT);
+    case TXN_GOVERNOR_STATUS: return txn_flag(TXN_GOVERNOR_STATUS, true);
+    case TXN_SHOW: return txn_geoms_record(TXN_SHOW, 123, 1);
+    case TXN_ISOLATE: return txn_geoms_record(TXN_ISOLATE, (uint32_t)i, 1000);
+    case TXN_HIGHLIGHT: return txn_highlight(7, 2, i % 2 == 0);
+    case TXN_COLOUR: return txn_colour(7, 2, rgb);
+    case TXN_SHADOWS: return txn_flag(TXN_SHADOWS, false);
+    case TXN_RENDERER: return txn_renderer("eyelight");
+    case TXN_THREADS: return txn_threads(1 + i % 8);
+    case TXN_CHANNEL_ACTIVE: return txn_channel_active(i % 4, true);
+    case TXN_KIND_COUNT: break;
+    }
+    return txn_simple(TXN_QUIT);
+}
+
 /* A recording of `n` transactions of every kind, as the sink writes it. */
 static char *recording(int n, size_t *len, size_t *last_line_start)
 {
@@ -192,15 +226,7 @@ static char *recording(int n, size_t *len, size_t *last_line_start)
     cr_assert_not_null(f);
     fprintf(f, "%s\n", INPUT_RECORD_HEADER);
     for (int i = 0; i < n; i++) {
-        input_txn t;
-        memset(&t, 0, sizeof t);
-        t.kind = (input_txn_kind)(i % INPUT_TXN_KIND_COUNT);
-        t.camera = (camera_desc){v3(1.f + (float)i, 2.5f, -3.f), v3(0.125f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 41.f};
-        t.on = true;
-        t.sx = 0.25f;
-        t.sy = -0.75f;
-        t.geom_id = 123;
-        snprintf(t.text, sizeof t.text, "picked mesh %d", i);
+        input_txn t = sample_record(i);
         fflush(f);
         if (i == n - 1)
             *last_line_start = *len;
@@ -214,7 +240,7 @@ static char *recording(int n, size_t *len, size_t *last_line_start)
  * bit as in the whole file, and the warning names the file and line. */
 Test(input_faults, a_record_cut_off_mid_line_replays_the_complete_lines)
 {
-    const int n = 2 * INPUT_TXN_KIND_COUNT; /* the last one a camera line, the longest kind */
+    const int n = 2 * TXN_KIND_COUNT + 1; /* the last one a camera line, the longest kind */
     size_t len = 0, last = 0;
     char *text = recording(n, &len, &last);
     input_record whole = {0};
@@ -253,12 +279,12 @@ Test(input_faults, a_record_cut_off_mid_line_replays_the_complete_lines)
  * start of a longer one ("hide 12" of "hide 123"). One line cut: "1 transaction". */
 Test(input_faults, a_cut_line_is_left_out_even_when_it_parses)
 {
-    const char text[] = INPUT_RECORD_HEADER "\n# a comment\n0.5 unhide-all\n0.75 hide 12";
+    const char text[] = INPUT_RECORD_HEADER_V1 "\n# a comment\n0.5 unhide-all\n0.75 hide 12";
     input_record r = {0};
     tess_error err = {{0}};
     cr_assert(input_record_parse("rec.txt", text, strlen(text), &r, &err), "%s", err.msg);
     cr_assert_eq(r.count, 1);
-    cr_assert_eq(r.entries[0].txn.kind, INPUT_TXN_UNHIDE_ALL);
+    cr_assert_eq(r.entries[0].txn.kind, TXN_SHOW_ALL);
     cr_assert_str_eq(r.warning.msg, "rec.txt:4: the last line has no newline at its end (the recording was cut off?): "
                                     "left out; 1 transaction before it replay");
     input_record_free(&r);
@@ -274,7 +300,7 @@ Test(input_faults, a_record_cut_in_the_header_or_mended_badly_is_an_error)
     tess_error err = {{0}};
     cr_assert_not(input_record_parse("rec.txt", header_cut, strlen(header_cut), &r, &err));
     cr_assert(strstr(err.msg, "rec.txt:1: not an input record"), "%s", err.msg);
-    const char middle_cut[] = INPUT_RECORD_HEADER "\n0.5 hide 1\n0.75 cam\n1.0 quit\n";
+    const char middle_cut[] = INPUT_RECORD_HEADER "\n0.5 hide 1 1\n0.75 cam\n1.0 quit\n";
     tess_error err2 = {{0}};
     cr_assert_not(input_record_parse("rec.txt", middle_cut, strlen(middle_cut), &r, &err2));
     cr_assert(strstr(err2.msg, "rec.txt:3: unknown transaction kind 'cam'"), "%s", err2.msg);

@@ -695,15 +695,16 @@ Test(alloc_sweep, record_input)
     cr_assert_not_null(f);
     fprintf(f, "%s\n", INPUT_RECORD_HEADER);
     for (int i = 0; i < 150; i++) {
-        input_txn t;
-        memset(&t, 0, sizeof t);
-        t.kind = (input_txn_kind)(i % INPUT_TXN_QUIT); /* every kind but quit */
-        t.camera = (camera_desc){v3(1.f + (float)i, 2.f, 3.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
-        t.on = i % 2;
-        t.sx = 0.25f;
-        t.sy = -0.5f;
-        t.geom_id = (uint32_t)i % 3;
-        snprintf(t.text, sizeof t.text, "picked \"mesh\" %d", i);
+        /* camera, cursor, status, hide, show-all, tour: the kinds format 1 had but quit */
+        camera_desc cam = {v3(1.f + (float)i, 2.f, 3.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+        char text[64];
+        snprintf(text, sizeof text, "picked \"mesh\" %d", i);
+        input_txn t = i % 6 == 0   ? txn_camera(TXN_ALL_CHANNELS, &cam)
+                      : i % 6 == 1 ? txn_cursor(i % 2, 0.25f, -0.5f)
+                      : i % 6 == 2 ? txn_status(text)
+                      : i % 6 == 3 ? txn_geoms_record(TXN_HIDE, (uint32_t)i % 3, 1)
+                      : i % 6 == 4 ? txn_simple(TXN_SHOW_ALL)
+                                   : txn_flag(TXN_TOUR, i % 2);
         cr_assert(input_record_write(f, 0.01 * i, &t));
     }
     cr_assert_eq(fclose(f), 0);

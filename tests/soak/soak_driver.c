@@ -131,7 +131,7 @@ typedef struct soak {
     FILE *samples;
     vec3 scene_lo, scene_hi;
     uint32_t geometry_count;
-    uint64_t replay_generated[INPUT_TXN_KIND_COUNT];
+    uint64_t replay_generated[TXN_KIND_COUNT];
     uint64_t replay_total;
 
     /* set by the started hook, read by the threads */
@@ -672,17 +672,19 @@ static bool write_replay(soak *s, const char *file)
     while (ok && t < end) {
         int repeat = below(&rng, 100) == 0 ? 20 : 1; /* now and then a burst at one instant */
         for (int i = 0; ok && i < repeat; i++) {
-            input_txn x;
-            memset(&x, 0, sizeof x);
             int r = below(&rng, 100);
-            x.kind = r < 40 ? INPUT_TXN_CAMERA : r < 65 ? INPUT_TXN_CURSOR : r < 80 ? INPUT_TXN_STATUS
-                   : r < 88 ? INPUT_TXN_HIDE : r < 93 ? INPUT_TXN_UNHIDE_ALL : INPUT_TXN_TOUR;
-            x.camera = random_camera(s, &rng);
-            x.on = below(&rng, 2) != 0;
-            x.sx = (float)(-1.2 + 2.4 * uniform(&rng));
-            x.sy = (float)(-1.2 + 2.4 * uniform(&rng));
-            x.geom_id = (uint32_t)below(&rng, (int)s->geometry_count);
-            random_text(&rng, x.text, sizeof x.text);
+            camera_desc cam = random_camera(s, &rng);
+            bool on = below(&rng, 2) != 0;
+            float sx = (float)(-1.2 + 2.4 * uniform(&rng)), sy = (float)(-1.2 + 2.4 * uniform(&rng));
+            uint32_t geom = (uint32_t)below(&rng, (int)s->geometry_count);
+            char text[TXN_TEXT_BYTES];
+            random_text(&rng, text, sizeof text);
+            input_txn x = r < 40   ? txn_camera(TXN_ALL_CHANNELS, &cam)
+                          : r < 65 ? txn_cursor(on, sx, sy)
+                          : r < 80 ? txn_status(text)
+                          : r < 88 ? txn_geoms_record(TXN_HIDE, geom, 1)
+                          : r < 93 ? txn_simple(TXN_SHOW_ALL)
+                                   : txn_flag(TXN_TOUR, on);
             ok = input_record_write(f, t, &x);
             s->replay_generated[x.kind]++;
             s->replay_total++;
@@ -742,12 +744,12 @@ static void report(soak *s)
     printf("soak: replayed input: %llu generated (camera %llu, cursor %llu, status %llu, hide %llu, unhide-all %llu, "
            "tour %llu); sink: %llu replayed, %llu emitted live, %llu pipeline transactions queued, %llu refused, "
            "%llu camera changes applied in %llu transactions\n",
-           (unsigned long long)s->replay_total, (unsigned long long)s->replay_generated[INPUT_TXN_CAMERA],
-           (unsigned long long)s->replay_generated[INPUT_TXN_CURSOR],
-           (unsigned long long)s->replay_generated[INPUT_TXN_STATUS],
-           (unsigned long long)s->replay_generated[INPUT_TXN_HIDE],
-           (unsigned long long)s->replay_generated[INPUT_TXN_UNHIDE_ALL],
-           (unsigned long long)s->replay_generated[INPUT_TXN_TOUR], (unsigned long long)ss->replayed,
+           (unsigned long long)s->replay_total, (unsigned long long)s->replay_generated[TXN_CAMERA],
+           (unsigned long long)s->replay_generated[TXN_CURSOR],
+           (unsigned long long)s->replay_generated[TXN_STATUS],
+           (unsigned long long)s->replay_generated[TXN_HIDE],
+           (unsigned long long)s->replay_generated[TXN_SHOW_ALL],
+           (unsigned long long)s->replay_generated[TXN_TOUR], (unsigned long long)ss->replayed,
            (unsigned long long)ss->emitted, (unsigned long long)ss->queued, (unsigned long long)ss->refused,
            (unsigned long long)ss->camera_changes, (unsigned long long)ss->camera_applied);
     printf("soak: pipeline: %llu frames rendered, %llu displayed, %llu transactions applied, %llu rejected "
@@ -783,11 +785,11 @@ static void report(soak *s)
           "driver %llu + input sink %llu refused = pipeline %llu rejected = %llu queue full + %llu stopping",
           (unsigned long long)refused, (unsigned long long)ss->refused, (unsigned long long)ps->transactions_rejected,
           (unsigned long long)ps->rejected_queue_full, (unsigned long long)ps->rejected_stopped);
-    check(s, ss->replayed == s->replay_total && ss->camera_changes >= s->replay_generated[INPUT_TXN_CAMERA],
+    check(s, ss->replayed == s->replay_total && ss->camera_changes >= s->replay_generated[TXN_CAMERA],
           "replayed input", "%llu of %llu recorded input transactions played through the sink, %llu camera changes "
           "(%llu recorded)",
           (unsigned long long)ss->replayed, (unsigned long long)s->replay_total,
-          (unsigned long long)ss->camera_changes, (unsigned long long)s->replay_generated[INPUT_TXN_CAMERA]);
+          (unsigned long long)ss->camera_changes, (unsigned long long)s->replay_generated[TXN_CAMERA]);
     check(s, ss->emitted + ss->replayed >= ss->queued + ss->refused, "input sink counts",
           "%llu emitted + %llu replayed >= %llu queued + %llu refused (the rest coalesced in the mailbox)",
           (unsigned long long)ss->emitted, (unsigned long long)ss->replayed, (unsigned long long)ss->queued,

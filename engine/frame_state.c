@@ -1,0 +1,286 @@
+/* frame_state.c - the versioned frame state (frame_state.h). */
+#include "frame_state.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel.h"
+
+static size_t words(uint32_t count) { return ((size_t)count + 63) / 64; }
+static bool bit(const uint64_t *set, uint32_t id) { return set && (set[id / 64] >> (id % 64) & 1u); }
+
+/* Set bits [first, first + count) to `on`; returns how many changed. */
+static uint32_t set_bits(uint64_t *set, uint32_t first, uint32_t count, bool on)
+{
+    uint32_t changed = 0;
+    for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+        uint64_t *w = &set[id / 64], m = (uint64_t)1 << (id % 64);
+        if (((*w & m) != 0) != on) {
+            changed++;
+            *w ^= m;
+        }
+    }
+    return changed;
+}
+
+/* A bitset for the state's geometries, allocated on first use. */
+static bool ensure_bits(const frame_state *st, uint64_t **set)
+{
+    if (!*set)
+        *set = calloc(words(st->geometry_count) ? words(st->geometry_count) : 1, sizeof **set);
+    return *set != NULL;
+}
+
+static void mark_dirty(frame_state *st, uint32_t first, uint32_t end)
+{
+    if (st->dirty_first >= st->dirty_end) {
+        st->dirty_first = first;
+        st->dirty_end = end;
+        return;
+    }
+    if (first < st->dirty_first)
+        st->dirty_first = first;
+    if (end > st->dirty_end)
+        st->dirty_end = end;
+}
+
+void frame_state_init(frame_state *st, const struct renderer *r, bool shadows, int threads, uint32_t geometry_count)
+{
+    memset(st, 0, sizeof *st);
+    st->renderer = r;
+    st->shadows = shadows;
+    st->threads = threads;
+    st->geometry_count = geometry_count;
+}
+
+void frame_state_finish(frame_state *st)
+{
+    free(st->hidden);
+    free(st->highlight);
+    free(st->coloured);
+    free(st->colour);
+    st->hidden = st->highlight = st->coloured = NULL;
+    st->colour = NULL;
+}
+
+int frame_state_add_channel(frame_state *st, const camera_desc *c)
+{
+    if (st->channel_count == FRAME_STATE_MAX_CHANNELS)
+        return -1;
+    int i = st->channel_count++;
+    st->cameras[i] = *c;
+    st->camera_serials[i] = 0;
+    st->active[i] = true;
+    return i;
+}
+
+bool frame_state_adopt_hidden(frame_state *st, const struct accel *a)
+{
+    for (uint32_t id = 0; id < st->geometry_count; id++)
+        if (accel_hidden(a, id)) {
+            if (!ensure_bits(st, &st->hidden))
+                return false;
+            st->hidden[id / 64] |= (uint64_t)1 << (id % 64);
+            st->hidden_count++;
+        }
+    return true;
+}
+
+void frame_state_set_camera(frame_state *st, int channel, const camera_desc *c)
+{
+    /* the same camera again (a path player holding its last key, every frame) is no change of
+     * the picture: the governor may refine behind it */
+    const camera_desc *old = &st->cameras[channel];
+    bool same = old->eye.x == c->eye.x && old->eye.y == c->eye.y && old->eye.z == c->eye.z &&
+                old->look_at.x == c->look_at.x && old->look_at.y == c->look_at.y && old->look_at.z == c->look_at.z &&
+                old->up.x == c->up.x && old->up.y == c->up.y && old->up.z == c->up.z && old->fov_deg == c->fov_deg;
+    st->cameras[channel] = *c;
+    st->camera_serials[channel]++;
+    if (!same)
+        st->picture_serial++;
+    st->version++;
+}
+
+void frame_state_set_active(frame_state *st, int channel, bool on)
+{
+    if (st->active[channel] != on)
+        st->picture_serial++;
+    st->active[channel] = on;
+    st->version++;
+}
+
+void frame_state_set_threads(frame_state *st, int threads)
+{
+    st->threads = threads;
+    st->version++;
+}
+
+void frame_state_set_status(frame_state *st, const char *text)
+{
+    size_t n = strnlen(text, sizeof st->status - 1);
+    memcpy(st->status, text, n);
+    st->status[n] = '\0';
+    st->version++;
+}
+
+void frame_state_set_cursor(frame_state *st, bool on, float sx, float sy)
+{
+    if (on != st->cursor_visible || sx != st->cursor_sx || sy != st->cursor_sy)
+        st->overlay_serial++;
+    st->cursor_visible = on;
+    st->cursor_sx = sx;
+    st->cursor_sy = sy;
+    st->version++;
+}
+
+void frame_state_set_governor_status(frame_state *st, bool shown)
+{
+    st->governor_status_shown = shown;
+    st->version++;
+}
+
+void frame_state_set_shadows(frame_state *st, bool on)
+{
+    if (st->shadows != on)
+        st->picture_serial++;
+    st->shadows = on;
+    st->version++;
+}
+
+void frame_state_set_renderer(frame_state *st, const struct renderer *r)
+{
+    if (st->renderer != r)
+        st->picture_serial++;
+    st->renderer = r;
+    st->version++;
+}
+
+bool frame_state_set_hidden(frame_state *st, uint32_t first, uint32_t count, bool hidden)
+{
+    if (!st->hidden && !hidden) { /* nothing is hidden: showing changes nothing */
+        st->version++;
+        return true;
+    }
+    if (!ensure_bits(st, &st->hidden))
+        return false;
+    uint32_t changed = set_bits(st->hidden, first, count, hidden);
+    if (hidden)
+        st->hidden_count += changed;
+    else
+        st->hidden_count -= changed;
+    if (changed) {
+        st->picture_serial++;
+        mark_dirty(st, first, first + count);
+    }
+    st->version++;
+    return true;
+}
+
+bool frame_state_isolate(frame_state *st, uint32_t first, uint32_t count)
+{
+    if (!ensure_bits(st, &st->hidden))
+        return false;
+    uint32_t changed = set_bits(st->hidden, 0, first, true);
+    changed += set_bits(st->hidden, first, count, false);
+    uint32_t end = first + count;
+    changed += set_bits(st->hidden, end, st->geometry_count - end, true);
+    st->hidden_count = st->geometry_count - count;
+    if (changed) {
+        st->picture_serial++;
+        mark_dirty(st, 0, st->geometry_count);
+    }
+    st->version++;
+    return true;
+}
+
+void frame_state_show_all(frame_state *st)
+{
+    if (st->hidden)
+        memset(st->hidden, 0, words(st->geometry_count) * sizeof *st->hidden);
+    st->hidden_count = 0;
+    st->accel_unhide_all = true;
+    st->dirty_first = st->dirty_end = 0; /* unhide-all covers every id */
+    st->picture_serial++;                /* always, as the pipeline's unhide-all did */
+    st->version++;
+}
+
+bool frame_state_set_highlight(frame_state *st, uint32_t first, uint32_t count, bool on)
+{
+    if (!st->highlight && !on) {
+        st->version++;
+        return true;
+    }
+    if (!ensure_bits(st, &st->highlight))
+        return false;
+    if (set_bits(st->highlight, first, count, on))
+        st->picture_serial++;
+    st->version++;
+    return true;
+}
+
+bool frame_state_set_colour(frame_state *st, uint32_t first, uint32_t count, const float *rgb)
+{
+    if (!st->coloured && !rgb) {
+        st->version++;
+        return true;
+    }
+    if (!st->colour) {
+        vec3 *c = calloc(st->geometry_count ? st->geometry_count : 1, sizeof *c);
+        if (!c || !ensure_bits(st, &st->coloured)) {
+            free(c);
+            return false;
+        }
+        st->colour = c;
+    }
+    bool changed = set_bits(st->coloured, first, count, rgb != NULL) > 0;
+    if (rgb)
+        for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+            vec3 *c = &st->colour[id];
+            changed = changed || c->x != rgb[0] || c->y != rgb[1] || c->z != rgb[2];
+            *c = (vec3){rgb[0], rgb[1], rgb[2]};
+        }
+    if (changed)
+        st->picture_serial++;
+    st->version++;
+    return true;
+}
+
+void frame_state_bump_overlay(frame_state *st) { st->overlay_serial++; }
+
+bool frame_state_hidden(const frame_state *st, uint32_t id)
+{
+    return id < st->geometry_count && bit(st->hidden, id);
+}
+
+bool frame_state_highlighted(const frame_state *st, uint32_t id)
+{
+    return id < st->geometry_count && bit(st->highlight, id);
+}
+
+bool frame_state_colour(const frame_state *st, uint32_t id, vec3 *rgb)
+{
+    if (id >= st->geometry_count || !bit(st->coloured, id))
+        return false;
+    if (rgb)
+        *rgb = st->colour[id];
+    return true;
+}
+
+uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
+{
+    uint32_t calls = 0;
+    if (st->accel_unhide_all) {
+        accel_unhide_all(a);
+        st->accel_unhide_all = false;
+        calls++;
+    }
+    for (uint32_t id = st->dirty_first; id < st->dirty_end; id++) {
+        bool want = bit(st->hidden, id);
+        if (accel_hidden(a, id) != want) {
+            accel_set_hidden(a, id, want);
+            calls++;
+        }
+    }
+    st->dirty_first = st->dirty_end = 0;
+    return calls;
+}

@@ -1,0 +1,136 @@
+/* frame_state.h - what transactions may change between frames, in one
+ * versioned object owned by the pipeline (pipeline.h, TRANSACTIONS).
+ *
+ * CONTENTS. Per channel its camera (with a change serial) and whether it is
+ * active; the render thread count; the overlay's inputs (status text, cursor,
+ * whether the governor's line is shown); render options (renderer,
+ * shadows); per geometry (ids 0..geometry_count-1, what hits report as
+ * geom_id) visibility, a highlight flag and a colour override (linear RGB).
+ * Room for more: what the next issues add (opacity, cutting planes,
+ * accumulation) goes here, with a record kind in txn.h that edits it.
+ *
+ * WHO CHANGES IT. Only txn_apply (txn.h) and the setters below, and in a
+ * pipeline only in the serial section of the frame barrier (transactions,
+ * serial callbacks) or while no loop runs: pipeline.c enforces it. So while
+ * a frame renders the state does not change: the state at the barrier IS
+ * the frame's snapshot, and render threads read it through a const pointer
+ * (render_view.state) without locks; the barrier orders their reads after
+ * the serial section's writes.
+ *
+ * VERSION AND SERIALS. `version` is bumped by every applied change (a
+ * setter or record that succeeds, even one that sets what is already
+ * there). The governor needs to know what kind of change it was:
+ *   picture_serial  bumped when what the picture shows changes: a camera
+ *                   different from the one it replaces, a channel switched,
+ *                   a geometry's visibility changed, show-all (always),
+ *                   highlight or colour changed, shadows or renderer changed;
+ *   overlay_serial  bumped when the overlay changes: the cursor moved,
+ *                   shown or hidden (cursor setter), and by the pipeline when
+ *                   the status line as drawn changes (frame_state_bump_overlay);
+ *   camera_serial[c] bumped by every camera set on channel c, the same or not.
+ *
+ * MEMORY. Nothing per geometry is allocated until a scene uses the feature:
+ * the hidden, highlight and colour arrays are each NULL until the first
+ * record that needs one (a hide, a highlight on, a colour override).
+ *
+ * VISIBILITY AND THE ACCEL. The accel keeps its own hidden flags (accel.h;
+ * traversal reads them). The state says what should be hidden and marks
+ * which ids may differ from the accel; frame_state_sync_accel (serial
+ * section) brings the accel in line calling accel_set_hidden only for ids
+ * whose flag differs, and accel_unhide_all after a show-all. */
+#ifndef TESSERA_FRAME_STATE_H
+#define TESSERA_FRAME_STATE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "camera.h"
+#include "err.h"
+#include "txn.h"
+#include "vec3.h"
+
+struct accel;
+struct renderer;
+
+#define FRAME_STATE_MAX_CHANNELS TXN_MAX_CHANNELS
+
+typedef struct frame_state {
+    uint64_t version;        /* every applied change */
+    uint64_t picture_serial; /* changes of what the picture shows (above) */
+    uint64_t overlay_serial; /* changes of the overlay (above) */
+
+    /* channels */
+    int channel_count;
+    camera_desc cameras[FRAME_STATE_MAX_CHANNELS];
+    uint64_t camera_serials[FRAME_STATE_MAX_CHANNELS]; /* cameras set so far */
+    bool active[FRAME_STATE_MAX_CHANNELS];             /* rendered and displayed */
+
+    int threads;             /* render threads wanted, 1..TXN_MAX_THREADS */
+
+    /* the overlay's inputs (the pipeline composes the drawn line) */
+    char status[TXN_TEXT_BYTES]; /* the status text asked for */
+    bool cursor_visible;
+    float cursor_sx, cursor_sy;
+    bool governor_status_shown;
+
+    /* render options */
+    const struct renderer *renderer; /* never NULL once initialised */
+    bool shadows;
+
+    /* per geometry: bitsets of (geometry_count + 63) / 64 words, NULL until used */
+    uint32_t geometry_count;
+    uint64_t *hidden;        /* bit set: hidden */
+    uint32_t hidden_count;   /* bits set in `hidden` */
+    uint64_t *highlight;     /* bit set: highlighted */
+    uint64_t *coloured;      /* bit set: colour[id] overrides the material */
+    vec3 *colour;            /* geometry_count entries, with `coloured` */
+
+    /* what frame_state_sync_accel still has to do */
+    bool accel_unhide_all;   /* a show-all since the last sync */
+    uint32_t dirty_first, dirty_end; /* ids [first, end) may differ from the accel's flags */
+} frame_state;
+
+/* A state for geometry_count geometries with no channels, nothing hidden,
+ * no overlay, the given render options. Allocates nothing. */
+void frame_state_init(frame_state *st, const struct renderer *r, bool shadows, int threads, uint32_t geometry_count);
+/* Free the per-geometry arrays. */
+void frame_state_finish(frame_state *st);
+
+/* Add a channel with its camera (active, serial 0); its index, or -1 when
+ * FRAME_STATE_MAX_CHANNELS exist. Before the pipeline runs. */
+int frame_state_add_channel(frame_state *st, const camera_desc *c);
+
+/* Take over the accel's hidden flags (a pipeline made over an accel whose
+ * geometries an earlier user hid): allocates `hidden` only if some are. */
+bool frame_state_adopt_hidden(frame_state *st, const struct accel *a);
+
+/* ---- setters (txn_apply calls these after validating; the same rules) ---- */
+void frame_state_set_camera(frame_state *st, int channel, const camera_desc *c);
+void frame_state_set_active(frame_state *st, int channel, bool on);
+void frame_state_set_threads(frame_state *st, int threads);
+void frame_state_set_status(frame_state *st, const char *text);
+void frame_state_set_cursor(frame_state *st, bool on, float sx, float sy);
+void frame_state_set_governor_status(frame_state *st, bool shown);
+void frame_state_set_shadows(frame_state *st, bool on);
+void frame_state_set_renderer(frame_state *st, const struct renderer *r);
+/* Visibility of [first, first + count) (in range); isolate hides the rest. False, st unchanged, out of memory. */
+bool frame_state_set_hidden(frame_state *st, uint32_t first, uint32_t count, bool hidden);
+bool frame_state_isolate(frame_state *st, uint32_t first, uint32_t count);
+void frame_state_show_all(frame_state *st);
+bool frame_state_set_highlight(frame_state *st, uint32_t first, uint32_t count, bool on);
+/* rgb NULL: remove the override */
+bool frame_state_set_colour(frame_state *st, uint32_t first, uint32_t count, const float *rgb);
+/* The pipeline: the drawn status line changed. */
+void frame_state_bump_overlay(frame_state *st);
+
+/* ---- readers (any thread that may read the state: see WHO CHANGES IT) ---- */
+bool frame_state_hidden(const frame_state *st, uint32_t id);      /* false out of range */
+bool frame_state_highlighted(const frame_state *st, uint32_t id); /* false out of range */
+/* Whether id has a colour override; then *rgb is it (rgb may be NULL). */
+bool frame_state_colour(const frame_state *st, uint32_t id, vec3 *rgb);
+
+/* Bring the accel's hidden flags in line (serial section; see above).
+ * Returns the accel calls made (accel_set_hidden ones + unhide-all). */
+uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a);
+
+#endif
