@@ -274,13 +274,24 @@ uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
         st->accel_unhide_all = false;
         calls++;
     }
-    for (uint32_t id = st->dirty_first; id < st->dirty_end; id++) {
+    /* runs of ids that change the same way go as one range: showing refits
+     * the accel's instance level once per call, so a subtree shown is one
+     * refit, not one per instance */
+    for (uint32_t id = st->dirty_first; id < st->dirty_end;) {
         bool want = bit(st->hidden, id);
-        if (accel_hidden(a, id) != want) {
-            accel_set_hidden(a, id, want);
-            calls++;
+        if (accel_hidden(a, id) == want) {
+            id++;
+            continue;
         }
+        uint32_t run = id + 1;
+        while (run < st->dirty_end && bit(st->hidden, run) == want && accel_hidden(a, run) != want)
+            run++;
+        accel_set_hidden_range(a, id, run - id, want);
+        calls++;
+        id = run;
     }
     st->dirty_first = st->dirty_end = 0;
+    /* what was hidden leaves the instance level's boxes (one refit) */
+    accel_commit(a);
     return calls;
 }

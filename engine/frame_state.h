@@ -130,7 +130,10 @@ bool frame_state_highlighted(const frame_state *st, uint32_t id); /* false out o
 bool frame_state_colour(const frame_state *st, uint32_t id, vec3 *rgb);
 
 /* Bring the accel's hidden flags in line (serial section; see above).
- * Returns the accel calls made (accel_set_hidden ones + unhide-all). */
+ * Changes go as runs of consecutive ids (accel_set_hidden_range: a subtree
+ * shown is one refit of the instance level), then accel_commit shrinks the
+ * instance level around what was hidden. Returns the accel calls made (one
+ * per run + unhide-all). */
 uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a);
 
 #endif
