@@ -10,6 +10,7 @@
 
 #include "accel.h"
 #include "log.h"
+#include "frame_state.h"
 #include "scene.h"
 
 /* What shading needs to know about a hit. */
@@ -50,7 +51,12 @@ static vec3 transformed_error(const affine3 *m, vec3 p, vec3 error)
  * instance's transform places it. The position (and its error bound) only
  * when `need_position`, i.e. when shading will cast a shadow ray or light a
  * point. */
-static surface describe_hit(const scene *s, const ray *r, const hit *h, bool need_position)
+/* Highlighted parts are drawn in their colour mixed this far towards
+ * RENDER_HIGHLIGHT_RGB (lit and shadowed like the rest). */
+#define RENDER_HIGHLIGHT_MIX 0.6f
+static const vec3 render_highlight_rgb = {1.0f, 0.55f, 0.05f};
+
+static surface describe_hit(const scene *s, const frame_state *st, const ray *r, const hit *h, bool need_position)
 {
     const scene_instance *inst = &s->instances[h->geom_id];
     const scene_geometry *g = &s->geometries[inst->geometry];
@@ -76,6 +82,13 @@ static surface describe_hit(const scene *s, const ray *r, const hit *h, bool nee
     }
     sf.mat = &s->materials[inst->material != SCENE_NO_MATERIAL ? inst->material : gs.material_id];
     sf.kd = gs.has_colour ? gs.colour : sf.mat->diffuse;
+    if (st) { /* the frame state's colour and highlight of the instance (absent: two NULL tests) */
+        vec3 rgb;
+        if (frame_state_colour(st, h->geom_id, &rgb))
+            sf.kd = rgb;
+        if (frame_state_highlighted(st, h->geom_id))
+            sf.kd = v3_add(v3_scale(sf.kd, 1.f - RENDER_HIGHLIGHT_MIX), v3_scale(render_highlight_rgb, RENDER_HIGHLIGHT_MIX));
+    }
     /* two-sided: face the viewer */
     if (v3_dot(sf.geometric_n, r->dir) > 0.f)
         sf.geometric_n = v3_scale(sf.geometric_n, -1.f);
@@ -169,7 +182,7 @@ vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
     hit h;
     if (!accel_intersect(v->accel, r, &h))
         return v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
-    surface sf = describe_hit(s, r, &h, needs_position(v));
+    surface sf = describe_hit(s, v->state, r, &h, needs_position(v));
     if (v->shading == RENDER_SHADE_EYELIGHT) {
         float grey = eyelight_grey(&sf, r);
         if (v->shadows && s->light_count > 0) {
@@ -212,12 +225,13 @@ typedef struct packet_shading {
 /* The packet's derived hit values for the rays in `hits`: geometric and
  * shading normals always, positions when `need_position`; each computed at
  * most once per traced packet (the PACKET_HAVE_ flags, which tracing clears). */
-static void packet_derive_hit_surfaces(const scene *s, ray_packet *p, packet_shading *ps, bool need_position)
+static void packet_derive_hit_surfaces(const render_view *v, ray_packet *p, packet_shading *ps, bool need_position)
 {
     const uint32_t have = PACKET_HAVE_GEOMETRIC_NORMAL | PACKET_HAVE_SHADING_NORMAL |
                           (need_position ? PACKET_HAVE_HIT_POSITION : 0u);
     if ((p->flags & have) == have)
         return;
+    const scene *s = v->scene;
     /* the hit triangles of a large mesh are cache misses: ask for all of them
      * (indices, then vertices) before reading any, so the waits overlap */
     for (uint64_t m = ps->hits; m; m &= m - 1) {
@@ -240,7 +254,7 @@ static void packet_derive_hit_surfaces(const scene *s, ray_packet *p, packet_sha
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray r = packet_get_ray(p, i);
         hit h = packet_get_hit(p, i);
-        surface sf = describe_hit(s, &r, &h, need_position);
+        surface sf = describe_hit(s, v->state, &r, &h, need_position);
         p->ng_x[i] = sf.geometric_n.x, p->ng_y[i] = sf.geometric_n.y, p->ng_z[i] = sf.geometric_n.z;
         p->ns_x[i] = sf.shading_n.x, p->ns_y[i] = sf.shading_n.y, p->ns_z[i] = sf.shading_n.z;
         if (need_position) {
@@ -299,7 +313,7 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
     if (!ps->hits)
         return;
     counts->primary_hits += (uint64_t)__builtin_popcountll(ps->hits);
-    packet_derive_hit_surfaces(s, p, ps, needs_position(v));
+    packet_derive_hit_surfaces(v, p, ps, needs_position(v));
     for (uint64_t m = ps->hits; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray r = packet_get_ray(p, i);

@@ -13,6 +13,7 @@
 
 #include "engine/accel.h"
 #include "engine/camera.h"
+#include "engine/frame_state.h"
 #include "engine/geometry.h"
 #include "engine/mesh.h"
 #include "engine/packet.h"
@@ -435,5 +436,55 @@ Test(instances, a_singular_or_non_finite_transform_is_refused)
     cr_assert_eq(scene_add_instance(s, 0, &nan_t, SCENE_NO_PART), -1);
     cr_assert_eq(scene_add_instance(s, 7, NULL, SCENE_NO_PART), -1);
     cr_assert_eq(s->instance_count, 1u);
+    scene_destroy(s);
+}
+
+/* ---- highlight and colour from the frame state ------------------------ */
+
+Test(geometry_kind, highlight_and_colour_of_the_frame_state_tint_only_their_instances)
+{
+    int destroyed = 0;
+    uint32_t disc_inst;
+    scene *s = disc_scene(&destroyed, &disc_inst);
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert_not_null(a, "%s", err.msg);
+    const int w = 48, h = 48;
+    render_view v = {.scene = s, .accel = a, .camera = top_camera(w, h), .shadows = true,
+                     .shading = RENDER_SHADE_PHONG};
+    size_t n = (size_t)w * h * 3;
+    float *plain = calloc(n, sizeof(float)), *tinted = calloc(n, sizeof(float));
+    render_image(&v, 1, plain, NULL);
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), true, 1, s->instance_count);
+    v.state = &st;
+    render_image(&v, 1, tinted, NULL);
+    cr_assert(memcmp(plain, tinted, n * sizeof(float)) == 0, "an empty frame state changes the picture");
+
+    cr_assert(frame_state_set_highlight(&st, disc_inst, 1, true));
+    render_image(&v, 1, tinted, NULL);
+    vec3 before = pixel(plain, w, w / 2, h / 2), after = pixel(tinted, w, w / 2, h / 2);
+    cr_assert_gt(after.y, before.y + 0.1f, "the highlighted disc is not tinted: g %g -> %g", (double)before.y,
+                 (double)after.y);
+    vec3 floor_before = pixel(plain, w, 2, 2), floor_after = pixel(tinted, w, 2, 2);
+    cr_assert(memcmp(&floor_before, &floor_after, sizeof floor_before) == 0, "the floor changed with the disc's highlight");
+
+    cr_assert(frame_state_set_highlight(&st, disc_inst, 1, false));
+    const float blue[3] = {0.f, 0.f, 1.f};
+    cr_assert(frame_state_set_colour(&st, 0, 1, blue));
+    render_image(&v, 1, tinted, NULL);
+    floor_after = pixel(tinted, w, 2, 2);
+    cr_assert(floor_after.x == 0.f && floor_after.z > 0.3f, "the floor's colour override: (%g, %g, %g)",
+              (double)floor_after.x, (double)floor_after.y, (double)floor_after.z);
+    after = pixel(tinted, w, w / 2, h / 2);
+    cr_assert(memcmp(&before, &after, sizeof before) == 0, "the disc changed with the floor's colour");
+    cr_assert(frame_state_set_colour(&st, 0, 1, NULL));
+    render_image(&v, 1, tinted, NULL);
+    cr_assert(memcmp(plain, tinted, n * sizeof(float)) == 0, "highlight off and colour removed: not the plain picture");
+
+    frame_state_finish(&st);
+    free(plain);
+    free(tinted);
+    accel_destroy(a);
     scene_destroy(s);
 }
