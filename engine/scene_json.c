@@ -483,6 +483,97 @@ static bool load_meshes(loader *L, json_object *root)
     return ok;
 }
 
+/* One entry of an assembly's "colours": the parts matching `parts` (and
+ * their subtrees) get a material, named or made from a diffuse colour. */
+static bool load_part_colour(loader *L, json_object *v)
+{
+    static const char *const fields[] = {"parts", "material", "diffuse", NULL};
+    jr_ctx *c = &L->ctx;
+    const char *pattern = NULL;
+    uint32_t material_id = 0;
+    bool has_material = jr_get_member(v, "material", &(json_object *){NULL}),
+         has_diffuse = jr_get_member(v, "diffuse", &(json_object *){NULL});
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, fields) || !jr_require_member(c, v, "parts") ||
+        !jr_opt_string(c, v, "parts", &pattern))
+        return false;
+    if (has_material == has_diffuse)
+        return jr_field_fail(c, "give either 'material' or 'diffuse'");
+    if (has_material) {
+        if (!material_ref(L, v, &material_id))
+            return false;
+    } else {
+        material m = material_default();
+        if (!jr_opt_vec3(c, v, "diffuse", jr_range_unit, &m.diffuse))
+            return false;
+        snprintf(m.name, sizeof m.name, "parts %.*s", (int)(sizeof m.name - 7), pattern);
+        int id = scene_add_material(L->s, &m);
+        if (id < 0)
+            return out_of_memory(L);
+        material_id = (uint32_t)id;
+    }
+    long matched = scene_colour_parts(L->s, pattern, material_id);
+    if (matched < 0)
+        return out_of_memory(L);
+    if (matched == 0)
+        log_warn("%s: field '%s.parts': no part matches '%s'", c->path, c->field, pattern);
+    return true;
+}
+
+static bool load_assembly(loader *L, json_object *v)
+{
+    static const char *const fields[] = {"file", "transform", "matrix", "optional", "colours", NULL};
+    jr_ctx *c = &L->ctx;
+    const char *file = NULL;
+    bool optional = false;
+    float xform[12];
+    char resolved[MESH_PATH_BYTES];
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, fields) || !jr_require_member(c, v, "file") ||
+        !jr_opt_string(c, v, "file", &file) || !jr_opt_bool(c, v, "optional", &optional) ||
+        !mesh_xform(c, v, xform) || !resolve_path(L, file, resolved, sizeof resolved))
+        return false;
+    struct stat st;
+    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
+        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+        return true;
+    }
+    affine3 placement;
+    memcpy(placement.m, xform, sizeof placement.m);
+    tess_error why = {{0}};
+    if (!scene_load_assembly(L->s, resolved, affine3_is_identity(&placement) ? NULL : &placement, &why))
+        return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the assembly");
+    json_object *colours;
+    if (!jr_get_member(v, "colours", &colours))
+        return true;
+    size_t outer = jr_field_key(c, "colours");
+    bool ok = jr_expect_array(c, colours);
+    size_t n = ok ? json_object_array_length(colours) : 0;
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t saved = jr_field_index(c, i);
+        ok = load_part_colour(L, json_object_array_get_idx(colours, i));
+        jr_field_leave(c, saved);
+    }
+    jr_field_leave(c, outer);
+    return ok;
+}
+
+static bool load_assemblies(loader *L, json_object *root)
+{
+    jr_ctx *c = &L->ctx;
+    json_object *all;
+    if (!jr_get_member(root, "assemblies", &all))
+        return true;
+    size_t outer = jr_field_key(c, "assemblies");
+    bool ok = jr_expect_array(c, all);
+    size_t n = ok ? json_object_array_length(all) : 0;
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t saved = jr_field_index(c, i);
+        ok = load_assembly(L, json_object_array_get_idx(all, i));
+        jr_field_leave(c, saved);
+    }
+    jr_field_leave(c, outer);
+    return ok;
+}
+
 static bool load_sphere(loader *L, json_object *v)
 {
     static const char *const fields[] = {"center", "radius", "material", NULL};
@@ -517,17 +608,18 @@ static bool load_spheres(loader *L, json_object *root)
 
 static bool load_scene(loader *L, json_object *root)
 {
-    static const char *const fields[] = {"camera",    "background", "ambient", "materials",
-                                         "lights",    "meshes",     "spheres", NULL};
+    static const char *const fields[] = {"camera", "background", "ambient",    "materials", "lights",
+                                         "meshes", "spheres",    "assemblies", NULL};
     jr_ctx *c = &L->ctx;
     if (!json_object_is_type(root, json_type_object))
         return tess_error_set(c->err, "%s: expected a JSON object at the top level, got %s", c->path,
                               jr_kind(root));
     if (!jr_check_fields(c, root, fields) || !jr_opt_vec3(c, root, "background", jr_range_nonneg, &L->s->background) ||
         !jr_opt_vec3(c, root, "ambient", jr_range_nonneg, &L->s->ambient) || !load_materials(L, root) ||
-        !load_lights(L, root) || !load_camera(L, root) || !load_meshes(L, root) || !load_spheres(L, root))
+        !load_lights(L, root) || !load_camera(L, root) || !load_meshes(L, root) || !load_spheres(L, root) ||
+        !load_assemblies(L, root))
         return false;
-    if (scene_triangle_count(L->s) == 0 && L->s->spheres.count == 0)
+    if (scene_instanced_triangle_count(L->s) == 0 && L->s->spheres.count == 0)
         return tess_error_set(c->err, "%s: scene has no geometry", c->path);
     return true;
 }

@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "engine/part_tree.h"
 #include "engine/scene.h"
 
 #define EXAMPLE_SCENES_DIR "../configs/scenes"
@@ -925,4 +926,111 @@ Test(scene, example_scenes_load)
     }
     closedir(d);
     cr_assert_geq(loaded, 2, "expected at least two self-contained example scenes");
+}
+
+/* ---- assemblies -------------------------------------------------------- */
+
+/* The shipped assembly (tests/data/assembly-small.glb) by absolute path. */
+static void small_assembly(char *out, size_t size)
+{
+    char cwd[400];
+    cr_assert_not_null(getcwd(cwd, sizeof cwd));
+    snprintf(out, size, "%s/data/assembly-small.glb", cwd);
+    struct stat st;
+    cr_assert_eq(stat(out, &st), 0, "%s is missing", out);
+}
+
+Test(scene, an_assembly_loads_as_a_part_tree_with_instances)
+{
+    char glb[512];
+    small_assembly(glb, sizeof glb);
+    tess_error err = {{0}};
+    scene *s = scene_load(glb, &err);
+    cr_assert_not_null(s, "%s", err.msg);
+    cr_assert_not_null(s->parts);
+    cr_assert_gt(part_tree_count(s->parts), 200);
+    cr_assert_lt(s->geometry_count, s->instance_count / 5, "fasteners are stored once: %u geometries, %u instances",
+                 s->geometry_count, s->instance_count);
+    cr_assert_gt(scene_instanced_triangle_count(s), 5 * scene_triangle_count(s));
+    /* a subtree's instances are one range, and the parts of a section lie in it */
+    int32_t section = part_tree_find(s->parts, "assembly/section-1");
+    cr_assert_geq(section, 0, "assembly/section-1 is a part");
+    uint32_t first, end, all_first, all_end;
+    scene_part_instances(s, (uint32_t)section, &first, &end);
+    scene_part_instances(s, PART_ROOT, &all_first, &all_end);
+    cr_assert(first < end && all_first == 0 && all_end == s->instance_count, "section [%u, %u), all [%u, %u)", first,
+              end, all_first, all_end);
+    int32_t section_end = part_tree_subtree_end(s->parts, section);
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        bool inside = (int32_t)s->instances[i].part >= section && (int32_t)s->instances[i].part < section_end;
+        cr_assert_eq(inside, i >= first && i < end, "instance %u (part %u)", i, s->instances[i].part);
+    }
+    scene_destroy(s);
+}
+
+Test(scene, a_scene_file_places_an_assembly_and_colours_parts_by_pattern)
+{
+    char glb[512], text[2048];
+    small_assembly(glb, sizeof glb);
+    snprintf(text, sizeof text,
+             "{\"materials\": {\"steel\": {\"diffuse\": [0.2, 0.2, 0.25]}},\n"
+             " \"assemblies\": [{\"file\": \"%s\", \"transform\": {\"translate\": [0, 10, 0]},\n"
+             "   \"colours\": [{\"parts\": \"**/bolt-*\", \"material\": \"steel\"},\n"
+             "                 {\"parts\": \"assembly/section-2\", \"diffuse\": [1, 0, 0]},\n"
+             "                 {\"parts\": \"**/no-such-part\", \"diffuse\": [0, 1, 0]}]}]}",
+             glb);
+    tess_error err = {{0}};
+    scene *s = load_text(text, &err);
+    cr_assert_not_null(s, "%s", err.msg);
+    scene *plain = scene_load(glb, &err);
+    cr_assert_not_null(plain, "%s", err.msg);
+    vec3 lo, hi, plo, phi;
+    cr_assert(scene_bounds(s, &lo, &hi) && scene_bounds(plain, &plo, &phi));
+    cr_assert_float_eq(lo.y, plo.y + 10.f, 1e-3f, "placed 10 up: %g vs %g", (double)lo.y, (double)plo.y);
+    int steel = -1;
+    for (uint32_t m = 0; m < s->material_count && steel < 0; m++) /* the scene file's, before the assembly's own */
+        if (strcmp(s->materials[m].name, "steel") == 0)
+            steel = (int)m;
+    char path[1024];
+    int bolts = 0, red = 0;
+    int32_t section2 = part_tree_find(s->parts, "assembly/section-2");
+    cr_assert_geq(section2, 0);
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        uint32_t part = s->instances[i].part;
+        part_tree_path(s->parts, (int32_t)part, path, sizeof path);
+        bool in_section2 = (int32_t)part >= section2 && (int32_t)part < part_tree_subtree_end(s->parts, section2);
+        if (in_section2) { /* the later colour wins */
+            cr_assert_eq(s->materials[s->instances[i].material].diffuse.x, 1.f, "%s", path);
+            red++;
+        } else if (strstr(path, "/bolt-")) {
+            cr_assert_eq(s->instances[i].material, (uint32_t)steel, "%s", path);
+            bolts++;
+        } else {
+            cr_assert_eq(s->instances[i].material, SCENE_NO_MATERIAL, "%s", path);
+        }
+    }
+    cr_assert(bolts > 0 && red > 0, "bolts %d, section-2 instances %d", bolts, red);
+    scene_destroy(plain);
+    scene_destroy(s);
+}
+
+Test(scene, assembly_entries_with_errors_name_the_field)
+{
+    char glb[512], text[2048];
+    small_assembly(glb, sizeof glb);
+    expect_failure("{\"assemblies\": [{\"file\": \"missing.glb\"}]}", "field 'assemblies[0].file': ", "missing.glb",
+                   NULL);
+    snprintf(text, sizeof text, "{\"assemblies\": [{\"file\": \"%s\", \"colours\": [{\"parts\": \"**\"}]}]}", glb);
+    expect_failure(text, "field 'assemblies[0].colours[0]': give either 'material' or 'diffuse'", NULL);
+    snprintf(text, sizeof text,
+             "{\"assemblies\": [{\"file\": \"%s\", \"colours\": [{\"parts\": \"**\", \"material\": \"gold\"}]}]}", glb);
+    expect_failure(text, "field 'assemblies[0].colours[0].material': unknown material 'gold'", NULL);
+    snprintf(text, sizeof text, "{\"assemblies\": [{\"file\": \"%s\", \"scale\": 2}]}", glb);
+    expect_failure(text, "field 'assemblies[0].scale': unknown field", NULL);
+    snprintf(text, sizeof text,
+             "{\"assemblies\": [{\"file\": \"%s\", \"colours\": [{\"parts\": \"**\", \"diffuse\": [2, 0, 0]}]}]}", glb);
+    expect_failure(text, "field 'assemblies[0].colours[0].diffuse", NULL);
+    put_file("broken.glb", "glTF but not really");
+    expect_failure("{\"assemblies\": [{\"file\": \"broken.glb\"}]}", "field 'assemblies[0].file': ", "broken.glb",
+                   NULL);
 }
