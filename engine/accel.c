@@ -137,8 +137,10 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
         build_boxes[i] = aabb_is_empty(a->instance_bounds[i]) ? (aabb){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f)}
                                                               : a->instance_bounds[i];
     }
+    /* one instance per leaf: entering one costs a packet setup below, so the
+     * wide nodes' exact per-ray masks should decide it, not a shared leaf */
     bvh binary;
-    bool ok = bvh_build(&binary, build_boxes, n, 1, err);
+    bool ok = bvh_build_leaves(&binary, build_boxes, n, 1, 1, err);
     free(build_boxes);
     if (!ok)
         goto fail;

@@ -438,6 +438,7 @@ typedef struct builder {
     uint32_t *task_at;      /* per task: its root's index in the final layout */
     uint32_t *task_next;    /* per task: first final index of its root's descendants */
     bvh_node *out_nodes;    /* the canonical layout being written */
+    uint32_t leaf_max;      /* most primitives in a leaf, 1..BVH_LEAF_MAX */
 } builder;
 
 static uint32_t alloc_pair(builder *B, worker_state *w)
@@ -732,14 +733,14 @@ static bool split_node(builder *B, parallel_pool *pool, worker_state *w, const b
     box_pair centroids = box_pair_empty();
     /* Up to one block, a leaf costs BVH_COST_INTERSECT and any split at least
      * BVH_COST_TRAVERSAL: when that is no less, the leaf wins without binning. */
-    bool leaf_wins = n <= BVH_SAH_BLOCK && BVH_COST_TRAVERSAL >= BVH_COST_INTERSECT;
+    bool leaf_wins = n <= BVH_SAH_BLOCK && n <= B->leaf_max && BVH_COST_TRAVERSAL >= BVH_COST_INTERSECT;
     if (n > 1 && !leaf_wins && it->depth < BVH_SAH_DEPTH_LIMIT) {
         bin_map map = bin_map_make(it->centroids);
         bin_set local_bins;
         bin_range(B, pool, it, &map, &local_bins);
         split s = find_split(&local_bins, box4_half_area(it->bounds));
         float leaf_cost = BVH_COST_INTERSECT * leaf_blocks(n);
-        if (s.axis >= 0 && (n > BVH_LEAF_MAX || s.cost < leaf_cost)) {
+        if (s.axis >= 0 && (n > B->leaf_max || s.cost < leaf_cost)) {
             side_rule rule = {map, s.axis, s.bin};
             uint32_t left_count = partition_range(B, pool, it->begin, it->end, &rule, w->scratch, &centroids);
             assert(left_count == s.left_count);
@@ -749,7 +750,7 @@ static bool split_node(builder *B, parallel_pool *pool, worker_state *w, const b
         }
     }
     /* no useful SAH split (coincident centroids, or too deep): halve by count if too big */
-    if (mid == it->begin && n > BVH_LEAF_MAX) {
+    if (mid == it->begin && n > B->leaf_max) {
         mid = it->begin + n / 2;
         box_pair l = range_bounds(B, pool, it->begin, mid), r = range_bounds(B, pool, mid, it->end);
         left = l.a;
@@ -1017,12 +1018,21 @@ static void builder_free(builder *B)
 
 bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, tess_error *err)
 {
+    return bvh_build_leaves(out, prim_bounds, count, threads, BVH_LEAF_MAX, err);
+}
+
+bool bvh_build_leaves(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,
+                      tess_error *err)
+{
     memset(out, 0, sizeof *out);
+    if (leaf_max < 1 || leaf_max > BVH_LEAF_MAX)
+        return tess_error_set(err, "bvh: leaves of %u primitives (1..%d)", leaf_max, BVH_LEAF_MAX);
     if (count == 0)
         return true;
     if (threads < 1 || count <= BVH_PARALLEL_NODE_MIN)
         threads = 1;
     builder B = {0};
+    B.leaf_max = leaf_max;
     B.threads = threads > 1 ? parallel_pool_create(threads) : NULL; /* NULL: serial build */
     B.thread_count = parallel_pool_threads(B.threads);
     /* slots: the root, at most 2 * count - 2 below it, and each thread's unused block */

@@ -46,6 +46,10 @@ typedef struct bvh {
  * during the build; boxes may be degenerate (zero size) or empty. An empty
  * input gives an empty BVH (node_count 0). */
 bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, tess_error *err);
+/* The same with leaves of at most leaf_max (1..BVH_LEAF_MAX) primitives:
+ * 1 where a primitive is costly to enter (an instance: a whole BVH below). */
+bool bvh_build_leaves(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,
+                      tess_error *err);
 void bvh_finish(bvh *b); /* frees arrays; the struct itself is the caller's */
 
 size_t bvh_bytes(const bvh *b);

@@ -690,3 +690,35 @@ Test(parallel, one_shot_loops)
         free(c.hits);
     }
 }
+
+Test(bvh, leaves_of_one_primitive_for_an_instance_level)
+{
+    const uint32_t n = 3000;
+    aabb *boxes = random_boxes(n, 77);
+    for (int k = 0; k < 2; k++) {
+        aabb *set = k == 0 ? boxes : same_centroid_boxes(n, 5); /* also where SAH finds no split */
+        bvh one, two;
+        tess_error err = {{0}};
+        cr_assert(bvh_build_leaves(&one, set, n, 1, 1, &err), "%s", err.msg);
+        cr_assert(bvh_build_leaves(&two, set, n, 2, 1, &err), "%s", err.msg);
+        check_bvh(&one, set, n);
+        uint32_t leaves = 0;
+        for (uint32_t i = 0; i < one.node_count; i++)
+            if (one.nodes[i].count) {
+                cr_assert_eq(one.nodes[i].count, 1u, "node %u holds %u primitives", i, one.nodes[i].count);
+                leaves++;
+            }
+        cr_assert_eq(leaves, n);
+        cr_assert_eq(one.node_count, two.node_count);
+        cr_assert(memcmp(one.nodes, two.nodes, one.node_count * sizeof *one.nodes) == 0, "threads change the tree");
+        bvh_finish(&one);
+        bvh_finish(&two);
+        if (set != boxes)
+            free(set);
+    }
+    bvh bad;
+    tess_error err = {{0}};
+    cr_assert_not(bvh_build_leaves(&bad, boxes, n, 1, 0, &err));
+    cr_assert(strstr(err.msg, "leaves of 0 primitives"), "%s", err.msg);
+    free(boxes);
+}

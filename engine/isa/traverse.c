@@ -526,9 +526,11 @@ static void setup_slack(packet_ctx *c, uint64_t mask)
 {
     const ray_packet *p = c->p;
     c->slack_hi = 0.f;
-    for (uint32_t i = 0; i < PACKET_MAX_RAYS; i++) {
+    memset(c->slack, 0, sizeof c->slack);
+    for (uint64_t rest = mask; rest; rest &= rest - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(rest);
         ray one = {v3(p->org_x[i], p->org_y[i], p->org_z[i]), v3(p->dir_x[i], p->dir_y[i], p->dir_z[i]), 0.f, 0.f};
-        c->slack[i] = mask >> i & 1u ? ray_cull_slack(&one, c->w) : 0.f;
+        c->slack[i] = ray_cull_slack(&one, c->w);
         c->slack_hi = c->slack[i] > c->slack_hi ? c->slack[i] : c->slack_hi;
     }
 }
@@ -778,12 +780,25 @@ static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ra
 static uint64_t instance_packet(const wbvh_instance *inst, uint32_t id, ray_packet *p, uint64_t mask, bool any)
 {
     ray_packet local;
-    local.flags = 0;
-    local.count = p->count;
-    local.active = mask;
     const affine3 *m = &inst->to_object;
     const bool common_origin = (p->flags & PACKET_COMMON_ORIGIN) != 0;
     vec3 shared_org = common_origin ? affine3_point(m, v3(p->org_x[0], p->org_y[0], p->org_z[0])) : v3(0.f, 0.f, 0.f);
+    /* the kernels read whole groups of RAY_LANES lanes (and mask them), never
+     * a group without a ray of the mask: only the lanes of touched groups
+     * outside the mask need defined values */
+    for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+        if (!((mask >> g) & ((1ull << RAY_LANES) - 1ull)))
+            continue;
+        for (uint32_t i = g; i < g + RAY_LANES; i++) {
+            local.org_x[i] = local.org_y[i] = local.org_z[i] = 0.f;
+            local.dir_x[i] = local.dir_y[i] = local.dir_z[i] = 0.f;
+            local.inv_dir_x[i] = local.inv_dir_y[i] = local.inv_dir_z[i] = 0.f;
+            local.t_near[i] = local.t_far[i] = 0.f;
+            local.hit_t[i] = INFINITY;
+            local.hit_u[i] = local.hit_v[i] = 0.f;
+            local.prim_id[i] = local.geom_id[i] = RAY_INVALID_ID;
+        }
+    }
     uint64_t traceable = 0;
     for (uint64_t rest = mask; rest; rest &= rest - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(rest);
@@ -795,6 +810,10 @@ static uint64_t instance_packet(const wbvh_instance *inst, uint32_t id, ray_pack
         traceable |= 1ull << i;
         local.org_x[i] = o.x, local.org_y[i] = o.y, local.org_z[i] = o.z;
         local.dir_x[i] = dv.x, local.dir_y[i] = dv.y, local.dir_z[i] = dv.z;
+        /* packet_derive_inv_dir's values, for these lanes only */
+        local.inv_dir_x[i] = dv.x != 0.f ? 1.f / dv.x : copysignf(FLT_MAX, dv.x);
+        local.inv_dir_y[i] = dv.y != 0.f ? 1.f / dv.y : copysignf(FLT_MAX, dv.y);
+        local.inv_dir_z[i] = dv.z != 0.f ? 1.f / dv.z : copysignf(FLT_MAX, dv.z);
         local.t_near[i] = p->t_near[i];
         local.t_far[i] = p->t_far[i];
         local.hit_t[i] = p->hit_t[i];
@@ -803,20 +822,11 @@ static uint64_t instance_packet(const wbvh_instance *inst, uint32_t id, ray_pack
         local.prim_id[i] = p->prim_id[i];
         local.geom_id[i] = p->geom_id[i];
     }
-    /* lanes outside the mask are never read by the kernels but for the
-     * interval setup, which looks at masked lanes only; zero them anyway */
-    for (uint32_t i = 0; i < PACKET_MAX_RAYS; i++)
-        if (!(traceable >> i & 1u)) {
-            local.org_x[i] = local.org_y[i] = local.org_z[i] = 0.f;
-            local.dir_x[i] = local.dir_y[i] = local.dir_z[i] = 0.f;
-            local.t_near[i] = local.t_far[i] = 0.f;
-            local.hit_t[i] = INFINITY;
-            local.hit_u[i] = local.hit_v[i] = 0.f;
-            local.prim_id[i] = local.geom_id[i] = RAY_INVALID_ID;
-        }
     if (!traceable)
         return 0;
-    packet_derive_inv_dir(&local);
+    local.count = p->count;
+    local.active = traceable;
+    local.flags = PACKET_HAVE_INV_DIR | (common_origin ? PACKET_COMMON_ORIGIN : 0u);
     uint64_t result = ISA_SUFFIX(intersect_packet)(inst->geometry, id, &local, traceable, any);
     if (!any)
         for (uint64_t rest = result; rest; rest &= rest - 1) {
