@@ -94,31 +94,25 @@ static ray random_ray(int kind)
 
 static bool same_hit(hit a, hit b) { return memcmp(&a, &b, sizeof a) == 0; }
 
-/* The definition the kernels implement: over every primitive, the hit in
- * (t_near, t_far] that is smallest in (t, geom_id, prim_id) order. */
+/* The definition the kernels implement: over every primitive of every
+ * instance, the hit in (t_near, t_far] that is smallest in (t, geom_id,
+ * prim_id) order, by each kind's scalar reference intersector (geometry.h). */
 static hit brute_force(const scene *s, const ray *r)
 {
     hit best = hit_none();
-    ray_derived d = ray_derive(r);
-    for (uint32_t g = 0; g < s->mesh_count; g++) {
-        const mesh *m = s->meshes[g]->mesh;
-        for (uint32_t t = 0; t < m->triangle_count; t++) {
-            const uint32_t *idx = m->indices + 3 * (size_t)t;
-            vec3 v[3];
-            for (int k = 0; k < 3; k++) {
-                const float *q = m->positions + 3 * (size_t)idx[k];
-                v[k] = v3(q[0], q[1], q[2]);
-            }
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        const scene_instance *inst = &s->instances[i];
+        const scene_geometry *g = scene_instance_geometry(s, i);
+        ray local = *r;
+        if (!inst->identity)
+            local = (ray){affine3_point(&inst->to_object, r->org), affine3_vector(&inst->to_object, r->dir), r->t_near,
+                          r->t_far};
+        uint32_t n = g->ops->prim_count(g->data);
+        for (uint32_t p = 0; p < n; p++) {
             float th, u, vv;
-            if (intersect_triangle(r, &d, v[0], v[1], v[2], &th, &u, &vv) && th < best.t)
-                best = (hit){.t = th, .u = u, .v = vv, .prim_id = t, .geom_id = g};
+            if (g->ops->intersect(g->data, p, &local, &th, &u, &vv) && th < best.t)
+                best = (hit){.t = th, .u = u, .v = vv, .prim_id = p, .geom_id = i};
         }
-    }
-    for (uint32_t i = 0; i < s->spheres.count; i++) {
-        float th;
-        vec3 c = v3(s->spheres.center_x[i], s->spheres.center_y[i], s->spheres.center_z[i]);
-        if (intersect_sphere(r, c, s->spheres.radius[i], &th) && th < best.t)
-            best = (hit){.t = th, .prim_id = i, .geom_id = s->mesh_count};
     }
     return best;
 }

@@ -875,7 +875,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "soak: built-in scene: %s\n", err.msg);
         return 1;
     }
-    s->geometry_count = sc->mesh_count + (sc->spheres.count ? 1u : 0u);
+    s->geometry_count = sc->instance_count; /* hit ids name instances (scene.h) */
     scene_destroy(sc);
 
     char replay[4096], absent[4096], threads[16];
