@@ -117,10 +117,44 @@ static hit brute_force(const scene *s, const ray *r)
     return best;
 }
 
+/* The scene of make_scene plus its geometries placed again by rotations,
+ * non-uniform scales and translations (instances of the soup and of the
+ * sphere set, which become ellipsoids). */
+static scene *make_instanced_scene(void)
+{
+    scene *s = make_scene();
+    for (int k = 0; k < 6; k++) {
+        float a = rng_range(0.f, 6.28f), b = rng_range(0.f, 6.28f);
+        float sx = rng_range(0.3f, 2.f), sy = rng_range(0.3f, 2.f), sz = rng_range(0.3f, 2.f);
+        float ca = cosf(a), sa = sinf(a), cb = cosf(b), sb = sinf(b);
+        /* R = Rz(b) Ry(a), then S, then a translation */
+        affine3 m = {{cb * ca * sx, -sb * sy, cb * sa * sz, rng_range(-15.f, 15.f),
+                      sb * ca * sx, cb * sy, sb * sa * sz, rng_range(-15.f, 15.f),
+                      -sa * sx, 0.f, ca * sz, rng_range(-15.f, 15.f)}};
+        uint32_t geometry = k % 3 == 2 ? s->instances[s->sphere_instance].geometry : 0u; /* soup or spheres */
+        cr_assert(scene_add_instance(s, geometry, &m, SCENE_NO_PART) >= 0);
+    }
+    return s;
+}
+
+static void matches_brute_force(scene *s);
+
 Test(kernels, every_isa_matches_brute_force_bit_for_bit, .timeout = 120)
 {
     rng_state = 0x9E3779B97F4A7C15ull;
-    scene *s = make_scene();
+    matches_brute_force(make_scene());
+}
+
+Test(kernels, every_isa_matches_brute_force_through_transformed_instances, .timeout = 120)
+{
+    rng_state = 0x2545F4914F6CDD1Dull;
+    matches_brute_force(make_instanced_scene());
+}
+
+/* Single rays and packets of every width, every ISA, against brute_force;
+ * takes the scene. */
+static void matches_brute_force(scene *s)
+{
     tess_error err = {{0}};
     accel *a = accel_build(s, 2, &err);
     cr_assert(a, "%s", err.msg);
@@ -132,10 +166,16 @@ Test(kernels, every_isa_matches_brute_force_bit_for_bit, .timeout = 120)
     for (int i = 0; i < rays; i++)
         list[i] = random_ray(i);
     /* strictly increasing scan order above makes "first found" the lowest ids on equal t */
+    int on_placed = 0; /* hits on instances placed by a transform */
     for (int i = 0; i < rays; i++) {
         reference[i] = brute_force(s, &list[i]);
         occluded[i] = reference[i].t != INFINITY;
+        on_placed += occluded[i] && !s->instances[reference[i].geom_id].identity;
     }
+    bool placed = false;
+    for (uint32_t i = 0; i < s->instance_count; i++)
+        placed |= !s->instances[i].identity;
+    cr_assert(!placed || on_placed > 200, "only %d rays hit a transformed instance", on_placed);
     const char *isas[] = {"sse2", "avx2", "avx512"};
     int tested = 0;
     for (size_t k = 0; k < sizeof isas / sizeof isas[0]; k++) {
