@@ -22,6 +22,9 @@ struct accel {
     uint32_t geom_count;
     wbvh_instance *instances;    /* instance_count; index = instance id (hit.geom_id) */
     aabb *instance_bounds;       /* world box of each instance (empty: nothing to hit) */
+    accel_placement *placements; /* where each instance is (what shading reads); instances[i]
+                                    caches its to_object for traversal */
+    const scene *scene;          /* built from; outlives the accel (the scene's placements) */
     uint32_t instance_count;
     wbvh top;                    /* over the instances */
     const kernel_table *kernels; /* resolved once at build */
@@ -90,7 +93,7 @@ static bool build_geometry(wbvh *out, const scene_geometry *g, int threads, tess
 }
 
 /* World box of an instance from its geometry's tree (the root's children). */
-static aabb instance_box(const scene_instance *si, const wbvh *w)
+static aabb instance_box(const accel_placement *si, const wbvh *w)
 {
     aabb b = aabb_empty();
     if (w->node_count == 0)
@@ -114,6 +117,7 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
     if (!(a->geoms = calloc((size_t)a->geom_count + 1, sizeof *a->geoms)) ||
         !(a->instances = calloc((size_t)n + 1, sizeof *a->instances)) ||
         !(a->instance_bounds = calloc((size_t)n + 1, sizeof *a->instance_bounds)) ||
+        !(a->placements = calloc((size_t)n + 1, sizeof *a->placements)) ||
         !(a->hidden = calloc((size_t)n + 1, sizeof *a->hidden)))
         goto oom;
     if (pthread_mutex_init(&a->refit_lock, NULL) != 0)
@@ -121,6 +125,7 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
     a->lock_ready = true;
     atomic_init(&a->refit_pending, false);
     a->kernels = kernels_select();
+    a->scene = s;
     for (uint32_t g = 0; g < a->geom_count; g++)
         if (!build_geometry(&a->geoms[g], &s->geometries[g], threads, err))
             goto fail;
@@ -133,7 +138,8 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
         const scene_instance *si = &s->instances[i];
         a->instances[i] = (wbvh_instance){.geometry = &a->geoms[si->geometry], .to_object = si->to_object,
                                           .identity = si->identity};
-        a->instance_bounds[i] = instance_box(si, &a->geoms[si->geometry]);
+        a->placements[i] = (accel_placement){si->to_world, si->to_object, si->identity};
+        a->instance_bounds[i] = instance_box(&a->placements[i], &a->geoms[si->geometry]);
         build_boxes[i] = aabb_is_empty(a->instance_bounds[i]) ? (aabb){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f)}
                                                               : a->instance_bounds[i];
     }
@@ -169,6 +175,7 @@ void accel_destroy(accel *a)
     wbvh_finish(&a->top);
     free(a->instances);
     free(a->instance_bounds);
+    free(a->placements);
     free(a->hidden);
     if (a->lock_ready)
         pthread_mutex_destroy(&a->refit_lock);
@@ -225,6 +232,34 @@ bool accel_hidden(const accel *a, uint32_t geom_id)
     return geom_id < a->instance_count && atomic_load_explicit(&a->hidden[geom_id], memory_order_relaxed) != 0;
 }
 
+const accel_placement *accel_placement_of(const accel *a, uint32_t geom_id) { return &a->placements[geom_id]; }
+
+void accel_set_placement(const accel *ca, uint32_t first, uint32_t count, const affine3 *moves)
+{
+    accel *a = mutable_accel(ca);
+    if (first >= a->instance_count)
+        return;
+    uint32_t end = count > a->instance_count - first ? a->instance_count : first + count;
+    pthread_mutex_lock(&a->refit_lock);
+    for (uint32_t i = first; i < end; i++) {
+        const scene_instance *si = &a->scene->instances[i];
+        accel_placement pl = {si->to_world, si->to_object, si->identity};
+        if (!affine3_is_identity(&moves[i - first])) {
+            pl.to_world = affine3_compose(&moves[i - first], &si->to_world);
+            pl.identity = affine3_is_identity(&pl.to_world);
+            if (!affine3_invert(&pl.to_world, &pl.to_object))
+                continue; /* not invertible after all (rounding): stays where it was */
+        }
+        a->placements[i] = pl;
+        a->instances[i].to_object = pl.to_object;
+        a->instances[i].identity = pl.identity;
+        a->instance_bounds[i] = instance_box(&pl, a->instances[i].geometry);
+    }
+    wbvh_refit_instances(&a->top, a->instance_bounds);
+    pthread_mutex_unlock(&a->refit_lock);
+    atomic_store_explicit(&a->refit_pending, false, memory_order_relaxed);
+}
+
 bool accel_commit(const accel *ca)
 {
     accel *a = mutable_accel(ca);
@@ -254,7 +289,7 @@ bool accel_use_isa(accel *a, const char *isa_name)
  * mesh). */
 static const wbvh *sole_geometry(const accel *a)
 {
-    if (a->instance_count != 1 || !a->instances[0].identity ||
+    if (a->instance_count != 1 || !a->placements[0].identity ||
         atomic_load_explicit(&a->hidden[0], memory_order_relaxed))
         return NULL;
     return a->instances[0].geometry;

@@ -27,6 +27,7 @@
 #include <stdint.h>
 
 #include "err.h"
+#include "geometry.h"
 #include "packet.h"
 #include "ray.h"
 
@@ -73,6 +74,22 @@ void accel_unhide_all(const accel *a);
 bool accel_commit(const accel *a);
 /* Whether geom_id is hidden (false out of range). Any thread. */
 bool accel_hidden(const accel *a, uint32_t geom_id);
+
+/* Where instance geom_id is now: the scene's placement, or after
+ * accel_set_placement the move applied after it. Render threads read it
+ * while shading; it changes only where hidden flags may (header comment). */
+typedef struct accel_placement {
+    affine3 to_world, to_object;
+    bool identity; /* to_world is the identity */
+} accel_placement;
+const accel_placement *accel_placement_of(const accel *a, uint32_t geom_id);
+
+/* Place instances [first, first + count) by moves[i] applied after the
+ * scene's placement (the identity: back where the scene put them), and
+ * refit the instance level once. moves must be invertible (txn_validate);
+ * one that is not leaves its instance where it was. Same callers as
+ * accel_set_hidden. */
+void accel_set_placement(const accel *a, uint32_t first, uint32_t count, const affine3 *moves);
 
 /* Bytes of acceleration data (nodes, primitive blocks), not counting the scene. */
 size_t accel_bytes(const accel *a);

@@ -59,6 +59,8 @@ void frame_state_finish(frame_state *st)
     free(st->highlight);
     free(st->coloured);
     free(st->colour);
+    free(st->moved);
+    st->moved = NULL;
     st->hidden = st->highlight = st->coloured = NULL;
     st->colour = NULL;
 }
@@ -218,6 +220,38 @@ bool frame_state_set_highlight(frame_state *st, uint32_t first, uint32_t count, 
     return true;
 }
 
+bool frame_state_set_move(frame_state *st, uint32_t first, uint32_t count, const affine3 *m)
+{
+    if (!st->moved) {
+        if (affine3_is_identity(m)) { /* nothing was ever moved: nothing to put back */
+            st->version++;
+            return true;
+        }
+        st->moved = malloc((size_t)(st->geometry_count ? st->geometry_count : 1) * sizeof *st->moved);
+        if (!st->moved)
+            return false;
+        for (uint32_t i = 0; i < st->geometry_count; i++)
+            st->moved[i] = affine3_identity();
+    }
+    bool changed = false;
+    for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+        changed = changed || memcmp(&st->moved[id], m, sizeof *m) != 0;
+        st->moved[id] = *m;
+    }
+    if (changed) {
+        st->picture_serial++;
+        if (st->moved_first >= st->moved_end) {
+            st->moved_first = first;
+            st->moved_end = first + count;
+        } else {
+            st->moved_first = first < st->moved_first ? first : st->moved_first;
+            st->moved_end = first + count > st->moved_end ? first + count : st->moved_end;
+        }
+    }
+    st->version++;
+    return true;
+}
+
 bool frame_state_set_colour(frame_state *st, uint32_t first, uint32_t count, const float *rgb)
 {
     if (!st->coloured && !rgb) {
@@ -291,6 +325,11 @@ uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
         id = run;
     }
     st->dirty_first = st->dirty_end = 0;
+    if (st->moved && st->moved_first < st->moved_end) {
+        accel_set_placement(a, st->moved_first, st->moved_end - st->moved_first, st->moved + st->moved_first);
+        calls++;
+    }
+    st->moved_first = st->moved_end = 0;
     /* what was hidden leaves the instance level's boxes (one refit) */
     accel_commit(a);
     return calls;

@@ -45,6 +45,7 @@
 #include <stdint.h>
 
 #include "camera.h"
+#include "geometry.h"
 #include "err.h"
 #include "txn.h"
 #include "vec3.h"
@@ -84,10 +85,13 @@ typedef struct frame_state {
     uint64_t *highlight;     /* bit set: highlighted */
     uint64_t *coloured;      /* bit set: colour[id] overrides the material */
     vec3 *colour;            /* geometry_count entries, with `coloured` */
+    affine3 *moved;          /* geometry_count placements applied after the scene's (identity:
+                                not moved), NULL until the first move */
 
     /* what frame_state_sync_accel still has to do */
     bool accel_unhide_all;   /* a show-all since the last sync */
     uint32_t dirty_first, dirty_end; /* ids [first, end) may differ from the accel's flags */
+    uint32_t moved_first, moved_end; /* ids [first, end) moved since the last sync */
 } frame_state;
 
 /* A state for geometry_count geometries with no channels, nothing hidden,
@@ -120,6 +124,9 @@ void frame_state_show_all(frame_state *st);
 bool frame_state_set_highlight(frame_state *st, uint32_t first, uint32_t count, bool on);
 /* rgb NULL: remove the override */
 bool frame_state_set_colour(frame_state *st, uint32_t first, uint32_t count, const float *rgb);
+/* Place [first, first + count) by m after the scene's placement (the identity: back where the
+ * scene put them). m must be invertible (txn_validate checks). False, st unchanged, out of memory. */
+bool frame_state_set_move(frame_state *st, uint32_t first, uint32_t count, const affine3 *m);
 /* The pipeline: the drawn status line changed. */
 void frame_state_bump_overlay(frame_state *st);
 
@@ -132,8 +139,9 @@ bool frame_state_colour(const frame_state *st, uint32_t id, vec3 *rgb);
 /* Bring the accel's hidden flags in line (serial section; see above).
  * Changes go as runs of consecutive ids (accel_set_hidden_range: a subtree
  * shown is one refit of the instance level), then accel_commit shrinks the
- * instance level around what was hidden. Returns the accel calls made (one
- * per run + unhide-all). */
+ * instance level around what was hidden. Moved instances get their new
+ * placement (accel_set_placement: one refit for the range). Returns the
+ * accel calls made (one per run + unhide-all + one per moved range). */
 uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a);
 
 #endif

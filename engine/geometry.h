@@ -119,6 +119,19 @@ static inline vec3 affine3_vector_transposed(const affine3 *a, vec3 v)
               m[2] * v.x + m[6] * v.y + m[10] * v.z);
 }
 
+/* a after b: p -> a(b(p)). */
+static inline affine3 affine3_compose(const affine3 *a, const affine3 *b)
+{
+    affine3 out;
+    const float *x = a->m, *y = b->m;
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 4; c++)
+            out.m[4 * r + c] = x[4 * r] * y[c] + x[4 * r + 1] * y[4 + c] + x[4 * r + 2] * y[8 + c];
+        out.m[4 * r + 3] += x[4 * r + 3];
+    }
+    return out;
+}
+
 /* The inverse (in double, rounded once); false when the linear part is
  * singular or anything is not finite. */
 bool affine3_invert(const affine3 *a, affine3 *inverse);

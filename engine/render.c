@@ -56,30 +56,34 @@ static vec3 transformed_error(const affine3 *m, vec3 p, vec3 error)
 #define RENDER_HIGHLIGHT_MIX 0.6f
 static const vec3 render_highlight_rgb = {1.0f, 0.55f, 0.05f};
 
-static surface describe_hit(const scene *s, const frame_state *st, const ray *r, const hit *h, bool need_position)
+static surface describe_hit(const render_view *v, const ray *r, const hit *h, bool need_position)
 {
+    const scene *s = v->scene;
     const scene_instance *inst = &s->instances[h->geom_id];
     const scene_geometry *g = &s->geometries[inst->geometry];
+    /* where the instance is now (a move transaction may have placed it anew) */
+    const accel_placement *pl = accel_placement_of(v->accel, h->geom_id);
     geometry_surface gs;
     surface sf;
-    if (inst->identity) {
+    if (pl->identity) {
         g->ops->describe(g->data, h->prim_id, r, h, need_position, &gs);
         sf.position = gs.position;
         sf.position_error = gs.position_error;
         sf.geometric_n = gs.geometric_n;
         sf.shading_n = gs.shading_n;
     } else {
-        ray local = {affine3_point(&inst->to_object, r->org), affine3_vector(&inst->to_object, r->dir), r->t_near,
+        ray local = {affine3_point(&pl->to_object, r->org), affine3_vector(&pl->to_object, r->dir), r->t_near,
                      r->t_far};
         g->ops->describe(g->data, h->prim_id, &local, h, need_position, &gs);
         if (need_position) {
-            sf.position = affine3_point(&inst->to_world, gs.position);
-            sf.position_error = transformed_error(&inst->to_world, gs.position, gs.position_error);
+            sf.position = affine3_point(&pl->to_world, gs.position);
+            sf.position_error = transformed_error(&pl->to_world, gs.position, gs.position_error);
         }
         /* normals by the inverse transpose: the transpose of world -> object */
-        sf.geometric_n = v3_normalize(affine3_vector_transposed(&inst->to_object, gs.geometric_n));
-        sf.shading_n = v3_normalize(affine3_vector_transposed(&inst->to_object, gs.shading_n));
+        sf.geometric_n = v3_normalize(affine3_vector_transposed(&pl->to_object, gs.geometric_n));
+        sf.shading_n = v3_normalize(affine3_vector_transposed(&pl->to_object, gs.shading_n));
     }
+    const frame_state *st = v->state;
     sf.mat = &s->materials[inst->material != SCENE_NO_MATERIAL ? inst->material : gs.material_id];
     sf.kd = gs.has_colour ? gs.colour : sf.mat->diffuse;
     if (st) { /* the frame state's colour and highlight of the instance (absent: two NULL tests) */
@@ -182,7 +186,7 @@ vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
     hit h;
     if (!accel_intersect(v->accel, r, &h))
         return v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
-    surface sf = describe_hit(s, v->state, r, &h, needs_position(v));
+    surface sf = describe_hit(v, r, &h, needs_position(v));
     if (v->shading == RENDER_SHADE_EYELIGHT) {
         float grey = eyelight_grey(&sf, r);
         if (v->shadows && s->light_count > 0) {
@@ -254,7 +258,7 @@ static void packet_derive_hit_surfaces(const render_view *v, ray_packet *p, pack
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray r = packet_get_ray(p, i);
         hit h = packet_get_hit(p, i);
-        surface sf = describe_hit(s, v->state, &r, &h, need_position);
+        surface sf = describe_hit(v, &r, &h, need_position);
         p->ng_x[i] = sf.geometric_n.x, p->ng_y[i] = sf.geometric_n.y, p->ng_z[i] = sf.geometric_n.z;
         p->ns_x[i] = sf.shading_n.x, p->ns_y[i] = sf.shading_n.y, p->ns_z[i] = sf.shading_n.z;
         if (need_position) {

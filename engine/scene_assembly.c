@@ -89,14 +89,8 @@ static int sink_instance(void *ctx, int part, int mesh_id, const float to_world[
     }
     affine3 xform;
     memcpy(xform.m, to_world, sizeof xform.m);
-    if (k->placement) { /* placement after the file's own transform */
-        const float *p = k->placement->m, *a = to_world;
-        for (int r = 0; r < 3; r++) {
-            for (int c = 0; c < 4; c++)
-                xform.m[4 * r + c] = p[4 * r] * a[c] + p[4 * r + 1] * a[4 + c] + p[4 * r + 2] * a[8 + c];
-            xform.m[4 * r + 3] += p[4 * r + 3];
-        }
-    }
+    if (k->placement) /* placement after the file's own transform */
+        xform = affine3_compose(k->placement, &xform);
     uint32_t scene_part = (uint32_t)(k->part_base + part);
     if (scene_add_instance(k->s, k->geometry_ids[mesh_id], &xform, scene_part) < 0) {
         tess_error_set(k->err, "%s: part %u: its transform is singular or not finite, or out of memory", k->path,

@@ -397,6 +397,26 @@ static bool mesh_xform(jr_ctx *c, json_object *v, float xform[12])
     return ok;
 }
 
+/* Each element of the array member `key` of `obj` (absent: nothing) through
+ * `one`, with the field path following ("key[i]"). */
+static bool load_each(loader *L, json_object *obj, const char *key, bool (*one)(loader *L, json_object *v))
+{
+    jr_ctx *c = &L->ctx;
+    json_object *all;
+    if (!jr_get_member(obj, key, &all))
+        return true;
+    size_t outer = jr_field_key(c, key);
+    bool ok = jr_expect_array(c, all);
+    size_t n = ok ? json_object_array_length(all) : 0;
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t saved = jr_field_index(c, i);
+        ok = one(L, json_object_array_get_idx(all, i));
+        jr_field_leave(c, saved);
+    }
+    jr_field_leave(c, outer);
+    return ok;
+}
+
 /* `file` relative to the scene file's directory (absolute paths as they are). */
 static bool resolve_path(loader *L, const char *file, char *out, size_t out_bytes)
 {
@@ -465,23 +485,6 @@ static bool load_mesh(loader *L, json_object *v)
     return true;
 }
 
-static bool load_meshes(loader *L, json_object *root)
-{
-    jr_ctx *c = &L->ctx;
-    json_object *all;
-    if (!jr_get_member(root, "meshes", &all))
-        return true;
-    size_t outer = jr_field_key(c, "meshes");
-    bool ok = jr_expect_array(c, all);
-    size_t n = ok ? json_object_array_length(all) : 0;
-    for (size_t i = 0; ok && i < n; i++) {
-        size_t saved = jr_field_index(c, i);
-        ok = load_mesh(L, json_object_array_get_idx(all, i));
-        jr_field_leave(c, saved);
-    }
-    jr_field_leave(c, outer);
-    return ok;
-}
 
 /* One entry of an assembly's "colours": the parts matching `parts` (and
  * their subtrees) get a material, named or made from a diffuse colour. */
@@ -541,38 +544,9 @@ static bool load_assembly(loader *L, json_object *v)
     tess_error why = {{0}};
     if (!scene_load_assembly(L->s, resolved, affine3_is_identity(&placement) ? NULL : &placement, &why))
         return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the assembly");
-    json_object *colours;
-    if (!jr_get_member(v, "colours", &colours))
-        return true;
-    size_t outer = jr_field_key(c, "colours");
-    bool ok = jr_expect_array(c, colours);
-    size_t n = ok ? json_object_array_length(colours) : 0;
-    for (size_t i = 0; ok && i < n; i++) {
-        size_t saved = jr_field_index(c, i);
-        ok = load_part_colour(L, json_object_array_get_idx(colours, i));
-        jr_field_leave(c, saved);
-    }
-    jr_field_leave(c, outer);
-    return ok;
+    return load_each(L, v, "colours", load_part_colour);
 }
 
-static bool load_assemblies(loader *L, json_object *root)
-{
-    jr_ctx *c = &L->ctx;
-    json_object *all;
-    if (!jr_get_member(root, "assemblies", &all))
-        return true;
-    size_t outer = jr_field_key(c, "assemblies");
-    bool ok = jr_expect_array(c, all);
-    size_t n = ok ? json_object_array_length(all) : 0;
-    for (size_t i = 0; ok && i < n; i++) {
-        size_t saved = jr_field_index(c, i);
-        ok = load_assembly(L, json_object_array_get_idx(all, i));
-        jr_field_leave(c, saved);
-    }
-    jr_field_leave(c, outer);
-    return ok;
-}
 
 static bool load_sphere(loader *L, json_object *v)
 {
@@ -588,23 +562,6 @@ static bool load_sphere(loader *L, json_object *v)
     return scene_add_sphere(L->s, center, radius, material_id) >= 0 || out_of_memory(L);
 }
 
-static bool load_spheres(loader *L, json_object *root)
-{
-    jr_ctx *c = &L->ctx;
-    json_object *all;
-    if (!jr_get_member(root, "spheres", &all))
-        return true;
-    size_t outer = jr_field_key(c, "spheres");
-    bool ok = jr_expect_array(c, all);
-    size_t n = ok ? json_object_array_length(all) : 0;
-    for (size_t i = 0; ok && i < n; i++) {
-        size_t saved = jr_field_index(c, i);
-        ok = load_sphere(L, json_object_array_get_idx(all, i));
-        jr_field_leave(c, saved);
-    }
-    jr_field_leave(c, outer);
-    return ok;
-}
 
 static bool load_scene(loader *L, json_object *root)
 {
@@ -616,8 +573,8 @@ static bool load_scene(loader *L, json_object *root)
                               jr_kind(root));
     if (!jr_check_fields(c, root, fields) || !jr_opt_vec3(c, root, "background", jr_range_nonneg, &L->s->background) ||
         !jr_opt_vec3(c, root, "ambient", jr_range_nonneg, &L->s->ambient) || !load_materials(L, root) ||
-        !load_lights(L, root) || !load_camera(L, root) || !load_meshes(L, root) || !load_spheres(L, root) ||
-        !load_assemblies(L, root))
+        !load_lights(L, root) || !load_camera(L, root) || !load_each(L, root, "meshes", load_mesh) ||
+        !load_each(L, root, "spheres", load_sphere) || !load_each(L, root, "assemblies", load_assembly))
         return false;
     if (scene_instanced_triangle_count(L->s) == 0 && L->s->spheres.count == 0)
         return tess_error_set(c->err, "%s: scene has no geometry", c->path);

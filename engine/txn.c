@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "frame_state.h"
+#include "geometry.h"
 #include "render.h"
 
 _Static_assert(sizeof(((txn_record *)0)->args.status.text) == TXN_TEXT_BYTES, "status text");
@@ -22,7 +23,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_SHOW] = "show",             [TXN_ISOLATE] = "isolate",
     [TXN_HIGHLIGHT] = "highlight",   [TXN_COLOUR] = "colour",
     [TXN_SHADOWS] = "shadows",       [TXN_RENDERER] = "renderer",
-    [TXN_THREADS] = "threads",       [TXN_CHANNEL_ACTIVE] = "channel-active",
+    [TXN_THREADS] = "threads",       [TXN_CHANNEL_ACTIVE] = "channel-active", [TXN_MOVE] = "move",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -115,6 +116,14 @@ txn_record txn_colour(uint32_t first, uint32_t count, const float rgb[3])
     r.args.colour.reset = rgb == NULL;
     if (rgb)
         memcpy(r.args.colour.rgb, rgb, sizeof r.args.colour.rgb);
+    return r;
+}
+
+txn_record txn_move(uint32_t first, uint32_t count, const float m[12])
+{
+    txn_record r = blank(TXN_MOVE);
+    r.args.move.geoms = (txn_geoms){first, count};
+    memcpy(r.args.move.m, m, sizeof r.args.move.m);
     return r;
 }
 
@@ -212,6 +221,18 @@ bool txn_validate(const txn_record *r, tess_error *err)
             return tess_error_set(err, "channel-active: channel: %d is not in 0..%d", (int)r->args.channel.channel,
                                   TXN_MAX_CHANNELS - 1);
         return true;
+    case TXN_MOVE: {
+        if (!geoms_valid(name, &r->args.move.geoms, err))
+            return false;
+        for (int i = 0; i < 12; i++)
+            if (!isfinite(r->args.move.m[i]))
+                return tess_error_set(err, "move: m[%d]: %g is not finite", i, (double)r->args.move.m[i]);
+        affine3 a, inverse;
+        memcpy(a.m, r->args.move.m, sizeof a.m);
+        if (!affine3_invert(&a, &inverse))
+            return tess_error_set(err, "move: m: the 3x3 part is singular");
+        return true;
+    }
     case TXN_SHOW_ALL:
     case TXN_TOUR:
     case TXN_QUIT:
@@ -316,6 +337,15 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
             return false;
         frame_state_set_active(st, r->args.channel.channel, r->args.channel.on);
         return true;
+    case TXN_MOVE: {
+        if (!geoms_in(st, name, &r->args.move.geoms, err))
+            return false;
+        affine3 a;
+        memcpy(a.m, r->args.move.m, sizeof a.m);
+        if (!frame_state_set_move(st, r->args.move.geoms.first, r->args.move.geoms.count, &a))
+            return out_of_memory(name, err);
+        return true;
+    }
     case TXN_TOUR:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -422,6 +452,11 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
         break;
     case TXN_CHANNEL_ACTIVE:
         put(&o, " %d %d", (int)r->args.channel.channel, r->args.channel.on ? 1 : 0);
+        break;
+    case TXN_MOVE:
+        put_geoms(&o, &r->args.move.geoms);
+        for (int i = 0; i < 12; i++)
+            put(&o, " %a", (double)r->args.move.m[i]);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
@@ -661,6 +696,13 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
             return false;
         t->args.channel.channel = (int32_t)v;
         return flag(r, &t->args.channel.on, "channel-active on/off");
+    case TXN_MOVE:
+        if (!geoms_text(r, name, &t->args.move.geoms))
+            return false;
+        for (int i = 0; i < 12; i++)
+            if (!float_value(r, &t->args.move.m[i], "move matrix element"))
+                return false;
+        return true;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -814,6 +856,12 @@ static void layout(txn_record *t, unsigned char *b, bool write)
     case TXN_CHANNEL_ACTIVE:
         I32(4, t->args.channel.channel);
         U8(8, t->args.channel.on);
+        break;
+    case TXN_MOVE:
+        U32(4, t->args.move.geoms.first);
+        U32(8, t->args.move.geoms.count);
+        for (int i = 0; i < 12; i++)
+            F32(12 + 4 * i, t->args.move.m[i]);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:

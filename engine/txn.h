@@ -27,6 +27,11 @@
  *   highlight        first, count, on              highlight flag of those geometries
  *   colour           first, count, reset | rgb     colour override (linear RGB, finite, >= 0)
  *                                                  of those geometries, or the override removed
+ *   move             first, count, m[12]           those instances placed by the row-major 3x4
+ *                                                  affine m (finite, invertible) applied after
+ *                                                  their own placement: relative to where the
+ *                                                  scene put them, never cumulative (the
+ *                                                  identity puts them back)
  *   shadows          on                            shadow rays traced or not
  *   renderer         name                          the renderer (renderer_by_name)
  *   threads          count (1..TXN_MAX_THREADS)    render threads
@@ -51,6 +56,7 @@
  *   highlight FIRST COUNT ON                         colour FIRST COUNT R G B | colour FIRST COUNT reset
  *   shadows ON             renderer NAME             threads N
  *   channel-active CH ON   tour ON                   quit
+ *   move FIRST COUNT M0 .. M11
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -70,6 +76,7 @@
  *     colour          u32 first, u32 count, u8 reset, 3 zero bytes, f32 r, g, b
  *     threads         i32 count
  *     channel-active  i32 channel, u8 on
+ *     move            u32 first, u32 count, 12 x f32 m (row-major 3x4)
  *     show-all, quit  nothing
  * Decoding checks the kind, the zero bytes and then txn_validate. */
 #ifndef TESSERA_TXN_H
@@ -110,6 +117,7 @@ typedef enum txn_kind {
     TXN_RENDERER,
     TXN_THREADS,
     TXN_CHANNEL_ACTIVE,
+    TXN_MOVE,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -149,6 +157,10 @@ typedef struct txn_record {
             char name[TXN_NAME_BYTES];
         } renderer;
         struct {
+            txn_geoms geoms;
+            float m[12];        /* row-major 3x4 affine, applied after each instance's placement */
+        } move;
+        struct {
             int32_t count;
         } threads;
         struct {
@@ -179,6 +191,7 @@ txn_record txn_flag(txn_kind kind, bool on); /* governor-status, shadows, tour *
 txn_record txn_geoms_record(txn_kind kind, uint32_t first, uint32_t count); /* hide, show, isolate */
 txn_record txn_highlight(uint32_t first, uint32_t count, bool on);
 txn_record txn_colour(uint32_t first, uint32_t count, const float rgb[3]); /* rgb NULL: reset */
+txn_record txn_move(uint32_t first, uint32_t count, const float m[12]);
 txn_record txn_renderer(const char *name);
 txn_record txn_threads(int count);
 txn_record txn_channel_active(int channel, bool on);

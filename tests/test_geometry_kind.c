@@ -14,6 +14,7 @@
 #include "engine/accel.h"
 #include "engine/camera.h"
 #include "engine/frame_state.h"
+#include "engine/txn.h"
 #include "engine/geometry.h"
 #include "engine/mesh.h"
 #include "engine/packet.h"
@@ -487,4 +488,68 @@ Test(geometry_kind, highlight_and_colour_of_the_frame_state_tint_only_their_inst
     free(tinted);
     accel_destroy(a);
     scene_destroy(s);
+}
+
+/* Scene boxes_scene(true) with instance 2 placed by `move` after its own
+ * placement, built directly (what a move transaction must equal). */
+static scene *boxes_scene_moved(const affine3 *move)
+{
+    scene *s = boxes_scene(true);
+    affine3 composed = affine3_compose(move, &s->instances[2].to_world);
+    affine3 inverse;
+    cr_assert(affine3_invert(&composed, &inverse));
+    s->instances[2].to_world = composed;
+    s->instances[2].to_object = inverse;
+    s->instances[2].identity = false;
+    return s;
+}
+
+Test(instances, a_move_transaction_places_an_instance_as_if_the_scene_had)
+{
+    const affine3 move = {{0.8f, -0.6f, 0.f, 1.5f, 0.6f, 0.8f, 0.f, 0.25f, 0.f, 0.f, 1.f, -1.f}};
+    scene *s = boxes_scene(true), *want = boxes_scene_moved(&move);
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err), *aw = accel_build(want, 1, &err);
+    cr_assert(a && aw, "%s", err.msg);
+    accel_set_hidden(a, 1, true);
+    accel_set_hidden(aw, 1, true);
+    camera_desc c = {.eye = v3(4.f, 5.f, 7.f), .look_at = v3(0.f, 0.5f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 45.f};
+    const int w = 64, h = 48;
+    render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, w, h), .shadows = true,
+                     .shading = RENDER_SHADE_PHONG};
+    render_view vw = v;
+    vw.scene = want;
+    vw.accel = aw;
+    size_t n = (size_t)w * h * 3;
+    float *before = calloc(n, sizeof(float)), *img = calloc(n, sizeof(float)), *ref = calloc(n, sizeof(float));
+    render_image(&v, 1, before, NULL);
+    render_image(&vw, 1, ref, NULL);
+    cr_assert(memcmp(before, ref, n * sizeof(float)) != 0, "the move does not change the picture");
+
+    /* through the frame state, as the serial section does it */
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), true, 1, s->instance_count);
+    txn_record r = txn_move(2, 1, move.m);
+    cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
+    cr_assert_geq(frame_state_sync_accel(&st, a), 1u);
+    render_image(&v, 1, img, NULL);
+    cr_assert(memcmp(img, ref, n * sizeof(float)) == 0, "moved: not the picture of the scene placed so");
+    const accel_placement *pl = accel_placement_of(a, 2);
+    cr_assert(memcmp(&pl->to_world, &want->instances[2].to_world, sizeof pl->to_world) == 0);
+
+    /* the identity puts it back, bit for bit */
+    const float id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    r = txn_move(2, 1, id);
+    cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
+    frame_state_sync_accel(&st, a);
+    render_image(&v, 1, img, NULL);
+    cr_assert(memcmp(img, before, n * sizeof(float)) == 0, "moved back: not the original picture");
+    frame_state_finish(&st);
+    free(before);
+    free(img);
+    free(ref);
+    accel_destroy(a);
+    accel_destroy(aw);
+    scene_destroy(s);
+    scene_destroy(want);
 }

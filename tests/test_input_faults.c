@@ -213,6 +213,10 @@ static input_txn sample_record(int i)
     case TXN_RENDERER: return txn_renderer("eyelight");
     case TXN_THREADS: return txn_threads(1 + i % 8);
     case TXN_CHANNEL_ACTIVE: return txn_channel_active(i % 4, true);
+    case TXN_MOVE: {
+        const float m[12] = {0.f, -1.f, 0.f, 0.5f * (float)i, 1.f, 0.f, 0.f, 0.f, 0.f, 0.f, 2.f, -0.25f};
+        return txn_move(3, 4, m);
+    }
     case TXN_KIND_COUNT: break;
     }
     return txn_simple(TXN_QUIT);

@@ -39,6 +39,10 @@ static txn_record sample(txn_kind k)
     case TXN_RENDERER: return txn_renderer("eyelight");
     case TXN_THREADS: return txn_threads(7);
     case TXN_CHANNEL_ACTIVE: return txn_channel_active(1, false);
+    case TXN_MOVE: {
+        const float m[12] = {0.f, -1.f, 0.f, 0.1f, 1.f, 0.f, 0.f, 1e-7f, 0.f, 0.f, 3.f, -3.4028235e38f};
+        return txn_move(6, 3, m);
+    }
     case TXN_KIND_COUNT: break;
     }
     cr_assert_fail("no sample for kind %d", (int)k);
@@ -151,7 +155,7 @@ Test(txn, the_binary_layout_is_little_endian_as_documented)
     txn_record back;
     b[0] = TXN_KIND_COUNT;
     cr_expect_not(txn_decode_binary(b, &back, &err));
-    cr_expect(strstr(err.msg, "kind: 16 is not a transaction kind"), "%s", err.msg);
+    cr_expect(strstr(err.msg, "kind: 17 is not a transaction kind"), "%s", err.msg);
     r = txn_highlight(1, 1, true);
     cr_assert(txn_encode_binary(&r, b));
     b[100] = 1;
@@ -177,6 +181,8 @@ Test(txn, bad_values_are_refused_naming_the_field)
     const float neg[3] = {0.f, -1.f, 0.f}, inf[3] = {INFINITY, 0.f, 0.f};
     txn_record unterminated = txn_status("x");
     memset(unterminated.args.status.text, 'a', sizeof unterminated.args.status.text);
+    const float flat[12] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0}, nan_m[12] = {1, 0, 0, NAN, 0, 1, 0, 0, 0, 0, 1, 0},
+                ident[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
     struct {
         txn_record r;
         const char *expect;
@@ -197,7 +203,10 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_threads(0), "threads: count: 0 is not in 1..256"},
         {txn_threads(257), "threads: count: 257"},
         {txn_channel_active(-1, true), "channel-active: channel: -1 is not in 0..15"},
-        {txn_simple(TXN_KIND_COUNT), "kind: 16 is not a transaction kind"},
+        {txn_move(0, 1, flat), "move: m: the 3x3 part is singular"},
+        {txn_move(0, 1, nan_m), "move: m[3]: nan is not finite"},
+        {txn_move(0, 0, ident), "move: count: 0"},
+        {txn_simple(TXN_KIND_COUNT), "kind: 17 is not a transaction kind"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};
@@ -277,6 +286,10 @@ Test(txn, every_engine_kind_applies_to_a_frame_state)
     cr_expect_eq(st.renderer, renderer_by_name("eyelight"));
     cr_expect_eq(st.threads, 7);
     cr_expect(st.active[0] && !st.active[1]);
+    cr_assert_not_null(st.moved);
+    for (uint32_t id = 0; id < GEOMS; id++)
+        cr_expect_eq(affine3_is_identity(&st.moved[id]), id < 6 || id > 8, "geometry %u moved", id);
+    cr_expect(st.moved[7].m[11] == -3.4028235e38f && st.moved_first == 6 && st.moved_end == 9);
     /* out of the state's range: the error names it, nothing changes */
     txn_record past = txn_geoms_record(TXN_HIDE, GEOMS - 1, 2);
     err = (tess_error){{0}};
