@@ -584,6 +584,10 @@ static bool quoted(reader *r, char *out, size_t size)
                 return tess_error_set(r->err, "status: unknown escape (expected \\\", \\\\ or \\xHH)");
             }
         }
+        /* a NUL (raw or \x00) would end the text early: what follows could
+         * never be written back, so a replay would not be the recording */
+        if (ch == '\0')
+            return tess_error_set(r->err, "status: the text holds a NUL byte");
         if (n + 1 >= size)
             return tess_error_set(r->err, "status: the text is longer than %zu bytes", size - 1);
         out[n++] = (char)ch;

@@ -242,6 +242,7 @@ Test(txn, bad_text_names_the_field)
         {"show 1.5 1", "show: the geometry id must be a whole number >= 0"},
         {"highlight 1 1 2", "highlight on/off: expected 0 or 1, got '2'"},
         {"colour 1 1 rest", "colour r: expected a finite number, got 'rest'"},
+        {"status \"a\\x00b\"", "status: the text holds a NUL byte"},
         {"colour 1 1 1 1", "colour b is missing"},
         {"renderer", "renderer name is missing"},
         {"threads 300", "threads: the count must be a whole number in 1..256"},
