@@ -295,9 +295,6 @@ static bool write_pfm_grey(const char *path, int width_px, int height_px, const 
     return ok;
 }
 
-/* Load the scene, build its accel (timed), switch kernels if asked, and
- * choose the camera as 'tessera render' does; print the camera in
- * embree_bench's syntax. On failure prints the error and returns false. */
 /* --flatten: the file's geometry as one mesh (mesh_load bakes the node
  * transforms), in a scene made as scene_load makes one of a mesh file: the
  * default material and light. Timed and reported like cli_scene_prepare. */
@@ -341,6 +338,9 @@ static bool prepare_flat(const char *path, int threads, cli_scene *cs)
     return true;
 }
 
+/* Load the scene, build its accel (timed), switch kernels if asked, and
+ * choose the camera as 'tessera render' does; print the camera in
+ * embree_bench's syntax. On failure prints the error and returns false. */
 static bool prepare(bench_options *o, cli_scene *cs)
 {
     if (!(o->flatten ? prepare_flat(o->scene_path, o->threads, cs) : cli_scene_prepare(o->scene_path, o->threads, cs)))
