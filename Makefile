@@ -56,7 +56,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-pipeline bench-wall clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-parts bench-pipeline bench-wall clean check-headers unrobust \
         gen-assembly
 
 all: tessera
@@ -211,10 +211,23 @@ check-headers:
 
 bench:
 	@sh tools/deps.sh --bench
-	$(MAKE) tessera
+	$(MAKE) tessera $(BUILD)/gen-assembly $(EMBREE_PARTS)
 	sh tools/bench.sh
 	sh tools/bench_wall.sh
 	sh tools/bench_pipeline.sh
+	sh tools/bench_parts.sh
+
+# Embree's two-level scene on an assembly (tools/embree_parts/embree_parts.c): built only for the
+# benchmarks (it needs libembree-dev: tools/deps.sh --bench), never by make or make test
+EMBREE_PARTS := $(BUILD)/embree_parts
+$(EMBREE_PARTS): $(BUILD)/tools/embree_parts/embree_parts.o $(LIB)
+	$(CXX) $(LDFLAGS) -pthread -o $@ $(BUILD)/tools/embree_parts/embree_parts.o $(LIB) $(LDLIBS) -lembree3
+
+# parts and instances alone (tools/bench_parts.sh): the "## Parts and instances" section of BENCHMARKS.md
+bench-parts:
+	@sh tools/deps.sh --bench
+	$(MAKE) tessera $(BUILD)/gen-assembly $(EMBREE_PARTS)
+	sh tools/bench_parts.sh
 
 # the wall benchmarks alone (bench --wall): the "## Wall" section of BENCHMARKS.md
 bench-wall: deps

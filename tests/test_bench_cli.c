@@ -28,6 +28,7 @@ static const char *const bench_fields[] = {
     "scene",        "size",         "threads",  "frames",        "warmup",     "shadows",     "isa",
     "triangles",    "spheres",      "load_s",   "build_s",       "prim_mrays", "total_mrays", "frame_ms_median",
     "frame_ms_min", "frame_ms_max", "hit_rate", "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
+    "hits",         "instances",    "geometries", "triangles_instanced", "bytes_per_instanced_tri",
 };
 #define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
 
@@ -119,6 +120,17 @@ static void check_consistent(const char *line)
               per_tri, mesh_b, accel_b, tris);
     double other = field(line, "cpu_other");
     cr_expect(other >= 0.0 || other == -1.0, "cpu_other %g", other);
+    /* the instancing fields */
+    double placed = field(line, "triangles_instanced"), per_placed = field(line, "bytes_per_instanced_tri");
+    cr_expect(placed >= tris, "triangles_instanced %g < triangles %g", placed, tris);
+    cr_expect(fabs(per_placed - (mesh_b + accel_b) / placed) <= 0.0051, "bytes_per_instanced_tri %g, expected (%g + %g) / %g",
+              per_placed, mesh_b, accel_b, placed);
+    cr_expect(field(line, "instances") >= 1 && field(line, "geometries") >= 1, "%s", line);
+    char size[64];
+    int w = 0, h = 0;
+    cr_assert(field_text(line, "size", size, sizeof size) && sscanf(size, "%dx%d", &w, &h) == 2);
+    cr_expect(fabs(field(line, "hits") - hit_rate * w * h) <= 0.00005 * w * h + 0.5, "hits %g, hit_rate %g, %dx%d",
+              field(line, "hits"), hit_rate, w, h);
 }
 
 /* An ascii PLY octahedron: 6 vertices, 8 triangles, closed (so shadow rays
@@ -159,8 +171,8 @@ Test(bench_cli, help_documents_options_and_every_field)
 {
     char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
     cr_assert_eq(run_bench(out, err, "--help"), 0, "%s", err);
-    const char *options[] = {"--scene",  "--size",    "--threads", "--frames", "--warmup",
-                             "--shadows", "--camera", "--isa",     "--out"};
+    const char *options[] = {"--scene",  "--size",   "--threads", "--frames",  "--warmup",     "--shadows",
+                             "--camera", "--isa",    "--out",     "--flatten", "--part-txns", "PARTTXN"};
     for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
         cr_expect(strstr(out, options[i]), "bench --help lacks %s", options[i]);
     for (size_t i = 0; i < BENCH_FIELD_COUNT; i++) {
@@ -288,6 +300,99 @@ Test(bench_cli, bad_options_give_one_line)
     EXPECT_ERROR(2, "--scene", "--scene", "needs a value");
     EXPECT_ERROR(2, "--no-shadows", "unknown option");
     EXPECT_ERROR(2, "--isa neon", "--isa", "neon");
+    EXPECT_ERROR(2, "--flatten --size 16x16", "--flatten", "--scene");
+    EXPECT_ERROR(2, "--part-txns 0", "--part-txns", "from 1");
     EXPECT_ERROR(1, "--scene %s/missing.ply --size 16x16", "missing.ply");
     EXPECT_ERROR(1, "--size 16x16 --out %s/no/such/dir/x.pfm", "no/such/dir", "directory");
+}
+
+/* ---- parts and instances (suite bench_parts) ---- */
+
+#define ASSEMBLY "data/assembly-small.glb"
+/* the parts scene's default framing at 320x180, given to both runs so that
+ * they trace the same rays */
+#define ASSEMBLY_CAMERA "9.42882,3.01429,9.04286,3.40025,0,0,0,1,0,40"
+
+TestSuite(bench_parts, .init = make_tmp_dir, .fini = remove_tmp_dir, .timeout = 240);
+
+Test(bench_parts, flatten_traces_the_same_triangles_as_the_parts)
+{
+    char parts[OUTPUT_BYTES], flat[OUTPUT_BYTES];
+    run_ok("--scene " ASSEMBLY " --size 320x180 --threads 2 --frames 1 --camera " ASSEMBLY_CAMERA, parts);
+    run_ok("--scene " ASSEMBLY " --flatten --size 320x180 --threads 2 --frames 1 --camera " ASSEMBLY_CAMERA, flat);
+    check_consistent(parts);
+    check_consistent(flat);
+
+    tess_error err = {{0}};
+    scene *s = scene_load(ASSEMBLY, &err);
+    cr_assert(s, "%s", err.msg);
+    cr_expect_eq(field(parts, "instances"), (double)s->instance_count);
+    cr_expect_eq(field(parts, "geometries"), (double)s->geometry_count);
+    cr_expect_eq(field(parts, "triangles"), (double)scene_triangle_count(s));
+    cr_expect_eq(field(parts, "triangles_instanced"), (double)scene_instanced_triangle_count(s));
+    cr_expect(field(parts, "instances") > field(parts, "geometries"), "the assembly places meshes more than once");
+    cr_expect(field(parts, "triangles_instanced") > field(parts, "triangles"), "%s", parts);
+    scene_destroy(s);
+
+    /* flattened: one mesh holding every placed triangle */
+    cr_expect_eq(field(flat, "instances"), 1);
+    cr_expect_eq(field(flat, "geometries"), 1);
+    cr_expect_eq(field(flat, "triangles"), field(parts, "triangles_instanced"), "flat %s\nparts %s", flat, parts);
+    cr_expect_eq(field(flat, "triangles_instanced"), field(parts, "triangles_instanced"));
+    /* instancing stores less per placed triangle */
+    cr_expect(field(parts, "bytes_per_instanced_tri") < field(flat, "bytes_per_instanced_tri"), "parts %s\nflat %s",
+              parts, flat);
+    /* the same picture: the transforms baked by assimp round differently from
+     * tessera's per-instance ones only in the last bits */
+    double hp = field(parts, "hits"), hf = field(flat, "hits");
+    cr_expect(hp > 0 && fabs(hp - hf) <= 0.001 * hp + 1.0, "hits: parts %g, flat %g", hp, hf);
+}
+
+Test(bench_parts, part_txns_line_and_the_hides_take_effect)
+{
+    char out[OUTPUT_BYTES], err[OUTPUT_BYTES], buf[512];
+    int code = run_bench(out, err, "--scene " ASSEMBLY " --size 320x180 --threads 2 --part-txns 3");
+    cr_assert_eq(code, 0, "exit %d: %s", code, err);
+    cr_assert_eq(count_lines(out), 1, "stdout should be one line: %s", out);
+    cr_assert(!strncmp(out, "PARTTXN scene=", 14), "not a PARTTXN line: %s", out);
+    cr_expect(!strstr(out, "BENCH"), "%s", out);
+    cr_expect_str_eq(field_text(out, "check", buf, sizeof buf), "ok");
+    cr_expect_eq(field(out, "rounds"), 3);
+    cr_expect_eq(field(out, "threads"), 2);
+
+    tess_error e = {{0}};
+    scene *s = scene_load(ASSEMBLY, &e);
+    cr_assert(s, "%s", e.msg);
+    cr_expect_eq(field(out, "instances"), (double)s->instance_count);
+    double section_n = field(out, "section_instances"), bolt_n = field(out, "bolt_instances");
+    cr_expect(section_n >= 1 && section_n < s->instance_count, "section_instances %g", section_n);
+    cr_expect(bolt_n >= 1 && bolt_n < section_n, "bolt_instances %g", bolt_n);
+    cr_expect(field(out, "part_instance") < s->instance_count);
+    scene_destroy(s);
+    const char *section = field_text(out, "section", buf, sizeof buf);
+    cr_expect(section && !strncmp(section, "assembly/section-", 17), "section=%s", section ? section : "(missing)");
+    const char *bolt = field_text(out, "bolt", buf, sizeof buf);
+    cr_expect(bolt && strstr(bolt, "/bolt-"), "bolt=%s", bolt ? bolt : "(missing)");
+    /* the check is only worth something when the hidden section was in view */
+    cr_expect(field(out, "section_hits") > 0, "%s", out);
+
+    static const char *const kinds[] = {"hide_section", "isolate_bolt", "show_all", "hide_part", "show_part"};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        char key[64];
+        snprintf(key, sizeof key, "%s_us_median", kinds[k]);
+        double median = field(out, key);
+        snprintf(key, sizeof key, "%s_us_max", kinds[k]);
+        double max = field(out, key);
+        cr_expect(median >= 0.0 && median <= max, "%s: median %g max %g", kinds[k], median, max);
+    }
+}
+
+Test(bench_parts, part_txns_needs_an_assembly)
+{
+    char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
+    write_octahedron("octa.ply");
+    int code = run_bench(out, err, "--scene %s/octa.ply --size 16x16 --part-txns 2");
+    cr_expect_eq(code, 1, "exit %d: %s", code, err);
+    cr_expect(strstr(err, "tessera: error: ") && strstr(err, "--part-txns needs an assembly"), "%s", err);
+    cr_expect(!strstr(out, "PARTTXN") && !strstr(out, "BENCH"), "%s", out);
 }

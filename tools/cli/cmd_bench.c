@@ -9,6 +9,7 @@
  * the peer, which reports rays / total time, each timed frame is timed on its
  * own and the BENCH line gives medians over the frames. */
 #include <errno.h>
+#include <math.h>
 #include <libgen.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -21,8 +22,11 @@
 
 #include "cli.h"
 #include "engine/accel.h"
+#include "engine/frame_state.h"
+#include "engine/part_tree.h"
 #include "engine/render.h"
 #include "engine/scene.h"
+#include "engine/txn.h"
 #include "wall/dump.h"
 
 /* Defaults: the size, frames and warm-up of the peer's 1920x1080 runs
@@ -32,6 +36,10 @@
 #define BENCH_DEFAULT_FRAMES 5
 #define BENCH_DEFAULT_WARMUP 1
 #define BENCH_MAX_FRAMES 100000
+#define BENCH_MAX_PART_TXNS 100000
+/* --part-txns: the checks trace a grid of this many rays across the image */
+#define BENCH_CHECK_COLS 160
+#define BENCH_CHECK_ROWS 90
 
 typedef struct bench_options {
     const char *scene_path; /* NULL: the built-in default scene */
@@ -44,6 +52,8 @@ typedef struct bench_options {
     camera_desc camera;
     const char *out;        /* image file for the last frame, or NULL */
     const char *isa;        /* kernels to use ("sse2", "avx2", "avx512"), or NULL: the engine's choice */
+    bool flatten;           /* load the file as one mesh (mesh_load), not as an assembly */
+    int part_txns;          /* > 0: time this many rounds of part transactions instead of frames */
 } bench_options;
 
 /* One timed frame. */
@@ -76,6 +86,14 @@ static void bench_usage(FILE *f)
           "                   eye, look-at point, up vector, vertical field of view in degrees\n"
           "  --isa NAME       traversal kernels: sse2, avx2 or avx512 (default: the best this CPU\n"
           "                   runs, or the environment's TESSERA_ISA)\n"
+          "  --flatten        load the scene file's geometry as ONE mesh, node transforms baked in\n"
+          "                   (mesh_load: assimp's PreTransformVertices), not as parts and instances:\n"
+          "                   the same triangles as the assembly, traced without instancing\n"
+          "  --part-txns N    instead of frames: N rounds of part transactions on the loaded scene and\n"
+          "                   built accel (an assembly), each as a pipeline's serial section does it\n"
+          "                   (txn_apply on a frame state, then frame_state_sync_accel, which commits):\n"
+          "                   hide a section's subtree, isolate one bolt, show all, hide one part,\n"
+          "                   show it again; prints one PARTTXN line (below) instead of BENCH\n"
           "  --path FILE, --scaling  the pipeline benchmarks: see 'tessera bench --scaling --help'\n"
           "  --wall FILE      frame time of a display wall, whole and output by output, per display\n"
           "                   kind: see 'tessera bench --wall --help'\n"
@@ -89,11 +107,12 @@ static void bench_usage(FILE *f)
           "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 isa=NAME\n"
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
-          "        cpu_other=\n"
+          "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
           "                   '%' in it are written as %XX so that fields split on spaces\n"
           "  isa              the instruction set of the traversal kernels that ran\n"
-          "  triangles        triangles over all meshes; spheres: spheres in the scene\n"
+          "  triangles        triangles stored, over all meshes (a mesh placed many times counts\n"
+          "                   once); spheres: spheres in the scene\n"
           "  load_s           seconds to load the scene file (or create the built-in scene)\n"
           "  build_s          seconds of accel_build with --threads threads (wall clock)\n"
           "  prim_mrays       median over the timed frames of (primary rays of the frame /\n"
@@ -102,7 +121,7 @@ static void bench_usage(FILE *f)
           "  frame_ms_*       median, fastest and slowest timed frame, milliseconds; a frame is\n"
           "                   one render_image call, from the call to its return\n"
           "  hit_rate         fraction of the last frame's primary rays that hit something\n"
-          "  bytes_per_tri    (mesh_bytes + accel_bytes) / triangles, 0 when there are none\n"
+          "  bytes_per_tri    (mesh_bytes + accel_bytes) / triangles (stored), 0 when there are none\n"
           "  mesh_bytes       sum of mesh_bytes() over the meshes: positions and indices, plus\n"
           "                   normals, colours and per-triangle materials when the mesh has them\n"
           "                   (counts, not capacities); spheres and the scene struct not counted\n"
@@ -114,6 +133,26 @@ static void bench_usage(FILE *f)
           "                   -1 = /proc/stat unreadable. Reject runs above ~0.05. /proc/stat counts in\n"
           "                   ticks (1/100 s), so the figure is only meaningful when the timed frames\n"
           "                   take about a second or more\n"
+          "  hits             primary rays of the last frame that hit something\n"
+          "  instances        instances in the scene (a mesh file: 1; parts placing a mesh: one each)\n"
+          "  geometries       geometries stored (meshes, the sphere set)\n"
+          "  triangles_instanced  triangles over all instances: what the picture holds\n"
+          "  bytes_per_instanced_tri  (mesh_bytes + accel_bytes) / triangles_instanced\n"
+          "--part-txns N prints instead, after the scene's status lines:\n"
+          "  PARTTXN scene=PATH threads=N instances=N parts=N rounds=N check=ok|failed\n"
+          "          section=PATH section_instances=N bolt=PATH bolt_instances=N part_instance=ID\n"
+          "          section_hits=N then, per kind K of hide_section, isolate_bolt, show_all,\n"
+          "          hide_part, show_part: K_us_median= K_us_max=\n"
+          "  K_us_*           microseconds of txn_apply + frame_state_sync_accel for that record,\n"
+          "                   median and slowest over the rounds\n"
+          "  section          the part hidden: the middle one of the parts one level under the top\n"
+          "                   (under the single top-level part, if there is only one)\n"
+          "  bolt             the part isolated: the first named bolt-* with instances (else the\n"
+          "                   last part with instances); part_instance: the instance hidden alone\n"
+          "  section_hits     of a grid of 160x90 camera rays, those that hit the section before it\n"
+          "                   is hidden; check=ok: after the hide none of them hits it, after the\n"
+          "                   isolate every hit is on the bolt, after show-all every ray hits what it\n"
+          "                   hit first (exit status 1 otherwise)\n"
           "Exit status: 0, or 2 for a command-line error, 1 for any other error (one line on stderr).\n",
           f);
 }
@@ -168,10 +207,20 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             o->isa = val;
         } else if (!strcmp(a, "--shadows")) {
             o->shadows = true;
+        } else if (!strcmp(a, "--flatten")) {
+            o->flatten = true;
+        } else if (!strcmp(a, "--part-txns")) {
+            if (!(val = cli_option_value(argc, argv, &i)) ||
+                !cli_parse_int(a, val, 1, BENCH_MAX_PART_TXNS, &o->part_txns))
+                goto bad;
         } else {
             cli_error("unknown option '%s' (see 'tessera bench --help')", a);
             goto bad;
         }
+    }
+    if (o->flatten && !o->scene_path) {
+        cli_error("--flatten needs --scene FILE (a mesh or assembly file)");
+        goto bad;
     }
     return true;
 bad:
@@ -246,12 +295,55 @@ static bool write_pfm_grey(const char *path, int width_px, int height_px, const 
     return ok;
 }
 
+/* --flatten: the file's geometry as one mesh (mesh_load bakes the node
+ * transforms), in a scene made as scene_load makes one of a mesh file: the
+ * default material and light. Timed and reported like cli_scene_prepare. */
+static bool prepare_flat(const char *path, int threads, cli_scene *cs)
+{
+    *cs = (cli_scene){.name = path};
+    tess_error err = {{0}};
+    double t0 = cli_now_s();
+    mesh *m = mesh_load(path, &err);
+    if (!m) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    if (m->triangle_count == 0) {
+        mesh_destroy(m);
+        cli_error("%s: --flatten: the file has no triangles", path);
+        return false;
+    }
+    material mat = material_default();
+    light sun = light_default_directional();
+    cs->scene = scene_create();
+    int mat_id = cs->scene ? scene_add_material(cs->scene, &mat) : -1;
+    if (mat_id < 0)
+        mesh_destroy(m); /* scene_add_mesh takes it, also on failure */
+    if (mat_id < 0 || scene_add_mesh(cs->scene, m, (uint32_t)mat_id, "flattened") < 0 ||
+        scene_add_light(cs->scene, &sun) < 0) {
+        cli_error("%s: out of memory building the scene", path);
+        return false;
+    }
+    double t1 = cli_now_s();
+    cs->accel = accel_build(cs->scene, threads, &err);
+    if (!cs->accel) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    cs->load_s = t1 - t0;
+    cs->build_s = cli_now_s() - t1;
+    fprintf(stderr, "tessera: scene %s flattened: %zu triangles in one mesh; loaded in %.3f s, BVH built in %.3f s "
+            "(%s kernels)\n", path, scene_triangle_count(cs->scene), cs->load_s, cs->build_s,
+            accel_isa_name(cs->accel));
+    return true;
+}
+
 /* Load the scene, build its accel (timed), switch kernels if asked, and
  * choose the camera as 'tessera render' does; print the camera in
  * embree_bench's syntax. On failure prints the error and returns false. */
 static bool prepare(bench_options *o, cli_scene *cs)
 {
-    if (!cli_scene_prepare(o->scene_path, o->threads, cs))
+    if (!(o->flatten ? prepare_flat(o->scene_path, o->threads, cs) : cli_scene_prepare(o->scene_path, o->threads, cs)))
         return false;
     if (o->isa && !accel_use_isa(cs->accel, o->isa)) {
         cli_error("--isa: this CPU cannot run the %s kernels", o->isa);
@@ -328,9 +420,195 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
     printf(" triangles=%zu spheres=%u load_s=%.3f build_s=%.3f", triangles, s->spheres.count, load_s, build_s);
     printf(" prim_mrays=%.3f total_mrays=%.3f frame_ms_median=%.2f frame_ms_min=%.2f frame_ms_max=%.2f", prim_mrays,
            total_mrays, 1e3 * ms_median, 1e3 * ms_min, 1e3 * ms_max);
-    printf(" hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f\n",
+    size_t instanced = scene_instanced_triangle_count(s);
+    double bytes_per_instanced = instanced ? (double)(mesh_total + accel_total) / (double)instanced : 0.0;
+    printf(" hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f",
            hit_rate, bytes_per_tri, mesh_total, accel_total, cpu_other);
+    printf(" hits=%llu instances=%u geometries=%u triangles_instanced=%zu bytes_per_instanced_tri=%.2f\n",
+           (unsigned long long)last->primary_hits, s->instance_count, s->geometry_count, instanced,
+           bytes_per_instanced);
     fflush(stdout);
+}
+
+/* ---- --part-txns ---------------------------------------------------------- */
+
+enum { PT_HIDE_SECTION, PT_ISOLATE_BOLT, PT_SHOW_ALL, PT_HIDE_PART, PT_SHOW_PART, PT_KINDS };
+static const char *const part_txn_names[PT_KINDS] = {"hide_section", "isolate_bolt", "show_all", "hide_part",
+                                                      "show_part"};
+
+typedef struct part_pick {
+    int32_t section, bolt;
+    uint32_t section_first, section_end, bolt_first, bolt_end, part_instance;
+} part_pick;
+
+typedef struct bolt_search {
+    const scene *s;
+    int32_t found;
+} bolt_search;
+
+static bool find_bolt(void *ctx, int32_t id, const char *path)
+{
+    (void)path;
+    bolt_search *b = ctx;
+    uint32_t first, end;
+    scene_part_instances(b->s, (uint32_t)id, &first, &end);
+    if (end > first) {
+        b->found = id;
+        return false;
+    }
+    return true;
+}
+
+/* The parts the transactions act on (see the usage); false when the scene
+ * has no parts with instances. */
+static bool pick_parts(const scene *s, part_pick *p)
+{
+    const part_tree *t = s->parts;
+    if (!t || s->instance_count == 0)
+        return false;
+    int32_t count = part_tree_count(t), top_level = 0;
+    for (int32_t id = 1; id < count; id++)
+        top_level += part_tree_parent(t, id) == 0;
+    int level = top_level == 1 ? 2 : 1, sections = 0;
+    for (int32_t id = 1; id < count; id++)
+        sections += part_tree_depth(t, id) == level;
+    if (sections == 0) {
+        level = 1;
+        sections = top_level;
+    }
+    p->section = -1;
+    for (int32_t id = 1, k = 0; id < count && p->section < 0; id++)
+        if (part_tree_depth(t, id) == level && k++ == sections / 2)
+            p->section = id;
+    bolt_search b = {s, -1};
+    if (part_tree_match(t, "**/bolt-*", find_bolt, &b) < 0)
+        return false;
+    for (int32_t id = count - 1; b.found < 0 && id > 0; id--)
+        find_bolt(&b, id, NULL);
+    if (p->section < 0 || b.found < 0)
+        return false;
+    p->bolt = b.found;
+    scene_part_instances(s, (uint32_t)p->section, &p->section_first, &p->section_end);
+    scene_part_instances(s, (uint32_t)p->bolt, &p->bolt_first, &p->bolt_end);
+    p->part_instance = s->instance_count / 2;
+    return p->section_end > p->section_first && p->bolt_end > p->bolt_first;
+}
+
+/* Trace the check grid: the instance each ray hits (RAY_INVALID_ID: none). */
+static void trace_grid(const accel *a, const camera_basis *b, uint32_t *ids)
+{
+    for (int y = 0; y < BENCH_CHECK_ROWS; y++)
+        for (int x = 0; x < BENCH_CHECK_COLS; x++) {
+            int px = (int)(((long)x * b->width_px + b->width_px / 2) / BENCH_CHECK_COLS);
+            int py = (int)(((long)y * b->height_px + b->height_px / 2) / BENCH_CHECK_ROWS);
+            ray r = {b->eye, camera_pixel_direction(b, px, py), 0.f, INFINITY};
+            hit h = hit_none();
+            accel_intersect(a, &r, &h);
+            ids[y * BENCH_CHECK_COLS + x] = h.geom_id;
+        }
+}
+
+/* One record at the barrier: txn_apply + frame_state_sync_accel (which
+ * commits); returns microseconds, or -1 when txn_apply refused it. */
+static double timed_txn(const txn_record *r, frame_state *st, const accel *a)
+{
+    tess_error err = {{0}};
+    double t0 = cli_now_s();
+    if (!txn_apply(r, st, &err)) {
+        cli_error("--part-txns: %s: %s", txn_kind_name(r->kind), err.msg);
+        return -1.0;
+    }
+    frame_state_sync_accel(st, a);
+    return 1e6 * (cli_now_s() - t0);
+}
+
+static int run_part_txns(const bench_options *o, const cli_scene *cs)
+{
+    const scene *s = cs->scene;
+    const accel *a = cs->accel;
+    part_pick p;
+    if (!pick_parts(s, &p)) {
+        cli_error("%s: --part-txns needs an assembly with parts that have instances", cs->name);
+        return 1;
+    }
+    size_t grid = (size_t)BENCH_CHECK_COLS * BENCH_CHECK_ROWS;
+    uint32_t *before = malloc(grid * sizeof *before), *now = malloc(grid * sizeof *now);
+    double *us = malloc((size_t)PT_KINDS * (size_t)o->part_txns * sizeof *us);
+    double *scratch = malloc((size_t)o->part_txns * sizeof *scratch);
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, o->threads, accel_geometry_count(a));
+    int code = 1;
+    if (!before || !now || !us || !scratch) {
+        cli_error("out of memory for %d rounds", o->part_txns);
+        goto done;
+    }
+    camera_basis basis = camera_basis_make(&o->camera, o->width_px, o->height_px);
+    trace_grid(a, &basis, before);
+    uint32_t section_hits = 0;
+    bool ok = true;
+    for (size_t i = 0; i < grid; i++)
+        section_hits += before[i] >= p.section_first && before[i] < p.section_end;
+    txn_record recs[PT_KINDS] = {
+        txn_geoms_record(TXN_HIDE, p.section_first, p.section_end - p.section_first),
+        txn_geoms_record(TXN_ISOLATE, p.bolt_first, p.bolt_end - p.bolt_first),
+        txn_simple(TXN_SHOW_ALL),
+        txn_geoms_record(TXN_HIDE, p.part_instance, 1),
+        txn_geoms_record(TXN_SHOW, p.part_instance, 1),
+    };
+    for (int round = 0; round < o->part_txns; round++)
+        for (int k = 0; k < PT_KINDS; k++) {
+            double t = timed_txn(&recs[k], &st, a);
+            if (t < 0.0)
+                goto done;
+            us[(size_t)k * (size_t)o->part_txns + (size_t)round] = t;
+            if (round > 0 || k == PT_HIDE_PART)
+                continue;
+            /* first round: what the picture shows now (outside the timing) */
+            trace_grid(a, &basis, now);
+            for (size_t i = 0; i < grid; i++) {
+                uint32_t id = now[i];
+                if (k == PT_HIDE_SECTION)
+                    ok &= !(id >= p.section_first && id < p.section_end) && (id == RAY_INVALID_ID || !accel_hidden(a, id));
+                else if (k == PT_ISOLATE_BOLT)
+                    ok &= id == RAY_INVALID_ID || (id >= p.bolt_first && id < p.bolt_end);
+                else
+                    ok &= id == before[i];
+            }
+        }
+    char section_path[512], bolt_path[512];
+    part_tree_path(s->parts, p.section, section_path, sizeof section_path);
+    part_tree_path(s->parts, p.bolt, bolt_path, sizeof bolt_path);
+    printf("PARTTXN scene=");
+    print_field_path(stdout, o->scene_path ? o->scene_path : "default");
+    printf(" threads=%d instances=%u parts=%d rounds=%d check=%s section=", o->threads, s->instance_count,
+           (int)part_tree_count(s->parts) - 1, o->part_txns, ok ? "ok" : "failed");
+    print_field_path(stdout, section_path);
+    printf(" section_instances=%u bolt=", p.section_end - p.section_first);
+    print_field_path(stdout, bolt_path);
+    printf(" bolt_instances=%u part_instance=%u section_hits=%u", p.bolt_end - p.bolt_first, p.part_instance,
+           section_hits);
+    for (int k = 0; k < PT_KINDS; k++) {
+        const double *v = us + (size_t)k * (size_t)o->part_txns;
+        double max = v[0];
+        for (int r = 0; r < o->part_txns; r++) {
+            scratch[r] = v[r];
+            max = v[r] > max ? v[r] : max;
+        }
+        printf(" %s_us_median=%.1f %s_us_max=%.1f", part_txn_names[k], cli_median(scratch, (size_t)o->part_txns),
+               part_txn_names[k], max);
+    }
+    printf("\n");
+    fflush(stdout);
+    if (!ok)
+        cli_error("%s: --part-txns: a hide, isolate or show-all did not change the picture as it should", cs->name);
+    code = ok ? 0 : 1;
+done:
+    frame_state_finish(&st);
+    free(scratch);
+    free(us);
+    free(now);
+    free(before);
+    return code;
 }
 
 int cli_bench(int argc, char **argv)
@@ -358,6 +636,10 @@ int cli_bench(int argc, char **argv)
     code = 1;
     if (!prepare(&o, &cs))
         goto done;
+    if (o.part_txns > 0) {
+        code = run_part_txns(&o, &cs);
+        goto done;
+    }
     size_t pixels = (size_t)o.width_px * (size_t)o.height_px;
     rgb = malloc(pixels * 3 * sizeof *rgb);
     samples = calloc((size_t)o.frames, sizeof *samples);
