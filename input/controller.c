@@ -681,6 +681,17 @@ static void long_press(input_controller *c, uint64_t now_us)
     command(c, (input_action)c->cfg.bindings.gesture_action[INPUT_GESTURE_LONG_PRESS], a->x, a->y, now_us);
 }
 
+/* A long press whose time came by now_us happens now: from a tick at its
+ * deadline, or from the finger's next event when the input thread got to
+ * the events late (a finger lifted 1 s after it came down, both read at
+ * once, was held 1 s). */
+static void long_press_if_due(input_controller *c, uint64_t now_us)
+{
+    uint64_t due;
+    if (!c->touring && long_press_due(c, &due) && now_us >= due)
+        long_press(c, now_us);
+}
+
 static void touch_frame(input_controller *c, uint64_t now_us)
 {
     touch *a, *b;
@@ -849,6 +860,7 @@ void input_controller_event(input_controller *c, const input_event *e)
         flush(c);
         return;
     case INPUT_TOUCH_FRAME:
+        long_press_if_due(c, e->time_us);
         touch_frame(c, e->time_us);
         flush(c);
         return;
@@ -856,6 +868,8 @@ void input_controller_event(input_controller *c, const input_event *e)
         break;
     }
     user_input(c, e->time_us);
+    if (e->kind == INPUT_TOUCH_MOTION || e->kind == INPUT_TOUCH_UP)
+        long_press_if_due(c, e->time_us);
     const unsigned char *g = c->cfg.bindings.gesture_action;
     switch (e->kind) {
     case INPUT_KEY:
@@ -924,9 +938,7 @@ void input_controller_tick(input_controller *c, uint64_t now_us)
     }
     if (c->touring)
         return;
-    uint64_t press_due;
-    if (long_press_due(c, &press_due) && now_us >= press_due)
-        long_press(c, now_us);
+    long_press_if_due(c, now_us);
     if (c->cfg.have_tour && c->cfg.idle_timeout_s > 0.0 && !c->dragging &&
         (double)(now_us - c->last_input_us) * 1e-6 >= c->cfg.idle_timeout_s) {
         bool fingers = false;

@@ -370,6 +370,21 @@ Test(input_parts, a_long_press_selects_and_isolates_the_part_under_the_finger)
     rig_free(r);
 }
 
+/* The input thread read the down and the up together, 1 s apart on the
+ * events' clock, with no tick between: still a long press. */
+Test(input_parts, a_press_read_late_is_timed_by_the_events)
+{
+    rig *r = rig_make(NULL);
+    int at = r->count;
+    touch(r, INPUT_TOUCH_DOWN, 0, RIGHT);
+    touch_frame(r);
+    r->now_us += 1000000;
+    touch(r, INPUT_TOUCH_UP, 0, 0, 0);
+    touch_frame(r);
+    cr_expect_str_eq(made_since(r, at), "isolate 50 1 | status \"isolated: asm/sec-2/skin-1 (1 instance)\"");
+    rig_free(r);
+}
+
 Test(input_parts, a_finger_that_moves_or_lifts_early_is_no_long_press)
 {
     rig *r = rig_make(NULL);
