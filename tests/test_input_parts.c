@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "engine/accel.h"
+#include "engine/mesh.h"
 #include "engine/part_tree.h"
 #include "engine/scene.h"
 #include "input/controller.h"
@@ -529,6 +530,51 @@ Test(input_parts, picking_a_scene_without_parts_names_the_geometry)
     cr_expect_eq(h.part.first, h.geom_id);
     cr_expect_eq(h.part.count, 1u);
     cr_expect_eq(h.ancestor_count, 0);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* A path longer than a label keeps its tail after "...", in the label and in
+ * `what` (whose primitive stays whole). */
+Test(input_parts, a_long_path_keeps_its_tail)
+{
+    scene *s = scene_create();
+    cr_assert(s);
+    cr_assert(s->parts = part_tree_create());
+    mesh *m = mesh_create();
+    cr_assert(m);
+    cr_assert(mesh_add_vertex(m, -1.f, -1.f, 0.f) && mesh_add_vertex(m, 1.f, -1.f, 0.f) &&
+              mesh_add_vertex(m, 0.f, 1.f, 0.f) && mesh_add_triangle(m, 0, 1, 2));
+    int geom = scene_add_mesh_geometry(s, m, 0, "tri");
+    cr_assert_geq(geom, 0);
+    tess_error err = {{0}};
+    char name[64];
+    int32_t part = PART_ROOT;
+    for (int depth = 0; depth < 6; depth++) { /* 6 names of 40 bytes: a 245-byte path */
+        snprintf(name, sizeof name, "level-%d-%033d", depth, depth);
+        part = part_tree_add(s->parts, part, name, &err);
+        cr_assert_neq(part, PART_NONE, "%s", err.msg);
+    }
+    cr_assert_geq(scene_add_instance(s, (uint32_t)geom, NULL, (uint32_t)part), 0);
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    input_hit h;
+    cli_input_pick(s, a, v3(0.f, 0.f, 5.f), v3(0.f, 0.f, -1.f), &h);
+    cr_assert(h.hit);
+    char path[512];
+    size_t n = part_tree_path(s->parts, part, path, sizeof path);
+    cr_assert_gt(n, sizeof h.part.label);
+    cr_expect_eq(strlen(h.part.label), sizeof h.part.label - 1);
+    cr_expect(strncmp(h.part.label, "...", 3) == 0, "%s", h.part.label);
+    cr_expect_str_eq(h.part.label + 3, path + n - (sizeof h.part.label - 4));
+    cr_expect(strncmp(h.what, "part ...", 8) == 0, "%s", h.what);
+    cr_expect_eq(strlen(h.what), sizeof h.what - 1, "%s", h.what);
+    char end[96];
+    snprintf(end, sizeof end, "/%s triangle 0", name); /* the last name made */
+    cr_expect_str_eq(h.what + strlen(h.what) - strlen(end), end, "%s", h.what);
+    cr_expect_eq(h.ancestor_count, 5);
+    snprintf(name, sizeof name, "level-%d-%033d", 0, 0);
+    cr_expect_str_eq(h.ancestors[4].label, name);
     accel_destroy(a);
     scene_destroy(s);
 }

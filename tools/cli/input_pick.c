@@ -58,13 +58,23 @@ static bool hit_part(const scene *s, const hit *h, input_hit *out)
         return false;
     const scene_geometry *g = scene_instance_geometry(s, h->geom_id);
     const char *prim = g->ops == &geometry_triangles_ops ? "triangle" : "primitive";
-    if (snprintf(out->what, sizeof out->what, "part %s %s %u", out->part.label, prim, h->prim_id) >=
-        (int)sizeof out->what) { /* keep the primitive: cut the path's head instead */
-        char tail[32];
-        int tail_len = snprintf(tail, sizeof tail, " %s %u", prim, h->prim_id);
-        size_t room = sizeof out->what - (size_t)tail_len - 1;
-        memcpy(out->what + room, tail, (size_t)tail_len + 1);
+    char tail[40];
+    size_t tail_len = (size_t)snprintf(tail, sizeof tail, " %s %u", prim, h->prim_id);
+    size_t label_len = strlen(out->part.label), room = sizeof out->what - 5 - tail_len - 1;
+    /* "part PATH triangle N"; a path too long keeps its tail after "...", as the label does */
+    const char *path = out->part.label;
+    size_t path_len = label_len;
+    char *w = out->what;
+    memcpy(w, "part ", 5);
+    w += 5;
+    if (label_len > room) {
+        memcpy(w, "...", 3);
+        w += 3;
+        path_len = room - 3;
+        path += label_len - path_len;
     }
+    memcpy(w, path, path_len);
+    memcpy(w + path_len, tail, tail_len + 1);
     out->ancestor_count = 0;
     for (int32_t p = part_tree_parent(s->parts, (int32_t)part);
          p != PART_NONE && p != PART_ROOT && out->ancestor_count < INPUT_HIT_ANCESTORS;
