@@ -30,14 +30,15 @@
 # idle timeout.
 # Then a third run on a 10,000-part glTF assembly (build/gen-assembly --parts
 # 10000 --triangles 2000000, made here on the host), no shadows, another
-# uinput touchscreen mapped to Virtual-4: the tablet's click picks a skin
-# panel (the record's status names its path: "picked part assembly/..."),
-# H hides it (hide of its instance range; the pixels where it was change),
-# I isolates it (the same range), U shows all (heads 1 and 2, which show
-# neither the status line nor the cursor, equal the start's screendumps);
-# then on the touchscreen a long press selects and isolates the part under
-# the finger and a two-finger tap shows all again. Each of these is also a
-# check as above (the heads equal the native replay of the record).
+# uinput touchscreen mapped to Virtual-4, in three checks (about 2.5 min):
+# the tablet's click picks a skin panel (the record's status names its path:
+# "picked part assembly/..."), H hides it (a hide of its instance range; the
+# native render of the record without the hide differs where it was); I
+# isolates it (the same range); U shows all, a long press on the touchscreen
+# selects and isolates the part under the finger, a two-finger tap shows all
+# (the record's kinds in that order; heads 1 and 2, which show neither the
+# status line nor the cursor, equal the start's native render). Each check
+# also asks the heads to equal the native replay of the record, as above.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
 # TESSERA_LOG=debug and logs each frame on screen; the host waits for those
