@@ -99,8 +99,10 @@ endif
 
 # (the suite runs ./tessera too: `make test` builds it; the ASan build makes its own tessera-asan
 # and must never overwrite ./tessera)
-$(TEST_BIN): $(TEST_OBJ) $(LIB)
-	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
+# the tests also link the CLI's input pick hook (tools/cli/input_pick.h: a scene's parts as input sees them)
+TEST_CLI_OBJ := $(BUILD)/tools/cli/input_pick.o
+$(TEST_BIN): $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 
 # fault injection (tests/fault/, README "Tests"): a Criterion binary of its own whose link
 # routes every allocation call in our objects (engine, wall, input, the CLI but main.o, the

@@ -41,11 +41,18 @@ static const char *const action_names[INPUT_ACTION_COUNT + 1] = {
     [INPUT_ACTION_HOME] = "home",
     [INPUT_ACTION_PICK] = "pick",
     [INPUT_ACTION_HIDE_OBJECT] = "hide-object",
-    [INPUT_ACTION_UNHIDE_ALL] = "unhide-all",
+    [INPUT_ACTION_SHOW_ALL] = "show-all",
     [INPUT_ACTION_FLY_TO] = "fly-to",
     [INPUT_ACTION_GOVERNOR_STATUS] = "governor-status",
+    [INPUT_ACTION_ISOLATE] = "isolate",
+    [INPUT_ACTION_SELECT_PARENT] = "select-parent",
+    [INPUT_ACTION_HIGHLIGHT] = "highlight",
+    [INPUT_ACTION_SHOW] = "show",
     [INPUT_ACTION_COUNT] = NULL,
 };
+
+/* show-all's name before parts came (bindings files may still say it). */
+static const char show_all_old_name[] = "unhide-all";
 
 static const char *const gesture_names[INPUT_GESTURE_COUNT + 1] = {
     [INPUT_GESTURE_CLICK] = "click",
@@ -57,6 +64,8 @@ static const char *const gesture_names[INPUT_GESTURE_COUNT + 1] = {
     [INPUT_GESTURE_TWO_FINGER_PINCH] = "two-finger-pinch",
     [INPUT_GESTURE_TOUCHPAD_PINCH] = "touchpad-pinch",
     [INPUT_GESTURE_TOUCHPAD_SWIPE] = "touchpad-swipe",
+    [INPUT_GESTURE_LONG_PRESS] = "long-press",
+    [INPUT_GESTURE_TWO_FINGER_TAP] = "two-finger-tap",
     [INPUT_GESTURE_COUNT] = NULL,
 };
 
@@ -87,7 +96,8 @@ static bool action_is_held(input_action a)
  * (command actions only). */
 static bool gesture_moves(input_gesture g)
 {
-    return g != INPUT_GESTURE_CLICK && g != INPUT_GESTURE_TAP && g != INPUT_GESTURE_DOUBLE_TAP;
+    return g != INPUT_GESTURE_CLICK && g != INPUT_GESTURE_TAP && g != INPUT_GESTURE_DOUBLE_TAP &&
+           g != INPUT_GESTURE_LONG_PRESS && g != INPUT_GESTURE_TWO_FINGER_TAP;
 }
 
 /* A code is a (pointer, joystick, tablet, ...) button when its evdev name
@@ -115,8 +125,10 @@ static const code_binding default_codes[] = {
     {KEY_EQUAL, INPUT_ACTION_SPEED_UP},   {KEY_KPPLUS, INPUT_ACTION_SPEED_UP},
     {KEY_MINUS, INPUT_ACTION_SPEED_DOWN}, {KEY_KPMINUS, INPUT_ACTION_SPEED_DOWN},
     {KEY_HOME, INPUT_ACTION_HOME},        {KEY_H, INPUT_ACTION_HIDE_OBJECT},
-    {KEY_U, INPUT_ACTION_UNHIDE_ALL},     {KEY_P, INPUT_ACTION_PICK},
+    {KEY_U, INPUT_ACTION_SHOW_ALL},       {KEY_P, INPUT_ACTION_PICK},
     {KEY_F, INPUT_ACTION_FLY_TO},
+    {KEY_I, INPUT_ACTION_ISOLATE},        {KEY_BACKSPACE, INPUT_ACTION_SELECT_PARENT},
+    {KEY_L, INPUT_ACTION_HIGHLIGHT},      {KEY_Z, INPUT_ACTION_SHOW},
     {KEY_G, INPUT_ACTION_GOVERNOR_STATUS}, {BTN_LEFT, INPUT_ACTION_ORBIT},
     {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PAN},
 };
@@ -131,6 +143,8 @@ static const unsigned char default_gestures[INPUT_GESTURE_COUNT] = {
     [INPUT_GESTURE_TWO_FINGER_PINCH] = INPUT_ACTION_DOLLY,
     [INPUT_GESTURE_TOUCHPAD_PINCH] = INPUT_ACTION_DOLLY,
     [INPUT_GESTURE_TOUCHPAD_SWIPE] = INPUT_ACTION_PAN,
+    [INPUT_GESTURE_LONG_PRESS] = INPUT_ACTION_ISOLATE,
+    [INPUT_GESTURE_TWO_FINGER_TAP] = INPUT_ACTION_SHOW_ALL,
 };
 
 static const int default_chord[] = {KEY_LEFTCTRL, KEY_LEFTALT, KEY_Q};
@@ -184,7 +198,11 @@ static bool read_action(jr_ctx *c, json_object *v, input_action *out)
             *out = (input_action)a;
             return true;
         }
-    char list[256];
+    if (len == strlen(show_all_old_name) && memcmp(show_all_old_name, s, len) == 0) {
+        *out = INPUT_ACTION_SHOW_ALL;
+        return true;
+    }
+    char list[512];
     return jr_field_fail(c, "unknown action '%.*s' (expected one of: %s)", SHOWN_VALUE_BYTES, s,
                          action_list(list, sizeof list));
 }
@@ -226,7 +244,7 @@ static bool check_code_action(jr_ctx *c, int code, input_action a)
 /* Whether action `a` may be bound to gesture `g` (the current field). */
 static bool check_gesture_action(jr_ctx *c, input_gesture g, input_action a)
 {
-    char list[256];
+    char list[512];
     if (a == INPUT_ACTION_NONE)
         return true;
     if (gesture_moves(g)) {

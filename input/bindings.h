@@ -6,9 +6,10 @@
  *  - drag actions (orbit, pan, dolly) follow a motion: bound to pointer
  *    buttons (held while the pointer moves), the wheel, and the touch and
  *    touchpad gestures that move;
- *  - command actions (flight, speed, home, pick, hide, unhide, fly-to) happen
+ *  - command actions (flight, speed, home, pick, fly-to, the part commands
+ *    hide-object, isolate, show, show-all, select-parent, highlight) happen
  *    on a key or button press (flight keys and buttons act while held), or on
- *    a discrete gesture (tap, double tap, click).
+ *    a discrete gesture (click, tap, double tap, long press, two-finger tap).
  * Binding an action where its kind cannot happen is an error naming the
  * field: a drag action on a keyboard key or a discrete gesture, a command
  * action on a moving gesture, flight on a discrete gesture (it cannot be
@@ -43,11 +44,15 @@ typedef enum input_action {
     INPUT_ACTION_SPEED_UP,    /* flight speed x 1.5 */
     INPUT_ACTION_SPEED_DOWN,  /* flight speed / 1.5 */
     INPUT_ACTION_HOME,        /* the scene's home view */
-    INPUT_ACTION_PICK,        /* report the object under the cursor */
-    INPUT_ACTION_HIDE_OBJECT, /* hide the object under the cursor */
-    INPUT_ACTION_UNHIDE_ALL,
+    INPUT_ACTION_PICK,        /* report the part under the cursor and select it */
+    INPUT_ACTION_HIDE_OBJECT, /* hide the part under the cursor (its whole subtree) */
+    INPUT_ACTION_SHOW_ALL,    /* "show-all" (also read as its old name "unhide-all") */
     INPUT_ACTION_FLY_TO,      /* fly to the point under the cursor */
     INPUT_ACTION_GOVERNOR_STATUS, /* show / hide the frame-budget governor's state in the status line */
+    INPUT_ACTION_ISOLATE,     /* show only the selection (none: the part under the cursor) */
+    INPUT_ACTION_SELECT_PARENT, /* widen the selection to its parent part */
+    INPUT_ACTION_HIGHLIGHT,   /* highlight of the selection on / off */
+    INPUT_ACTION_SHOW,        /* show the part hidden last again (undo hide-object) */
     INPUT_ACTION_COUNT
 } input_action;
 
@@ -63,6 +68,9 @@ typedef enum input_gesture {
     INPUT_GESTURE_TWO_FINGER_PINCH, /* "two-finger-pinch": change of the fingers' spread */
     INPUT_GESTURE_TOUCHPAD_PINCH,   /* "touchpad-pinch": libinput pinch gesture, its scale */
     INPUT_GESTURE_TOUCHPAD_SWIPE,   /* "touchpad-swipe": libinput swipe gesture */
+    INPUT_GESTURE_LONG_PRESS,       /* "long-press": one finger held still (controller.h:
+                                       INPUT_LONG_PRESS_S); selects the part under it first */
+    INPUT_GESTURE_TWO_FINGER_TAP,   /* "two-finger-tap": two fingers down and up, short, without motion */
     INPUT_GESTURE_COUNT
 } input_gesture;
 
@@ -83,8 +91,10 @@ typedef struct input_bindings {
  * PageUp/PageDown up/down, = and - (main and keypad + and -) speed, Home,
  * left button orbit (click: pick), right and middle pan, wheel dolly, one
  * finger orbit, two fingers pan and pinch dolly, tap pick, double tap fly-to,
- * touchpad pinch dolly and swipe pan, P pick, F fly-to, H hide-object, U
- * unhide-all, quit chord Ctrl+Alt+Q (left keys). The whole struct is written,
+ * touchpad pinch dolly and swipe pan, long press isolate, two-finger tap
+ * show-all, P pick, F fly-to, H hide-object, U show-all, I isolate,
+ * Backspace select-parent, L highlight, Z show (undo the last hide), quit
+ * chord Ctrl+Alt+Q (left keys). The whole struct is written,
  * padding included (memset), so bindings may be compared with memcmp. */
 void input_bindings_default(input_bindings *out);
 
@@ -98,7 +108,8 @@ bool input_bindings_load(const char *file, input_bindings *out, tess_error *err)
 bool input_bindings_parse(const char *name, const char *text, size_t len, input_bindings *out, tess_error *err);
 
 /* Names as in the file: "orbit", "fly-forward", ...; "none" for NONE; NULL
- * for a value out of range (COUNT included). */
+ * for a value out of range (COUNT included). Reading also takes the old
+ * name "unhide-all" for show-all. */
 const char *input_action_name(input_action a);
 const char *input_gesture_name(input_gesture g);
 bool input_action_is_drag(input_action a);

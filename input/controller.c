@@ -20,6 +20,7 @@
 #define SPEED_STEP 1.5
 #define FLY_TO_DISTANCE 0.5       /* fly-to ends at this fraction of the distance to the point */
 #define MAX_TICK_S 0.1            /* flight never jumps more than this much time at once */
+#define SELECTION_LEVELS (1 + INPUT_HIT_ANCESTORS) /* the picked part and its ancestors */
 
 typedef struct touch {
     bool active;
@@ -75,6 +76,17 @@ struct input_controller {
     bool have_last_tap;
     uint64_t last_tap_us;
     double last_tap_x, last_tap_y;
+    bool seq_long_pressed;     /* this sequence's long press has fired (its finger does nothing more) */
+
+    /* parts (controller.h, PARTS) */
+    bool have_selection;
+    input_part sel_levels[SELECTION_LEVELS]; /* the part picked last, then its ancestors nearest first */
+    int sel_level_count;       /* valid entries of sel_levels (>= 1 with a selection) */
+    int sel_level;             /* the selection is sel_levels[sel_level] */
+    bool highlight_on;         /* the selection is highlighted ... */
+    input_part highlighted;    /* ... as this range (what the last highlight-on record named) */
+    input_part hidden[INPUT_HIDDEN_MAX]; /* hide-object's parts not shown again yet, oldest first */
+    int hidden_count;
 
     /* touchpad gestures */
     vec3 gesture_point;
@@ -184,6 +196,17 @@ static vec3 point_under(input_controller *c, double sx, double sy, input_hit *hi
     navigate_plane_ray(&c->cam, c->cfg.plane_aspect, sx, sy, &origin, &dir);
     input_hit hit = {.hit = false};
     c->hooks.pick(c->hooks.ctx, origin, dir, &hit);
+    if (hit.hit && hit.part.count == 0) { /* a pick that names no part: the instance hit is one */
+        hit.part.first = hit.geom_id;
+        hit.part.count = 1;
+        if (!hit.part.label[0])
+            snprintf(hit.part.label, sizeof hit.part.label, "%s", hit.what);
+    }
+    hit.part.label[sizeof hit.part.label - 1] = '\0';
+    if (hit.ancestor_count < 0 || hit.ancestor_count > INPUT_HIT_ANCESTORS)
+        hit.ancestor_count = hit.ancestor_count < 0 ? 0 : INPUT_HIT_ANCESTORS;
+    for (int i = 0; i < hit.ancestor_count; i++)
+        hit.ancestors[i].label[sizeof hit.ancestors[i].label - 1] = '\0';
     if (hit_out)
         *hit_out = hit;
     if (hit.hit)
@@ -261,6 +284,147 @@ static bool flight_direction(const input_controller *c, double *forward, double 
 
 static bool flight_held(const input_controller *c) { return flight_direction(c, NULL, NULL, NULL); }
 
+/* ---- parts ------------------------------------------------------------------- */
+
+static const input_part *selection(const input_controller *c)
+{
+    return c->have_selection ? &c->sel_levels[c->sel_level] : NULL;
+}
+
+static bool same_range(const input_part *a, const input_part *b)
+{
+    return a->first == b->first && a->count == b->count;
+}
+
+/* While highlight is on it follows the selection: off on the range it lit,
+ * on on the selection's (off altogether when nothing is selected). */
+static void highlight_follow(input_controller *c)
+{
+    if (!c->highlight_on)
+        return;
+    const input_part *sel = selection(c);
+    if (sel && same_range(sel, &c->highlighted))
+        return;
+    input_txn t = txn_highlight(c->highlighted.first, c->highlighted.count, false);
+    emit(c, &t);
+    if (!sel) {
+        c->highlight_on = false;
+        return;
+    }
+    c->highlighted = *sel;
+    t = txn_highlight(sel->first, sel->count, true);
+    emit(c, &t);
+}
+
+/* The selection becomes the part hit (nothing on a miss). */
+static void select_hit(input_controller *c, const input_hit *hit)
+{
+    c->have_selection = hit->hit;
+    if (hit->hit) {
+        c->sel_levels[0] = hit->part;
+        for (int i = 0; i < hit->ancestor_count; i++)
+            c->sel_levels[1 + i] = hit->ancestors[i];
+        c->sel_level_count = 1 + hit->ancestor_count;
+        c->sel_level = 0;
+    }
+    highlight_follow(c);
+}
+
+static void remember_hidden(input_controller *c, const input_part *p)
+{
+    if (c->hidden_count == INPUT_HIDDEN_MAX) { /* the oldest is forgotten (show-all still shows it) */
+        memmove(&c->hidden[0], &c->hidden[1], (INPUT_HIDDEN_MAX - 1) * sizeof c->hidden[0]);
+        c->hidden_count--;
+    }
+    c->hidden[c->hidden_count++] = *p;
+}
+
+/* The part commands (controller.h, PARTS) at plane point (sx, sy). */
+static void part_command(input_controller *c, input_action action, double sx, double sy)
+{
+    input_hit hit;
+    const input_part *sel = selection(c);
+    switch (action) {
+    case INPUT_ACTION_HIDE_OBJECT:
+        point_under(c, sx, sy, &hit);
+        if (hit.hit) {
+            input_txn t = txn_geoms_record(TXN_HIDE, hit.part.first, hit.part.count);
+            emit(c, &t);
+            remember_hidden(c, &hit.part);
+            emit_status(c, "hidden: %s", hit.part.label);
+        } else {
+            emit_status(c, "nothing to hide there");
+        }
+        break;
+    case INPUT_ACTION_SHOW:
+        if (c->hidden_count == 0) {
+            emit_status(c, "nothing hidden to show");
+        } else {
+            const input_part *p = &c->hidden[--c->hidden_count];
+            input_txn t = txn_geoms_record(TXN_SHOW, p->first, p->count);
+            emit(c, &t);
+            emit_status(c, "shown: %s", p->label);
+        }
+        break;
+    case INPUT_ACTION_ISOLATE:
+        if (!sel) {
+            point_under(c, sx, sy, &hit);
+            if (!hit.hit) {
+                emit_status(c, "nothing to isolate there");
+                break;
+            }
+            select_hit(c, &hit);
+            sel = selection(c);
+        }
+        {
+            input_txn t = txn_geoms_record(TXN_ISOLATE, sel->first, sel->count);
+            emit(c, &t);
+            emit_status(c, "isolated: %s (%u instance%s)", sel->label, sel->count, sel->count == 1 ? "" : "s");
+        }
+        break;
+    case INPUT_ACTION_SHOW_ALL: {
+        input_txn t = txn_simple(TXN_SHOW_ALL);
+        emit(c, &t);
+        c->hidden_count = 0;
+        emit_status(c, "all parts shown");
+        break;
+    }
+    case INPUT_ACTION_SELECT_PARENT:
+        if (!sel) {
+            emit_status(c, "nothing selected (pick a part first)");
+            break;
+        }
+        if (c->sel_level + 1 < c->sel_level_count) {
+            c->sel_level++;
+            highlight_follow(c);
+            sel = selection(c);
+            emit_status(c, "selected: %s (%u instance%s)", sel->label, sel->count, sel->count == 1 ? "" : "s");
+        } else {
+            emit_status(c, "selected: %s (%u instance%s; no parent above it)", sel->label, sel->count,
+                        sel->count == 1 ? "" : "s");
+        }
+        break;
+    case INPUT_ACTION_HIGHLIGHT:
+        if (!sel) {
+            emit_status(c, "nothing selected to highlight (pick a part first)");
+        } else if (c->highlight_on) {
+            c->highlight_on = false;
+            input_txn t = txn_highlight(c->highlighted.first, c->highlighted.count, false);
+            emit(c, &t);
+            emit_status(c, "highlight off: %s", sel->label);
+        } else {
+            c->highlight_on = true;
+            c->highlighted = *sel;
+            input_txn t = txn_highlight(sel->first, sel->count, true);
+            emit(c, &t);
+            emit_status(c, "highlighted: %s", sel->label);
+        }
+        break;
+    default:
+        break;
+    }
+}
+
 /* A command action at plane point (sx, sy). */
 static void command(input_controller *c, input_action action, double sx, double sy, uint64_t now_us)
 {
@@ -268,6 +432,7 @@ static void command(input_controller *c, input_action action, double sx, double 
     switch (action) {
     case INPUT_ACTION_PICK:
         point_under(c, sx, sy, &hit);
+        select_hit(c, &hit);
         if (hit.hit)
             emit_status(c, "picked %s at (%.4g, %.4g, %.4g)", hit.what, (double)hit.point.x, (double)hit.point.y,
                         (double)hit.point.z);
@@ -275,21 +440,13 @@ static void command(input_controller *c, input_action action, double sx, double 
             emit_status(c, "picked nothing (background)");
         break;
     case INPUT_ACTION_HIDE_OBJECT:
-        point_under(c, sx, sy, &hit);
-        if (hit.hit) {
-            input_txn t = txn_geoms_record(TXN_HIDE, hit.geom_id, 1);
-            emit(c, &t);
-            emit_status(c, "hidden: %s", hit.object[0] ? hit.object : hit.what);
-        } else {
-            emit_status(c, "nothing to hide there");
-        }
+    case INPUT_ACTION_SHOW:
+    case INPUT_ACTION_ISOLATE:
+    case INPUT_ACTION_SHOW_ALL:
+    case INPUT_ACTION_SELECT_PARENT:
+    case INPUT_ACTION_HIGHLIGHT:
+        part_command(c, action, sx, sy);
         break;
-    case INPUT_ACTION_UNHIDE_ALL: {
-        input_txn t = txn_simple(TXN_SHOW_ALL);
-        emit(c, &t);
-        emit_status(c, "all objects shown");
-        break;
-    }
     case INPUT_ACTION_GOVERNOR_STATUS: {
         c->governor_status_shown = !c->governor_status_shown;
         input_txn t = txn_flag(TXN_GOVERNOR_STATUS, c->governor_status_shown);
@@ -469,13 +626,19 @@ static int active_touches(input_controller *c, touch **first, touch **second)
 static void touch_sequence_ended(input_controller *c, uint64_t now_us)
 {
     double dt_s = (double)(now_us - c->seq_start_us) * 1e-6;
-    bool tap = c->seq_max_fingers == 1 && dt_s <= TAP_MAX_S && c->seq_travel < TAP_SLOP;
+    bool still = dt_s <= TAP_MAX_S && c->seq_travel < TAP_SLOP;
+    const unsigned char *g = c->cfg.bindings.gesture_action;
+    if (still && c->seq_max_fingers == 2) {
+        c->have_last_tap = false;
+        command(c, (input_action)g[INPUT_GESTURE_TWO_FINGER_TAP], c->seq_x0, c->seq_y0, now_us);
+        return;
+    }
+    bool tap = c->seq_max_fingers == 1 && still;
     if (!tap)
         return;
     double ddx = c->seq_x0 - c->last_tap_x, ddy = c->seq_y0 - c->last_tap_y;
     bool second = c->have_last_tap && (double)(c->seq_start_us - c->last_tap_us) * 1e-6 <= DOUBLE_TAP_S &&
                   sqrt(ddx * ddx + ddy * ddy) <= DOUBLE_TAP_DIST;
-    const unsigned char *g = c->cfg.bindings.gesture_action;
     if (second) {
         c->have_last_tap = false;
         command(c, (input_action)g[INPUT_GESTURE_DOUBLE_TAP], c->seq_x0, c->seq_y0, now_us);
@@ -486,6 +649,47 @@ static void touch_sequence_ended(input_controller *c, uint64_t now_us)
         c->last_tap_y = c->seq_y0;
         command(c, (input_action)g[INPUT_GESTURE_TAP], c->seq_x0, c->seq_y0, now_us);
     }
+}
+
+/* When the finger down now becomes a long press: one finger in this
+ * sequence, still within the tap slop, not fired yet, a long press bound. */
+static bool long_press_due(const input_controller *c, uint64_t *due_us)
+{
+    if (c->seq_long_pressed || c->seq_max_fingers > 1 || c->seq_travel >= TAP_SLOP ||
+        c->cfg.bindings.gesture_action[INPUT_GESTURE_LONG_PRESS] == INPUT_ACTION_NONE)
+        return false;
+    int down = 0;
+    for (int i = 0; i < TOUCH_SLOTS; i++)
+        down += c->touches[i].active;
+    if (down != 1)
+        return false;
+    *due_us = c->seq_start_us + (uint64_t)(INPUT_LONG_PRESS_S * 1e6);
+    return true;
+}
+
+/* The long press: the part under the finger is selected, then its action. */
+static void long_press(input_controller *c, uint64_t now_us)
+{
+    touch *a, *b;
+    if (active_touches(c, &a, &b) != 1)
+        return;
+    c->seq_long_pressed = true;
+    c->have_last_tap = false;
+    input_hit hit;
+    point_under(c, a->x, a->y, &hit);
+    select_hit(c, &hit);
+    command(c, (input_action)c->cfg.bindings.gesture_action[INPUT_GESTURE_LONG_PRESS], a->x, a->y, now_us);
+}
+
+/* A long press whose time came by now_us happens now: from a tick at its
+ * deadline, or from the finger's next event when the input thread got to
+ * the events late (a finger lifted 1 s after it came down, both read at
+ * once, was held 1 s). */
+static void long_press_if_due(input_controller *c, uint64_t now_us)
+{
+    uint64_t due;
+    if (!c->touring && long_press_due(c, &due) && now_us >= due)
+        long_press(c, now_us);
 }
 
 static void touch_frame(input_controller *c, uint64_t now_us)
@@ -517,6 +721,8 @@ static void touch_frame(input_controller *c, uint64_t now_us)
         return;
     }
     if (n == 1) {
+        if (c->seq_long_pressed) /* a long press took this finger: it steers nothing */
+            return;
         if (!c->one_drag_started) { /* within the tap slop nothing moves */
             if (hypot(a->x - a->x0, a->y - a->y0) < TAP_SLOP)
                 return;
@@ -567,6 +773,7 @@ static void touch_event(input_controller *c, const input_event *e)
                 c->seq_x0 = e->x;
                 c->seq_y0 = e->y;
                 c->seq_travel = 0.0;
+                c->seq_long_pressed = false;
                 c->animating = false;
             }
         }
@@ -653,6 +860,7 @@ void input_controller_event(input_controller *c, const input_event *e)
         flush(c);
         return;
     case INPUT_TOUCH_FRAME:
+        long_press_if_due(c, e->time_us);
         touch_frame(c, e->time_us);
         flush(c);
         return;
@@ -660,6 +868,8 @@ void input_controller_event(input_controller *c, const input_event *e)
         break;
     }
     user_input(c, e->time_us);
+    if (e->kind == INPUT_TOUCH_MOTION || e->kind == INPUT_TOUCH_UP)
+        long_press_if_due(c, e->time_us);
     const unsigned char *g = c->cfg.bindings.gesture_action;
     switch (e->kind) {
     case INPUT_KEY:
@@ -728,6 +938,7 @@ void input_controller_tick(input_controller *c, uint64_t now_us)
     }
     if (c->touring)
         return;
+    long_press_if_due(c, now_us);
     if (c->cfg.have_tour && c->cfg.idle_timeout_s > 0.0 && !c->dragging &&
         (double)(now_us - c->last_input_us) * 1e-6 >= c->cfg.idle_timeout_s) {
         bool fingers = false;
@@ -760,7 +971,8 @@ void input_controller_tick(input_controller *c, uint64_t now_us)
     flush(c);
 }
 
-uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us)
+/* input_controller_deadline_us but for a long press. */
+static uint64_t deadline_us(const input_controller *c, uint64_t now_us)
 {
     if (!c->started)
         return now_us;
@@ -775,4 +987,16 @@ uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us
         return idle_end > now_us ? idle_end : now_us + 1000000;
     }
     return UINT64_MAX;
+}
+
+uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us)
+{
+    uint64_t due = deadline_us(c, now_us), press_due;
+    if (c->started && !c->touring && long_press_due(c, &press_due)) {
+        if (press_due < now_us)
+            press_due = now_us;
+        if (press_due < due)
+            due = press_due;
+    }
+    return due;
 }

@@ -16,14 +16,29 @@
  *  - wheel [dolly]: towards the point under the cursor, x0.85 per click;
  *  - keys: flight while held at a speed that scales with the scene (its
  *    bounding-box diagonal / 4 per second by default), speed x / 1.5, home
- *    (flies back to the home view), pick / hide / fly-to at the cursor;
+ *    (flies back to the home view), pick / hide / fly-to at the cursor, and
+ *    the part commands below;
  *  - touch: one finger [orbit] about the point it landed on; two fingers:
  *    the spread [dolly by the spread's ratio about the point between them,
  *    so a pinch's effect depends only on how much the spread changed, never
  *    on its size or the scene's scale] and the centre's motion [pan]; a tap
- *    [pick], a double tap [fly-to the tapped point];
+ *    [pick], a double tap [fly-to the tapped point], a long press (one
+ *    finger down INPUT_LONG_PRESS_S on the events' clock without leaving the
+ *    tap slop) [selects the part under it, then isolate], a two-finger tap
+ *    [show-all];
  *  - touchpad gestures: pinch [dolly by libinput's scale about the cursor's
  *    point], swipe [pan];
+ *  - PARTS (input_part: a part's subtree as an instance range, from the
+ *    pick callback). The SELECTION is the last part picked (pick, isolate at
+ *    the cursor, a long press) or widened to its parent (select-parent, up
+ *    the ancestors the pick reported). hide-object hides the part under the
+ *    cursor (remembered, up to INPUT_HIDDEN_MAX, for `show`: the last hidden
+ *    one shown again); isolate shows only the selection (nothing selected:
+ *    the part under the cursor, which it selects); show-all shows every
+ *    part (and forgets the hidden ones); highlight toggles the highlight of
+ *    the selection, which then follows the selection as it changes. Each
+ *    says what it did in the status line ("hidden: PATH", "isolated: PATH
+ *    (N instances)", "selected: PATH (N instances)", "all parts shown");
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -55,19 +70,38 @@
 /* What input asks the renderer to do: a transaction record (engine/txn.h),
  * the same records the pipeline applies (pipeline_submit) and the record
  * file stores (input/record.h). The controller emits camera (always
- * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide (one geometry:
- * count 1), show-all, governor-status, and the input-level tour and quit. */
+ * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide, show and
+ * isolate (a part's instance range: input_part), show-all, highlight,
+ * governor-status, and the input-level tour and quit. */
 typedef txn_record input_txn;
 typedef txn_kind input_txn_kind;
+
+#define INPUT_PART_LABEL_BYTES 128 /* a part's label with its NUL (a longer path keeps its tail: "...") */
+#define INPUT_HIT_ANCESTORS 8      /* ancestors a pick reports (select-parent widens up to this many levels) */
+
+/* A part as input acts on it: the instance ids of its whole subtree (a
+ * scene's part tree numbers instances in preorder, so a subtree is one
+ * range: engine/scene.h, PARTS) and what the status line calls it. Without a
+ * part tree every instance is its own part: (geom_id, 1). */
+typedef struct input_part {
+    uint32_t first, count;             /* instance ids [first, first + count); count >= 1 */
+    char label[INPUT_PART_LABEL_BYTES]; /* the part's path ("assembly/section-2/frame-3/bracket-1"), or
+                                          e.g. "mesh 0 'bunny'" / "the sphere set (6 spheres)" */
+} input_part;
 
 /* A pick: the first visible surface along a ray. */
 typedef struct input_hit {
     bool hit;
     vec3 point;            /* world position of the hit */
-    uint32_t geom_id, prim_id;
-    char what[128];        /* the primitive, e.g. "mesh 0 'bunny' triangle 1234", for the status line */
-    char object[128];      /* what hiding hides: the whole geometry, e.g. "mesh 0 'bunny'" or
-                              "the sphere set (6 spheres)" */
+    uint32_t geom_id, prim_id; /* geom_id: the instance hit */
+    char what[128];        /* the primitive, for the status line: "part PATH triangle N", or
+                              "mesh 0 'bunny' triangle 1234" */
+    input_part part;       /* what hide, isolate and highlight act on: the hit instance's part and
+                              everything under it (no part tree: that instance) */
+    int ancestor_count;    /* 0..INPUT_HIT_ANCESTORS */
+    input_part ancestors[INPUT_HIT_ANCESTORS]; /* the part's parent first, then its parent, ..., up to
+                              the top-level part (the file's root is none); the nearest
+                              INPUT_HIT_ANCESTORS when deeper */
 } input_hit;
 
 typedef struct input_controller_config {
@@ -122,5 +156,10 @@ bool input_controller_touring(const input_controller *c);
 
 /* Interval between animation ticks (about 60 Hz). */
 #define INPUT_TICK_US 16000
+/* A finger held this long without moving is a long press (iOS and Android
+ * use 0.5 s; a little longer keeps a slow tap from turning into one). */
+#define INPUT_LONG_PRESS_S 0.6
+/* Hidden parts remembered for `show` (undo the last hide). */
+#define INPUT_HIDDEN_MAX 32
 
 #endif

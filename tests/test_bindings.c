@@ -113,8 +113,10 @@ Test(bindings, defaults_are_as_documented)
         {KEY_EQUAL, INPUT_ACTION_SPEED_UP},   {KEY_KPPLUS, INPUT_ACTION_SPEED_UP},
         {KEY_MINUS, INPUT_ACTION_SPEED_DOWN}, {KEY_KPMINUS, INPUT_ACTION_SPEED_DOWN},
         {KEY_HOME, INPUT_ACTION_HOME},        {KEY_H, INPUT_ACTION_HIDE_OBJECT},
-        {KEY_U, INPUT_ACTION_UNHIDE_ALL},     {KEY_P, INPUT_ACTION_PICK},
+        {KEY_U, INPUT_ACTION_SHOW_ALL},       {KEY_P, INPUT_ACTION_PICK},
         {KEY_F, INPUT_ACTION_FLY_TO},         {KEY_G, INPUT_ACTION_GOVERNOR_STATUS},
+        {KEY_I, INPUT_ACTION_ISOLATE},        {KEY_BACKSPACE, INPUT_ACTION_SELECT_PARENT},
+        {KEY_L, INPUT_ACTION_HIGHLIGHT},      {KEY_Z, INPUT_ACTION_SHOW},
         {BTN_LEFT, INPUT_ACTION_ORBIT},
         {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PAN},
     };
@@ -131,6 +133,8 @@ Test(bindings, defaults_are_as_documented)
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_TWO_FINGER_PINCH], INPUT_ACTION_DOLLY);
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_TOUCHPAD_PINCH], INPUT_ACTION_DOLLY);
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_TOUCHPAD_SWIPE], INPUT_ACTION_PAN);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_LONG_PRESS], INPUT_ACTION_ISOLATE);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_TWO_FINGER_TAP], INPUT_ACTION_SHOW_ALL);
     cr_expect_eq(b.quit_chord_len, 3);
     cr_expect_eq(b.quit_chord[0], KEY_LEFTCTRL);
     cr_expect_eq(b.quit_chord[1], KEY_LEFTALT);
@@ -181,6 +185,11 @@ Test(bindings, every_action_name_round_trips)
     cr_expect_str_eq(input_action_name(INPUT_ACTION_NONE), "none");
     cr_expect_str_eq(input_action_name(INPUT_ACTION_FLY_FORWARD), "fly-forward");
     cr_expect_str_eq(input_action_name(INPUT_ACTION_HIDE_OBJECT), "hide-object");
+    cr_expect_str_eq(input_action_name(INPUT_ACTION_SHOW_ALL), "show-all");
+    cr_expect_str_eq(input_action_name(INPUT_ACTION_ISOLATE), "isolate");
+    cr_expect_str_eq(input_action_name(INPUT_ACTION_SELECT_PARENT), "select-parent");
+    cr_expect_str_eq(input_action_name(INPUT_ACTION_HIGHLIGHT), "highlight");
+    cr_expect_str_eq(input_action_name(INPUT_ACTION_SHOW), "show");
     cr_expect_null(input_action_name(INPUT_ACTION_COUNT));
     cr_expect_null(input_action_name((input_action)-1));
 }
@@ -204,7 +213,34 @@ Test(bindings, every_gesture_name_round_trips)
                          input_gesture_name((input_gesture)other));
     }
     cr_expect_str_eq(input_gesture_name(INPUT_GESTURE_DOUBLE_TAP), "double-tap");
+    cr_expect_str_eq(input_gesture_name(INPUT_GESTURE_LONG_PRESS), "long-press");
+    cr_expect_str_eq(input_gesture_name(INPUT_GESTURE_TWO_FINGER_TAP), "two-finger-tap");
     cr_expect_null(input_gesture_name(INPUT_GESTURE_COUNT));
+}
+
+/* The part actions by name on keys, pointer buttons and the new touch
+ * gestures; show-all's old name still reads; the long press and the
+ * two-finger tap are discrete (no drag actions, no flight). */
+Test(bindings, part_actions_on_keys_buttons_and_touch_gestures)
+{
+    input_bindings b = parse_ok("{" HEAD ", \"keys\": {\"KEY_X\": \"unhide-all\", \"BTN_SIDE\": \"isolate\", "
+                                "\"BTN_EXTRA\": \"select-parent\", \"BTN_FORWARD\": \"highlight\", \"BTN_BACK\": \"show\", "
+                                "\"BTN_TASK\": \"hide-object\"}, \"gestures\": {\"long-press\": \"hide-object\", "
+                                "\"two-finger-tap\": \"unhide-all\", \"double-tap\": \"select-parent\"}}");
+    cr_expect_eq(b.code_action[KEY_X], INPUT_ACTION_SHOW_ALL);
+    cr_expect_eq(b.code_action[BTN_SIDE], INPUT_ACTION_ISOLATE);
+    cr_expect_eq(b.code_action[BTN_EXTRA], INPUT_ACTION_SELECT_PARENT);
+    cr_expect_eq(b.code_action[BTN_FORWARD], INPUT_ACTION_HIGHLIGHT);
+    cr_expect_eq(b.code_action[BTN_BACK], INPUT_ACTION_SHOW);
+    cr_expect_eq(b.code_action[BTN_TASK], INPUT_ACTION_HIDE_OBJECT);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_LONG_PRESS], INPUT_ACTION_HIDE_OBJECT);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_TWO_FINGER_TAP], INPUT_ACTION_SHOW_ALL);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_DOUBLE_TAP], INPUT_ACTION_SELECT_PARENT);
+    expect_members_failure(", \"gestures\": {\"long-press\": \"orbit\"}", "gestures.long-press",
+                           "'orbit' is a drag action, which follows motion, but long-press is a discrete gesture");
+    expect_members_failure(", \"gestures\": {\"two-finger-tap\": \"fly-up\"}", "gestures.two-finger-tap",
+                           "'fly-up' acts while held");
+    expect_members_failure(", \"keys\": {\"KEY_X\": \"unhide\"}", "keys.KEY_X", "unknown action 'unhide'");
 }
 
 /* ---- sections -------------------------------------------------------------------- */
@@ -315,7 +351,7 @@ Test(bindings, bad_actions)
     expect_members_failure(", \"keys\": {\"KEY_W\": \"fly-fwd\"}", "keys.KEY_W",
                            "unknown action 'fly-fwd' (expected one of: none, orbit, pan, dolly, fly-forward, "
                            "fly-back, fly-left, fly-right, fly-up, fly-down, speed-up, speed-down, home, pick, "
-                           "hide-object, unhide-all, fly-to, governor-status)");
+                           "hide-object, show-all, fly-to, governor-status, isolate, select-parent, highlight, show)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -332,7 +368,8 @@ Test(bindings, drag_actions_need_motion)
                            "'dolly' is a drag action");
     expect_members_failure(", \"gestures\": {\"tap\": \"orbit\"}", "gestures.tap",
                            "'orbit' is a drag action, which follows motion, but tap is a discrete gesture without "
-                           "motion (it takes speed-up, speed-down, home, pick, hide-object, unhide-all, fly-to, governor-status or none)");
+                           "motion (it takes speed-up, speed-down, home, pick, hide-object, show-all, fly-to, governor-status, isolate, "
+                           "select-parent, highlight, show or none)");
     expect_members_failure(", \"gestures\": {\"click\": \"pan\"}", "gestures.click", "'pan' is a drag action");
     expect_members_failure(", \"gestures\": {\"double-tap\": \"dolly\"}", "gestures.double-tap",
                            "'dolly' is a drag action");
@@ -360,7 +397,8 @@ Test(bindings, bad_gestures_section)
 {
     expect_members_failure(", \"gestures\": {\"triple-tap\": \"pick\"}", "gestures.triple-tap",
                            "unknown field (expected one of: click, wheel, tap, double-tap, one-finger-drag, "
-                           "two-finger-drag, two-finger-pinch, touchpad-pinch, touchpad-swipe)");
+                           "two-finger-drag, two-finger-pinch, touchpad-pinch, touchpad-swipe, long-press, "
+                           "two-finger-tap)");
     expect_members_failure(", \"gestures\": [\"tap\"]", "gestures", "expected an object, got array");
     expect_members_failure(", \"keys\": \"KEY_W\"", "keys", "expected an object, got string");
 }

@@ -55,7 +55,7 @@ static void rig_pick(void *ctx, vec3 o, vec3 d, input_hit *out)
             out->point = v3_add(o, v3_scale(d, (float)t));
             out->geom_id = 0;
             snprintf(out->what, sizeof out->what, "sphere");
-            snprintf(out->object, sizeof out->object, "the sphere set");
+            snprintf(out->part.label, sizeof out->part.label, "the sphere set");
             return;
         }
     }

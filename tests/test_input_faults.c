@@ -89,7 +89,7 @@ static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
     out->point = v3_add(origin, v3_scale(dir, t));
     out->geom_id = 0;
     snprintf(out->what, sizeof out->what, "mesh 0 'ground' triangle 1");
-    snprintf(out->object, sizeof out->object, "mesh 0 'ground'");
+    snprintf(out->part.label, sizeof out->part.label, "mesh 0 'ground'");
 }
 
 static camera_desc current(void *ctx) { return ((garbage_sink *)ctx)->shown; }

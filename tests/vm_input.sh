@@ -28,6 +28,17 @@
 # time + 6 s) and the default tour (an orbit of the home view): the picture
 # moves with nobody there, holds still after a key, and moves again after the
 # idle timeout.
+# Then a third run on a 10,000-part glTF assembly (build/gen-assembly --parts
+# 10000 --triangles 2000000, made here on the host), no shadows, another
+# uinput touchscreen mapped to Virtual-4, in three checks (about 2.5 min):
+# the tablet's click picks a skin panel (the record's status names its path:
+# "picked part assembly/..."), H hides it (a hide of its instance range; the
+# native render of the record without the hide differs where it was); I
+# isolates it (the same range); U shows all, a long press on the touchscreen
+# selects and isolates the part under the finger, a two-finger tap shows all
+# (the record's kinds in that order; heads 1 and 2, which show neither the
+# status line nor the cursor, equal the start's native render). Each check
+# also asks the heads to equal the native replay of the record, as above.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
 # TESSERA_LOG=debug and logs each frame on screen; the host waits for those
@@ -67,6 +78,14 @@ vm_build "$CACHE/vm-input" "$W/bin/tessera" "$W/bin/uinput_touch"
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
+# the third run's assembly (make test builds build/gen-assembly; the same options give the same bytes)
+GEN=${TESSERA_GEN_ASSEMBLY:-build/gen-assembly}
+[ -x "$GEN" ] || make -s "$GEN" > "$W/gen.log" 2>&1
+if ! "$GEN" --parts 10000 --triangles 2000000 -o "$W/asm.glb" > "$W/gen.log" 2>&1; then
+    cat "$W/gen.log"
+    echo "vm_input: FAIL: $GEN did not make the 10,000-part assembly"
+    exit 1
+fi
 
 # the guest (busybox sh in the share): the touchscreen, then tessera, then the
 # steps the host drops in (cmd-N.sh, run in order; output cmd-N.log, status cmd-N.done)
@@ -108,8 +127,21 @@ if [ ! -e done ]; then
     tessera run --wall wall.json --scene scene.json --threads 2 --no-shadows --idle-timeout "$(cat idle_s 2>/dev/null || echo 8)" \
         > tessera2.log 2>&1 3<&- &
     pid=$!
-    run_steps $pid 3600
+    run_steps $pid 3600 tour-done
     stop_program $pid tessera2.rc
+fi
+# a 10,000-part assembly, a touchscreen on Virtual-4
+if [ ! -e done ]; then
+    mkfifo /tmp/touch3.fifo
+    uinput_touch -n tessera-test-touch3 -s 640x480 -f /tmp/touch3.fifo > touch3.log 2>&1 3<&- &
+    i=0
+    while ! grep -q ready touch3.log 2>/dev/null && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
+    tessera run --wall wall.json --scene asm.glb --threads 2 --no-shadows --idle-timeout 0 --record-input rec3.txt \
+        --map-input tessera-test-touch3=Virtual-4 > tessera3.log 2>&1 3<&- &
+    pid=$!
+    run_steps $pid 3600
+    stop_program $pid tessera3.rc
+    echo quit > /tmp/touch3.fifo
 fi
 alive $tpid && echo quit > /tmp/touch.fifo
 wait $tpid
@@ -154,6 +186,8 @@ heads_equal() {
 # so the record counts too), or the heads do not settle on the record's picture, within
 # 16 frames' time (frames_s). With a second argument `may_do_nothing` a check of input
 # that need not do anything (garbage) only asks that the heads settle on the replay.
+# Which run check looks at: its log, record, scene and the native render's extra options.
+CHECK_LOG=tessera.log CHECK_REC=rec.txt CHECK_SCENE=scene.json CHECK_OPTS=
 K=0
 check() {
     K=$((K + 1))
@@ -169,12 +203,13 @@ check() {
             fi
             return
         fi
-        _sum=$(cksum < "$W/rec.txt" 2>/dev/null)
+        _sum=$(cksum < "$W/$CHECK_REC" 2>/dev/null)
         if [ "$_sum" != "$_rendered" ]; then
-            cp "$W/rec.txt" "$W/rec-$K.txt" 2>/dev/null || : > "$W/rec-$K.txt"
+            cp "$W/$CHECK_REC" "$W/rec-$K.txt" 2>/dev/null || : > "$W/rec-$K.txt"
             _rendered=$(cksum < "$W/rec-$K.txt")
-            if ! "$W/bin/tessera" render --wall "$W/wall.json" --scene "$W/scene.json" --replay-input "$W/rec-$K.txt" \
-                --threads 2 --out "$W/ref-$K.bmp" > "$W/native-$K.log" 2>&1; then
+            # shellcheck disable=SC2086 # CHECK_OPTS: options, split on purpose
+            if ! "$W/bin/tessera" render --wall "$W/wall.json" --scene "$W/$CHECK_SCENE" --replay-input "$W/rec-$K.txt" \
+                --threads 2 $CHECK_OPTS --out "$W/ref-$K.bmp" > "$W/native-$K.log" 2>&1; then
                 bad "$1: the native replay failed: $(tail -n 3 "$W/native-$K.log")"
                 return
             fi
@@ -188,15 +223,114 @@ check() {
             sleep 0.5
             continue
         fi
-        _f=$(last_frame tessera.log)
-        if heads_equal "$W/dump-$K" "$W/ref-$K" && wait_frame tessera.log $((_f + 3)) &&
-            [ "$(cksum < "$W/rec.txt" 2>/dev/null)" = "$_rendered" ] && heads_equal "$W/dump-$K" "$W/ref-$K"; then
+        _f=$(last_frame $CHECK_LOG)
+        if heads_equal "$W/dump-$K" "$W/ref-$K" && wait_frame $CHECK_LOG $((_f + 3)) &&
+            [ "$(cksum < "$W/$CHECK_REC" 2>/dev/null)" = "$_rendered" ] && heads_equal "$W/dump-$K" "$W/ref-$K"; then
             ok "$1: the 4 heads equal the native replay of the recorded transactions ($(($(wc -l < "$W/rec-$K.txt") - 1)) so far; $(($(elapsed) - _t)) s)"
             return
         fi
         echo "$(elapsed) s, frame $_f: $_why" >> "$W/check-$K.log" # (VM_KEEP=1 keeps it)
         sleep 0.5
     done
+}
+
+# px_differ A B: how many pixels of two images differ
+px_differ() { python3 tests/vm/qmp.py compare "$1" "$2" 0 2>&1 | sed -n 's/^\([0-9]*\) of .*/\1/p'; }
+# heads_differ K1 K2: pixels that differ between the native replays of checks K1 and K2 on
+# heads 1, 2 and 4 (head 3 shows the status line)
+heads_differ() {
+    _hd=0
+    for _v in 1 2 4; do _hd=$((_hd + $(px_differ "$W/ref-$1-Virtual-$_v.bmp" "$W/ref-$2-Virtual-$_v.bmp") + 0)); done
+    echo $_hd
+}
+# rec_last REGEX: the record's last line matching REGEX (of the current check's copy), without its time
+rec_last() { grep -E "$1" "$W/rec-$K.txt" | tail -n 1 | cut -d' ' -f2-; }
+# native NAME RECORD: the native render of RECORD (the current check's scene and options) as
+# ref-NAME-Virtual-N.bmp
+native() {
+    # shellcheck disable=SC2086 # CHECK_OPTS: options, split on purpose
+    "$W/bin/tessera" render --wall "$W/wall.json" --scene "$W/$CHECK_SCENE" --replay-input "$2" --threads 2 $CHECK_OPTS \
+        --out "$W/ref-$1.bmp" > "$W/native-$1.log" 2>&1 || echo "native render of $2 failed: $(tail -n 1 "$W/native-$1.log")"
+}
+# The third run: a 10,000-part glTF assembly. Parts are picked by path, hidden, isolated and
+# shown again by the tablet, the keyboard and the touchscreen (on Virtual-4). Four checks
+# (the heads equal the native replay of the record; each ~4 of the guest's frames), two
+# gestures in some, to keep the run short; what each recorded is read back (the path picked,
+# the ranges hidden and isolated, the status lines, in order), and native renders of the
+# record without the hide, and up to the isolate, show that those changed the picture.
+assembly_run() {
+    if ! log_wait tessera3.log "outputs up" "$(frames_s 30)" ||
+        ! log_wait tessera3.log "added: 'tessera-test-touch3'" "$(frames_s 4)" ||
+        ! wait_frame tessera3.log 2 8; then
+        bad "assembly: the kiosk did not come up with the 10,000-part assembly: $(tail -n 3 "$W/tessera3.log" 2>/dev/null)"
+        return
+    fi
+    echo "vm_input: the assembly is up after $(elapsed) s: $(grep -o 'scene asm.glb.*' "$W/tessera3.log" | head -n 1)"
+    CHECK_LOG=tessera3.log CHECK_REC=rec3.txt CHECK_SCENE=asm.glb CHECK_OPTS=--no-shadows
+    printf 'tessera-input-record 2\n' > "$W/rec-asm0.txt"
+    native asm0 "$W/rec-asm0.txt" # the start: every part shown, no status line, no cursor
+
+    # the tablet clicks a skin panel in Virtual-4 (pixel (360, 50) of that output: the wall's
+    # 336 x 256 mm, Virtual-4's active area from (172, 132) mm at 4 px a mm), which picks it by
+    # its path; H hides the part under the cursor: that one
+    qmp mouse tablet
+    qmp abs 25551 18496
+    qmp click left
+    qmp key h
+    _fail0=$FAIL
+    check "assembly: tablet click (pick a part), H (hide it)"
+    [ $FAIL -eq $_fail0 ] || return
+    _picked=$(rec_last ' status "picked part ' | sed -n 's/^status "picked part \(.*\) triangle [0-9]* at .*/\1/p')
+    _hide=$(rec_last ' hide ')
+    grep -v ' hide ' "$W/rec-$K.txt" > "$W/rec-asm1.txt"
+    native asm1 "$W/rec-asm1.txt"
+    _n=$(($(px_differ "$W/ref-asm1-Virtual-4.bmp" "$W/ref-$K-Virtual-4.bmp") + 0))
+    if [ -z "$_picked" ]; then
+        bad "assembly: the click picked no part: $(grep ' status ' "$W/rec-$K.txt" | head -n 1)"
+        return
+    elif [ "$(rec_last ' status ')" = "status \"hidden: $_picked\"" ] && [ -n "$_hide" ] && [ "$_n" -gt 100 ]; then
+        ok "assembly: picked by path $_picked; H hid it ($_hide; $_n pixels of Virtual-4 changed)"
+    else
+        bad "assembly: picked $_picked; H: record '$_hide', '$(rec_last ' status ')', $_n pixels of Virtual-4 changed"
+    fi
+
+    # I isolates the selection (the part picked)
+    _k1=$K
+    qmp key i
+    check "assembly: I (isolate the selection)"
+    _iso=$(rec_last ' isolate ')
+    _n=$(heads_differ $_k1 $K)
+    if [ "isolate ${_hide#hide }" = "$_iso" ] && [ "$_n" -gt 2000 ] &&
+        [ "$(rec_last ' status ')" = "status \"isolated: $_picked (1 instance)\"" ]; then
+        ok "assembly: I isolated $_picked ($_iso; $_n pixels changed)"
+    else
+        bad "assembly: I: record '$_iso' (hidden: '$_hide'), '$(rec_last ' status ')', $_n pixels changed"
+    fi
+
+    # U shows all; then on the touchscreen a long press (1.5 s held still) selects and
+    # isolates the part under the finger, and a two-finger tap (two fingers 80 px apart,
+    # down and up together) shows all again: one check for the three (the picture at the
+    # end: every part shown), the record read back in order, and the native render of the
+    # record up to the long press's isolate against the start's
+    qmp key u
+    dev_cmd /tmp/touch3.fifo touch3.log "tap 450 66 1500"
+    dev_cmd /tmp/touch3.fifo touch3.log "pinch 450 66 40 40 1"
+    check "assembly: U (show all), touch long press (select and isolate), two-finger tap (show all)"
+    _order=$(sed -n '1,/ isolate /d; / cursor /d; p' "$W/rec-$K.txt" | cut -d' ' -f2 | tr '\n' ' ')
+    _iso=$(rec_last ' isolate ')
+    _lp=$(grep ' status "isolated: ' "$W/rec-$K.txt" | tail -n 1 | cut -d' ' -f2-)
+    awk -v n="$(grep -n ' isolate ' "$W/rec-$K.txt" | tail -n 1 | cut -d: -f1)" 'NR <= n' "$W/rec-$K.txt" > "$W/rec-asm2.txt"
+    native asm2 "$W/rec-asm2.txt"
+    _n=$(heads_differ asm0 asm2)
+    if [ "$_order" = 'status show-all status isolate status show-all status ' ] && [ "$_iso" != "isolate ${_hide#hide }" ] &&
+        echo "$_lp" | grep -q '^status "isolated: assembly/.* ([0-9]* instances*)"$' && [ "$_n" -gt 2000 ] &&
+        [ "$(rec_last ' status ')" = 'status "all parts shown"' ] &&
+        [ "$(px_differ "$W/ref-asm0-Virtual-1.bmp" "$W/ref-$K-Virtual-1.bmp")" = 0 ] &&
+        [ "$(px_differ "$W/ref-asm0-Virtual-2.bmp" "$W/ref-$K-Virtual-2.bmp")" = 0 ]; then
+        ok "assembly: U showed all; the long press $(echo "$_lp" | sed 's/^status "\(.*\)"$/\1/') ($_iso; $_n pixels of the replay changed); the two-finger tap showed all (heads 1 and 2 equal the start's)"
+    else
+        bad "assembly: U, long press, two-finger tap: after the I: '$_order'; '$_iso', '$_lp', $_n pixels of the replay changed; heads 1 and 2 against the start's: $(px_differ "$W/ref-asm0-Virtual-1.bmp" "$W/ref-$K-Virtual-1.bmp"), $(px_differ "$W/ref-asm0-Virtual-2.bmp" "$W/ref-$K-Virtual-2.bmp") pixels differ"
+    fi
 }
 
 # the wall comes up (boot, tessera's start and first frames take ~25-40 s here under TCG;
@@ -388,6 +522,8 @@ else
             bad "kiosk: the tour came back but head 0 does not move"
         fi
     fi
+    : > "$W/tour-done"
+    assembly_run
 fi
 : > "$W/done"
 wait "$GPID"

@@ -13,7 +13,8 @@
  *     at the barrier). Each is a pipeline transaction whose callback calls
  *     the pipeline's own setter and counts what happened;
  *   - replayed input: a record file of random input transactions (camera,
- *     cursor, status, hide, unhide-all, tour on/off), generated here and
+ *     cursor, status, hide, show, isolate and highlight of instance ranges,
+ *     show-all, tour on/off), generated here and
  *     given to the kiosk as --replay-input, so the sink's replay thread plays
  *     it at the recorded times as it would a person's session;
  *   - a frame clock (a serial animation: each frame's duration into a
@@ -677,12 +678,17 @@ static bool write_replay(soak *s, const char *file)
             bool on = below(&rng, 2) != 0;
             float sx = (float)(-1.2 + 2.4 * uniform(&rng)), sy = (float)(-1.2 + 2.4 * uniform(&rng));
             uint32_t geom = (uint32_t)below(&rng, (int)s->geometry_count);
+            /* a part's instance range, as the part commands of input make them */
+            uint32_t span = 1 + (uint32_t)below(&rng, (int)(s->geometry_count - geom));
             char text[TXN_TEXT_BYTES];
             random_text(&rng, text, sizeof text);
             input_txn x = r < 40   ? txn_camera(TXN_ALL_CHANNELS, &cam)
                           : r < 65 ? txn_cursor(on, sx, sy)
                           : r < 80 ? txn_status(text)
-                          : r < 88 ? txn_geoms_record(TXN_HIDE, geom, 1)
+                          : r < 84 ? txn_geoms_record(TXN_HIDE, geom, below(&rng, 2) ? 1 : span)
+                          : r < 85 ? txn_geoms_record(TXN_SHOW, geom, span)
+                          : r < 86 ? txn_geoms_record(TXN_ISOLATE, geom, span)
+                          : r < 88 ? txn_highlight(geom, span, on)
                           : r < 93 ? txn_simple(TXN_SHOW_ALL)
                                    : txn_flag(TXN_TOUR, on);
             ok = input_record_write(f, t, &x);
@@ -741,13 +747,16 @@ static void report(soak *s)
         discarded += dk;
         mismatches += atomic_load(&c->mismatch);
     }
-    printf("soak: replayed input: %llu generated (camera %llu, cursor %llu, status %llu, hide %llu, unhide-all %llu, "
-           "tour %llu); sink: %llu replayed, %llu emitted live, %llu pipeline transactions queued, %llu refused, "
+    printf("soak: replayed input: %llu generated (camera %llu, cursor %llu, status %llu, hide %llu, show %llu, "
+           "isolate %llu, highlight %llu, show-all %llu, tour %llu); sink: %llu replayed, %llu emitted live, %llu pipeline transactions queued, %llu refused, "
            "%llu camera changes applied in %llu transactions\n",
            (unsigned long long)s->replay_total, (unsigned long long)s->replay_generated[TXN_CAMERA],
            (unsigned long long)s->replay_generated[TXN_CURSOR],
            (unsigned long long)s->replay_generated[TXN_STATUS],
            (unsigned long long)s->replay_generated[TXN_HIDE],
+           (unsigned long long)s->replay_generated[TXN_SHOW],
+           (unsigned long long)s->replay_generated[TXN_ISOLATE],
+           (unsigned long long)s->replay_generated[TXN_HIGHLIGHT],
            (unsigned long long)s->replay_generated[TXN_SHOW_ALL],
            (unsigned long long)s->replay_generated[TXN_TOUR], (unsigned long long)ss->replayed,
            (unsigned long long)ss->emitted, (unsigned long long)ss->queued, (unsigned long long)ss->refused,

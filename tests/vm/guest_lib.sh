@@ -16,13 +16,13 @@ wait_for() {
     [ -e "$1" ]
 }
 
-# run_steps PID SECS: while PID runs, run each cmd-N.sh (N = 1, 2, ... in
-# order, going on from an earlier run_steps) the host drops in, output to
+# run_steps PID SECS [STOP]: while PID runs, run each cmd-N.sh (N = 1, 2, ...
+# in order, going on from an earlier run_steps) the host drops in, output to
 # cmd-N.log, exit status to cmd-N.done (fd 3 closed for them); until the host
-# creates `done`, PID ends, or SECS pass without a step.
+# creates `done` (or the file STOP), PID ends, or SECS pass without a step.
 run_steps() {
     n=${n:-1} i=0
-    while [ ! -e done ] && [ $i -lt $(($2 * 10)) ] && alive "$1"; do
+    while [ ! -e done ] && [ ! -e "${3:-done}" ] && [ $i -lt $(($2 * 10)) ] && alive "$1"; do
         if [ -e cmd-$n.sh ]; then
             sh cmd-$n.sh > cmd-$n.log 2>&1 3<&-
             echo $? > cmd-$n.tmp

@@ -14,6 +14,7 @@
 #include "input/navigate.h"
 #include "input/record.h"
 #include "input/runner.h"
+#include "input_pick.h"
 #include "pipeline_cli.h"
 
 #define CLI_TOUR_ORBIT_PERIOD_S 24.0 /* the default tour: one turn around the home view */
@@ -310,33 +311,11 @@ struct cli_input {
     char record_file[CLI_INPUT_PATH_BYTES];
 };
 
-/* The first surface along a ray (the input thread; the accel is read-only but
- * for the hidden flags, which it reads atomically). */
+/* The pick hook (input_pick.h). */
 static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
 {
     const cli_scene *cs = ctx;
-    ray r = {.org = origin, .dir = dir, .t_near = 0.f, .t_far = INFINITY};
-    hit h;
-    *out = (input_hit){.hit = false};
-    if (!accel_pick(cs->accel, &r, &h))
-        return;
-    out->hit = true;
-    out->point = v3_add(origin, v3_scale(dir, h.t));
-    out->geom_id = h.geom_id;
-    out->prim_id = h.prim_id;
-    const scene *s = cs->scene;
-    const scene_geometry *g = scene_instance_geometry(s, h.geom_id);
-    if (g->ops == &geometry_triangles_ops) {
-        snprintf(out->what, sizeof out->what, "mesh %u '%s' triangle %u", h.geom_id, g->name, h.prim_id);
-        snprintf(out->object, sizeof out->object, "mesh %u '%s'", h.geom_id, g->name);
-    } else if (g->ops == &geometry_spheres_ops) {
-        /* spheres are one geometry: hiding one hides the set (per-sphere hiding is not there yet) */
-        snprintf(out->what, sizeof out->what, "sphere %u", h.prim_id);
-        snprintf(out->object, sizeof out->object, "the sphere set (%u spheres)", s->spheres.count);
-    } else {
-        snprintf(out->what, sizeof out->what, "%s %u '%s' primitive %u", g->ops->name, h.geom_id, g->name, h.prim_id);
-        snprintf(out->object, sizeof out->object, "%s %u '%s'", g->ops->name, h.geom_id, g->name);
-    }
+    cli_input_pick(cs->scene, cs->accel, origin, dir, out);
 }
 
 static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs,
