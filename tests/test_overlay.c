@@ -786,7 +786,8 @@ typedef struct racer {
     atomic_int bad_picks;
 } racer;
 
-/* The racer: picks (reading the hidden flags the serial section writes)
+/* The racer: picks through accel_pick (the hidden flags and the boxes the
+ * serial section refits; accel.h)
  * and cursor moves from its own thread while frames render. Each move waits
  * for a frame to be rendered after it (an event: a starved racer makes the
  * run longer, never the test wrong); after RACE_MOVES moves and two more
@@ -799,7 +800,7 @@ static void *pick_and_move(void *arg)
     for (unsigned k = 0; !atomic_load(&r->done); k++) {
         ray down = down_ray(0.f, 0.f);
         hit h;
-        bool any = accel_intersect(r->a, &down, &h);
+        bool any = accel_pick(r->a, &down, &h); /* a pick from another thread: the refit lock */
         /* the sphere or, while it is hidden, the floor */
         if (!any || (h.geom_id != 2 && h.geom_id != 0))
             atomic_fetch_add(&r->bad_picks, 1);
