@@ -99,8 +99,8 @@ static int sink_instance(void *ctx, int part, int mesh_id, const float to_world[
     }
     part_counts *counts = part_tree_counts(k->s->parts, (int32_t)scene_part);
     counts->instances++;
-    counts->triangles += scene_instance_geometry(k->s, k->s->instance_count - 1)->ops->prim_count(
-        scene_instance_geometry(k->s, k->s->instance_count - 1)->data);
+    const scene_geometry *g = &k->s->geometries[k->geometry_ids[mesh_id]];
+    counts->triangles += g->ops->prim_count(g->data);
     return 0;
 }
 
