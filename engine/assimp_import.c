@@ -16,7 +16,10 @@
  *    (found by fuzzing); the check counts vertices and checks the indices;
  *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
  *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
- *    therefore checked for non-finite values before that step runs. */
+ *    therefore checked for non-finite values before that step runs;
+ *  - its base64 decoder leaks the buffer of a glTF data URI holding a byte
+ *    >= 0x80 and decodes other strangers as data (found by fuzzing);
+ *    assimp_check_gltf_uris (gltf_uri_check.c) reads those URIs first. */
 #include "assimp_import.h"
 
 #include <assimp/cimport.h>
@@ -411,7 +414,7 @@ static void *import_on_deep_stack(void *arg)
     import_job *job = arg;
     const char *path = job->path;
     tess_error *err = job->err;
-    if (has_extension(path, ".obj") && !check_obj_numbers(path, err))
+    if (has_extension(path, ".obj") ? !check_obj_numbers(path, err) : !assimp_check_gltf_uris(path, err))
         return NULL;
     const struct aiScene *scene = import_scene(path, BASE_FLAGS | job->flags, err);
     if (!scene)
