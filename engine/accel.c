@@ -193,11 +193,11 @@ size_t accel_bytes(const accel *a)
 
 uint32_t accel_geometry_count(const accel *a) { return a->instance_count; }
 
-/* Refit the instance level under the lock accel_pick takes. */
+/* Refit the instance level's stale nodes under the lock accel_pick takes. */
 static void refit(accel *a)
 {
     pthread_mutex_lock(&a->refit_lock);
-    wbvh_refit_instances(&a->top, a->instance_bounds);
+    wbvh_refit_stale(&a->top, a->instance_bounds);
     pthread_mutex_unlock(&a->refit_lock);
     atomic_store_explicit(&a->refit_pending, false, memory_order_relaxed);
 }
@@ -212,11 +212,15 @@ void accel_set_hidden_range(const accel *ca, uint32_t first, uint32_t count, boo
         return;
     uint32_t end = count > a->instance_count - first ? a->instance_count : first + count;
     bool showed = false, hid = false;
+    pthread_mutex_lock(&a->refit_lock); /* the stale marks are the refit's */
     for (uint32_t i = first; i < end; i++) {
         unsigned char old = atomic_exchange_explicit(&a->hidden[i], hidden ? 1u : 0u, memory_order_relaxed);
+        if (!old != !hidden)
+            wbvh_mark_instances(&a->top, i, 1);
         showed |= old && !hidden;
         hid |= !old && hidden;
     }
+    pthread_mutex_unlock(&a->refit_lock);
     if (showed) /* a shown instance must be inside the boxes before anything traces again */
         refit(a);
     else if (hid)
@@ -255,7 +259,8 @@ void accel_set_placement(const accel *ca, uint32_t first, uint32_t count, const 
         a->instances[i].identity = pl.identity;
         a->instance_bounds[i] = instance_box(&pl, a->instances[i].geometry);
     }
-    wbvh_refit_instances(&a->top, a->instance_bounds);
+    wbvh_mark_instances(&a->top, first, end - first);
+    wbvh_refit_stale(&a->top, a->instance_bounds);
     pthread_mutex_unlock(&a->refit_lock);
     atomic_store_explicit(&a->refit_pending, false, memory_order_relaxed);
 }

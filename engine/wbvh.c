@@ -188,6 +188,39 @@ bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const voi
     return true;
 }
 
+/* An instance level's parent and leaf_node indices (wbvh.h), all stale. */
+static bool index_instances(wbvh *w, uint32_t instance_count, tess_error *err)
+{
+    w->instance_count = instance_count;
+    w->parent = malloc(((size_t)w->node_count + 1) * sizeof *w->parent);
+    w->stale = malloc((size_t)w->node_count + 1);
+    w->leaf_node = malloc(((size_t)instance_count + 1) * sizeof *w->leaf_node);
+    if (!w->parent || !w->stale || !w->leaf_node)
+        return tess_error_set(err, "wbvh: out of memory indexing %u instances", instance_count);
+    memset(w->stale, 1, (size_t)w->node_count);
+    for (uint32_t i = 0; i < instance_count; i++)
+        w->leaf_node[i] = UINT32_MAX;
+    if (w->node_count > 0)
+        w->parent[0] = UINT32_MAX;
+    const wbvh_prim_block *blocks = w->blocks;
+    for (uint32_t k = 0; k < w->node_count; k++) {
+        const wbvh_node *n = &w->nodes[k];
+        for (int i = 0; i < WBVH_WIDTH; i++) {
+            if (!(n->slot_mask >> i & 1u))
+                continue;
+            if (!n->leaf_blocks[i]) {
+                w->parent[n->child[i]] = k;
+                continue;
+            }
+            for (uint32_t blk = n->child[i]; blk < n->child[i] + n->leaf_blocks[i]; blk++)
+                for (int lane = 0; lane < WBVH_BLOCK; lane++)
+                    if (blocks[blk].prim_id[lane] < instance_count)
+                        w->leaf_node[blocks[blk].prim_id[lane]] = k;
+        }
+    }
+    return true;
+}
+
 bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *instances, const atomic_uchar *hidden,
                           tess_error *err)
 {
@@ -195,6 +228,10 @@ bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *ins
         return false;
     out->instances = instances;
     out->hidden = hidden;
+    if (!index_instances(out, binary->prim_count, err)) {
+        wbvh_finish(out);
+        return false;
+    }
     return true;
 }
 
@@ -208,41 +245,83 @@ static void set_slot(wbvh_node *n, int i, aabb b)
         n->child_mask |= (uint8_t)(1u << i);
 }
 
+/* The refit's union of boxes. Plain compares, not aabb_grow's fminf/fmaxf
+ * (library calls for their NaN rules, which a refit of finite or empty boxes
+ * does not need): the refit of 100k instances spent a third of its time in
+ * them. */
+static inline float min_f(float a, float b) { return b < a ? b : a; }
+static inline float max_f(float a, float b) { return b > a ? b : a; }
+static inline aabb grow(aabb b, aabb o)
+{
+    return (aabb){v3(min_f(b.lo.x, o.lo.x), min_f(b.lo.y, o.lo.y), min_f(b.lo.z, o.lo.z)),
+                  v3(max_f(b.hi.x, o.hi.x), max_f(b.hi.y, o.hi.y), max_f(b.hi.z, o.hi.z))};
+}
+
 static aabb node_box(const wbvh_node *n)
 {
     aabb b = aabb_empty();
     for (int i = 0; i < WBVH_WIDTH; i++)
         if (n->child_mask >> i & 1u)
-            b = aabb_grow(b, (aabb){v3(n->lo_x[i], n->lo_y[i], n->lo_z[i]), v3(n->hi_x[i], n->hi_y[i], n->hi_z[i])});
+            b = grow(b, (aabb){v3(n->lo_x[i], n->lo_y[i], n->lo_z[i]), v3(n->hi_x[i], n->hi_y[i], n->hi_z[i])});
     return b;
+}
+
+/* Recompute node k's slots from its children's boxes and its leaves'
+ * instances (hidden ones left out). */
+static void refit_node(wbvh *w, uint32_t k, const aabb *instance_bounds)
+{
+    const wbvh_prim_block *blocks = w->blocks;
+    wbvh_node *n = &w->nodes[k];
+    for (int i = 0; i < WBVH_WIDTH; i++) {
+        if (!(n->slot_mask >> i & 1u))
+            continue;
+        aabb b = aabb_empty();
+        if (n->leaf_blocks[i]) {
+            for (uint32_t blk = n->child[i]; blk < n->child[i] + n->leaf_blocks[i]; blk++)
+                for (int lane = 0; lane < WBVH_BLOCK; lane++) {
+                    uint32_t id = blocks[blk].prim_id[lane];
+                    if (id != RAY_INVALID_ID && !atomic_load_explicit(&w->hidden[id], memory_order_relaxed))
+                        b = grow(b, instance_bounds[id]);
+                }
+        } else {
+            b = node_box(&w->nodes[n->child[i]]);
+        }
+        set_slot(n, i, b);
+    }
+}
+
+void wbvh_mark_instances(wbvh *w, uint32_t first, uint32_t count)
+{
+    if (!w->stale || first >= w->instance_count)
+        return;
+    uint32_t end = count > w->instance_count - first ? w->instance_count : first + count;
+    for (uint32_t id = first; id < end; id++)
+        /* a stale node's ancestors are stale already: stop there */
+        for (uint32_t k = w->leaf_node[id]; k != UINT32_MAX && !w->stale[k]; k = w->parent[k])
+            w->stale[k] = 1;
+}
+
+bool wbvh_refit_stale(wbvh *w, const aabb *instance_bounds)
+{
+    if (!w->stale || w->node_count == 0 || !w->stale[0]) /* anything stale has the root stale */
+        return false;
+    /* children always have larger indices than their parents (the collapse
+     * numbers them as it goes down), so one backward sweep sees every child
+     * before its parent */
+    for (uint32_t k = w->node_count; k-- > 0;)
+        if (w->stale[k]) {
+            refit_node(w, k, instance_bounds);
+            w->stale[k] = 0;
+        }
+    return true;
 }
 
 void wbvh_refit_instances(wbvh *w, const aabb *instance_bounds)
 {
-    /* children always have larger indices than their parents (the collapse
-     * numbers them as it goes down), so one backward sweep sees every child
-     * before its parent */
-    const wbvh_prim_block *blocks = w->blocks;
-    for (uint32_t k = w->node_count; k-- > 0;) {
-        wbvh_node *n = &w->nodes[k];
-        for (int i = 0; i < WBVH_WIDTH; i++) {
-            if (!(n->slot_mask >> i & 1u))
-                continue;
-            aabb b = aabb_empty();
-            if (n->leaf_blocks[i]) {
-                for (uint32_t blk = n->child[i]; blk < n->child[i] + n->leaf_blocks[i]; blk++)
-                    for (int lane = 0; lane < WBVH_BLOCK; lane++) {
-                        uint32_t id = blocks[blk].prim_id[lane];
-                        if (id != RAY_INVALID_ID &&
-                            !atomic_load_explicit(&w->hidden[id], memory_order_relaxed))
-                            b = aabb_grow(b, instance_bounds[id]);
-                    }
-            } else {
-                b = node_box(&w->nodes[n->child[i]]);
-            }
-            set_slot(n, i, b);
-        }
-    }
+    for (uint32_t k = w->node_count; k-- > 0;)
+        refit_node(w, k, instance_bounds);
+    if (w->stale)
+        memset(w->stale, 0, (size_t)w->node_count);
 }
 
 void wbvh_finish(wbvh *w)
@@ -251,10 +330,17 @@ void wbvh_finish(wbvh *w)
         return;
     free(w->nodes);
     free(w->blocks);
+    free(w->parent);
+    free(w->leaf_node);
+    free(w->stale);
     memset(w, 0, sizeof *w);
 }
 
 size_t wbvh_bytes(const wbvh *w)
 {
-    return (size_t)w->node_count * sizeof(wbvh_node) + (size_t)w->block_count * block_bytes_of(w->kind);
+    size_t bytes = (size_t)w->node_count * sizeof(wbvh_node) + (size_t)w->block_count * block_bytes_of(w->kind);
+    if (w->stale) /* the instance level's refit indices */
+        bytes += (size_t)w->node_count * (sizeof *w->parent + sizeof *w->stale) +
+                 (size_t)w->instance_count * sizeof *w->leaf_node;
+    return bytes;
 }

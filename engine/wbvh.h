@@ -91,6 +91,15 @@ typedef struct wbvh {
      * flags (nonzero: not hit; relaxed atomics, see accel.h) */
     const wbvh_instance *instances;
     const atomic_uchar *hidden;
+    /* WBVH_INSTANCES, for refitting only what changed (wbvh_mark_instances):
+     * each node's parent (UINT32_MAX for the root), the node whose leaf slot
+     * holds each instance, and which nodes' boxes are stale. Written only by
+     * the marking and refitting calls, which the caller serialises (accel.c:
+     * under its refit lock). */
+    uint32_t *parent;
+    uint32_t *leaf_node;
+    uint8_t *stale;
+    uint32_t instance_count;
 } wbvh;
 
 
@@ -110,6 +119,14 @@ bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *ins
  * leaving hidden instances out; children left empty are masked off
  * (child_mask), so traversal never enters them. O(nodes + instances). */
 void wbvh_refit_instances(wbvh *w, const aabb *instance_bounds);
+/* Mark instances first..first+count-1 (clamped to the level) as changed
+ * (box, hidden flag): their leaves' nodes and those nodes' ancestors become
+ * stale. O(count + nodes newly marked). */
+void wbvh_mark_instances(wbvh *w, uint32_t first, uint32_t count);
+/* Recompute the boxes of the stale nodes only, children before parents, and
+ * clear the marks; the result equals wbvh_refit_instances when every change
+ * since the last refit was marked. Whether anything was stale. */
+bool wbvh_refit_stale(wbvh *w, const aabb *instance_bounds);
 void wbvh_finish(wbvh *w);
 size_t wbvh_bytes(const wbvh *w);
 

@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "engine/bvh.h"
+#include "engine/wbvh.h"
 #include "engine/parallel.h"
 
 static const int thread_counts[] = {1, 2, 3, 7};
@@ -721,4 +722,73 @@ Test(bvh, leaves_of_one_primitive_for_an_instance_level)
     cr_assert_not(bvh_build_leaves(&bad, boxes, n, 1, 0, &err));
     cr_assert(strstr(err.msg, "leaves of 0 primitives"), "%s", err.msg);
     free(boxes);
+}
+
+/* Refitting only the stale nodes of an instance level (wbvh_mark_instances,
+ * wbvh_refit_stale) gives the same nodes, bit for bit, as a full refit
+ * after any mix of hiding, showing and moving instances, for leaves of one
+ * instance (as accel builds them) and of several. */
+Test(bvh, instance_level_partial_refit_equals_full)
+{
+    const uint32_t n = 2000;
+    for (uint32_t leaf = 1; leaf <= 4; leaf += 3) {
+        aabb *boxes = random_boxes(n, 91 + leaf);
+        bvh binary;
+        tess_error err = {{0}};
+        cr_assert(bvh_build_leaves(&binary, boxes, n, 1, leaf, &err), "%s", err.msg);
+        wbvh_instance *instances = calloc(n, sizeof *instances);
+        atomic_uchar *hidden = calloc(n, sizeof *hidden);
+        cr_assert(instances && hidden);
+        wbvh part, full;
+        cr_assert(wbvh_build_instances(&part, &binary, instances, hidden, &err), "%s", err.msg);
+        cr_assert(wbvh_build_instances(&full, &binary, instances, hidden, &err), "%s", err.msg);
+        bvh_finish(&binary);
+        /* every instance's leaf node holds it */
+        const wbvh_prim_block *blocks = part.blocks;
+        for (uint32_t id = 0; id < n; id++) {
+            const wbvh_node *node = &part.nodes[part.leaf_node[id]];
+            bool found = false;
+            for (int i = 0; i < WBVH_WIDTH; i++)
+                for (uint32_t b = node->child[i]; node->leaf_blocks[i] && b < node->child[i] + node->leaf_blocks[i]; b++)
+                    for (int lane = 0; lane < WBVH_BLOCK; lane++)
+                        found |= blocks[b].prim_id[lane] == id;
+            cr_assert(found, "instance %u is not in its leaf node %u", id, part.leaf_node[id]);
+        }
+        wbvh_refit_instances(&part, boxes);
+        uint64_t seed = 5;
+        for (int round = 0; round < 200; round++) {
+            uint32_t first = (uint32_t)(rng_next(&seed) % n), count = 1 + (uint32_t)(rng_next(&seed) % 40);
+            switch (rng_next(&seed) % 3) {
+            case 0: /* hide or show a range */
+            case 1: {
+                bool hide = round % 5 != 4;
+                for (uint32_t i = first; i < first + count && i < n; i++)
+                    atomic_store(&hidden[i], hide);
+                break;
+            }
+            case 2: /* move a range (one refit may follow several changes) */
+                for (uint32_t i = first; i < first + count && i < n; i++) {
+                    vec3 d = v3_sub(rng_point(&seed, 20.f), v3(10.f, 10.f, 10.f));
+                    boxes[i] = (aabb){v3_add(boxes[i].lo, d), v3_add(boxes[i].hi, d)};
+                }
+                break;
+            }
+            wbvh_mark_instances(&part, first, count);
+            if (round % 3 == 2)
+                continue;
+            wbvh_refit_stale(&part, boxes);
+            wbvh_refit_instances(&full, boxes);
+            cr_assert_eq(part.node_count, full.node_count);
+            cr_assert(memcmp(part.nodes, full.nodes, part.node_count * sizeof *part.nodes) == 0,
+                      "leaves of %u, round %d: the partial refit differs from the full one", leaf, round);
+            for (uint32_t k = 0; k < part.node_count; k++)
+                cr_assert_eq(part.stale[k], 0, "node %u left stale", k);
+        }
+        cr_assert_not(wbvh_refit_stale(&part, boxes), "nothing was stale");
+        wbvh_finish(&part);
+        wbvh_finish(&full);
+        free(instances);
+        free(hidden);
+        free(boxes);
+    }
 }
