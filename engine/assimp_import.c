@@ -17,9 +17,11 @@
  *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
  *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
  *    therefore checked for non-finite values before that step runs;
- *  - its base64 decoder leaks the buffer of a glTF data URI holding a byte
- *    >= 0x80 and decodes other strangers as data (found by fuzzing);
- *    assimp_check_gltf_uris (gltf_uri_check.c) reads those URIs first. */
+ *  - a .gltf or .glb that both glTF importers refuse is offered to every
+ *    other importer by content, some of which overrun buffers on garbage;
+ *    its base64 decoder leaks the buffer of a data URI holding a byte >= 0x80
+ *    (both found by fuzzing): assimp_check_gltf (gltf_check.c) reads glTF
+ *    files first. */
 #include "assimp_import.h"
 
 #include <assimp/cimport.h>
@@ -414,7 +416,7 @@ static void *import_on_deep_stack(void *arg)
     import_job *job = arg;
     const char *path = job->path;
     tess_error *err = job->err;
-    if (has_extension(path, ".obj") ? !check_obj_numbers(path, err) : !assimp_check_gltf_uris(path, err))
+    if (has_extension(path, ".obj") ? !check_obj_numbers(path, err) : !assimp_check_gltf(path, err))
         return NULL;
     const struct aiScene *scene = import_scene(path, BASE_FLAGS | job->flags, err);
     if (!scene)

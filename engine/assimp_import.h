@@ -42,11 +42,12 @@ void assimp_append_vertices(struct mesh *m, const struct aiMesh *am);
 bool assimp_append_triangles(struct mesh *m, const struct aiMesh *am, uint32_t first_vertex, uint32_t material,
                              const char *path, tess_error *err);
 
-/* Every base64 data URI of a glTF file (text .gltf, or a .glb's JSON chunk;
- * recognised by content) holds only base64 characters; false with err naming
- * the file, the byte offset and the character otherwise. Files that are not
- * glTF pass. Run by assimp_import_file on every file but .obj. */
-bool assimp_check_gltf_uris(const char *path, tess_error *err);
+/* A glTF file (named .gltf or .glb, or glTF by content) is one assimp's glTF
+ * 2.0 reader accepts and holds only well-formed base64 data URIs; false with
+ * err naming the file, the byte offset where it can, and the problem
+ * otherwise (gltf_check.c says why each check exists). Other files pass.
+ * Run by assimp_import_file on every file but .obj. */
+bool assimp_check_gltf(const char *path, tess_error *err);
 
 /* Does path end in ext (ASCII case-insensitive, ext with its dot)? */
 bool assimp_has_extension(const char *path, const char *ext);

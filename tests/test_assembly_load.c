@@ -387,14 +387,16 @@ Test(assembly_load, broken_inputs)
 {
     char path[PATH_BYTES];
     expect_load_error(scratch_path(path, "absent.gltf"), "assimp");
+    /* not JSON: refused before assimp (which would offer it to every other
+     * importer: engine/gltf_check.c) */
     support_write_file(scratch_dir, "text.gltf", "hello, not a model\n");
-    expect_load_error(scratch_path(path, "text.gltf"), "assimp");
+    expect_load_error(scratch_path(path, "text.gltf"), "byte 0: 'h' outside a string is not JSON");
     /* truncated JSON */
     char *text = gltf_text(hierarchy_body, false);
     text[strlen(text) / 2] = '\0';
     support_write_file(scratch_dir, "truncated.gltf", text);
     free(text);
-    expect_load_error(scratch_path(path, "truncated.gltf"), "assimp");
+    expect_load_error(scratch_path(path, "truncated.gltf"), "is not closed"); /* the cut falls in the data URI */
     /* an accessor index out of range */
     write_gltf(path, "accessor.gltf",
                "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"name\":\"a\",\"mesh\":0}],"
@@ -486,6 +488,60 @@ Test(assembly_load, data_uri_checked)
     fclose(f);
     free(glb);
     expect_load_error(path, "character 0x9c");
+}
+
+/* What assimp's glTF 2.0 reader would refuse (and assimp then offer to its
+ * other importers) is refused first, each with its reason. */
+Test(assembly_load, not_quite_gltf_refused_with_the_reason)
+{
+    char path[PATH_BYTES];
+    static const struct {
+        const char *name, *text, *needle;
+    } cases[] = {
+        {"comment.gltf", "{\"asset\":{\"version\":\"2.0\"} // note\n}", "'/' outside a string is not JSON (a comment?)"},
+        {"quote.gltf", "{'asset':{}}", "(a single-quoted string?)"},
+        {"comma.gltf", "{\"asset\":{\"version\":\"2.0\"},}", "a ',' before '}'"},
+        {"nan.gltf", "{\"asset\":{\"version\":\"2.0\"},\"x\":NaN}", "'N' outside a string"},
+        {"huge.gltf", "{\"asset\":{\"version\":\"2.0\"},\"x\":1e400}", "out of range"},
+        {"control.gltf", "{\"asset\":{\"version\":\"2.0\",\"generator\":\"a\tb\"}}", "control character 0x09"},
+        {"surrogate.gltf", "{\"asset\":{\"version\":\"2.0\",\"generator\":\"\\ud800x\"}}", "high surrogate"},
+        {"twice.gltf", "{\"asset\":{},\"asset\":{\"version\":\"2.0\"}}", "asset"},
+        {"array.gltf", "[1, 2]", "not an object"},
+        {"noasset.gltf", "{\"scene\":0}", "no \"asset\" object"},
+        {"version1.gltf", "{\"asset\":{\"version\":\"1.0\"}}", "asset.version is '1.0': tessera reads glTF 2.0"},
+        {"number.gltf", "{\"asset\":{\"version\":2}}", "asset.version: missing or not a string"},
+        {"json.glb", "{\"asset\":{\"version\":\"2.0\"}}", "does not start with \"glTF\""},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        support_write_file(scratch_dir, cases[i].name, cases[i].text);
+        expect_load_error(scratch_path(path, cases[i].name), cases[i].needle);
+    }
+    /* binary headers: version, chunk type, lengths, a promised BIN chunk */
+    static const char json[33] = "{\"asset\":{\"version\":\"2.0\"}}     "; /* 32 bytes, padded with spaces */
+    static const struct {
+        const char *name;
+        uint32_t version, total, json_len, json_type;
+        const char *needle;
+    } glbs[] = {
+        {"v1.glb", 1, 52, 32, 0x4E4F534Au, "binary glTF version 1"},
+        {"type.glb", 2, 52, 32, 0x12345678u, "the first chunk is not JSON"},
+        {"long.glb", 2, 52, 999, 0x4E4F534Au, "does not fit the file"},
+        {"nobin.glb", 2, 200, 32, 0x4E4F534Au, "promises a BIN chunk"},
+    };
+    for (size_t i = 0; i < sizeof glbs / sizeof glbs[0]; i++) {
+        unsigned char glb[52];
+        memcpy(glb, "glTF", 4);
+        const uint32_t words[4] = {glbs[i].version, glbs[i].total, glbs[i].json_len, glbs[i].json_type};
+        for (int w = 0; w < 4; w++)
+            for (int b = 0; b < 4; b++)
+                glb[4 + 4 * w + b] = (unsigned char)(words[w] >> (8 * b));
+        memcpy(glb + 20, json, 32);
+        FILE *f = fopen(scratch_path(path, glbs[i].name), "wb");
+        cr_assert_not_null(f);
+        cr_assert_eq(fwrite(glb, 1, sizeof glb, f), sizeof glb);
+        fclose(f);
+        expect_load_error(path, glbs[i].needle);
+    }
 }
 
 /* A sink refusing any one call ends the load there: false, a message, no
