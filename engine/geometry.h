@@ -110,6 +110,16 @@ static inline vec3 affine3_vector(const affine3 *a, vec3 v)
               m[8] * v.x + m[9] * v.y + m[10] * v.z);
 }
 
+/* Ray r in the space a maps to (world -> object with an instance's
+ * to_object): origin as a point, direction as a vector, unnormalised, so
+ * t means the same point on both sides. The kernels and the shading of a
+ * hit both use this one mapping: a hit is described on the ray it was found
+ * with, bit for bit. */
+static inline ray affine3_ray(const affine3 *a, const ray *r)
+{
+    return (ray){affine3_point(a, r->org), affine3_vector(a, r->dir), r->t_near, r->t_far};
+}
+
 /* Transposed linear part times v: normals go object -> world by the
  * transpose of the world -> object map. */
 static inline vec3 affine3_vector_transposed(const affine3 *a, vec3 v)

@@ -72,8 +72,7 @@ static surface describe_hit(const render_view *v, const ray *r, const hit *h, bo
         sf.geometric_n = gs.geometric_n;
         sf.shading_n = gs.shading_n;
     } else {
-        ray local = {affine3_point(&pl->to_object, r->org), affine3_vector(&pl->to_object, r->dir), r->t_near,
-                     r->t_far};
+        ray local = affine3_ray(&pl->to_object, r);
         g->ops->describe(g->data, h->prim_id, &local, h, need_position, &gs);
         if (need_position) {
             sf.position = affine3_point(&pl->to_world, gs.position);

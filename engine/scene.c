@@ -59,6 +59,7 @@ void scene_destroy(scene *s)
     free(s->meshes);
     free(s->geometries);
     free(s->instances);
+    free(s->parted);
     part_tree_destroy(s->parts);
     sphere_set_finish(&s->spheres);
     free(s->materials);
@@ -191,13 +192,8 @@ int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uin
     scene_instance inst = {.geometry = geometry, .to_world = affine3_identity(), .to_object = affine3_identity(),
                            .identity = true, .part = part, .material = SCENE_NO_MATERIAL};
     /* instances with parts come in preorder of their parts (scene.h PARTS) */
-    if (part != SCENE_NO_PART)
-        for (uint32_t i = s->instance_count; i-- > 0;)
-            if (s->instances[i].part != SCENE_NO_PART) {
-                if (s->instances[i].part > part)
-                    return -1;
-                break;
-            }
+    if (part != SCENE_NO_PART && s->parted_count > 0 && s->instances[s->parted[s->parted_count - 1]].part > part)
+        return -1;
     if (to_world && !affine3_is_identity(to_world)) {
         if (!affine3_invert(to_world, &inst.to_object))
             return -1;
@@ -206,6 +202,11 @@ int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uin
     }
     if (!reserve_one((void **)&s->instances, s->instance_count, &s->instance_capacity, sizeof *s->instances))
         return -1;
+    if (part != SCENE_NO_PART) {
+        if (!reserve_one((void **)&s->parted, s->parted_count, &s->parted_capacity, sizeof *s->parted))
+            return -1;
+        s->parted[s->parted_count++] = s->instance_count;
+    }
     s->instances[s->instance_count] = inst;
     return (int)s->instance_count++;
 }

@@ -111,6 +111,11 @@ typedef struct scene {
      * that have one), so the instances of a part's subtree are one id range
      * (scene_part_instances): hiding a subtree is hiding a range. */
     struct part_tree *parts;
+    /* the ids of the instances that have a part, in order (so their parts
+     * never decrease): what scene_part_instances binary-searches, without
+     * stepping over instances that have none. NULL while there are none. */
+    uint32_t *parted;
+    uint32_t parted_count, parted_capacity;
     material *materials;
     uint32_t material_count, material_capacity;
     light *lights;

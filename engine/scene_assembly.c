@@ -120,19 +120,14 @@ bool scene_load_assembly(scene *s, const char *path, const affine3 *placement, t
     return ok;
 }
 
-/* The first instance at or after `index` whose part is >= part (instances
- * with parts are sorted by part; those without one are skipped over). */
-static uint32_t first_instance_of_part_at_least(const scene *s, uint32_t part)
+/* How many instances with a part have a part below `part` (a lower bound
+ * in s->parted, whose parts never decrease). */
+static uint32_t parted_below(const scene *s, uint32_t part)
 {
-    uint32_t lo = 0, hi = s->instance_count;
+    uint32_t lo = 0, hi = s->parted_count;
     while (lo < hi) {
         uint32_t mid = lo + (hi - lo) / 2;
-        /* an instance without a part sorts by the nearest one with a part before it */
-        uint32_t probe = mid;
-        while (probe > 0 && s->instances[probe].part == SCENE_NO_PART)
-            probe--;
-        uint32_t key = s->instances[probe].part == SCENE_NO_PART ? 0u : s->instances[probe].part;
-        if (key < part)
+        if (s->instances[s->parted[mid]].part < part)
             lo = mid + 1;
         else
             hi = mid;
@@ -146,13 +141,11 @@ void scene_part_instances(const scene *s, uint32_t part, uint32_t *first, uint32
     if (!s->parts || part >= (uint32_t)part_tree_count(s->parts))
         return;
     uint32_t subtree_end = (uint32_t)part_tree_subtree_end(s->parts, (int32_t)part);
-    *first = first_instance_of_part_at_least(s, part);
-    *end = first_instance_of_part_at_least(s, subtree_end);
-    /* instances without a part after the range's last part are not in it */
-    while (*end > *first && s->instances[*end - 1].part == SCENE_NO_PART)
-        (*end)--;
-    while (*first < *end && s->instances[*first].part == SCENE_NO_PART)
-        (*first)++;
+    uint32_t lo = parted_below(s, part), hi = parted_below(s, subtree_end);
+    if (lo < hi) { /* one id range: an assembly's instances are added together */
+        *first = s->parted[lo];
+        *end = s->parted[hi - 1] + 1;
+    }
 }
 
 typedef struct colour_job {

@@ -968,6 +968,52 @@ Test(scene, an_assembly_loads_as_a_part_tree_with_instances)
     scene_destroy(s);
 }
 
+static mesh *one_triangle(void)
+{
+    mesh *m = mesh_create();
+    mesh_add_vertex(m, 0, 0, 0);
+    mesh_add_vertex(m, 1, 0, 0);
+    mesh_add_vertex(m, 0, 1, 0);
+    mesh_add_triangle(m, 0, 1, 2);
+    return m;
+}
+
+/* Meshes without parts before and after an assembly: every
+ * part's range holds exactly its subtree's instances, never a part-less one,
+ * and an instance out of preorder is refused. */
+Test(scene, part_ranges_skip_instances_without_parts)
+{
+    char glb[512];
+    small_assembly(glb, sizeof glb);
+    tess_error err = {{0}};
+    scene *s = scene_create();
+    material mat = material_default();
+    scene_add_material(s, &mat);
+    cr_assert_geq(scene_add_mesh(s, one_triangle(), 0, "before"), 0);
+    cr_assert(scene_load_assembly(s, glb, NULL, &err), "%s", err.msg);
+    cr_assert_geq(scene_add_mesh(s, one_triangle(), 0, "after"), 0);
+    int32_t count = part_tree_count(s->parts);
+    for (int32_t part = 0; part < count; part++) { /* the root too: every instance with a part */
+        uint32_t first, end;
+        scene_part_instances(s, (uint32_t)part, &first, &end);
+        int32_t part_end = part_tree_subtree_end(s->parts, part);
+        uint32_t inside = 0;
+        for (uint32_t i = 0; i < s->instance_count; i++) {
+            uint32_t p = s->instances[i].part;
+            bool in_subtree = p != SCENE_NO_PART && (int32_t)p >= part && (int32_t)p < part_end;
+            inside += in_subtree;
+            if (in_subtree)
+                cr_assert(i >= first && i < end, "part %d: instance %u outside [%u, %u)", part, i, first, end);
+        }
+        cr_assert_eq(end - first, inside, "part %d: [%u, %u) for %u instances", part, first, end, inside);
+    }
+    cr_assert_eq(s->instances[0].part, SCENE_NO_PART);
+    cr_assert_eq(s->instances[s->instance_count - 1].part, SCENE_NO_PART);
+    /* preorder: an instance of an earlier part after a later one is refused */
+    cr_assert_eq(scene_add_instance(s, 0, NULL, 1), -1);
+    scene_destroy(s);
+}
+
 Test(scene, a_scene_file_places_an_assembly_and_colours_parts_by_pattern)
 {
     char glb[512], text[2048];

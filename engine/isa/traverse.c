@@ -263,14 +263,6 @@ static inline bool instance_hidden(const wbvh *w, uint32_t id)
     return atomic_load_explicit(&w->hidden[id], memory_order_relaxed) != 0;
 }
 
-/* The ray in an instance's object space: the same t measures the same point
- * (the direction is mapped, not renormalised). */
-static inline ray ray_to_object(const wbvh_instance *inst, const ray *r)
-{
-    return (ray){affine3_point(&inst->to_object, r->org), affine3_vector(&inst->to_object, r->dir), r->t_near,
-                 r->t_far};
-}
-
 /* One ray against up to 4 instances: down into each geometry's tree. */
 static bool instance_block1(const wbvh *w, const wbvh_prim_block *b, ray *r, const ray_derived *d, hit *h, bool any)
 {
@@ -286,7 +278,7 @@ static bool instance_block1(const wbvh *w, const wbvh_prim_block *b, ray *r, con
         if (inst->identity) {
             hit_here = traverse1(inst->geometry, 0, id, r, d, h, any);
         } else {
-            ray local = ray_to_object(inst, r);
+            ray local = affine3_ray(&inst->to_object, r);
             if (ray_is_degenerate(&local))
                 continue;
             ray_derived ld = ray_derive(&local);
