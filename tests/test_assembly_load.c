@@ -437,9 +437,36 @@ static const char *write_gltf_payload_edit(char path[PATH_BYTES], const char *na
     return scratch_path(path, name);
 }
 
+/* Write a .glb: its 20-byte header and JSON chunk header from the given
+ * words (so tests can get them wrong), then `json` padded with spaces to a
+ * multiple of 4 bytes; the file is `file_bytes` long (zeros after the text)
+ * whatever the header says. */
+static const char *write_glb(char path[PATH_BYTES], const char *name, uint32_t version, uint32_t declared_total,
+                             uint32_t json_len, uint32_t json_type, const char *json, size_t file_bytes)
+{
+    unsigned char *glb = calloc(1, file_bytes);
+    cr_assert_not_null(glb);
+    memcpy(glb, "glTF", 4);
+    const uint32_t words[4] = {version, declared_total, json_len, json_type};
+    for (int w = 0; w < 4; w++)
+        for (int b = 0; b < 4; b++)
+            glb[4 + 4 * w + b] = (unsigned char)(words[w] >> (8 * b));
+    size_t text = strlen(json), room = file_bytes - 20;
+    memset(glb + 20, ' ', ((text + 3) & ~(size_t)3) < room ? (text + 3) & ~(size_t)3 : room);
+    memcpy(glb + 20, json, text < room ? text : room);
+    FILE *f = fopen(scratch_path(path, name), "wb");
+    cr_assert_not_null(f);
+    cr_assert_eq(fwrite(glb, 1, file_bytes, f), file_bytes);
+    fclose(f);
+    free(glb);
+    return path;
+}
+
+#define GLB_JSON_CHUNK 0x4E4F534Au
+
 /* A base64 data URI holding a character outside the alphabet is refused
  * before assimp reads it (assimp 5.2 leaks the buffer of one with a byte >=
- * 0x80 and decodes other strangers as data: engine/gltf_uri_check.c), in a
+ * 0x80 and decodes other strangers as data: engine/gltf_check.c), in a
  * .gltf and in a .glb's JSON chunk; JSON escapes of base64 characters are
  * data like any other. */
 Test(assembly_load, data_uri_checked)
@@ -470,23 +497,9 @@ Test(assembly_load, data_uri_checked)
     char *json = gltf_text(hierarchy_body, false);
     char *p = strstr(json, ";base64,") + 8 + 5;
     *p = '\x9c';
-    size_t json_len = (strlen(json) + 3) & ~(size_t)3; /* chunks are padded to 4 bytes with spaces */
-    size_t total = 20 + json_len;
-    unsigned char *glb = calloc(1, total);
-    cr_assert_not_null(glb);
-    memcpy(glb, "glTF", 4);
-    const uint32_t words[4] = {2, (uint32_t)total, (uint32_t)json_len, 0x4E4F534Au};
-    for (int w = 0; w < 4; w++)
-        for (int i = 0; i < 4; i++)
-            glb[4 + 4 * w + i] = (unsigned char)(words[w] >> (8 * i));
-    memset(glb + 20, ' ', json_len);
-    memcpy(glb + 20, json, strlen(json));
+    uint32_t json_len = (uint32_t)((strlen(json) + 3) & ~(size_t)3); /* chunks are padded to 4 bytes */
+    write_glb(path, "bad.glb", 2, 20 + json_len, json_len, GLB_JSON_CHUNK, json, 20 + json_len);
     free(json);
-    FILE *f = fopen(scratch_path(path, "bad.glb"), "wb");
-    cr_assert_not_null(f);
-    cr_assert_eq(fwrite(glb, 1, total, f), total);
-    fclose(f);
-    free(glb);
     expect_load_error(path, "character 0x9c");
 }
 
@@ -505,7 +518,7 @@ Test(assembly_load, not_quite_gltf_refused_with_the_reason)
         {"huge.gltf", "{\"asset\":{\"version\":\"2.0\"},\"x\":1e400}", "out of range"},
         {"control.gltf", "{\"asset\":{\"version\":\"2.0\",\"generator\":\"a\tb\"}}", "control character 0x09"},
         {"surrogate.gltf", "{\"asset\":{\"version\":\"2.0\",\"generator\":\"\\ud800x\"}}", "high surrogate"},
-        {"twice.gltf", "{\"asset\":{},\"asset\":{\"version\":\"2.0\"}}", "asset"},
+        {"twice.gltf", "{\"asset\":{},\"asset\":{\"version\":\"2.0\"}}", "duplicate key 'asset'"},
         {"array.gltf", "[1, 2]", "not an object"},
         {"noasset.gltf", "{\"scene\":0}", "no \"asset\" object"},
         {"version1.gltf", "{\"asset\":{\"version\":\"1.0\"}}", "asset.version is '1.0': tessera reads glTF 2.0"},
@@ -517,29 +530,20 @@ Test(assembly_load, not_quite_gltf_refused_with_the_reason)
         expect_load_error(scratch_path(path, cases[i].name), cases[i].needle);
     }
     /* binary headers: version, chunk type, lengths, a promised BIN chunk */
-    static const char json[33] = "{\"asset\":{\"version\":\"2.0\"}}     "; /* 32 bytes, padded with spaces */
+    static const char json[] = "{\"asset\":{\"version\":\"2.0\"}}"; /* 27 bytes: a 32-byte chunk */
     static const struct {
         const char *name;
         uint32_t version, total, json_len, json_type;
         const char *needle;
     } glbs[] = {
-        {"v1.glb", 1, 52, 32, 0x4E4F534Au, "binary glTF version 1"},
+        {"v1.glb", 1, 52, 32, GLB_JSON_CHUNK, "binary glTF version 1"},
         {"type.glb", 2, 52, 32, 0x12345678u, "the first chunk is not JSON"},
-        {"long.glb", 2, 52, 999, 0x4E4F534Au, "does not fit the file"},
-        {"nobin.glb", 2, 200, 32, 0x4E4F534Au, "promises a BIN chunk"},
+        {"long.glb", 2, 52, 999, GLB_JSON_CHUNK, "does not fit the file"},
+        {"nobin.glb", 2, 200, 32, GLB_JSON_CHUNK, "promises a BIN chunk"},
     };
     for (size_t i = 0; i < sizeof glbs / sizeof glbs[0]; i++) {
-        unsigned char glb[52];
-        memcpy(glb, "glTF", 4);
-        const uint32_t words[4] = {glbs[i].version, glbs[i].total, glbs[i].json_len, glbs[i].json_type};
-        for (int w = 0; w < 4; w++)
-            for (int b = 0; b < 4; b++)
-                glb[4 + 4 * w + b] = (unsigned char)(words[w] >> (8 * b));
-        memcpy(glb + 20, json, 32);
-        FILE *f = fopen(scratch_path(path, glbs[i].name), "wb");
-        cr_assert_not_null(f);
-        cr_assert_eq(fwrite(glb, 1, sizeof glb, f), sizeof glb);
-        fclose(f);
+        write_glb(path, glbs[i].name, glbs[i].version, glbs[i].total, glbs[i].json_len, glbs[i].json_type, json,
+                  52);
         expect_load_error(path, glbs[i].needle);
     }
 }
