@@ -46,16 +46,16 @@ static vec3 transformed_error(const affine3 *m, vec3 p, vec3 error)
     return v3(out[0], out[1], out[2]);
 }
 
-/* Describe the hit surface in the world: its instance's geometry describes it
- * in object space (the ray mapped there as traversal mapped it), then the
- * instance's transform places it. The position (and its error bound) only
- * when `need_position`, i.e. when shading will cast a shadow ray or light a
- * point. */
 /* Highlighted parts are drawn in their colour mixed this far towards
  * RENDER_HIGHLIGHT_RGB (lit and shadowed like the rest). */
 #define RENDER_HIGHLIGHT_MIX 0.6f
 static const vec3 render_highlight_rgb = {1.0f, 0.55f, 0.05f};
 
+/* Describe the hit surface in the world: its instance's geometry describes it
+ * in object space (the ray mapped there as traversal mapped it), then the
+ * instance's transform places it. The position (and its error bound) only
+ * when `need_position`, i.e. when shading will cast a shadow ray or light a
+ * point. */
 static surface describe_hit(const render_view *v, const ray *r, const hit *h, bool need_position)
 {
     const scene *s = v->scene;
