@@ -130,8 +130,6 @@ static bool take_outside(gltf_lexer *x, unsigned char b, tess_error *err)
     if ((b == ']' || b == '}') && x->last == ',')
         return tess_error_set(err, "%s: byte %lld: a ',' before '%c' (a trailing comma is not JSON)", x->path,
                               x->offset, (int)b);
-    if (b == '"') /* not reached: the caller opens strings */
-        return true;
     if (!strchr(" \t\r\n", b))
         x->last = b;
     return true;
