@@ -34,6 +34,37 @@ typedef enum render_shading {
                               shadows, x 0.2 when the scene's first light is occluded */
 } render_shading;
 
+/* Settings of the inspection renderers (pipeline config "render" object,
+ * docs/pipeline-config.md): how far transparency, caps and ambient occlusion
+ * go. Fixed while a pipeline runs; render_settings_default() is what a view
+ * without settings (render_view.settings NULL) uses. */
+typedef enum render_cap_style {
+    RENDER_CAP_TINT,  /* a cut face in its part's colour, darkened (RENDER_CAP_TINT_FACTOR) */
+    RENDER_CAP_HATCH, /* ... with diagonal hatching in screen space */
+} render_cap_style;
+
+typedef struct render_settings {
+    /* transparency (frame state opacity < 1) */
+    float min_transmittance;  /* stop blending layers once the light left is below this; (0, 1) */
+    int max_layers;           /* most surfaces blended along one ray, >= 1; the last is taken as opaque */
+    bool transparent_shadows; /* shadow rays pass transparent surfaces attenuated by their opacity;
+                                 false: every surface casts a full shadow (faster) */
+    /* cutting planes */
+    bool caps;                /* draw the cut faces of closed parts */
+    render_cap_style cap_style;
+    /* ambient occlusion (renderer "ao", and the raytracer's ambient term when ao_in_raytracer) */
+    int ao_rays;              /* rays per hit, 1..64 */
+    float ao_distance;        /* world units; <= 0: 0.1 x the scene's bounding-box diagonal */
+    int ao_interleave;        /* K: a K x K pixel pattern of direction sets, 1..8 */
+    int ao_filter_px;         /* discontinuity filter edge (odd, 1 = off), <= 9 */
+    bool ao_in_raytracer;     /* the raytracer's ambient term is scaled by the unoccluded fraction */
+} render_settings;
+
+#define RENDER_MIN_TRANSMITTANCE_DEFAULT (1.f / 255.f)
+#define RENDER_MAX_LAYERS_DEFAULT 16
+
+render_settings render_settings_default(void);
+
 typedef struct render_view {
     const struct scene *scene;  /* read-only while rendering */
     const struct accel *accel;  /* built from scene */
@@ -41,7 +72,9 @@ typedef struct render_view {
     bool shadows;               /* trace shadow rays (lights may also opt out) */
     render_shading shading;
     const struct frame_state *state; /* the frame's snapshot of the pipeline's frame state (frame_state.h:
-                                        per-geometry highlight and colour); NULL outside a pipeline */
+                                        per-geometry highlight, colour, opacity; cutting planes);
+                                        NULL outside a pipeline */
+    const render_settings *settings; /* NULL: render_settings_default() */
 } render_view;
 
 /* Rays traced, for benchmarks. */

@@ -387,7 +387,7 @@ static float *reference_jittered(const fixture *fx, const camera_desc *cam, int 
 {
     float *rgb = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(rgb);
-    render_view v = {fx->scene, fx->accel, camera_basis_make(cam, w, h), true, RENDER_SHADE_PHONG, NULL};
+    render_view v = {fx->scene, fx->accel, camera_basis_make(cam, w, h), true, RENDER_SHADE_PHONG, NULL, NULL};
     pixel_sampler s = pixel_sampler_jittered(k, PIXEL_SAMPLER_DEFAULT_SEED);
     render_image_sampled(&v, &s, 1, rgb, NULL);
     return rgb;
@@ -572,7 +572,7 @@ Test(governor, a_reduced_frame_is_the_low_res_render_upscaled_bit_for_bit)
         cr_assert(low && want);
         render_view v = {fx.scene, fx.accel,
                          camera_basis_window(&fx.camera, (float)w / (float)h, CAMERA_WINDOW_FULL, lw, lh), true,
-                         RENDER_SHADE_PHONG, NULL};
+                         RENDER_SHADE_PHONG, NULL, NULL};
         render_image(&v, 1, low, NULL);
         cr_assert(upscale_image(low, lw, lh, want, w, h, cfg.upscale, &err), "%s", err.msg);
         cr_expect(memcmp(out->last, want, (size_t)w * h * 3 * sizeof(float)) == 0,

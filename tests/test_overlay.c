@@ -481,7 +481,7 @@ Test(overlay, images_with_an_overlay_are_identical_for_threads_tile_sizes_and_or
     /* the reference: render_image, then the overlay composited over the whole image at once */
     float *ref = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(ref);
-    render_view v = {fx.scene, fx.accel, camera_basis_make(&fx.camera, w, h), true, RENDER_SHADE_PHONG, NULL};
+    render_view v = {fx.scene, fx.accel, camera_basis_make(&fx.camera, w, h), true, RENDER_SHADE_PHONG, NULL, NULL};
     render_image(&v, 1, ref, NULL);
     overlay_state st;
     memset(&st, 0, sizeof st);
@@ -699,7 +699,7 @@ static float *render_plain(const fixture *fx, int w, int h)
 {
     float *rgb = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(rgb);
-    render_view v = {fx->scene, fx->accel, camera_basis_make(&fx->camera, w, h), true, RENDER_SHADE_PHONG, NULL};
+    render_view v = {fx->scene, fx->accel, camera_basis_make(&fx->camera, w, h), true, RENDER_SHADE_PHONG, NULL, NULL};
     render_image(&v, 2, rgb, NULL);
     return rgb;
 }

@@ -141,7 +141,7 @@ static float *reference(const fixture *fx, const camera_desc *cam, int w, int h)
 {
     float *rgb = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(rgb);
-    render_view v = {fx->scene, fx->accel, camera_basis_make(cam, w, h), true, RENDER_SHADE_PHONG, NULL};
+    render_view v = {fx->scene, fx->accel, camera_basis_make(cam, w, h), true, RENDER_SHADE_PHONG, NULL, NULL};
     render_image(&v, 1, rgb, NULL);
     return rgb;
 }

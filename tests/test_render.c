@@ -31,7 +31,7 @@ static float *render_scene(const scene *s, camera_desc cam, int w, int h, int th
     cr_assert(a, "accel_build: %s", err.msg);
     float *rgb = calloc((size_t)w * h * 3, sizeof(float));
     cr_assert(rgb);
-    render_view v = {s, a, camera_basis_make(&cam, w, h), shadows, RENDER_SHADE_PHONG, NULL};
+    render_view v = {s, a, camera_basis_make(&cam, w, h), shadows, RENDER_SHADE_PHONG, NULL, NULL};
     render_image(&v, threads, rgb, NULL);
     accel_destroy(a);
     return rgb;
@@ -309,7 +309,7 @@ Test(render, packets_shade_exactly_like_single_rays)
     cr_assert(rgb);
     const render_shading models[] = {RENDER_SHADE_PHONG, RENDER_SHADE_EYELIGHT};
     for (size_t k = 0; k < 2; k++) {
-        render_view v = {s, a, camera_basis_make(&s->camera, w, h), true, models[k], NULL};
+        render_view v = {s, a, camera_basis_make(&s->camera, w, h), true, models[k], NULL, NULL};
         render_counts counts = {0, 0, 0};
         render_image(&v, 2, rgb, &counts);
         long differ = 0;

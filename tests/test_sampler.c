@@ -294,7 +294,7 @@ static test_view view_of(scene *s, camera_desc cam, int w, int h, render_shading
     tess_error err = {{0}};
     test_view t = {s, accel_build(s, 2, &err), {0}};
     cr_assert(t.accel, "accel_build: %s", err.msg);
-    t.view = (render_view){s, t.accel, camera_basis_make(&cam, w, h), true, shading, NULL};
+    t.view = (render_view){s, t.accel, camera_basis_make(&cam, w, h), true, shading, NULL, NULL};
     return t;
 }
 

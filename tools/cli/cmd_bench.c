@@ -649,7 +649,7 @@ int cli_bench(int argc, char **argv)
         goto done;
     }
     render_view view = {cs.scene, cs.accel, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
-                        RENDER_SHADE_EYELIGHT, NULL};
+                        RENDER_SHADE_EYELIGHT, NULL, NULL};
     measure(&o, &view, rgb, samples, &cpu_other);
     print_result(&o, cs.scene, cs.accel, cs.load_s, cs.build_s, samples, cpu_other, scratch);
     if (o.out) {

@@ -215,7 +215,7 @@ static bool measure_flips(frame_tap *t, const cli_pipeline_spec *spec, const cli
         if (!s->captured)
             continue;
         render_view v = {cs->scene, cs->accel, camera_basis_make(&s->camera, w, h), spec->shadows,
-                         spec->renderer->shading, NULL};
+                         spec->renderer->shading, NULL, NULL};
         render_image(&v, spec->threads, full, NULL);
         if (s->scale >= 1.0) {
             s->flip = 0.0; /* the full-size frame itself */
