@@ -319,6 +319,50 @@ bool accel_intersect(const accel *a, const ray *r, hit *h)
     return trace(a, &local, h, false);
 }
 
+/* A ray's bound for a next-hit query (ray.h NEXT-HIT QUERIES): t_near raised
+ * to the float below after->t. */
+static void bound_after(ray *r, ray_derived *d, const hit *after)
+{
+    d->after_t = after->t;
+    d->after_geom = after->geom_id;
+    d->after_prim = after->prim_id;
+    float below = nextafterf(after->t, -INFINITY);
+    if (r->t_near < below)
+        r->t_near = below;
+}
+
+bool accel_intersect_after(const accel *a, const ray *r, const hit *after, hit *h)
+{
+    *h = hit_none();
+    ray local = *r;
+    if (a->top.node_count == 0 || ray_is_degenerate(&local))
+        return false;
+    ray_derived d = ray_derive(&local);
+    bound_after(&local, &d, after);
+    if (!(local.t_near < local.t_far))
+        return false;
+    const wbvh *sole = sole_geometry(a);
+    return a->kernels->intersect1(sole ? sole : &a->top, 0, &local, &d, h, false);
+}
+
+bool accel_intersect_instance(const accel *a, uint32_t geom_id, const ray *r, const hit *after, hit *h)
+{
+    *h = hit_none();
+    if (geom_id >= a->instance_count || a->instances[geom_id].geometry->node_count == 0)
+        return false;
+    const wbvh_instance *inst = &a->instances[geom_id];
+    ray local = inst->identity ? *r : affine3_ray(&inst->to_object, r);
+    if (ray_is_degenerate(&local))
+        return false;
+    ray_derived d = ray_derive(&local);
+    if (after) {
+        bound_after(&local, &d, after);
+        if (!(local.t_near < local.t_far))
+            return false;
+    }
+    return a->kernels->intersect1(inst->geometry, geom_id, &local, &d, h, false);
+}
+
 bool accel_occluded(const accel *a, const ray *r)
 {
     ray local = *r;

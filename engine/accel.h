@@ -43,6 +43,19 @@ void accel_destroy(accel *a); /* NULL is fine */
  * returns whether something was hit. Degenerate rays miss. */
 bool accel_intersect(const accel *a, const ray *r, hit *h);
 
+/* The next surface along a ray: the closest hit in (r->t_near, r->t_far]
+ * that comes after `after` (a hit of this ray found before; after->t finite)
+ * in the closest-hit order (t, geom_id, prim_id). Walking a ray's surfaces
+ * one by one this way visits each exactly once, coplanar ones (equal t) in
+ * id order, whatever the packet, thread or tile: what transparency and caps
+ * need. In packets: packet_set_after on the rays, then
+ * accel_intersect_packet (bit-identical to this). */
+bool accel_intersect_after(const accel *a, const ray *r, const hit *after, hit *h);
+
+/* accel_intersect restricted to instance geom_id (hidden or not), and with
+ * a next-hit bound when `after` is not NULL: parity counts of one part. */
+bool accel_intersect_instance(const accel *a, uint32_t geom_id, const ray *r, const hit *after, hit *h);
+
 /* Any hit in (r->t_near, r->t_far]; stops at the first one found. */
 bool accel_occluded(const accel *a, const ray *r);
 

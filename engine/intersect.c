@@ -26,6 +26,8 @@ ray_derived ray_derive(const ray *r)
     d.zero_axes = 0u; /* fast build: no containment rule, every axis a plain slab */
 #endif
     d.cull_slack = 0.f;
+    d.after_t = -INFINITY;
+    d.after_geom = d.after_prim = RAY_INVALID_ID;
     float ax = fabsf(r->dir.x), ay = fabsf(r->dir.y), az = fabsf(r->dir.z);
     d.kz = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
     d.kx = (d.kz + 1) % 3;

@@ -42,6 +42,23 @@ hit packet_get_hit(const ray_packet *p, uint32_t i)
                  .geom_id = p->geom_id[i]};
 }
 
+void packet_set_after(ray_packet *p, uint32_t i, const hit *after)
+{
+    if (!(p->flags & PACKET_AFTER_HIT)) {
+        for (uint32_t k = 0; k < PACKET_MAX_RAYS; k++) {
+            p->after_t[k] = -INFINITY;
+            p->after_geom[k] = p->after_prim[k] = RAY_INVALID_ID;
+        }
+        p->flags |= PACKET_AFTER_HIT;
+    }
+    p->after_t[i] = after->t;
+    p->after_geom[i] = after->geom_id;
+    p->after_prim[i] = after->prim_id;
+    float below = nextafterf(after->t, -INFINITY);
+    if (p->t_near[i] < below)
+        p->t_near[i] = below;
+}
+
 void packet_detect_facts(ray_packet *p)
 {
     uint32_t facts = PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED;

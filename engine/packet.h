@@ -31,6 +31,9 @@ enum packet_flags {
     PACKET_COMMON_ORIGIN = 1u << 0,  /* all rays in [0, count) share org of ray 0 */
     PACKET_CONSTANT_SIGNS = 1u << 1, /* each dir component has one sign over [0, count) (zero counts as +) */
     PACKET_NORMALIZED = 1u << 2,     /* every dir has unit length */
+    /* a query bound: only hits after (after_t, after_geom, after_prim) of each ray count
+     * (accel_intersect_after's order); set by packet_set_after, cleared by packet_reset */
+    PACKET_AFTER_HIT = 1u << 3,
     /* derived values, computed lazily and at most once */
     PACKET_HAVE_INV_DIR = 1u << 8,         /* inv_dir_* */
     PACKET_HAVE_HIT_POSITION = 1u << 9,    /* pos_* of rays that hit */
@@ -55,6 +58,10 @@ typedef struct ray_packet {
     alignas(64) uint32_t prim_id[PACKET_MAX_RAYS];
     alignas(64) uint32_t geom_id[PACKET_MAX_RAYS];
     alignas(64) uint32_t material_id[PACKET_MAX_RAYS]; /* filled by shading, not by traversal */
+    /* next-hit bounds (PACKET_AFTER_HIT): after_t -inf for a ray without one */
+    alignas(64) float after_t[PACKET_MAX_RAYS];
+    alignas(64) uint32_t after_geom[PACKET_MAX_RAYS];
+    alignas(64) uint32_t after_prim[PACKET_MAX_RAYS];
     /* derived values (see flags) */
     alignas(64) float inv_dir_x[PACKET_MAX_RAYS]; /* 1/dir, +-FLT_MAX for a zero component */
     alignas(64) float inv_dir_y[PACKET_MAX_RAYS];
@@ -98,6 +105,13 @@ void packet_reset(ray_packet *p, uint32_t count, uint32_t fact_flags);
 void packet_set_ray(ray_packet *p, uint32_t i, const ray *r);
 ray packet_get_ray(const ray_packet *p, uint32_t i);
 hit packet_get_hit(const ray_packet *p, uint32_t i);
+
+/* Ray i (already set) looks only for hits after `after` (a hit it found
+ * before, t finite), in the closest-hit order (t, geom_id, prim_id): the
+ * next surface along it. Lowers nothing: t_near becomes the float below
+ * after->t when it is smaller. Sets PACKET_AFTER_HIT (the first call gives
+ * the packet's other rays no bound). Closest-hit queries only. */
+void packet_set_after(ray_packet *p, uint32_t i, const hit *after);
 
 /* Find PACKET_COMMON_ORIGIN / PACKET_CONSTANT_SIGNS / PACKET_NORMALIZED by
  * looking at the rays (for callers that do not know them). */

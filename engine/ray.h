@@ -50,7 +50,21 @@ typedef struct ray_derived {
     float shear_x, shear_y, shear_z; /* dir[kx]/dir[kz], dir[ky]/dir[kz], 1/dir[kz] */
     float cull_slack; /* absolute margin on t_far when culling boxes (intersect_cull_slack); 0 from
                          ray_derive, set by traversal for the geometry at hand */
+    /* NEXT-HIT QUERIES (accel_intersect_after): only hits after (after_t,
+     * after_geom, after_prim) in the closest-hit order count; ray_derive sets
+     * after_t = -inf (no such bound). With a bound the ray's t_near is at most
+     * the float below after_t, so hits at exactly after_t reach the test. */
+    float after_t;
+    uint32_t after_geom, after_prim;
 } ray_derived;
+
+/* Whether a hit at t on (geom, prim) comes after the bound of d: t above
+ * after_t, or at it with a greater (geom, prim). Only hits with t >= after_t
+ * are ever asked (the ray's t_near sees to it). */
+static inline bool ray_hit_after(const ray_derived *d, float t, uint32_t geom, uint32_t prim)
+{
+    return t != d->after_t || geom > d->after_geom || (geom == d->after_geom && prim > d->after_prim);
+}
 
 ray_derived ray_derive(const ray *r);
 

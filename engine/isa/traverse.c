@@ -17,7 +17,14 @@
  *
  * Ties: a hit replaces the current one when (t, geom_id, prim_id) is smaller in
  * lexicographic order, so the result never depends on the order in which
- * nodes and lanes are visited. */
+ * nodes and lanes are visited.
+ *
+ * Next-hit queries (ray_derived.after_*, PACKET_AFTER_HIT): a hit also has to
+ * come after the query's bound in that order (ray_hit_after). The ray's t_near
+ * is then the float below the bound's t, so a hit at exactly that t reaches
+ * the offer, where the ids decide; primitives that can be met twice (spheres,
+ * kinds' own tests) are asked from the bound's t itself when their ids do not
+ * come after it, so their second crossing is found. Closest hit only. */
 #include "engine/isa/simd.h"
 
 #include <float.h>
@@ -127,9 +134,10 @@ static inline float ray_cull_slack(const ray *r, const wbvh *w)
 }
 
 /* Record a hit if it beats the current one. */
-static inline bool offer1(ray *r, hit *h, float t, float u, float v, uint32_t geom_id, uint32_t prim)
+static inline bool offer1(ray *r, const ray_derived *d, hit *h, float t, float u, float v, uint32_t geom_id,
+                          uint32_t prim)
 {
-    if (!closer(t, geom_id, prim, h->t, h->geom_id, h->prim_id))
+    if (!closer(t, geom_id, prim, h->t, h->geom_id, h->prim_id) || !ray_hit_after(d, t, geom_id, prim))
         return false;
     *h = (hit){.t = t, .u = u, .v = v, .prim_id = prim, .geom_id = geom_id};
     r->t_far = t;
@@ -207,32 +215,46 @@ static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const 
     bool found = false;
     for (int i = 0; i < WBVH_BLOCK; i++) {
         if (hits >> i & 1u)
-            found |= offer1(r, h, t_lane[i], u_lane[i], v_lane[i], geom_id, b->prim_id[i]);
+            found |= offer1(r, d, h, t_lane[i], u_lane[i], v_lane[i], geom_id, b->prim_id[i]);
         else if (on_edge >> i & 1u) {
             float te, ue, ve;
             if (intersect_triangle(r, d, block_vertex(b->v0x, b->v0y, b->v0z, i), block_vertex(b->v1x, b->v1y, b->v1z, i),
                                    block_vertex(b->v2x, b->v2y, b->v2z, i), &te, &ue, &ve)) {
                 if (any)
                     return true;
-                found |= offer1(r, h, te, ue, ve, geom_id, b->prim_id[i]);
+                found |= offer1(r, d, h, te, ue, ve, geom_id, b->prim_id[i]);
             }
         }
     }
     return found;
 }
 
+/* The ray a primitive that may be met twice is tested with: under a
+ * next-hit bound its ids do not pass at the bound's t, so only crossings
+ * beyond that t count (t_near = after_t, exclusive). */
+static inline const ray *prim_query_ray(const ray *r, const ray_derived *d, uint32_t geom_id, uint32_t prim, ray *scratch)
+{
+    if (d->after_t == -INFINITY || ray_hit_after(d, d->after_t, geom_id, prim) || !(r->t_near < d->after_t))
+        return r;
+    *scratch = *r;
+    scratch->t_near = d->after_t;
+    return scratch;
+}
+
 /* One ray against up to 4 spheres (scalar: spheres are not the hot path yet). */
-static bool sphere_block1(const wbvh_sphere_block *b, uint32_t geom_id, ray *r, hit *h, bool any)
+static bool sphere_block1(const wbvh_sphere_block *b, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
 {
     bool found = false;
     for (int i = 0; i < WBVH_BLOCK; i++) {
         if (b->prim_id[i] == RAY_INVALID_ID)
             continue;
         float t;
-        if (intersect_sphere(r, v3(b->cx[i], b->cy[i], b->cz[i]), b->r[i], &t)) {
+        ray scratch;
+        const ray *q = prim_query_ray(r, d, geom_id, b->prim_id[i], &scratch);
+        if (q->t_near < r->t_far && intersect_sphere(q, v3(b->cx[i], b->cy[i], b->cz[i]), b->r[i], &t)) {
             if (any)
                 return true;
-            found |= offer1(r, h, t, 0.f, 0.f, geom_id, b->prim_id[i]);
+            found |= offer1(r, d, h, t, 0.f, 0.f, geom_id, b->prim_id[i]);
         }
     }
     return found;
@@ -240,17 +262,20 @@ static bool sphere_block1(const wbvh_sphere_block *b, uint32_t geom_id, ray *r, 
 
 /* One ray against up to 4 primitives of a kind without a SIMD layout: its
  * scalar `intersect`. */
-static bool prim_block1(const wbvh *w, const wbvh_prim_block *b, uint32_t geom_id, ray *r, hit *h, bool any)
+static bool prim_block1(const wbvh *w, const wbvh_prim_block *b, uint32_t geom_id, ray *r, const ray_derived *d, hit *h,
+                        bool any)
 {
     bool found = false;
     for (int i = 0; i < WBVH_BLOCK; i++) {
         if (b->prim_id[i] == RAY_INVALID_ID)
             continue;
         float t, u, v;
-        if (w->ops->intersect(w->data, b->prim_id[i], r, &t, &u, &v)) {
+        ray scratch;
+        const ray *q = prim_query_ray(r, d, geom_id, b->prim_id[i], &scratch);
+        if (q->t_near < r->t_far && w->ops->intersect(w->data, b->prim_id[i], q, &t, &u, &v)) {
             if (any)
                 return true;
-            found |= offer1(r, h, t, u, v, geom_id, b->prim_id[i]);
+            found |= offer1(r, d, h, t, u, v, geom_id, b->prim_id[i]);
         }
     }
     return found;
@@ -282,6 +307,7 @@ static bool instance_block1(const wbvh *w, const wbvh_prim_block *b, ray *r, con
             if (ray_is_degenerate(&local))
                 continue;
             ray_derived ld = ray_derive(&local);
+            ld.after_t = d->after_t, ld.after_geom = d->after_geom, ld.after_prim = d->after_prim;
             hit_here = traverse1(inst->geometry, 0, id, &local, &ld, h, any);
             if (hit_here && !any)
                 r->t_far = local.t_far;
@@ -302,8 +328,10 @@ static bool leaf1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const r
         bool hit_here;
         switch (w->kind) {
         case WBVH_TRIANGLES: hit_here = tri_block1((const wbvh_tri_block *)w->blocks + k, geom_id, r, d, h, any); break;
-        case WBVH_SPHERES: hit_here = sphere_block1((const wbvh_sphere_block *)w->blocks + k, geom_id, r, h, any); break;
-        case WBVH_PRIMS: hit_here = prim_block1(w, (const wbvh_prim_block *)w->blocks + k, geom_id, r, h, any); break;
+        case WBVH_SPHERES:
+            hit_here = sphere_block1((const wbvh_sphere_block *)w->blocks + k, geom_id, r, d, h, any);
+            break;
+        case WBVH_PRIMS: hit_here = prim_block1(w, (const wbvh_prim_block *)w->blocks + k, geom_id, r, d, h, any); break;
         case WBVH_INSTANCES:
         default: hit_here = instance_block1(w, (const wbvh_prim_block *)w->blocks + k, r, d, h, any); break;
         }
@@ -425,6 +453,8 @@ static void setup_shear(packet_ctx *c, uint64_t mask)
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray one = packet_get_ray(p, i);
         ray_derived d = ray_derive(&one);
+        if (p->flags & PACKET_AFTER_HIT)
+            d.after_t = p->after_t[i], d.after_geom = p->after_geom[i], d.after_prim = p->after_prim[i];
         c->derived[i] = d;
         c->shear_x[i] = d.shear_x;
         c->shear_y[i] = d.shear_y;
@@ -617,6 +647,9 @@ static inline void offer_packet(packet_ctx *c, uint32_t i, float t, float u, flo
     ray_packet *p = c->p;
     if (!closer(t, c->geom_id, prim, p->hit_t[i], p->geom_id[i], p->prim_id[i]))
         return;
+    if ((p->flags & PACKET_AFTER_HIT) && t == p->after_t[i] &&
+        !(c->geom_id > p->after_geom[i] || (c->geom_id == p->after_geom[i] && prim > p->after_prim[i])))
+        return;
     p->hit_t[i] = t;
     p->hit_u[i] = u;
     p->hit_v[i] = v;
@@ -680,6 +713,21 @@ static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, cons
         vm ok = vm_andnot(vm_and(vr_gt(t, t_near), vr_le(t, t_far)), vm_and(any_neg, any_pos));
         ok = vm_andnot(ok, vr_eq(det, zero));
         unsigned hits = vm_bits(ok) & lanes & ~on_edge;
+        unsigned at_bound = 0; /* next-hit queries: hits at a bound's t, settled by ids in offer_packet */
+        if (p->flags & PACKET_AFTER_HIT) {
+            at_bound = vm_bits(vr_eq(t, vr_load(p->after_t + g))) & hits;
+            hits &= ~at_bound;
+        }
+        if (at_bound) {
+            alignas(64) float t_lane[RAY_LANES], u_lane[RAY_LANES], v_lane[RAY_LANES];
+            vr_store(t_lane, t);
+            vr_store(u_lane, vr_mul(v, inv_det));
+            vr_store(v_lane, vr_mul(w, inv_det));
+            for (unsigned m = at_bound; m; m &= m - 1u) {
+                int l = __builtin_ctz(m);
+                offer_packet(c, g + (uint32_t)l, t_lane[l], u_lane[l], v_lane[l], prim);
+            }
+        }
         if (c->any) {
             c->done |= (uint64_t)hits << g;
         } else if (hits) {
@@ -814,11 +862,22 @@ static uint64_t instance_packet(const wbvh_instance *inst, uint32_t id, ray_pack
         local.prim_id[i] = p->prim_id[i];
         local.geom_id[i] = p->geom_id[i];
     }
+    const bool bounded = (p->flags & PACKET_AFTER_HIT) != 0;
+    if (bounded) /* the bounds of every lane the kernels may read (groups of the mask) */
+        for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
+            if (!((mask >> g) & ((1ull << RAY_LANES) - 1ull)))
+                continue;
+            for (uint32_t i = g; i < g + RAY_LANES; i++) {
+                local.after_t[i] = p->after_t[i];
+                local.after_geom[i] = p->after_geom[i];
+                local.after_prim[i] = p->after_prim[i];
+            }
+        }
     if (!traceable)
         return 0;
     local.count = p->count;
     local.active = traceable;
-    local.flags = PACKET_HAVE_INV_DIR | (common_origin ? PACKET_COMMON_ORIGIN : 0u);
+    local.flags = PACKET_HAVE_INV_DIR | (common_origin ? PACKET_COMMON_ORIGIN : 0u) | (bounded ? PACKET_AFTER_HIT : 0u);
     uint64_t result = ISA_SUFFIX(intersect_packet)(inst->geometry, id, &local, traceable, any);
     if (!any)
         for (uint64_t rest = result; rest; rest &= rest - 1) {
