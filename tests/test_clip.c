@@ -1,0 +1,463 @@
+/* test_clip.c - cutting planes (engine/clip.h) and closed parts.
+ *
+ * Clipping: analytic cases against the EXACTNESS rule of clip.h (t_far is the
+ * largest float not above the crossing, t_near the largest float below it),
+ * checked where the answer is decidable exactly: axis-aligned planes with
+ * float data small enough that t * dir and the plane offset are exact in
+ * double, so the kept side of every float t is known without rounding. On
+ * such data the double crossing tc cannot round onto the wrong side of a
+ * float (|t - num / denom| is at least 2^-44 |t| unless zero, far above
+ * double's 2^-53), so the check is equality, no tolerance. Random general
+ * planes are checked in long double with a tolerance of a few double ulps of
+ * the magnitudes (the one rounding clip.h allows).
+ *
+ * Closed parts: the edge-parity rule of geometry_triangles_ops' `closed` on
+ * cubes whole, split, open and doubled, the spheres' and a kind without the
+ * operation, the scene's cache, and the parts of tests/data/assembly-small.glb
+ * (tools/gen_assembly: every mesh a closed solid). Runs from tests/. */
+#include <criterion/criterion.h>
+
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/clip.h"
+#include "engine/intersect.h"
+
+TestSuite(clip);
+
+/* ---- helpers -------------------------------------------------------------- */
+
+static uint64_t rng_state = 0x9e3779b97f4a7c15u;
+
+/* splitmix64: a fixed sequence, so every run checks the same cases */
+static uint64_t rng_next(void)
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    return z ^ (z >> 31);
+}
+
+/* uniform in [lo, hi) */
+static double rng_range(double lo, double hi) { return lo + (hi - lo) * (double)(rng_next() >> 11) * 0x1p-53; }
+
+/* an integer in [-limit, limit] divided by 1024: exact in float and double */
+static float rng_grid(int32_t limit)
+{
+    int32_t k = (int32_t)(rng_next() % (uint64_t)(2 * limit + 1)) - limit;
+    return (float)k / 1024.f;
+}
+
+static clip_set one_plane(vec3 point, vec3 normal)
+{
+    clip_plane planes[CLIP_MAX_PLANES] = {{.point = point, .normal = normal, .on = true}};
+    clip_set c;
+    clip_set_make(&c, planes);
+    cr_assert_eq(c.count, 1u);
+    return c;
+}
+
+static ray make_ray(vec3 org, vec3 dir) { return (ray){org, dir, 0.f, INFINITY}; }
+
+/* Exact side of org + t dir against plane z = pz removing z > pz (normal +z)
+ * or z < pz (normal -z): with grid data t * dir.z and pz - org.z are exact in
+ * double, so this is no approximation. */
+static bool kept_z(float org_z, float dir_z, float pz, double sign, float t)
+{
+    return sign * ((double)t * dir_z) <= sign * ((double)pz - org_z);
+}
+
+/* ---- clip_ray: analytic ---------------------------------------------------- */
+
+Test(clip, a_ray_along_an_axis_is_cut_where_it_crosses_the_plane)
+{
+    ray r = make_ray(v3(0.f, 0.f, -5.f), v3(0.f, 0.f, 1.f));
+    int entry = 42;
+    clip_set up = one_plane(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f)); /* removes z > 0 */
+    cr_assert(clip_ray(&up, &r, &entry));
+    cr_expect_eq(r.t_near, 0.f);
+    cr_expect_eq(r.t_far, 5.f, "t_far %a", (double)r.t_far);
+    cr_expect_eq(entry, -1, "t_near is the ray's own");
+
+    r = make_ray(v3(0.f, 0.f, -5.f), v3(0.f, 0.f, 1.f));
+    clip_set down = one_plane(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, -1.f)); /* removes z < 0 */
+    cr_assert(clip_ray(&down, &r, &entry));
+    cr_expect_eq(r.t_near, nextafterf(5.f, 0.f), "t_near %a: the float just below 5 (exclusive)", (double)r.t_near);
+    cr_expect_eq(r.t_far, INFINITY);
+    cr_expect_eq(entry, 0);
+}
+
+Test(clip, a_crossing_that_is_a_float_is_the_last_kept_t)
+{
+    const float crossings[] = {1.f, 0.75f, 3.0e-3f, 1.0e6f, 0x1.fffffep+10f, FLT_MIN, 0x1p-140f, 12345.678f};
+    for (size_t i = 0; i < sizeof crossings / sizeof crossings[0]; i++) {
+        float f = crossings[i];
+        clip_set up = one_plane(v3(0.f, 0.f, f), v3(0.f, 0.f, 1.f));
+        ray r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f));
+        r.t_near = -1.f;
+        cr_assert(clip_ray(&up, &r, NULL));
+        cr_expect_eq(r.t_far, f, "tc = %a: t_far %a", (double)f, (double)r.t_far);
+        clip_set down = one_plane(v3(0.f, 0.f, f), v3(0.f, 0.f, -1.f));
+        r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f));
+        r.t_near = -1.f;
+        int entry = -1;
+        cr_assert(clip_ray(&down, &r, &entry));
+        cr_expect_eq(r.t_near, nextafterf(f, -INFINITY), "tc = %a: t_near %a", (double)f, (double)r.t_near);
+        cr_expect_eq(entry, 0);
+    }
+    /* tc = 0: t_near is the largest float below zero, so t = 0 (and -0) are in */
+    clip_set down = one_plane(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, -1.f));
+    ray r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f));
+    r.t_near = -1.f;
+    cr_assert(clip_ray(&down, &r, NULL));
+    cr_expect_eq(r.t_near, -0x1p-149f);
+}
+
+Test(clip, a_crossing_between_floats_keeps_exactly_the_floats_on_its_side)
+{
+    /* 1/3: no float; the bounds are the floats either side of it */
+    clip_set up = one_plane(v3(0.f, 0.f, 1.f), v3(0.f, 0.f, 1.f));
+    ray r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 3.f));
+    cr_assert(clip_ray(&up, &r, NULL));
+    cr_expect((double)r.t_far * 3.0 <= 1.0 && (double)nextafterf(r.t_far, INFINITY) * 3.0 > 1.0, "t_far %a",
+              (double)r.t_far);
+    clip_set down = one_plane(v3(0.f, 0.f, 1.f), v3(0.f, 0.f, -1.f));
+    r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 3.f));
+    cr_assert(clip_ray(&down, &r, NULL));
+    cr_expect((double)r.t_near * 3.0 < 1.0 && (double)nextafterf(r.t_near, INFINITY) * 3.0 >= 1.0, "t_near %a",
+              (double)r.t_near);
+
+    /* many grid cases, either normal, either direction: exact agreement at
+     * both bounds and one float beyond each */
+    for (int i = 0; i < 20000; i++) {
+        float org_z = rng_grid(1 << 16), pz = rng_grid(1 << 16), dir_z = rng_grid(1 << 14);
+        if (dir_z == 0.f)
+            continue;
+        double sign = (rng_next() & 1) ? 1.0 : -1.0;
+        clip_set c = one_plane(v3(0.f, 0.f, pz), v3(0.f, 0.f, (float)sign));
+        ray r0 = make_ray(v3(rng_grid(64), rng_grid(64), org_z), v3(rng_grid(512), rng_grid(512), dir_z));
+        r0.t_near = -INFINITY;
+        ray r1 = r0;
+        bool left = clip_ray(&c, &r1, NULL);
+        cr_assert(left, "a plane not parallel to the ray leaves half of an unbounded interval");
+        if (r1.t_far < INFINITY) {
+            cr_assert(kept_z(org_z, dir_z, pz, sign, r1.t_far), "case %d: t_far %a removed", i, (double)r1.t_far);
+            cr_assert(!kept_z(org_z, dir_z, pz, sign, nextafterf(r1.t_far, INFINITY)), "case %d: past t_far kept", i);
+        }
+        if (r1.t_near > -INFINITY) {
+            cr_assert(!kept_z(org_z, dir_z, pz, sign, r1.t_near), "case %d: t_near %a kept", i, (double)r1.t_near);
+            cr_assert(kept_z(org_z, dir_z, pz, sign, nextafterf(r1.t_near, INFINITY)), "case %d: past t_near removed",
+                      i);
+        }
+        cr_assert((r1.t_far < INFINITY) != (r1.t_near > -INFINITY), "exactly one bound moves");
+    }
+}
+
+Test(clip, crossings_beyond_float_range)
+{
+    /* tc = 1e60: every finite float is below it */
+    clip_set up = one_plane(v3(0.f, 0.f, 1e30f), v3(0.f, 0.f, 1.f));
+    ray r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1e-30f));
+    int entry = 7;
+    cr_assert(clip_ray(&up, &r, &entry));
+    cr_expect_eq(r.t_far, FLT_MAX, "only +inf is past the crossing");
+    cr_expect_eq(r.t_near, 0.f);
+    cr_expect_eq(entry, -1);
+    /* kept only at t >= 1e60: no finite float, so nothing is left */
+    clip_set down = one_plane(v3(0.f, 0.f, 1e30f), v3(0.f, 0.f, -1.f));
+    r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1e-30f));
+    ray before = r;
+    cr_expect(!clip_ray(&down, &r, &entry));
+    cr_expect(memcmp(&r, &before, sizeof r) == 0, "r unchanged when nothing is left");
+    /* going down from below the plane removing z > 1e30: kept for t >= -1e60,
+     * so the lower bound is -inf and t_near stays the ray's */
+    r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, -1e-30f));
+    cr_assert(clip_ray(&up, &r, &entry));
+    cr_expect_eq(r.t_near, 0.f);
+    cr_expect_eq(r.t_far, INFINITY);
+    cr_expect_eq(entry, -1);
+    r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, -1e-30f));
+    r.t_near = -INFINITY;
+    cr_assert(clip_ray(&up, &r, &entry));
+    cr_expect_eq(r.t_near, -INFINITY);
+    cr_expect_eq(entry, -1);
+}
+
+Test(clip, a_ray_starting_on_the_removed_side)
+{
+    clip_set c = one_plane(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f)); /* removes z > 0 */
+    ray r = make_ray(v3(1.f, 2.f, 5.f), v3(0.f, 0.f, 1.f));
+    ray before = r;
+    int entry = 3;
+    cr_expect(!clip_ray(&c, &r, &entry), "leaving the kept side: nothing left");
+    cr_expect(memcmp(&r, &before, sizeof r) == 0);
+    cr_expect_eq(entry, 3, "entry untouched when nothing is left");
+    r = make_ray(v3(1.f, 2.f, 5.f), v3(0.f, 0.f, -2.f));
+    cr_assert(clip_ray(&c, &r, &entry));
+    cr_expect_eq(r.t_near, nextafterf(2.5f, 0.f));
+    cr_expect_eq(r.t_far, INFINITY);
+    cr_expect_eq(entry, 0, "enters through the plane");
+    /* a shadow ray's interval ending before the plane: nothing left */
+    r = make_ray(v3(1.f, 2.f, 5.f), v3(0.f, 0.f, -2.f));
+    r.t_far = 2.f;
+    cr_expect(!clip_ray(&c, &r, NULL));
+    r.t_far = 2.5f;
+    cr_assert(clip_ray(&c, &r, NULL), "t = 2.5 is on the plane: kept");
+    cr_expect_eq(r.t_far, 2.5f);
+}
+
+Test(clip, parallel_rays_are_kept_whole_or_removed_whole)
+{
+    clip_set c = one_plane(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f));
+    const float heights[] = {-1.f, -0x1p-149f, 0.f, -0.f};
+    for (size_t i = 0; i < sizeof heights / sizeof heights[0]; i++) {
+        ray r = make_ray(v3(0.f, 0.f, heights[i]), v3(1.f, -3.f, 0.f));
+        int entry = 5;
+        cr_assert(clip_ray(&c, &r, &entry), "z = %a is kept", (double)heights[i]);
+        cr_expect(r.t_near == 0.f && r.t_far == INFINITY && entry == -1);
+    }
+    ray r = make_ray(v3(0.f, 0.f, 0x1p-149f), v3(1.f, -3.f, 0.f));
+    cr_expect(!clip_ray(&c, &r, NULL), "the smallest height above the plane is removed");
+    r = make_ray(v3(0.f, 0.f, 1.f), v3(1.f, 0.f, 0.f));
+    cr_expect(!clip_ray(&c, &r, NULL));
+}
+
+Test(clip, several_planes_give_one_interval)
+{
+    clip_plane planes[CLIP_MAX_PLANES] = {0};
+    planes[1] = (clip_plane){v3(0.f, 0.f, 2.f), v3(0.f, 0.f, 1.f), true};    /* removes z > 2 */
+    planes[3] = (clip_plane){v3(0.f, 0.f, -1.f), v3(0.f, 0.f, -1.f), true};  /* removes z < -1 */
+    planes[4] = (clip_plane){v3(0.f, 0.f, 100.f), v3(0.f, 0.f, 1.f), false}; /* off */
+    planes[6] = (clip_plane){v3(0.5f, 0.f, 0.f), v3(-1.f, 0.f, 0.f), true};  /* removes x < 0.5 */
+    clip_set c;
+    clip_set_make(&c, planes);
+    cr_assert_eq(c.count, 3u);
+    cr_expect(c.index[0] == 1 && c.index[1] == 3 && c.index[2] == 6);
+
+    /* along z from below: enters through plane 3 at t = 9 (z = -1), leaves at t = 12 (z = 2) */
+    ray r = make_ray(v3(1.f, 0.f, -10.f), v3(0.f, 0.f, 1.f));
+    int entry = -1;
+    cr_assert(clip_ray(&c, &r, &entry));
+    cr_expect_eq(r.t_near, nextafterf(9.f, 0.f));
+    cr_expect_eq(r.t_far, 12.f);
+    cr_expect_eq(entry, 3);
+
+    /* diagonal in xz: x = -10 + t reaches 0.5 at t = 10.5, z = -10 + t reaches -1 at 9: plane 6 bounds */
+    r = make_ray(v3(-10.f, 0.f, -10.f), v3(1.f, 0.f, 1.f));
+    cr_assert(clip_ray(&c, &r, &entry));
+    cr_expect_eq(r.t_near, nextafterf(10.5f, 0.f));
+    cr_expect_eq(r.t_far, 12.f);
+    cr_expect_eq(entry, 6);
+
+    /* the two z planes swapped: kept z > 2 and z < -1 at once, empty everywhere */
+    planes[1].normal = v3(0.f, 0.f, -1.f);
+    planes[3].normal = v3(0.f, 0.f, 1.f);
+    clip_set_make(&c, planes);
+    r = make_ray(v3(1.f, 0.f, -10.f), v3(0.f, 0.f, 1.f));
+    ray before = r;
+    cr_expect(!clip_ray(&c, &r, &entry));
+    cr_expect(memcmp(&r, &before, sizeof r) == 0);
+    cr_expect(!clip_keeps_point(&c, v3(1.f, 0.f, 0.f)));
+
+    /* equal planes at 2 and 5: the lower index names the entry */
+    clip_plane same[CLIP_MAX_PLANES] = {0};
+    same[2] = same[5] = (clip_plane){v3(0.f, 0.f, 1.f), v3(0.f, 0.f, -1.f), true};
+    clip_set_make(&c, same);
+    r = make_ray(v3(0.f, 0.f, -1.f), v3(0.f, 0.f, 1.f));
+    cr_assert(clip_ray(&c, &r, &entry));
+    cr_expect_eq(entry, 2);
+    /* a tie with the ray's own t_near keeps the ray's */
+    r = make_ray(v3(0.f, 0.f, -1.f), v3(0.f, 0.f, 1.f));
+    r.t_near = nextafterf(2.f, 0.f);
+    cr_assert(clip_ray(&c, &r, &entry));
+    cr_expect_eq(entry, -1);
+}
+
+Test(clip, the_set_skips_bad_normals_and_normalises_in_double)
+{
+    clip_plane planes[CLIP_MAX_PLANES] = {0};
+    planes[0] = (clip_plane){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f), true};
+    planes[1] = (clip_plane){v3(0.f, 0.f, 0.f), v3(NAN, 0.f, 1.f), true};
+    planes[2] = (clip_plane){v3(0.f, 0.f, 0.f), v3(INFINITY, 0.f, 0.f), true};
+    planes[3] = (clip_plane){v3(NAN, 0.f, 0.f), v3(1.f, 0.f, 0.f), true};
+    planes[7] = (clip_plane){v3(0.f, 0.f, 3.f), v3(0.f, 0.f, 2.f), true};
+    clip_set c;
+    clip_set_make(&c, planes);
+    cr_assert_eq(c.count, 1u);
+    cr_expect_eq(c.index[0], 7);
+    cr_expect(c.n[0][0] == 0.0 && c.n[0][1] == 0.0 && c.n[0][2] == 1.0);
+    cr_expect_eq(c.d[0], 3.0);
+    clip_plane none[CLIP_MAX_PLANES] = {0};
+    clip_set_make(&c, none);
+    cr_expect_eq(c.count, 0u);
+    ray r = make_ray(v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f));
+    int entry = 9;
+    cr_expect(clip_ray(&c, &r, &entry) && r.t_near == 0.f && r.t_far == INFINITY && entry == -1,
+              "no planes: nothing clipped");
+    cr_expect(clip_keeps_point(&c, v3(1e30f, 0.f, 0.f)));
+}
+
+Test(clip, keeps_point_and_crossing)
+{
+    clip_set c = one_plane(v3(1.f, 1.f, 1.f), v3(0.f, 0.6f, 0.8f));
+    cr_expect(clip_keeps_point(&c, v3(1.f, 1.f, 1.f)), "on the plane: kept");
+    cr_expect(clip_keeps_point(&c, v3(1.f, 0.f, 1.f)));
+    cr_expect(!clip_keeps_point(&c, v3(1.f, 2.f, 1.f)));
+    ray r = make_ray(v3(0.f, -5.f, -5.f), v3(0.f, 1.f, 1.f));
+    vec3 p;
+    cr_assert(clip_crossing(&c, 0, &r, &p));
+    double off = c.n[0][0] * p.x + c.n[0][1] * p.y + c.n[0][2] * p.z - c.d[0];
+    cr_expect(fabs(off) < 4e-7, "on the plane within float rounding: %g", off);
+    cr_expect(fabsf(p.y - p.z) < 1e-6f && p.x == 0.f, "on the ray: (%g %g %g)", p.x, p.y, p.z);
+    cr_expect(!clip_crossing(&c, 1, &r, &p), "plane 1 is not in the set");
+    r = make_ray(v3(0.f, 0.f, 0.f), v3(1.f, 0.f, 0.f));
+    cr_expect(!clip_crossing(&c, 0, &r, &p), "parallel");
+}
+
+/* ---- clip_ray: general planes ---------------------------------------------- */
+
+/* Signed distance of org + t dir to plane k of c in long double, and the size
+ * of the magnitudes it is made of (for the tolerance). */
+static long double side(const clip_set *c, uint32_t k, const ray *r, float t, long double *magnitude)
+{
+    long double s = -(long double)c->d[k], mag = fabsl((long double)c->d[k]);
+    const float o[3] = {r->org.x, r->org.y, r->org.z}, d[3] = {r->dir.x, r->dir.y, r->dir.z};
+    for (int a = 0; a < 3; a++) {
+        long double x = (long double)o[a] + (long double)t * d[a];
+        s += (long double)c->n[k][a] * x;
+        mag += fabsl((long double)c->n[k][a]) * (fabsl((long double)o[a]) + fabsl((long double)t * d[a]));
+    }
+    *magnitude = mag;
+    return s;
+}
+
+/* Whether t is kept by every plane: 1 kept, 0 removed, -1 undecided (within
+ * the double rounding clip.h allows of one plane's distance). */
+static int kept_general(const clip_set *c, const ray *r, float t)
+{
+    int verdict = 1;
+    for (uint32_t k = 0; k < c->count; k++) {
+        long double mag, s = side(c, k, r, t, &mag);
+        long double tol = mag * 0x1p-48L;
+        if (s > tol)
+            return 0;
+        if (s > -tol)
+            verdict = -1;
+    }
+    return verdict;
+}
+
+Test(clip, random_rays_and_planes_agree_with_the_kept_side_near_both_bounds)
+{
+    int undecided = 0, checked = 0, empty = 0;
+    for (int i = 0; i < 4000; i++) {
+        clip_plane planes[CLIP_MAX_PLANES] = {0};
+        int n = 1 + (int)(rng_next() % 4);
+        for (int k = 0; k < n; k++) {
+            vec3 normal = v3_normalize(v3((float)rng_range(-1, 1), (float)rng_range(-1, 1), (float)rng_range(-1, 1)));
+            planes[rng_next() % CLIP_MAX_PLANES] =
+                (clip_plane){v3((float)rng_range(-10, 10), (float)rng_range(-10, 10), (float)rng_range(-10, 10)),
+                             normal, true};
+        }
+        clip_set c;
+        clip_set_make(&c, planes);
+        ray r = make_ray(v3((float)rng_range(-20, 20), (float)rng_range(-20, 20), (float)rng_range(-20, 20)),
+                         v3((float)rng_range(-3, 3), (float)rng_range(-3, 3), (float)rng_range(-3, 3)));
+        r.t_near = -INFINITY;
+        ray clipped = r;
+        int entry;
+        if (!clip_ray(&c, &clipped, &entry)) {
+            empty++;
+            /* empty: a sample of the line is removed (where decidable) */
+            for (float t = -64.f; t <= 64.f; t += 0.25f)
+                cr_assert_neq(kept_general(&c, &r, t), 1, "case %d: nothing left but t = %g is kept", i, t);
+            continue;
+        }
+        /* floats at and next to each bound, a few steps in and out */
+        const float bounds[2] = {clipped.t_near, clipped.t_far};
+        for (int b = 0; b < 2; b++) {
+            if (!isfinite(bounds[b]))
+                continue;
+            float t = bounds[b];
+            for (int step = 0; step < 3; step++)
+                t = nextafterf(t, b == 0 ? -INFINITY : INFINITY); /* outside */
+            for (int step = 0; step < 7; step++, t = nextafterf(t, b == 0 ? INFINITY : -INFINITY)) {
+                bool inside = t > clipped.t_near && t <= clipped.t_far;
+                int verdict = kept_general(&c, &r, t);
+                checked++;
+                if (verdict < 0) {
+                    undecided++;
+                    continue;
+                }
+                cr_assert_eq(inside, verdict == 1, "case %d: t = %a inside %d but kept %d (interval (%a, %a])", i,
+                             (double)t, inside, verdict, (double)clipped.t_near, (double)clipped.t_far);
+            }
+        }
+        if (entry >= 0) {
+            cr_assert(planes[entry].on);
+            vec3 p;
+            cr_assert(clip_crossing(&c, entry, &r, &p), "the entry plane is crossed");
+        }
+    }
+    cr_expect(undecided * 100 < checked, "undecided %d of %d: the tolerance is too wide to test", undecided, checked);
+    cr_expect(empty > 0 && empty < 4000, "both outcomes exercised (%d empty)", empty);
+}
+
+/* ---- a plane through the shared edge of two triangles ----------------------- */
+
+Test(clip, triangles_either_side_of_a_plane_through_their_edge_are_cut_consistently)
+{
+    /* two triangles in z = 0 sharing the edge x = 0, y in [-1, 1]; the plane
+     * x = 0 removes x > 0 (the right triangle) and keeps the edge itself */
+    const vec3 left[3] = {v3(-1.f, -1.f, 0.f), v3(0.f, -1.f, 0.f), v3(0.f, 1.f, 0.f)};
+    const vec3 right[3] = {v3(0.f, -1.f, 0.f), v3(1.f, -1.f, 0.f), v3(0.f, 1.f, 0.f)};
+    clip_set c = one_plane(v3(0.f, 0.f, 0.f), v3(1.f, 0.f, 0.f));
+    int hits_left = 0, hits_right = 0, hits_removed = 0, hits_on_edge = 0;
+    for (int i = 0; i < 20000; i++) {
+        /* aim at a point within a few ulps (or a few 1e-6) of the edge, slanted across it */
+        float ulps = (float)((int)(rng_next() % 41) - 20);
+        float aim_x = (rng_next() & 1) ? ulps * 0x1p-149f : ulps * 1e-7f;
+        vec3 aim = v3(aim_x, rng_grid(900), 0.f);
+        vec3 org = v3(rng_grid(2048), rng_grid(2048), 1.f + (float)(rng_next() % 8));
+        ray r = make_ray(org, v3_sub(aim, org));
+        if (!v3_is_finite(r.dir) || (r.dir.x == 0.f && r.dir.y == 0.f && r.dir.z == 0.f))
+            continue;
+        /* the hit without planes, and whether its point (in double from the
+         * float t) is kept */
+        ray_derived rd = ray_derive(&r);
+        float t = INFINITY, u, v, tt;
+        bool hit_l = intersect_triangle(&r, &rd, left[0], left[1], left[2], &tt, &u, &v);
+        if (hit_l)
+            t = tt;
+        bool hit_r = intersect_triangle(&r, &rd, right[0], right[1], right[2], &tt, &u, &v);
+        if (hit_r && tt < t)
+            t = tt;
+        if (!hit_l && !hit_r)
+            continue;
+        double hit_x = (double)org.x + (double)t * r.dir.x; /* exact sign: a sum of two exact terms, rounded once */
+        bool point_kept = hit_x <= 0.0;
+        cr_assert_eq(point_kept, clip_keeps_point(&c, v3((float)hit_x, 0.f, 0.f)), "float point agrees");
+        /* the clipped ray finds that hit exactly when the point is kept */
+        ray clipped = r;
+        bool left_over = clip_ray(&c, &clipped, NULL);
+        bool found = left_over && t > clipped.t_near && t <= clipped.t_far;
+        cr_assert_eq(found, point_kept, "case %d: hit at t = %a, x = %a: kept %d, in the interval %d", i, (double)t,
+                     hit_x, point_kept, found);
+        if (found) {
+            rd = ray_derive(&clipped);
+            bool again = intersect_triangle(&clipped, &rd, left[0], left[1], left[2], &tt, &u, &v) ||
+                         intersect_triangle(&clipped, &rd, right[0], right[1], right[2], &tt, &u, &v);
+            cr_assert(again, "case %d: the kept hit is found by the clipped ray", i);
+        }
+        hits_left += hit_l;
+        hits_right += hit_r;
+        hits_removed += !point_kept;
+        hits_on_edge += hit_x == 0.0;
+    }
+    cr_expect(hits_left > 1000 && hits_right > 1000 && hits_removed > 1000, "%d %d %d", hits_left, hits_right,
+              hits_removed);
+    cr_expect(hits_on_edge > 0, "some hits exactly on the edge (x = 0)");
+}
