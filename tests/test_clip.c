@@ -19,12 +19,17 @@
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "engine/clip.h"
+#include "engine/geometry.h"
 #include "engine/intersect.h"
+#include "engine/mesh.h"
+#include "engine/scene.h"
 
 TestSuite(clip);
 
@@ -460,4 +465,302 @@ Test(clip, triangles_either_side_of_a_plane_through_their_edge_are_cut_consisten
     cr_expect(hits_left > 1000 && hits_right > 1000 && hits_removed > 1000, "%d %d %d", hits_left, hits_right,
               hits_removed);
     cr_expect(hits_on_edge > 0, "some hits exactly on the edge (x = 0)");
+}
+
+/* ---- closed parts ----------------------------------------------------------- */
+
+/* The 8 corners of the cube [lo, lo + 1]^3, corner k at bits (x, y, z) of k. */
+static vec3 cube_corner(vec3 lo, int k)
+{
+    return v3(lo.x + (float)(k & 1), lo.y + (float)(k >> 1 & 1), lo.z + (float)(k >> 2 & 1));
+}
+
+/* Its 6 faces as corner quads, counter-clockwise seen from outside. */
+static const int cube_faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                     {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+
+/* Append the cube's faces (the first `faces` of them) to m: 8 shared
+ * vertices, or 4 of its own per face when `split` (as for flat normals). */
+static void add_cube(mesh *m, vec3 lo, int faces, bool split)
+{
+    uint32_t base = m->vertex_count;
+    if (!split)
+        for (int k = 0; k < 8; k++) {
+            vec3 c = cube_corner(lo, k);
+            cr_assert(mesh_add_vertex(m, c.x, c.y, c.z));
+        }
+    for (int f = 0; f < faces; f++) {
+        uint32_t q[4];
+        for (int i = 0; i < 4; i++) {
+            if (split) {
+                vec3 c = cube_corner(lo, cube_faces[f][i]);
+                q[i] = m->vertex_count;
+                cr_assert(mesh_add_vertex(m, c.x, c.y, c.z));
+            } else {
+                q[i] = base + (uint32_t)cube_faces[f][i];
+            }
+        }
+        cr_assert(mesh_add_triangle(m, q[0], q[1], q[2]) && mesh_add_triangle(m, q[0], q[2], q[3]));
+    }
+}
+
+/* The triangles kind's answer for m (m stays the caller's). */
+static bool mesh_closed(mesh *m)
+{
+    scene_mesh sm = {.mesh = m};
+    return geometry_triangles_ops.closed(&sm);
+}
+
+Test(clip, a_cube_is_closed_with_shared_or_split_vertices)
+{
+    mesh *m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 6, false);
+    cr_expect_eq(m->triangle_count, 12u);
+    cr_expect(mesh_closed(m), "12 triangles, 8 vertices");
+    mesh_destroy(m);
+
+    m = mesh_create();
+    add_cube(m, v3(-0.5f, -0.5f, -0.5f), 6, true);
+    cr_expect_eq(m->vertex_count, 24u);
+    cr_expect(mesh_closed(m), "24 vertices (per-face normals) weld back to 8");
+    mesh_destroy(m);
+
+    /* a corner at the origin given as -0 in one face and +0 in the others:
+     * the same position, welded */
+    m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 6, true);
+    for (uint32_t v = 0; v < 4; v++)
+        for (int a = 0; a < 3; a++)
+            if (m->positions[3 * v + a] == 0.f)
+                m->positions[3 * v + a] = -0.f;
+    cr_expect(mesh_closed(m), "-0 and +0 weld");
+    mesh_destroy(m);
+}
+
+Test(clip, an_open_or_lone_surface_is_not_closed)
+{
+    mesh *m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 5, false);
+    cr_expect(!mesh_closed(m), "a face missing: its rim is used once");
+    mesh_destroy(m);
+
+    m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 5, true);
+    cr_expect(!mesh_closed(m), "split, a face missing");
+    mesh_destroy(m);
+
+    m = mesh_create();
+    cr_assert(mesh_add_vertex(m, 0.f, 0.f, 0.f) && mesh_add_vertex(m, 1.f, 0.f, 0.f) &&
+              mesh_add_vertex(m, 0.f, 1.f, 0.f) && mesh_add_triangle(m, 0, 1, 2));
+    cr_expect(!mesh_closed(m), "a single triangle");
+    cr_assert(mesh_add_triangle(m, 0, 2, 1));
+    cr_expect(mesh_closed(m), "a triangle and its back face enclose nothing but are even at every edge: parity "
+                              "never counts a point inside, so a cut of it has no cap either");
+    mesh_destroy(m);
+
+    m = mesh_create();
+    cr_expect(!mesh_closed(m), "an empty mesh has nothing to cap");
+    mesh_destroy(m);
+}
+
+Test(clip, edge_counts_decide_by_parity)
+{
+    /* a duplicated triangle: its edges are used 3 times, odd: open */
+    mesh *m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 6, false);
+    cr_assert(mesh_add_triangle(m, 0, 2, 3));
+    cr_expect(!mesh_closed(m), "edge count 3");
+    /* the same triangle once more: 4 uses, even again (the two extra copies
+     * cancel under parity) */
+    cr_assert(mesh_add_triangle(m, 0, 3, 2));
+    cr_expect(mesh_closed(m), "edge count 4");
+    mesh_destroy(m);
+
+    /* two cubes sharing nothing, in one mesh */
+    m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 6, false);
+    add_cube(m, v3(3.f, 0.f, 0.f), 6, true);
+    cr_expect(mesh_closed(m), "two disjoint cubes");
+    mesh_destroy(m);
+
+    /* two cubes touching along one edge (CAD parts do): that edge has 4 */
+    m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 6, false);
+    add_cube(m, v3(1.f, 1.f, 0.f), 6, false);
+    cr_expect(mesh_closed(m), "non-manifold edge used 4 times");
+    mesh_destroy(m);
+
+    /* degenerate triangles (repeated vertex, collinear) are ignored */
+    m = mesh_create();
+    add_cube(m, v3(0.f, 0.f, 0.f), 6, false);
+    cr_assert(mesh_add_vertex(m, 0.5f, 0.f, 0.f));
+    cr_assert(mesh_add_triangle(m, 0, 0, 1) && mesh_add_triangle(m, 0, 1, 8) && mesh_add_triangle(m, 8, 8, 8));
+    cr_expect(mesh_closed(m), "degenerate triangles do not count");
+    mesh_destroy(m);
+}
+
+/* A UV sphere of `rings` x `segments` quads with the seam and pole vertices
+ * split (their positions repeated bit for bit, -0 and +0 mixed at the poles;
+ * the pole rows' triangles that collapse are degenerate). */
+static mesh *uv_sphere(uint32_t rings, uint32_t segments)
+{
+    mesh *m = mesh_create();
+    cr_assert(mesh_reserve_vertices(m, (rings + 1) * (segments + 1)) &&
+              mesh_reserve_triangles(m, 2 * rings * segments));
+    for (uint32_t i = 0; i <= rings; i++) {
+        double theta = 3.14159265358979323846 * i / rings;
+        for (uint32_t j = 0; j <= segments; j++) {
+            double phi = 2.0 * 3.14159265358979323846 * (j % segments) / segments; /* the seam repeats j = 0 */
+            double ring = i == 0 || i == rings ? 0.0 : sin(theta); /* sin(pi) is not 0 in double */
+            cr_assert(mesh_add_vertex(m, (float)(ring * cos(phi)), (float)(ring * sin(phi)), (float)cos(theta)));
+        }
+    }
+    for (uint32_t i = 0; i < rings; i++)
+        for (uint32_t j = 0; j < segments; j++) {
+            uint32_t a = i * (segments + 1) + j, b = a + 1, c = a + segments + 1, d = c + 1;
+            cr_assert(mesh_add_triangle(m, a, c, d) && mesh_add_triangle(m, a, d, b));
+        }
+    return m;
+}
+
+Test(clip, a_large_split_sphere_is_closed_in_n_log_n)
+{
+    mesh *m = uv_sphere(300, 600); /* 360,000 triangles */
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    cr_expect(mesh_closed(m));
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    cr_expect(seconds < 10.0, "%.2f s for 360k triangles: not n log n?", seconds);
+    /* a hole of one quad */
+    m->triangle_count -= 2;
+    cr_expect(!mesh_closed(m));
+    mesh_destroy(m);
+}
+
+/* A kind without the operation (a point set, never hit). */
+static uint32_t no_prims(const void *data)
+{
+    (void)data;
+    return 0;
+}
+static bool no_bounds(const void *data, uint32_t prim, aabb *out)
+{
+    (void)data, (void)prim, (void)out;
+    return false;
+}
+static bool no_hit(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v)
+{
+    (void)data, (void)prim, (void)r, (void)t, (void)u, (void)v;
+    return false;
+}
+static void no_surface(const void *data, uint32_t prim, const ray *r, const hit *h, bool need_position,
+                       geometry_surface *out)
+{
+    (void)data, (void)prim, (void)r, (void)h, (void)need_position, (void)out;
+}
+static const geometry_ops open_kind_ops = {
+    .name = "nothing",
+    .leaf = GEOMETRY_LEAF_PRIMS,
+    .prim_count = no_prims,
+    .prim_bounds = no_bounds,
+    .intersect = no_hit,
+    .describe = no_surface,
+};
+
+/* A scene of: a closed cube (geometry 0), an open cube (1), spheres (2), the
+ * kind without `closed` (3). */
+static scene *closed_scene(void)
+{
+    scene *s = scene_create();
+    cr_assert(s);
+    material grey = material_default();
+    cr_assert(scene_add_material(s, &grey) == 0);
+    mesh *closed = mesh_create(), *open = mesh_create();
+    add_cube(closed, v3(0.f, 0.f, 0.f), 6, true);
+    add_cube(open, v3(2.f, 0.f, 0.f), 5, false);
+    cr_assert(scene_add_mesh(s, closed, 0, "closed") == 0 && scene_add_mesh(s, open, 0, "open") == 1);
+    cr_assert(scene_add_sphere(s, v3(0.f, 5.f, 0.f), 1.f, 0) == 0);
+    cr_assert(scene_add_geometry(s, &open_kind_ops, NULL, "nothing") == 3);
+    return s;
+}
+
+static void expect_closed_flags(const scene *s)
+{
+    cr_expect(scene_geometry_closed(s, 0), "closed cube");
+    cr_expect(!scene_geometry_closed(s, 1), "open cube");
+    cr_expect(scene_geometry_closed(s, 2), "spheres");
+    cr_expect(!scene_geometry_closed(s, 3), "a kind without the operation");
+    cr_expect(!scene_geometry_closed(s, 4), "no such geometry");
+}
+
+Test(clip, the_scene_answers_lazily_and_caches)
+{
+    scene *s = closed_scene();
+    cr_expect_null(atomic_load(&s->closed), "nothing until the first question");
+    cr_expect(!scene_geometry_closed(s, 3));
+    cr_expect_null(atomic_load(&s->closed), "a kind without the operation needs no cache");
+    expect_closed_flags(s);
+    cr_expect_not_null(atomic_load(&s->closed));
+    expect_closed_flags(s); /* from the cache */
+    /* a geometry added later drops the cache; the next question makes a new one */
+    mesh *m = mesh_create();
+    add_cube(m, v3(5.f, 0.f, 0.f), 6, false);
+    cr_assert(scene_add_mesh_geometry(s, m, 0, "late") == 4);
+    cr_expect_null(atomic_load(&s->closed));
+    cr_expect(scene_geometry_closed(s, 4));
+    cr_expect(scene_geometry_closed(s, 0) && !scene_geometry_closed(s, 1));
+    scene_destroy(s);
+
+    s = closed_scene();
+    scene_prepare_closed(s, 2);
+    cr_expect_not_null(atomic_load(&s->closed));
+    expect_closed_flags(s);
+    scene_destroy(s);
+}
+
+static void *ask_every_geometry(void *arg)
+{
+    const scene *s = arg;
+    uintptr_t answers = 0;
+    for (uint32_t g = 0; g < s->geometry_count; g++)
+        answers |= (uintptr_t)scene_geometry_closed(s, g) << g;
+    return (void *)answers;
+}
+
+Test(clip, render_threads_may_ask_at_once)
+{
+    for (int round = 0; round < 20; round++) {
+        scene *s = closed_scene();
+        pthread_t threads[4];
+        for (int i = 0; i < 4; i++)
+            cr_assert_eq(pthread_create(&threads[i], NULL, ask_every_geometry, s), 0);
+        for (int i = 0; i < 4; i++) {
+            void *answers;
+            cr_assert_eq(pthread_join(threads[i], &answers), 0);
+            cr_expect_eq((uintptr_t)answers, 0x5u, "closed: geometries 0 and 2 (got %#lx)",
+                         (unsigned long)(uintptr_t)answers);
+        }
+        scene_destroy(s);
+    }
+}
+
+Test(clip, the_generated_assembly_parts_are_closed)
+{
+    /* tools/gen_assembly: frames, stringers, skins, pipes, brackets, bolts,
+     * rivets, each made a closed solid (its README); loaded through assimp
+     * with their per-face vertices split */
+    scene *s = scene_create();
+    tess_error err = {{0}};
+    cr_assert(scene_load_assembly(s, "data/assembly-small.glb", NULL, &err), "%s", err.msg);
+    cr_assert(s->geometry_count >= 7, "%u geometries: one mesh per kind at least", s->geometry_count);
+    uint32_t split = 0;
+    for (uint32_t g = 0; g < s->geometry_count; g++) {
+        cr_expect(scene_geometry_closed(s, g), "geometry %u (%s) is not closed", g, s->geometries[g].name);
+        const scene_mesh *sm = s->geometries[g].data;
+        split += sm->mesh->vertex_count > sm->mesh->triangle_count / 2 + 2; /* more than a welded solid's V */
+    }
+    cr_expect(split > 0, "some parts have split vertices, so welding was needed");
+    /* the instances are placed by rigid transforms, which keep a solid one */
+    scene_destroy(s);
 }
