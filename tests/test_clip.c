@@ -230,6 +230,25 @@ Test(clip, parallel_rays_are_kept_whole_or_removed_whole)
     cr_expect(!clip_ray(&c, &r, NULL));
 }
 
+Test(clip, rays_that_are_not_finite_never_get_nan_bounds)
+{
+    clip_set c = one_plane(v3(0.f, 0.f, 0.f), v3(0.6f, 0.f, 0.8f));
+    const ray rays[] = {
+        make_ray(v3(NAN, 0.f, 0.f), v3(0.f, 0.f, 1.f)),
+        make_ray(v3(0.f, 0.f, 0.f), v3(INFINITY, 0.f, 1.f)),
+        make_ray(v3(-INFINITY, 0.f, 0.f), v3(1.f, 0.f, 0.f)),
+        make_ray(v3(INFINITY, 0.f, -INFINITY), v3(1.f, 0.f, 1.f)),
+        {v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f), NAN, INFINITY},
+    };
+    for (size_t i = 0; i < sizeof rays / sizeof rays[0]; i++) {
+        ray r = rays[i];
+        if (clip_ray(&c, &r, NULL))
+            cr_expect(!isnan(r.t_near) && !isnan(r.t_far) && r.t_near < r.t_far, "ray %zu", i);
+        else
+            cr_expect(memcmp(&r, &rays[i], sizeof r) == 0, "ray %zu unchanged", i);
+    }
+}
+
 Test(clip, several_planes_give_one_interval)
 {
     clip_plane planes[CLIP_MAX_PLANES] = {0};
