@@ -49,9 +49,12 @@ typedef struct clip_set {
 void clip_set_make(clip_set *out, const clip_plane planes[CLIP_MAX_PLANES]);
 
 /* Cut r's (t_near, t_far] to the kept side of every plane of c (EXACTNESS
- * above). False when nothing is left (r unchanged then). *entry_plane (may be
- * NULL) gets the index (in the frame state) of the plane that now bounds
- * t_near, or -1 when t_near is r's own. */
+ * above). False when nothing is left (r unchanged then): no finite float t
+ * with t_near < t <= t_far (a crossing beyond float range can leave
+ * (FLT_MAX, +inf], which holds no hit). *entry_plane (may be NULL) gets
+ * the index (in the frame state) of the plane that now bounds t_near, or -1
+ * when t_near is r's own (ties: r's own, then the lowest index). A ray that
+ * is not finite gets no guarantee but never NaN bounds. */
 bool clip_ray(const clip_set *c, ray *r, int *entry_plane);
 
 /* Whether world point x is kept (on the kept side of every plane, in double). */

@@ -75,6 +75,12 @@ typedef struct geometry_ops {
     size_t (*bytes)(const void *data);
     /* Free `data` when the scene is destroyed; NULL: the caller owns it. */
     void (*destroy)(void *data);
+    /* Whether the primitives bound a solid (every cut of it by a plane can be
+     * capped by parity: a point is inside when a ray from it crosses the
+     * surface an odd number of times). NULL: not closed (no caps). May be
+     * slow (a pass over the data); the scene caches it
+     * (scene_geometry_closed). */
+    bool (*closed)(const void *data);
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */

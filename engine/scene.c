@@ -9,6 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "parallel.h"
 #include "part_tree.h"
 
 /* First capacity of a growing array; it doubles from there. Small because most
@@ -64,6 +65,7 @@ void scene_destroy(scene *s)
     sphere_set_finish(&s->spheres);
     free(s->materials);
     free(s->lights);
+    free(atomic_load_explicit(&s->closed, memory_order_relaxed));
     free(s);
 }
 
@@ -178,6 +180,9 @@ int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char
             ops->destroy(data);
         return -1;
     }
+    /* the closed cache has a byte per geometry there was: drop it (no frame
+     * renders while the scene changes; the next question makes a new one) */
+    free(atomic_exchange_explicit(&s->closed, NULL, memory_order_relaxed));
     scene_geometry *g = &s->geometries[s->geometry_count];
     g->ops = ops;
     g->data = data;
@@ -316,6 +321,72 @@ int scene_add_sphere(scene *s, vec3 center, float radius, uint32_t material_id)
     ss->radius[ss->count] = radius;
     ss->material_id[ss->count] = material_id;
     return (int)ss->count++;
+}
+
+/* ---- closed geometries (scene.h CLOSED GEOMETRIES) ------------------------ */
+
+enum { CLOSED_UNKNOWN = 0, CLOSED_NO = 1, CLOSED_YES = 2 };
+
+struct scene_closed_cache {
+    uint32_t count;       /* geometries when it was made (scene_add_geometry drops it) */
+    atomic_uchar state[]; /* CLOSED_*, relaxed */
+};
+
+/* The cache, made on first use; NULL without memory. */
+static struct scene_closed_cache *closed_cache(const scene *s)
+{
+    /* the cache is not the scene's content, so a const scene may fill it
+     * (scenes are never defined const: scene_create allocates them) */
+    scene *cached = (scene *)s;
+    struct scene_closed_cache *c = atomic_load_explicit(&cached->closed, memory_order_acquire);
+    if (c)
+        return c;
+    c = malloc(sizeof *c + s->geometry_count * sizeof c->state[0]);
+    if (!c)
+        return NULL;
+    c->count = s->geometry_count;
+    for (uint32_t g = 0; g < c->count; g++)
+        atomic_init(&c->state[g], CLOSED_UNKNOWN);
+    struct scene_closed_cache *seen = NULL;
+    if (atomic_compare_exchange_strong_explicit(&cached->closed, &seen, c, memory_order_acq_rel,
+                                                memory_order_acquire))
+        return c;
+    free(c); /* another thread published one first */
+    return seen;
+}
+
+bool scene_geometry_closed(const scene *s, uint32_t geometry)
+{
+    if (geometry >= s->geometry_count)
+        return false;
+    const scene_geometry *g = &s->geometries[geometry];
+    if (!g->ops->closed)
+        return false;
+    struct scene_closed_cache *c = closed_cache(s);
+    if (!c || geometry >= c->count)
+        return false;
+    unsigned char state = atomic_load_explicit(&c->state[geometry], memory_order_relaxed);
+    if (state == CLOSED_UNKNOWN) {
+        state = g->ops->closed(g->data) ? CLOSED_YES : CLOSED_NO;
+        atomic_store_explicit(&c->state[geometry], state, memory_order_relaxed);
+    }
+    return state == CLOSED_YES;
+}
+
+static void prepare_closed_chunk(void *ctx, size_t begin, size_t end, int worker)
+{
+    (void)worker;
+    const scene *s = ctx;
+    for (size_t g = begin; g < end; g++)
+        (void)scene_geometry_closed(s, (uint32_t)g);
+}
+
+void scene_prepare_closed(const scene *s, int threads)
+{
+    if (s->geometry_count == 0 || !closed_cache(s))
+        return;
+    /* one geometry a chunk: their costs differ by orders of magnitude */
+    parallel_for(threads, s->geometry_count, 1, prepare_closed_chunk, (void *)s);
 }
 
 bool scene_geometry_bounds(const scene *s, uint32_t geometry, aabb *out)

@@ -15,6 +15,7 @@
 #ifndef TESSERA_SCENE_H
 #define TESSERA_SCENE_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -83,6 +84,7 @@ typedef struct scene_geometry {
 #define SCENE_NO_MATERIAL 0xFFFFFFFFu
 
 struct part_tree;
+struct scene_closed_cache;
 
 /* A geometry placed in the world. */
 typedef struct scene_instance {
@@ -124,6 +126,16 @@ typedef struct scene {
     vec3 ambient;         /* linear RGB ambient light */
     bool has_camera;      /* false: frame the bounds with camera_frame_bounds() */
     camera_desc camera;
+    /* CLOSED GEOMETRIES (scene_geometry_closed): a byte per geometry, NULL
+     * until the first question about a kind that has a `closed` operation,
+     * so a scene without cutting planes pays nothing. Guarded by atomics, no
+     * lock: the pointer is published once by compare-and-swap (release;
+     * readers acquire: they see the zeroed bytes) and dropped only by
+     * scene_add_geometry, which like every change runs while no frame
+     * renders. The bytes are relaxed atomics, 0 until known: an answer is a
+     * pure function of the geometry's data, so two threads that compute it
+     * at once store the same byte. */
+    _Atomic(struct scene_closed_cache *) closed;
 } scene;
 
 scene *scene_create(void);
@@ -180,6 +192,18 @@ static inline const scene_geometry *scene_instance_geometry(const scene *s, uint
 {
     return &s->geometries[s->instances[instance].geometry];
 }
+
+/* Whether geometry `geometry` bounds a solid, so that where a cutting plane
+ * cuts it the cut can be capped (its kind's `closed` operation, geometry.h;
+ * false for a kind without one, or when memory for the cache is short: then
+ * there are no caps rather than a pass over the data per call). Computed on
+ * the first call for that geometry and cached (the scene's `closed`); any
+ * thread, at any time the scene is not being changed. */
+bool scene_geometry_closed(const scene *s, uint32_t geometry);
+/* Answer scene_geometry_closed for every geometry now, over `threads`
+ * threads (the caller counted): for the serial section where cutting planes
+ * turn on, so no render thread stalls on a first question. */
+void scene_prepare_closed(const scene *s, int threads);
 
 /* World bounds of one instance; false when its geometry has nothing to hit. */
 bool scene_instance_bounds(const scene *s, uint32_t instance, aabb *out);
