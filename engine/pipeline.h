@@ -139,6 +139,7 @@
 #include <stdint.h>
 
 #include "camera.h"
+#include "clip.h"
 #include "display.h"
 #include "err.h"
 #include "governor.h"

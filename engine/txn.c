@@ -14,6 +14,7 @@
 #include "render.h"
 
 _Static_assert(sizeof(((txn_record *)0)->args.status.text) == TXN_TEXT_BYTES, "status text");
+_Static_assert(TXN_CLIP_PLANES == CLIP_MAX_PLANES, "a clip-plane record's index is a frame state's plane");
 
 static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_CAMERA] = "camera",         [TXN_CURSOR] = "cursor",

@@ -34,7 +34,7 @@
  *                                                  identity puts them back)
  *   opacity          all | first, count; a         the global opacity, or those parts' opacity
  *                    (finite, in [0, 1])           (frame_state.h, OPACITY: 1 opaque, 0 see-through)
- *   clip-plane       index (0..CLIP_MAX_PLANES-1), cutting plane `index` (clip.h) set, and
+ *   clip-plane       index (0..TXN_CLIP_PLANES-1), cutting plane `index` (clip.h) set, and
  *                    on, point (finite), normal    switched on or off; apply stores the normal
  *                    (finite, length > 0)          normalised: each component n / |n| computed in
  *                                                  double and rounded once to float (a record
@@ -99,7 +99,6 @@
 #include <stdint.h>
 
 #include "camera.h"
-#include "clip.h"
 #include "err.h"
 
 struct frame_state;
@@ -107,6 +106,7 @@ struct frame_state;
 #define TXN_TEXT_BYTES 128        /* status text with its NUL (= PIPELINE_STATUS_BYTES) */
 #define TXN_NAME_BYTES 32         /* renderer name with its NUL */
 #define TXN_ALL_CHANNELS (-1)     /* camera: every channel (the wall's camera) */
+#define TXN_CLIP_PLANES 8         /* = CLIP_MAX_PLANES (clip.h, not included: its ray.h names `hit`) */
 #define TXN_MAX_CHANNELS 16       /* = PIPELINE_MAX_CHANNELS */
 #define TXN_MAX_THREADS 256       /* = PIPELINE_MAX_THREADS */
 #define TXN_BINARY_BYTES (4 + TXN_TEXT_BYTES)
@@ -183,7 +183,7 @@ typedef struct txn_record {
             float a;            /* opacity, [0, 1] */
         } opacity;
         struct {
-            int32_t index;      /* 0..CLIP_MAX_PLANES-1 */
+            int32_t index;      /* 0..TXN_CLIP_PLANES-1 */
             bool on;
             float point[3];     /* world, finite */
             float normal[3];    /* world, finite, nonzero (the removed side; apply normalises) */
