@@ -99,8 +99,10 @@ endif
 
 # (the suite runs ./tessera too: `make test` builds it; the ASan build makes its own tessera-asan
 # and must never overwrite ./tessera)
-# the tests also link the CLI's input pick hook (tools/cli/input_pick.h: a scene's parts as input sees them)
-TEST_CLI_OBJ := $(BUILD)/tools/cli/input_pick.o
+# the tests also link the CLI but its main (as the soak driver does): the input pick hook
+# (tools/cli/input_pick.h: a scene's parts as input sees them) and the pipeline config parser
+# (tests/test_pipeline_config.c reads back what a config sets)
+TEST_CLI_OBJ := $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ))
 $(TEST_BIN): $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 

@@ -51,6 +51,7 @@ void frame_state_init(frame_state *st, const struct renderer *r, bool shadows, i
     st->shadows = shadows;
     st->threads = threads;
     st->geometry_count = geometry_count;
+    st->opacity = 1.f; /* the planes stay off (on = false) from the memset */
 }
 
 void frame_state_finish(frame_state *st)
@@ -60,7 +61,10 @@ void frame_state_finish(frame_state *st)
     free(st->coloured);
     free(st->colour);
     free(st->moved);
+    free(st->part_opacity);
     st->moved = NULL;
+    st->part_opacity = NULL;
+    st->translucent_count = 0;
     st->hidden = st->highlight = st->coloured = NULL;
     st->colour = NULL;
 }
@@ -279,6 +283,59 @@ bool frame_state_set_colour(frame_state *st, uint32_t first, uint32_t count, con
     return true;
 }
 
+void frame_state_set_global_opacity(frame_state *st, float opacity)
+{
+    if (st->opacity != opacity)
+        st->picture_serial++;
+    st->opacity = opacity;
+    st->version++;
+}
+
+bool frame_state_set_opacity(frame_state *st, uint32_t first, uint32_t count, float opacity)
+{
+    if (!st->part_opacity) {
+        if (opacity == 1.f) { /* every part is opaque already: nothing to allocate */
+            st->version++;
+            return true;
+        }
+        float *a = malloc((size_t)(st->geometry_count ? st->geometry_count : 1) * sizeof *a);
+        if (!a)
+            return false;
+        for (uint32_t i = 0; i < st->geometry_count; i++)
+            a[i] = 1.f;
+        st->part_opacity = a;
+    }
+    bool changed = false;
+    for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+        float *o = &st->part_opacity[id];
+        if (*o == opacity)
+            continue;
+        changed = true;
+        /* translucent_count counts entries below 1: it moves when one crosses 1 */
+        if (*o < 1.f && !(opacity < 1.f))
+            st->translucent_count--;
+        else if (!(*o < 1.f) && opacity < 1.f)
+            st->translucent_count++;
+        *o = opacity;
+    }
+    if (changed)
+        st->picture_serial++;
+    st->version++;
+    return true;
+}
+
+void frame_state_set_clip_plane(frame_state *st, int index, const clip_plane *p)
+{
+    clip_plane *old = &st->clip[index];
+    /* a plane that is off clips nothing: changing one that stays off changes no picture */
+    bool moved = old->point.x != p->point.x || old->point.y != p->point.y || old->point.z != p->point.z ||
+                 old->normal.x != p->normal.x || old->normal.y != p->normal.y || old->normal.z != p->normal.z;
+    if (old->on != p->on || (p->on && moved))
+        st->picture_serial++;
+    *old = *p;
+    st->version++;
+}
+
 void frame_state_bump_overlay(frame_state *st) { st->overlay_serial++; }
 
 bool frame_state_hidden(const frame_state *st, uint32_t id)
@@ -299,6 +356,17 @@ bool frame_state_colour(const frame_state *st, uint32_t id, vec3 *rgb)
         *rgb = st->colour[id];
     return true;
 }
+
+float frame_state_opacity(const frame_state *st, uint32_t id)
+{
+    if (!st->part_opacity || id >= st->geometry_count)
+        return st->opacity;
+    return st->opacity * st->part_opacity[id];
+}
+
+bool frame_state_transparent(const frame_state *st) { return st->opacity < 1.f || st->translucent_count > 0; }
+
+const clip_plane *frame_state_clip_planes(const frame_state *st) { return st->clip; }
 
 uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
 {

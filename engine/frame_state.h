@@ -5,9 +5,20 @@
  * active; the render thread count; the overlay's inputs (status text, cursor,
  * whether the governor's line is shown); render options (renderer,
  * shadows); per geometry (ids 0..geometry_count-1, what hits report as
- * geom_id) visibility, a highlight flag and a colour override (linear RGB).
- * Room for more: what the next issues add (opacity, cutting planes,
- * accumulation) goes here, with a record kind in txn.h that edits it.
+ * geom_id) visibility, a highlight flag, a colour override (linear RGB) and
+ * an opacity; a global opacity; the cutting planes (clip.h, CLIP_MAX_PLANES,
+ * all off initially).
+ * Room for more: what the next issues add (accumulation) goes here, with a
+ * record kind in txn.h that edits it.
+ *
+ * OPACITY. What a surface of geometry id lets through is 1 - opacity, with
+ * opacity = global opacity x its part opacity (frame_state_opacity), both in
+ * [0, 1]: 1 opaque (the default for both), 0 see-through (the surface is
+ * still hit, its contribution weighted 0: a renderer may skip it). The
+ * global opacity scales every part, so "opacity all 0.5" then a part at 0.5
+ * shows that part at 0.25. frame_state_transparent says in O(1) whether any
+ * surface may be less than opaque (global < 1, or translucent_count > 0):
+ * renderers take their opaque fast path when it is false.
  *
  * WHO CHANGES IT. Only txn_apply (txn.h) and the setters below, and in a
  * pipeline only in the serial section of the frame barrier (transactions,
@@ -23,7 +34,10 @@
  *   picture_serial  bumped when what the picture shows changes: a camera
  *                   different from the one it replaces, a channel switched,
  *                   a geometry's visibility changed, show-all (always),
- *                   highlight or colour changed, shadows or renderer changed;
+ *                   highlight or colour changed, shadows or renderer changed,
+ *                   the global or a part's opacity changed, a cutting plane
+ *                   switched on or off, or one that is on moved or turned
+ *                   (a plane that stays off may change unseen: no bump);
  *   overlay_serial  bumped when the overlay changes: the cursor moved,
  *                   shown or hidden (cursor setter), and by the pipeline when
  *                   the status line as drawn changes (frame_state_bump_overlay);
@@ -31,7 +45,10 @@
  *
  * MEMORY. Nothing per geometry is allocated until a scene uses the feature:
  * the hidden, highlight and colour arrays are each NULL until the first
- * record that needs one (a hide, a highlight on, a colour override).
+ * record that needs one (a hide, a highlight on, a colour override, a part
+ * opacity below 1: part_opacity stays NULL while every part is opaque, and
+ * setting parts to 1 before that allocates nothing). The global opacity and
+ * the planes are fixed-size members.
  *
  * VISIBILITY AND THE ACCEL. The accel keeps its own hidden flags (accel.h;
  * traversal reads them). The state says what should be hidden and marks
@@ -45,6 +62,7 @@
 #include <stdint.h>
 
 #include "camera.h"
+#include "clip.h"
 #include "geometry.h"
 #include "err.h"
 #include "txn.h"
@@ -77,6 +95,8 @@ typedef struct frame_state {
     /* render options */
     const struct renderer *renderer; /* never NULL once initialised */
     bool shadows;
+    float opacity;           /* global, [0, 1] (OPACITY above); 1 after init */
+    clip_plane clip[CLIP_MAX_PLANES]; /* cutting planes (normals unit); all off after init */
 
     /* per geometry: bitsets of (geometry_count + 63) / 64 words, NULL until used */
     uint32_t geometry_count;
@@ -87,6 +107,9 @@ typedef struct frame_state {
     vec3 *colour;            /* geometry_count entries, with `coloured` */
     affine3 *moved;          /* geometry_count placements applied after the scene's (identity:
                                 not moved), NULL until the first move */
+    float *part_opacity;     /* geometry_count opacities in [0, 1] (1: opaque), NULL until the first
+                                part set below 1 */
+    uint32_t translucent_count; /* entries of part_opacity below 1 (0 while it is NULL) */
 
     /* what frame_state_sync_accel still has to do */
     bool accel_unhide_all;   /* a show-all since the last sync */
@@ -95,7 +118,8 @@ typedef struct frame_state {
 } frame_state;
 
 /* A state for geometry_count geometries with no channels, nothing hidden,
- * no overlay, the given render options. Allocates nothing. */
+ * no overlay, the given render options, opaque (opacity 1), no cutting
+ * plane on. Allocates nothing. */
 void frame_state_init(frame_state *st, const struct renderer *r, bool shadows, int threads, uint32_t geometry_count);
 /* Free the per-geometry arrays. */
 void frame_state_finish(frame_state *st);
@@ -127,6 +151,13 @@ bool frame_state_set_colour(frame_state *st, uint32_t first, uint32_t count, con
 /* Place [first, first + count) by m after the scene's placement (the identity: back where the
  * scene put them). m must be invertible (txn_validate checks). False, st unchanged, out of memory. */
 bool frame_state_set_move(frame_state *st, uint32_t first, uint32_t count, const affine3 *m);
+/* Global opacity, in [0, 1] (txn_validate checks). */
+void frame_state_set_global_opacity(frame_state *st, float opacity);
+/* Opacity of parts [first, first + count) (in range), in [0, 1]. False, st unchanged, out of memory. */
+bool frame_state_set_opacity(frame_state *st, uint32_t first, uint32_t count, float opacity);
+/* Cutting plane `index` (0..CLIP_MAX_PLANES-1) becomes *p, whose normal must
+ * be unit: txn_apply normalises a record's normal before calling this. */
+void frame_state_set_clip_plane(frame_state *st, int index, const clip_plane *p);
 /* The pipeline: the drawn status line changed. */
 void frame_state_bump_overlay(frame_state *st);
 
@@ -135,6 +166,12 @@ bool frame_state_hidden(const frame_state *st, uint32_t id);      /* false out o
 bool frame_state_highlighted(const frame_state *st, uint32_t id); /* false out of range */
 /* Whether id has a colour override; then *rgb is it (rgb may be NULL). */
 bool frame_state_colour(const frame_state *st, uint32_t id, vec3 *rgb);
+/* The opacity of id's surfaces: global x part (the part's is 1 when never set or id is out of range). */
+float frame_state_opacity(const frame_state *st, uint32_t id);
+/* Whether any surface may be less than opaque: global < 1 or a part below 1. O(1). */
+bool frame_state_transparent(const frame_state *st);
+/* The CLIP_MAX_PLANES cutting planes (those with on == false clip nothing). */
+const clip_plane *frame_state_clip_planes(const frame_state *st);
 
 /* Bring the accel's hidden flags in line (serial section; see above).
  * Changes go as runs of consecutive ids (accel_set_hidden_range: a subtree

@@ -3,6 +3,7 @@
  * lock or which stage guards each field. */
 #include "pipeline.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -334,7 +335,46 @@ pipeline_config pipeline_config_default(const struct scene *s, const struct acce
     c.refine_k = GOVERNOR_DEFAULT_REFINE_K;
     c.upscale = UPSCALE_BILINEAR;
     c.render_scale = 1.0;
+    c.settings = render_settings_default();
+    c.opacity = 1.f; /* the planes: all unused (zeroed) */
     return c;
+}
+
+static bool settings_validate(const render_settings *s, tess_error *err)
+{
+    if (!(s->min_transmittance > 0.f && s->min_transmittance < 1.f))
+        return tess_error_set(err, "pipeline: settings.min_transmittance: %g is not in (0, 1)",
+                              (double)s->min_transmittance);
+    if (s->max_layers < 1 || s->max_layers > PIPELINE_MAX_LAYERS_MAX)
+        return tess_error_set(err, "pipeline: settings.max_layers: %d is not in 1..%d", s->max_layers,
+                              PIPELINE_MAX_LAYERS_MAX);
+    if (s->cap_style != RENDER_CAP_TINT && s->cap_style != RENDER_CAP_HATCH)
+        return tess_error_set(err, "pipeline: settings.cap_style: unknown style %d", (int)s->cap_style);
+    if (s->ao_rays < 1 || s->ao_rays > PIPELINE_AO_RAYS_MAX)
+        return tess_error_set(err, "pipeline: settings.ao_rays: %d is not in 1..%d", s->ao_rays,
+                              PIPELINE_AO_RAYS_MAX);
+    if (!isfinite(s->ao_distance) || s->ao_distance < 0.f)
+        return tess_error_set(err, "pipeline: settings.ao_distance: %g is not a distance >= 0 (0: from the scene)",
+                              (double)s->ao_distance);
+    if (s->ao_interleave < 1 || s->ao_interleave > PIPELINE_AO_INTERLEAVE_MAX)
+        return tess_error_set(err, "pipeline: settings.ao_interleave: %d is not in 1..%d", s->ao_interleave,
+                              PIPELINE_AO_INTERLEAVE_MAX);
+    if (s->ao_filter_px < 1 || s->ao_filter_px > PIPELINE_AO_FILTER_PX_MAX || s->ao_filter_px % 2 == 0)
+        return tess_error_set(err, "pipeline: settings.ao_filter_px: %d is not odd in 1..%d", s->ao_filter_px,
+                              PIPELINE_AO_FILTER_PX_MAX);
+    return true;
+}
+
+/* An initial plane the config leaves unused: off, zero normal (a zeroed entry). */
+static bool plane_unused(const clip_plane *c)
+{
+    return !c->on && c->normal.x == 0.f && c->normal.y == 0.f && c->normal.z == 0.f;
+}
+
+static txn_record plane_record(int index, const clip_plane *c)
+{
+    const float point[3] = {c->point.x, c->point.y, c->point.z}, normal[3] = {c->normal.x, c->normal.y, c->normal.z};
+    return txn_clip_plane(index, c->on, point, normal);
 }
 
 bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
@@ -378,6 +418,19 @@ bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
             return false;
         }
     }
+    if (!settings_validate(&cfg->settings, err))
+        return false;
+    if (!isfinite(cfg->opacity) || cfg->opacity < 0.f || cfg->opacity > 1.f)
+        return tess_error_set(err, "pipeline: opacity: %g is not in [0, 1]", (double)cfg->opacity);
+    for (int i = 0; i < CLIP_MAX_PLANES; i++) {
+        if (plane_unused(&cfg->clip[i]))
+            continue;
+        txn_record r = plane_record(i, &cfg->clip[i]);
+        if (!txn_validate(&r, err)) {
+            tess_error_prefix(err, "pipeline: clip[%d]: ", i);
+            return false;
+        }
+    }
     return true;
 }
 
@@ -412,6 +465,17 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
         tess_error_set(err, "pipeline: out of memory");
         return NULL;
     }
+    /* where inspection starts: as records, so the planes are normalised as input's are (validated above) */
+    if (cfg->opacity != 1.f)
+        frame_state_set_global_opacity(&p->state, cfg->opacity);
+    for (int i = 0; i < CLIP_MAX_PLANES; i++)
+        if (!plane_unused(&cfg->clip[i])) {
+            txn_record r = plane_record(i, &cfg->clip[i]);
+            tess_error unused = {{0}};
+            bool applied = txn_apply(&r, &p->state, &unused);
+            assert(applied); /* pipeline_config_validate checked it; a plane allocates nothing */
+            (void)applied;
+        }
     pthread_mutex_init(&p->queue_lock, NULL);
     pthread_cond_init(&p->queue_changed, NULL);
     pthread_mutex_init(&p->stats_lock, NULL);
@@ -1194,7 +1258,8 @@ static void freeze_frame(pipeline *p)
                                                               c->height_px),
                                 .shadows = st->shadows,
                                 .shading = st->renderer->shading,
-                                .state = st};
+                                .state = st,
+                                .settings = &p->cfg.settings}; /* fixed: the pipeline's copy */
         frame_buffer *b = &c->buffers[c->pending];
         b->meta = (frame_image){b->rgb, c->width_px, c->height_px, p->step.info.frame, p->step.info.time_s, i,
                                 *camera, st->camera_serials[i], p->reduced ? scale : 1.0,

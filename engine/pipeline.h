@@ -34,8 +34,10 @@
  * versioned object owned by the pipeline (frame_state.h): per-channel
  * cameras (with change serials) and active flags, the thread count, the
  * overlay's inputs (status text, cursor, governor line shown), render
- * options (renderer, shadows) and per-geometry visibility, highlight and
- * colour (arrays allocated only when a scene first uses them). It is
+ * options (renderer, shadows), the global opacity and cutting planes, and
+ * per-geometry visibility, highlight, colour and opacity (arrays allocated
+ * only when a scene first uses them). It starts from the config (renderer,
+ * shadows, threads, opacity, cutting planes). It is
  * written only in the serial section (or while no loop runs), so the state
  * at a barrier is that frame's SNAPSHOT: render threads read it through a
  * const pointer (render_view.state, pipeline_frame_state) without locks, and
@@ -137,6 +139,7 @@
 #include <stdint.h>
 
 #include "camera.h"
+#include "clip.h"
 #include "display.h"
 #include "err.h"
 #include "governor.h"
@@ -197,12 +200,29 @@ typedef struct pipeline_config {
      * size (upscale.h, RENDER SCALE) with `sampler`, upscaled as the governor's
      * reduced frames are; (0, 1], 1 = full size; < 1 only with budget_ms 0 */
     double render_scale;
+    /* inspection: how far transparency, caps and ambient occlusion go, fixed for the
+     * pipeline's life (the pipeline keeps its copy; every render view it builds points at it:
+     * render_view.settings), and where the frame state's opacity and planes start */
+    render_settings settings;  /* ranges: pipeline_config_validate (PIPELINE_*_MAX below) */
+    float opacity;             /* initial global opacity, [0, 1] */
+    clip_plane clip[CLIP_MAX_PLANES]; /* initial cutting planes: an entry that is off with a zero
+                                  normal is unused; any other must pass as a clip-plane record
+                                  (txn.h: finite point, nonzero normal) and is applied as one
+                                  (the normal normalised) */
 } pipeline_config;
+
+/* Bounds of render_settings (render.h) a config may ask for; each a cost bound:
+ * the work per ray grows with them. */
+#define PIPELINE_MAX_LAYERS_MAX 64   /* transparent layers blended along one ray */
+#define PIPELINE_AO_RAYS_MAX 64      /* ambient occlusion rays per hit */
+#define PIPELINE_AO_INTERLEAVE_MAX 8 /* K of the K x K direction-set pattern */
+#define PIPELINE_AO_FILTER_PX_MAX 9  /* edge of the AO filter (odd) */
 
 /* Defaults: 1 thread, real time (rate 30 for FIXED_RATE), no frame limit,
  * 16-pixel tiles in row order, single sample, Phong with shadows, no
  * governor (still_s GOVERNOR_DEFAULT_STILL_S, refine_k
- * GOVERNOR_DEFAULT_REFINE_K, bilinear upscaling when one is asked for). */
+ * GOVERNOR_DEFAULT_REFINE_K, bilinear upscaling when one is asked for),
+ * render_settings_default(), opaque, no cutting plane. */
 pipeline_config pipeline_config_default(const struct scene *s, const struct accel *a);
 
 /* Check a config; false with err naming the field and the problem. */

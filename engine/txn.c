@@ -14,6 +14,7 @@
 #include "render.h"
 
 _Static_assert(sizeof(((txn_record *)0)->args.status.text) == TXN_TEXT_BYTES, "status text");
+_Static_assert(TXN_CLIP_PLANES == CLIP_MAX_PLANES, "a clip-plane record's index is a frame state's plane");
 
 static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_CAMERA] = "camera",         [TXN_CURSOR] = "cursor",
@@ -24,6 +25,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_HIGHLIGHT] = "highlight",   [TXN_COLOUR] = "colour",
     [TXN_SHADOWS] = "shadows",       [TXN_RENDERER] = "renderer",
     [TXN_THREADS] = "threads",       [TXN_CHANNEL_ACTIVE] = "channel-active", [TXN_MOVE] = "move",
+    [TXN_OPACITY] = "opacity",       [TXN_CLIP_PLANE] = "clip-plane",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -127,6 +129,32 @@ txn_record txn_move(uint32_t first, uint32_t count, const float m[12])
     return r;
 }
 
+txn_record txn_opacity_all(float a)
+{
+    txn_record r = blank(TXN_OPACITY);
+    r.args.opacity.all = true;
+    r.args.opacity.a = a;
+    return r;
+}
+
+txn_record txn_opacity(uint32_t first, uint32_t count, float a)
+{
+    txn_record r = blank(TXN_OPACITY);
+    r.args.opacity.geoms = (txn_geoms){first, count};
+    r.args.opacity.a = a;
+    return r;
+}
+
+txn_record txn_clip_plane(int index, bool on, const float point[3], const float normal[3])
+{
+    txn_record r = blank(TXN_CLIP_PLANE);
+    r.args.clip_plane.index = index;
+    r.args.clip_plane.on = on;
+    memcpy(r.args.clip_plane.point, point, sizeof r.args.clip_plane.point);
+    memcpy(r.args.clip_plane.normal, normal, sizeof r.args.clip_plane.normal);
+    return r;
+}
+
 txn_record txn_renderer(const char *name)
 {
     txn_record r = blank(TXN_RENDERER);
@@ -162,6 +190,12 @@ static bool geoms_valid(const char *kind, const txn_geoms *g, tess_error *err)
         return tess_error_set(err, "%s: first %u + count %u is past the largest geometry id", kind, g->first,
                               g->count);
     return true;
+}
+
+/* |n| in double: exact squares of floats (no overflow or underflow to 0 for any finite nonzero n). */
+static double normal_length(const float n[3])
+{
+    return sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
 }
 
 static bool text_terminated(const char *text, size_t size) { return memchr(text, '\0', size) != NULL; }
@@ -231,6 +265,37 @@ bool txn_validate(const txn_record *r, tess_error *err)
         memcpy(a.m, r->args.move.m, sizeof a.m);
         if (!affine3_invert(&a, &inverse))
             return tess_error_set(err, "move: m: the 3x3 part is singular");
+        return true;
+    }
+    case TXN_OPACITY: {
+        const txn_geoms *g = &r->args.opacity.geoms;
+        if (r->args.opacity.all) {
+            /* the text form "opacity all A" has no range: a record with one would not read back */
+            if (g->first != 0 || g->count != 0)
+                return tess_error_set(err, "opacity: first/count: %u %u with all (must be 0 0)", g->first, g->count);
+        } else if (!geoms_valid(name, g, err)) {
+            return false;
+        }
+        float a = r->args.opacity.a;
+        if (!isfinite(a) || a < 0.f || a > 1.f)
+            return tess_error_set(err, "opacity: a: %g is not a finite value in [0, 1]", (double)a);
+        return true;
+    }
+    case TXN_CLIP_PLANE: {
+        static const char *const axis[3] = {"x", "y", "z"};
+        if (r->args.clip_plane.index < 0 || r->args.clip_plane.index >= CLIP_MAX_PLANES)
+            return tess_error_set(err, "clip-plane: index: %d is not in 0..%d", (int)r->args.clip_plane.index,
+                                  CLIP_MAX_PLANES - 1);
+        for (int i = 0; i < 3; i++)
+            if (!isfinite(r->args.clip_plane.point[i]))
+                return tess_error_set(err, "clip-plane: point.%s: %g is not finite", axis[i],
+                                      (double)r->args.clip_plane.point[i]);
+        for (int i = 0; i < 3; i++)
+            if (!isfinite(r->args.clip_plane.normal[i]))
+                return tess_error_set(err, "clip-plane: normal.%s: %g is not finite", axis[i],
+                                      (double)r->args.clip_plane.normal[i]);
+        if (normal_length(r->args.clip_plane.normal) == 0.0)
+            return tess_error_set(err, "clip-plane: normal: zero length (a plane needs a direction)");
         return true;
     }
     case TXN_SHOW_ALL:
@@ -346,6 +411,26 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
             return out_of_memory(name, err);
         return true;
     }
+    case TXN_OPACITY:
+        if (r->args.opacity.all) {
+            frame_state_set_global_opacity(st, r->args.opacity.a);
+            return true;
+        }
+        if (!geoms_in(st, name, &r->args.opacity.geoms, err))
+            return false;
+        if (!frame_state_set_opacity(st, r->args.opacity.geoms.first, r->args.opacity.geoms.count,
+                                     r->args.opacity.a))
+            return tess_error_set(err, "opacity: out of memory for the per-geometry opacities");
+        return true;
+    case TXN_CLIP_PLANE: {
+        const float *p = r->args.clip_plane.point, *n = r->args.clip_plane.normal;
+        double len = normal_length(n);
+        clip_plane plane = {.point = v3(p[0], p[1], p[2]),
+                            .normal = v3((float)(n[0] / len), (float)(n[1] / len), (float)(n[2] / len)),
+                            .on = r->args.clip_plane.on};
+        frame_state_set_clip_plane(st, r->args.clip_plane.index, &plane);
+        return true;
+    }
     case TXN_TOUR:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -458,6 +543,19 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
         for (int i = 0; i < 12; i++)
             put(&o, " %a", (double)r->args.move.m[i]);
         break;
+    case TXN_OPACITY:
+        if (r->args.opacity.all)
+            put(&o, " all");
+        else
+            put_geoms(&o, &r->args.opacity.geoms);
+        put(&o, " %a", (double)r->args.opacity.a);
+        break;
+    case TXN_CLIP_PLANE: {
+        const float *p = r->args.clip_plane.point, *n = r->args.clip_plane.normal;
+        put(&o, " %d %d %a %a %a %a %a %a", (int)r->args.clip_plane.index, r->args.clip_plane.on ? 1 : 0,
+            (double)p[0], (double)p[1], (double)p[2], (double)n[0], (double)n[1], (double)n[2]);
+        break;
+    }
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -596,6 +694,19 @@ static bool quoted(reader *r, char *out, size_t size)
     return true;
 }
 
+/* Whether the next word is `kw` (then it is consumed). */
+static bool keyword(reader *r, const char *kw)
+{
+    skip_spaces(r);
+    size_t n = strlen(kw);
+    if ((size_t)(r->end - r->p) >= n && memcmp(r->p, kw, n) == 0 &&
+        ((size_t)(r->end - r->p) == n || r->p[n] == ' ' || r->p[n] == '\t')) {
+        r->p += n;
+        return true;
+    }
+    return false;
+}
+
 static bool geoms_text(reader *r, const char *kind, txn_geoms *g)
 {
     char what[48], msg[96];
@@ -676,10 +787,7 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
     case TXN_COLOUR: {
         if (!geoms_text(r, name, &t->args.colour.geoms))
             return false;
-        skip_spaces(r);
-        if ((size_t)(r->end - r->p) >= 5 && memcmp(r->p, "reset", 5) == 0 &&
-            (r->end - r->p == 5 || r->p[5] == ' ' || r->p[5] == '\t')) {
-            r->p += 5;
+        if (keyword(r, "reset")) {
             t->args.colour.reset = true;
             return true;
         }
@@ -707,6 +815,30 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
             if (!float_value(r, &t->args.move.m[i], "move matrix element"))
                 return false;
         return true;
+    case TXN_OPACITY:
+        if (keyword(r, "all"))
+            t->args.opacity.all = true;
+        else if (!geoms_text(r, name, &t->args.opacity.geoms))
+            return false;
+        return float_value(r, &t->args.opacity.a, "opacity a");
+    case TXN_CLIP_PLANE: {
+        static const char *const point_names[3] = {"clip-plane point.x", "clip-plane point.y", "clip-plane point.z"},
+                                 *const normal_names[3] = {"clip-plane normal.x", "clip-plane normal.y",
+                                                           "clip-plane normal.z"};
+        if (!whole(r, 0.0, CLIP_MAX_PLANES - 1, &v, "clip-plane index",
+                   "clip-plane: the index must be a whole number in 0..7"))
+            return false;
+        t->args.clip_plane.index = (int32_t)v;
+        if (!flag(r, &t->args.clip_plane.on, "clip-plane on/off"))
+            return false;
+        for (int i = 0; i < 3; i++)
+            if (!float_value(r, &t->args.clip_plane.point[i], point_names[i]))
+                return false;
+        for (int i = 0; i < 3; i++)
+            if (!float_value(r, &t->args.clip_plane.normal[i], normal_names[i]))
+                return false;
+        return true;
+    }
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -729,7 +861,7 @@ bool txn_decode_text(const char *text, size_t len, txn_text_version version, txn
                                                        "governor-status"
                                                      : "camera, cursor, status, governor-status, hide, show, isolate, "
                                                        "show-all, highlight, colour, shadows, renderer, threads, "
-                                                       "channel-active, tour, quit");
+                                                       "channel-active, move, opacity, clip-plane, tour, quit");
     }
     if (!decode_args(&r, version, &t))
         return false;
@@ -866,6 +998,20 @@ static void layout(txn_record *t, unsigned char *b, bool write)
         U32(8, t->args.move.geoms.count);
         for (int i = 0; i < 12; i++)
             F32(12 + 4 * i, t->args.move.m[i]);
+        break;
+    case TXN_OPACITY:
+        U8(4, t->args.opacity.all);
+        U32(8, t->args.opacity.geoms.first);
+        U32(12, t->args.opacity.geoms.count);
+        F32(16, t->args.opacity.a);
+        break;
+    case TXN_CLIP_PLANE:
+        I32(4, t->args.clip_plane.index);
+        U8(8, t->args.clip_plane.on);
+        for (int i = 0; i < 3; i++)
+            F32(12 + 4 * i, t->args.clip_plane.point[i]);
+        for (int i = 0; i < 3; i++)
+            F32(24 + 4 * i, t->args.clip_plane.normal[i]);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:

@@ -32,6 +32,14 @@
  *                                                  their own placement: relative to where the
  *                                                  scene put them, never cumulative (the
  *                                                  identity puts them back)
+ *   opacity          all | first, count; a         the global opacity, or those parts' opacity
+ *                    (finite, in [0, 1])           (frame_state.h, OPACITY: 1 opaque, 0 see-through)
+ *   clip-plane       index (0..TXN_CLIP_PLANES-1), cutting plane `index` (clip.h) set, and
+ *                    on, point (finite), normal    switched on or off; apply stores the normal
+ *                    (finite, length > 0)          normalised: each component n / |n| computed in
+ *                                                  double and rounded once to float (a record
+ *                                                  holds any nonzero normal, the state a unit one;
+ *                                                  an off plane keeps its place to come back to)
  *   shadows          on                            shadow rays traced or not
  *   renderer         name                          the renderer (renderer_by_name)
  *   threads          count (1..TXN_MAX_THREADS)    render threads
@@ -57,6 +65,8 @@
  *   shadows ON             renderer NAME             threads N
  *   channel-active CH ON   tour ON                   quit
  *   move FIRST COUNT M0 .. M11
+ *   opacity all A | opacity FIRST COUNT A
+ *   clip-plane I ON PX PY PZ NX NY NZ
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -77,6 +87,8 @@
  *     threads         i32 count
  *     channel-active  i32 channel, u8 on
  *     move            u32 first, u32 count, 12 x f32 m (row-major 3x4)
+ *     opacity         u8 all, 3 zero bytes, u32 first, u32 count, f32 a (all: first and count 0)
+ *     clip-plane      i32 index, u8 on, 3 zero bytes, f32 point xyz, f32 normal xyz
  *     show-all, quit  nothing
  * Decoding checks the kind, the zero bytes and then txn_validate. */
 #ifndef TESSERA_TXN_H
@@ -94,12 +106,15 @@ struct frame_state;
 #define TXN_TEXT_BYTES 128        /* status text with its NUL (= PIPELINE_STATUS_BYTES) */
 #define TXN_NAME_BYTES 32         /* renderer name with its NUL */
 #define TXN_ALL_CHANNELS (-1)     /* camera: every channel (the wall's camera) */
+#define TXN_CLIP_PLANES 8         /* = CLIP_MAX_PLANES (clip.h, not included: its ray.h names `hit`) */
 #define TXN_MAX_CHANNELS 16       /* = PIPELINE_MAX_CHANNELS */
 #define TXN_MAX_THREADS 256       /* = PIPELINE_MAX_THREADS */
 #define TXN_BINARY_BYTES (4 + TXN_TEXT_BYTES)
 #define TXN_TEXT_MAX (48 + 4 * TXN_TEXT_BYTES) /* longest text form with its NUL (a status of escapes) */
 
-/* The order of the first eight is record format 1's (input_txn_kind then). */
+/* The order of the first eight is record format 1's (input_txn_kind then).
+ * New kinds go at the end (before TXN_KIND_COUNT): a kind's number is in
+ * every binary record, so it never changes. */
 typedef enum txn_kind {
     TXN_CAMERA,
     TXN_CURSOR,
@@ -118,6 +133,8 @@ typedef enum txn_kind {
     TXN_THREADS,
     TXN_CHANNEL_ACTIVE,
     TXN_MOVE,
+    TXN_OPACITY,
+    TXN_CLIP_PLANE,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -161,6 +178,17 @@ typedef struct txn_record {
             float m[12];        /* row-major 3x4 affine, applied after each instance's placement */
         } move;
         struct {
+            bool all;           /* the global opacity; geoms then zero */
+            txn_geoms geoms;    /* the parts, when !all */
+            float a;            /* opacity, [0, 1] */
+        } opacity;
+        struct {
+            int32_t index;      /* 0..TXN_CLIP_PLANES-1 */
+            bool on;
+            float point[3];     /* world, finite */
+            float normal[3];    /* world, finite, nonzero (the removed side; apply normalises) */
+        } clip_plane;
+        struct {
             int32_t count;
         } threads;
         struct {
@@ -192,6 +220,9 @@ txn_record txn_geoms_record(txn_kind kind, uint32_t first, uint32_t count); /* h
 txn_record txn_highlight(uint32_t first, uint32_t count, bool on);
 txn_record txn_colour(uint32_t first, uint32_t count, const float rgb[3]); /* rgb NULL: reset */
 txn_record txn_move(uint32_t first, uint32_t count, const float m[12]);
+txn_record txn_opacity_all(float a);
+txn_record txn_opacity(uint32_t first, uint32_t count, float a);
+txn_record txn_clip_plane(int index, bool on, const float point[3], const float normal[3]);
 txn_record txn_renderer(const char *name);
 txn_record txn_threads(int count);
 txn_record txn_channel_active(int channel, bool on);

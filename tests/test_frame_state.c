@@ -61,6 +61,21 @@ Test(frame_state, every_change_bumps_the_version_and_the_right_serial)
         {txn_channel_active(0, true), 0, 0},
         {txn_channel_active(0, false), 1, 0},
         {txn_threads(3), 0, 0},
+        {txn_opacity_all(1.f), 0, 0}, /* already opaque */
+        {txn_opacity_all(0.5f), 1, 0},
+        {txn_opacity_all(0.5f), 0, 0},
+        {txn_opacity(0, 2, 1.f), 0, 0}, /* parts already opaque */
+        {txn_opacity(0, 2, 0.25f), 1, 0},
+        {txn_opacity(1, 1, 0.25f), 0, 0},
+        {txn_opacity(1, 1, 1.f), 1, 0},
+        {txn_clip_plane(2, false, (const float[3]){1.f, 0.f, 0.f}, (const float[3]){0.f, 1.f, 0.f}), 0, 0},
+        /* off and staying off: moved unseen */
+        {txn_clip_plane(2, true, (const float[3]){1.f, 0.f, 0.f}, (const float[3]){0.f, 1.f, 0.f}), 1, 0},
+        {txn_clip_plane(2, true, (const float[3]){1.f, 0.f, 0.f}, (const float[3]){0.f, 2.f, 0.f}), 0, 0},
+        /* the same unit normal */
+        {txn_clip_plane(2, true, (const float[3]){1.f, 0.5f, 0.f}, (const float[3]){0.f, 1.f, 0.f}), 1, 0},
+        {txn_clip_plane(2, true, (const float[3]){1.f, 0.5f, 0.f}, (const float[3]){0.f, -1.f, 0.f}), 1, 0},
+        {txn_clip_plane(2, false, (const float[3]){1.f, 0.5f, 0.f}, (const float[3]){0.f, -1.f, 0.f}), 1, 0},
     };
     for (size_t i = 0; i < sizeof steps / sizeof steps[0]; i++) {
         frame_state before = st;
@@ -104,6 +119,77 @@ Test(frame_state, a_scene_pays_no_memory_for_a_feature_it_does_not_use)
     cr_expect_not(frame_state_colour(&st, 8, &rgb));
     cr_expect(frame_state_highlighted(&st, 7) && !frame_state_highlighted(&st, 6));
     cr_expect_not(frame_state_highlighted(&st, 5000), "out of range is simply not highlighted");
+    frame_state_finish(&st);
+}
+
+Test(frame_state, opacity_starts_opaque_and_allocates_only_below_1)
+{
+    frame_state st = plain_state(100);
+    tess_error err = {{0}};
+    cr_expect_eq(st.opacity, 1.f);
+    cr_expect_not(frame_state_transparent(&st));
+    cr_expect_eq(frame_state_opacity(&st, 0), 1.f);
+    txn_record opaque = txn_opacity(0, 100, 1.f);
+    cr_assert(txn_apply(&opaque, &st, &err), "%s", err.msg);
+    cr_expect(st.part_opacity == NULL, "every part opaque: nothing allocated");
+    /* the global opacity is a member: no allocation either */
+    txn_record half = txn_opacity_all(0.5f);
+    cr_assert(txn_apply(&half, &st, &err), "%s", err.msg);
+    cr_expect(st.part_opacity == NULL);
+    cr_expect(frame_state_transparent(&st));
+    cr_expect_eq(frame_state_opacity(&st, 7), 0.5f);
+    cr_expect_eq(frame_state_opacity(&st, 5000), 0.5f, "out of range: the global opacity alone");
+    /* parts: allocated now, counted while below 1 */
+    txn_record some = txn_opacity(10, 5, 0.5f);
+    cr_assert(txn_apply(&some, &st, &err), "%s", err.msg);
+    cr_assert(st.part_opacity != NULL);
+    cr_expect_eq(st.translucent_count, 5u);
+    cr_expect_eq(frame_state_opacity(&st, 12), 0.25f, "global x part");
+    cr_expect_eq(frame_state_opacity(&st, 9), 0.5f);
+    txn_record zero = txn_opacity(12, 4, 0.f); /* 12..14 were 0.5, 15 was 1 */
+    cr_assert(txn_apply(&zero, &st, &err), "%s", err.msg);
+    cr_expect_eq(st.translucent_count, 6u);
+    cr_expect_eq(frame_state_opacity(&st, 15), 0.f);
+    txn_record back = txn_opacity_all(1.f);
+    cr_assert(txn_apply(&back, &st, &err), "%s", err.msg);
+    cr_expect(frame_state_transparent(&st), "parts are still translucent");
+    txn_record some_back = txn_opacity(0, 13, 1.f); /* 10..12 back to 1 */
+    cr_assert(txn_apply(&some_back, &st, &err), "%s", err.msg);
+    cr_expect_eq(st.translucent_count, 3u);
+    txn_record rest_back = txn_opacity(13, 87, 1.f);
+    cr_assert(txn_apply(&rest_back, &st, &err), "%s", err.msg);
+    cr_expect_eq(st.translucent_count, 0u);
+    cr_expect_not(frame_state_transparent(&st), "everything opaque again");
+    for (uint32_t id = 0; id < 100; id++)
+        cr_expect_eq(frame_state_opacity(&st, id), 1.f);
+    /* out of range: refused with the range named, nothing changed */
+    txn_record past = txn_opacity(99, 2, 0.5f);
+    frame_state before = st;
+    err = (tess_error){{0}};
+    cr_expect_not(txn_apply(&past, &st, &err));
+    cr_expect(strstr(err.msg, "opacity: geometries 99..100: there are 100 geometries (ids 0..99)"), "%s", err.msg);
+    cr_expect(memcmp(&st, &before, sizeof st) == 0);
+    frame_state_finish(&st);
+    cr_expect(st.part_opacity == NULL && st.translucent_count == 0);
+}
+
+Test(frame_state, the_setters_keep_the_same_rules_as_the_records)
+{
+    frame_state st = plain_state(8);
+    const clip_plane *planes = frame_state_clip_planes(&st);
+    for (int i = 0; i < CLIP_MAX_PLANES; i++)
+        cr_expect_not(planes[i].on, "plane %d is off after init", i);
+    uint64_t v = st.version, pic = st.picture_serial;
+    frame_state_set_global_opacity(&st, 0.f);
+    cr_expect(st.version == v + 1 && st.picture_serial == pic + 1);
+    cr_expect_eq(frame_state_opacity(&st, 3), 0.f, "0 is allowed: see-through");
+    cr_assert(frame_state_set_opacity(&st, 0, 8, 0.75f));
+    cr_expect_eq(st.translucent_count, 8u);
+    clip_plane p = {v3(0.f, 1.f, 0.f), v3(1.f, 0.f, 0.f), true};
+    frame_state_set_clip_plane(&st, CLIP_MAX_PLANES - 1, &p);
+    cr_expect(planes[CLIP_MAX_PLANES - 1].on && planes[CLIP_MAX_PLANES - 1].point.y == 1.f);
+    cr_expect_eq(st.picture_serial, pic + 3);
+    cr_expect_eq(st.version, v + 3);
     frame_state_finish(&st);
 }
 

@@ -167,6 +167,21 @@ Test(pipeline_cli, bad_configs_and_options_get_clear_errors)
     EXPECT_ERROR("render --config %s/gov3.json --out %s/a.png", "gov3.json", "refine", "unknown field");
     write_file("tile.json", "{\"traverser\": {\"tile_px\": 1000}}");
     EXPECT_ERROR("render --config %s/tile.json --out %s/a.png", "tile.json", "tile_px");
+    write_file("tr.json", "{\"renderer\": {\"transparency\": {\"min_transmittance\": 1}}}");
+    EXPECT_ERROR("render --config %s/tr.json --out %s/a.png", "tr.json", "renderer.transparency.min_transmittance",
+                 "(0, 1)");
+    write_file("ao.json", "{\"renderer\": {\"ao\": {\"filter_px\": 4}}}");
+    EXPECT_ERROR("render --config %s/ao.json --out %s/a.png", "ao.json", "renderer.ao.filter_px", "odd");
+    write_file("caps.json", "{\"renderer\": {\"caps\": {\"style\": \"dots\"}}}");
+    EXPECT_ERROR("render --config %s/caps.json --out %s/a.png", "caps.json", "renderer.caps.style", "tint, hatch");
+    write_file("op.json", "{\"opacity\": 2}");
+    EXPECT_ERROR("render --config %s/op.json --out %s/a.png", "op.json", "'opacity'", "[0, 1]");
+    write_file("cut.json", "{\"cutting_planes\": [{\"point\": [0,0,0], \"normal\": [0,1,0]},"
+                           " {\"point\": [0,0,0], \"normal\": [0,0,0]}]}");
+    EXPECT_ERROR("render --config %s/cut.json --out %s/a.png", "cut.json", "cutting_planes[1].normal", "zero length");
+    write_file("cut2.json", "{\"cutting_planes\": [{\"point\": [0,0,0], \"normal\": [0,1,0], \"enabled\": 1}]}");
+    EXPECT_ERROR("render --config %s/cut2.json --out %s/a.png", "cut2.json", "cutting_planes[0].enabled",
+                 "unknown field");
     EXPECT_ERROR("render --config %s/missing.json --out %s/a.png", "missing.json", "cannot open");
     EXPECT_ERROR("render --tile-order zigzag --out %s/a.png", "--tile-order", "zigzag", "hilbert");
     EXPECT_ERROR("render --tile-size 2 --out %s/a.png", "--tile-size");

@@ -4,6 +4,7 @@
  * the documented one. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "engine/frame_state.h"
@@ -42,6 +43,11 @@ static txn_record sample(txn_kind k)
     case TXN_MOVE: {
         const float m[12] = {0.f, -1.f, 0.f, 0.1f, 1.f, 0.f, 0.f, 1e-7f, 0.f, 0.f, 3.f, -3.4028235e38f};
         return txn_move(6, 3, m);
+    }
+    case TXN_OPACITY: return txn_opacity(1, 3, 0.3f);
+    case TXN_CLIP_PLANE: {
+        const float point[3] = {0.1f, -3.4028235e38f, 1e-7f}, normal[3] = {0.f, 3.f, -4.f};
+        return txn_clip_plane(3, true, point, normal);
     }
     case TXN_KIND_COUNT: break;
     }
@@ -155,7 +161,9 @@ Test(txn, the_binary_layout_is_little_endian_as_documented)
     txn_record back;
     b[0] = TXN_KIND_COUNT;
     cr_expect_not(txn_decode_binary(b, &back, &err));
-    cr_expect(strstr(err.msg, "kind: 17 is not a transaction kind"), "%s", err.msg);
+    char want_kind[64];
+    snprintf(want_kind, sizeof want_kind, "kind: %d is not a transaction kind", (int)TXN_KIND_COUNT);
+    cr_expect(strstr(err.msg, want_kind), "%s", err.msg);
     r = txn_highlight(1, 1, true);
     cr_assert(txn_encode_binary(&r, b));
     b[100] = 1;
@@ -183,6 +191,10 @@ Test(txn, bad_values_are_refused_naming_the_field)
     memset(unterminated.args.status.text, 'a', sizeof unterminated.args.status.text);
     const float flat[12] = {1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0}, nan_m[12] = {1, 0, 0, NAN, 0, 1, 0, 0, 0, 0, 1, 0},
                 ident[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    const float origin[3] = {0.f, 0.f, 0.f}, up[3] = {0.f, 1.f, 0.f}, nan_point[3] = {0.f, NAN, 0.f},
+                inf_normal[3] = {0.f, 1.f, INFINITY};
+    txn_record all_with_range = txn_opacity_all(0.5f);
+    all_with_range.args.opacity.geoms = (txn_geoms){2, 1};
     struct {
         txn_record r;
         const char *expect;
@@ -206,7 +218,18 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_move(0, 1, flat), "move: m: the 3x3 part is singular"},
         {txn_move(0, 1, nan_m), "move: m[3]: nan is not finite"},
         {txn_move(0, 0, ident), "move: count: 0"},
-        {txn_simple(TXN_KIND_COUNT), "kind: 17 is not a transaction kind"},
+        {txn_opacity_all(-0.1f), "opacity: a: -0.1 is not a finite value in [0, 1]"},
+        {txn_opacity_all(1.5f), "opacity: a: 1.5 is not a finite value in [0, 1]"},
+        {txn_opacity(0, 1, NAN), "opacity: a: nan is not"},
+        {txn_opacity(0, 0, 0.5f), "opacity: count: 0 geometries"},
+        {txn_opacity(UINT32_MAX, 2, 0.5f), "opacity: first 4294967295 + count 2 is past"},
+        {all_with_range, "opacity: first/count: 2 1 with all (must be 0 0)"},
+        {txn_clip_plane(-1, true, origin, up), "clip-plane: index: -1 is not in 0..7"},
+        {txn_clip_plane(CLIP_MAX_PLANES, false, origin, up), "clip-plane: index: 8 is not in 0..7"},
+        {txn_clip_plane(0, true, nan_point, up), "clip-plane: point.y: nan is not finite"},
+        {txn_clip_plane(0, true, origin, inf_normal), "clip-plane: normal.z: inf is not finite"},
+        {txn_clip_plane(0, false, origin, origin), "clip-plane: normal: zero length"},
+        {txn_simple(TXN_KIND_COUNT), "kind: 19 is not a transaction kind"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};
@@ -249,6 +272,17 @@ Test(txn, bad_text_names_the_field)
         {"channel-active 16 1", "channel-active: the channel must be a whole number in 0..15"},
         {"shadows 1 1", "unexpected text after the transaction"},
         {"status \"a", "status: the text has no closing quote"},
+        {"opacity all", "opacity a is missing"},
+        {"opacity all 2", "opacity: a: 2 is not a finite value in [0, 1]"},
+        {"opacity al 0.5", "opacity geometry id: expected a finite number, got 'al'"},
+        {"opacity 1 0 0.5", "opacity: the count must be a whole number >= 1"},
+        {"opacity 1 1 0.1", "opacity a: 0.10000000000000001 is not exactly a float"},
+        {"opacity all 0.5 1", "unexpected text after the transaction"},
+        {"clip-plane 8 1 0 0 0 0 0 1", "clip-plane: the index must be a whole number in 0..7"},
+        {"clip-plane 0 2 0 0 0 0 0 1", "clip-plane on/off: expected 0 or 1, got '2'"},
+        {"clip-plane 0 1 0 x 0 0 0 1", "clip-plane point.y: expected a finite number, got 'x'"},
+        {"clip-plane 0 1 0 0 0 0 0", "clip-plane normal.z is missing"},
+        {"clip-plane 0 1 0 0 0 0 0 0", "clip-plane: normal: zero length"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};
@@ -291,6 +325,15 @@ Test(txn, every_engine_kind_applies_to_a_frame_state)
     for (uint32_t id = 0; id < GEOMS; id++)
         cr_expect_eq(affine3_is_identity(&st.moved[id]), id < 6 || id > 8, "geometry %u moved", id);
     cr_expect(st.moved[7].m[11] == -3.4028235e38f && st.moved_first == 6 && st.moved_end == 9);
+    for (uint32_t id = 0; id < GEOMS; id++)
+        cr_expect_eq(frame_state_opacity(&st, id), id >= 1 && id <= 3 ? 0.3f : 1.f, "geometry %u opacity", id);
+    cr_expect_eq(st.translucent_count, 3u);
+    const clip_plane *planes = frame_state_clip_planes(&st);
+    for (int i = 0; i < CLIP_MAX_PLANES; i++)
+        cr_expect_eq(planes[i].on, i == 3, "plane %d", i);
+    cr_expect(planes[3].point.x == 0.1f && planes[3].point.y == -3.4028235e38f && planes[3].point.z == 1e-7f);
+    cr_expect(planes[3].normal.x == 0.f && planes[3].normal.y == 0.6f && planes[3].normal.z == -0.8f,
+              "the normal (0, 3, -4) is stored as (0, 0.6, -0.8)");
     /* out of the state's range: the error names it, nothing changes */
     txn_record past = txn_geoms_record(TXN_HIDE, GEOMS - 1, 2);
     err = (tess_error){{0}};
@@ -315,5 +358,97 @@ Test(txn, every_engine_kind_applies_to_a_frame_state)
     for (uint32_t id = 0; id < GEOMS; id++)
         cr_expect(!frame_state_hidden(&st, id) && !frame_state_highlighted(&st, id) &&
                   !frame_state_colour(&st, id, NULL));
+    frame_state_finish(&st);
+}
+
+Test(txn, opacity_and_clip_plane_forms_are_the_documented_ones)
+{
+    char text[TXN_TEXT_MAX];
+    txn_record r = txn_opacity_all(0.5f);
+    cr_assert(txn_encode_text(&r, text, sizeof text) > 0);
+    cr_expect_str_eq(text, "opacity all 0x1p-1");
+    r = txn_opacity(4, 2, 0.f);
+    cr_assert(txn_encode_text(&r, text, sizeof text) > 0);
+    cr_expect_str_eq(text, "opacity 4 2 0x0p+0");
+    const float point[3] = {1.f, -2.f, 0.25f}, normal[3] = {0.f, 0.f, -1.f};
+    r = txn_clip_plane(7, false, point, normal);
+    cr_assert(txn_encode_text(&r, text, sizeof text) > 0);
+    cr_expect_str_eq(text, "clip-plane 7 0 0x1p+0 -0x1p+1 0x1p-2 0x0p+0 0x0p+0 -0x1p+0");
+    /* decimal input that is exactly a float reads as the same record */
+    txn_record back;
+    tess_error err = {{0}};
+    cr_assert(txn_decode_text("clip-plane 7 0 1 -2 0.25 0 0 -1", 31, TXN_TEXT_V2, &back, &err), "%s", err.msg);
+    cr_expect(memcmp(&back, &r, sizeof r) == 0);
+    cr_assert(txn_decode_text("opacity all 0.5", 15, TXN_TEXT_V2, &back, &err), "%s", err.msg);
+    r = txn_opacity_all(0.5f);
+    cr_expect(memcmp(&back, &r, sizeof r) == 0);
+    cr_expect_not(txn_decode_text("opacity all 0.5", 15, TXN_TEXT_V1, &back, &err), "no such kind in format 1");
+
+    unsigned char b[TXN_BINARY_BYTES];
+    r = txn_opacity(0x01020304u, 5, 1.f); /* 1.0f = 0x3f800000 */
+    cr_assert(txn_encode_binary(&r, b));
+    const unsigned char parts[] = {TXN_OPACITY, 0, 0, 0, 0, 0, 0, 0, 4, 3, 2, 1, 5, 0, 0, 0, 0, 0, 0x80, 0x3f};
+    cr_expect(memcmp(b, parts, sizeof parts) == 0);
+    for (size_t i = sizeof parts; i < TXN_BINARY_BYTES; i++)
+        cr_expect_eq(b[i], 0, "byte %zu", i);
+    r = txn_opacity_all(0.5f); /* 0x3f000000 */
+    cr_assert(txn_encode_binary(&r, b));
+    const unsigned char all[] = {TXN_OPACITY, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x3f};
+    cr_expect(memcmp(b, all, sizeof all) == 0);
+    b[9] = 1; /* all with a range */
+    err = (tess_error){{0}};
+    cr_expect_not(txn_decode_binary(b, &back, &err));
+    cr_expect(strstr(err.msg, "opacity: first/count: 256 0 with all"), "%s", err.msg);
+    b[9] = 0;
+    b[5] = 1; /* padding after the flag */
+    err = (tess_error){{0}};
+    cr_expect_not(txn_decode_binary(b, &back, &err));
+    cr_expect(strstr(err.msg, "opacity: bytes that must be zero"), "%s", err.msg);
+
+    r = txn_clip_plane(7, true, point, normal); /* -2 = 0xc0000000, 0.25 = 0x3e800000, -1 = 0xbf800000 */
+    cr_assert(txn_encode_binary(&r, b));
+    const unsigned char plane[] = {TXN_CLIP_PLANE, 0, 0, 0, 7, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0x80, 0x3f, 0, 0, 0, 0xc0,
+                                   0, 0, 0x80, 0x3e, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0x80, 0xbf};
+    cr_expect(memcmp(b, plane, sizeof plane) == 0);
+    for (size_t i = sizeof plane; i < TXN_BINARY_BYTES; i++)
+        cr_expect_eq(b[i], 0, "byte %zu", i);
+    cr_assert(txn_decode_binary(b, &back, &err), "%s", err.msg);
+    cr_expect(memcmp(&back, &r, sizeof r) == 0);
+    b[4] = 8; /* index 8 */
+    err = (tess_error){{0}};
+    cr_expect_not(txn_decode_binary(b, &back, &err));
+    cr_expect(strstr(err.msg, "clip-plane: index: 8"), "%s", err.msg);
+    b[4] = 7;
+    b[35] = 0; /* normal.z 0: a zero normal */
+    b[34] = 0;
+    err = (tess_error){{0}};
+    cr_expect_not(txn_decode_binary(b, &back, &err));
+    cr_expect(strstr(err.msg, "clip-plane: normal: zero length"), "%s", err.msg);
+}
+
+Test(txn, a_clip_plane_normal_is_stored_normalised_in_double_rounded_once)
+{
+    frame_state st = make_state();
+    tess_error err = {{0}};
+    /* huge and tiny normals: the length in double neither overflows nor underflows */
+    const float point[3] = {0.f, 0.f, 0.f};
+    const float normals[][3] = {{3.4028235e38f, 3.4028235e38f, 0.f}, {1e-45f, 0.f, 0.f}, {1.f, 2.f, 2.f},
+                                {0.f, -7.f, 0.f}, {1.f, 1.f, 1.f}};
+    for (size_t i = 0; i < sizeof normals / sizeof normals[0]; i++) {
+        const float *n = normals[i];
+        txn_record r = txn_clip_plane((int)i, true, point, n);
+        cr_assert(txn_apply(&r, &st, &err), "normal %zu: %s", i, err.msg);
+        double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+        vec3 want = v3((float)(n[0] / len), (float)(n[1] / len), (float)(n[2] / len));
+        const clip_plane *p = &frame_state_clip_planes(&st)[i];
+        cr_expect(p->normal.x == want.x && p->normal.y == want.y && p->normal.z == want.z, "normal %zu", i);
+        double got = sqrt((double)p->normal.x * p->normal.x + (double)p->normal.y * p->normal.y +
+                          (double)p->normal.z * p->normal.z);
+        cr_expect(fabs(got - 1.0) < 2e-7, "normal %zu: length %.9g", i, got);
+    }
+    const clip_plane *p = frame_state_clip_planes(&st);
+    cr_expect(p[2].normal.x == (float)(1.0 / 3.0) && p[2].normal.y == (float)(2.0 / 3.0));
+    cr_expect(p[3].normal.x == 0.f && p[3].normal.y == -1.f && p[3].normal.z == 0.f);
+    cr_expect(p[1].normal.x == 1.f);
     frame_state_finish(&st);
 }

@@ -51,6 +51,8 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     s->budget_ms = 0.0;
     s->refine_k = GOVERNOR_DEFAULT_REFINE_K;
     s->still_s = GOVERNOR_DEFAULT_STILL_S;
+    s->settings = render_settings_default();
+    s->opacity = 1.f; /* clip: zeroed above, every plane unused */
 }
 
 /* ---------------------------------------------------------------- the config file */
@@ -237,16 +239,73 @@ static bool load_sampler(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
     return ok;
 }
 
+/* "renderer.transparency": {"min_transmittance", "max_layers", "shadows"}. */
+static bool load_transparency(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
+{
+    static const char *const fields[] = {"min_transmittance", "max_layers", "shadows", NULL};
+    json_object *m;
+    if (!jr_get_member(renderer_obj, "transparency", &m))
+        return true;
+    size_t saved = jr_field_key(c, "transparency");
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) &&
+              jr_opt_number(c, m, "min_transmittance", (jr_range){0.0, 1.0, true, true}, &rs->min_transmittance) &&
+              opt_int(c, m, "max_layers", 1, PIPELINE_MAX_LAYERS_MAX, &rs->max_layers) &&
+              jr_opt_bool(c, m, "shadows", &rs->transparent_shadows);
+    jr_field_leave(c, saved);
+    return ok;
+}
+
+/* "renderer.caps": {"on", "style"}. */
+static bool load_caps(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
+{
+    static const char *const fields[] = {"on", "style", NULL};
+    static const char *const styles[] = {"tint", "hatch", NULL}; /* in render_cap_style's order */
+    json_object *m;
+    if (!jr_get_member(renderer_obj, "caps", &m))
+        return true;
+    size_t saved = jr_field_key(c, "caps");
+    int style = rs->cap_style == RENDER_CAP_HATCH ? 1 : 0;
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_bool(c, m, "on", &rs->caps) &&
+              jr_opt_choice(c, m, "style", styles, &style);
+    jr_field_leave(c, saved);
+    rs->cap_style = style == 1 ? RENDER_CAP_HATCH : RENDER_CAP_TINT;
+    return ok;
+}
+
+/* "renderer.ao": {"rays", "distance", "interleave", "filter_px", "in_raytracer"}. */
+static bool load_ao(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
+{
+    static const char *const fields[] = {"rays", "distance", "interleave", "filter_px", "in_raytracer", NULL};
+    json_object *m;
+    if (!jr_get_member(renderer_obj, "ao", &m))
+        return true;
+    size_t saved = jr_field_key(c, "ao");
+    int filter_px = rs->ao_filter_px;
+    bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) &&
+              opt_int(c, m, "rays", 1, PIPELINE_AO_RAYS_MAX, &rs->ao_rays) &&
+              jr_opt_number(c, m, "distance", jr_range_positive, &rs->ao_distance) &&
+              opt_int(c, m, "interleave", 1, PIPELINE_AO_INTERLEAVE_MAX, &rs->ao_interleave) &&
+              opt_int(c, m, "filter_px", 1, PIPELINE_AO_FILTER_PX_MAX, &filter_px) &&
+              jr_opt_bool(c, m, "in_raytracer", &rs->ao_in_raytracer);
+    if (ok && filter_px % 2 == 0)
+        ok = jr_member_fail(c, "filter_px", "expected an odd filter edge (1 = off, 3, 5, 7 or 9)");
+    if (ok)
+        rs->ao_filter_px = filter_px;
+    jr_field_leave(c, saved);
+    return ok;
+}
+
 static bool load_renderer(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
 {
-    static const char *const fields[] = {"name", "shadows", NULL};
+    static const char *const fields[] = {"name", "shadows", "transparency", "caps", "ao", NULL};
     json_object *m;
     if (!jr_get_member(root, "renderer", &m))
         return true;
     size_t saved = jr_field_key(c, "renderer");
     const char *name = NULL;
     bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_opt_string(c, m, "name", &name) &&
-              jr_opt_bool(c, m, "shadows", &s->shadows);
+              jr_opt_bool(c, m, "shadows", &s->shadows) && load_transparency(c, m, &s->settings) &&
+              load_caps(c, m, &s->settings) && load_ao(c, m, &s->settings);
     if (ok && name) {
         const renderer *r = renderer_by_name(name);
         if (!r) {
@@ -258,6 +317,47 @@ static bool load_renderer(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
         }
     }
     jr_field_leave(c, saved);
+    return ok;
+}
+
+/* One of "cutting_planes": {"point", "normal", "on"}; point and normal required. */
+static bool load_plane(jr_ctx *c, json_object *v, clip_plane *out)
+{
+    static const char *const fields[] = {"point", "normal", "on", NULL};
+    clip_plane p = {.on = true};
+    json_object *m;
+    bool ok = jr_expect_object(c, v) && jr_check_fields(c, v, fields) && jr_require_member(c, v, "point") &&
+              jr_require_member(c, v, "normal") && jr_opt_vec3(c, v, "point", jr_range_float, &p.point) &&
+              jr_opt_vec3(c, v, "normal", jr_range_float, &p.normal) && jr_opt_bool(c, v, "on", &p.on);
+    /* the pipeline normalises it (a clip-plane record): any length but 0 */
+    if (ok && p.normal.x == 0.f && p.normal.y == 0.f && p.normal.z == 0.f && jr_get_member(v, "normal", &m))
+        ok = jr_member_fail(c, "normal", "zero length (a plane needs a direction: the side it removes)");
+    if (ok)
+        *out = p;
+    return ok;
+}
+
+/* "cutting_planes": [plane, ...], at most CLIP_MAX_PLANES: planes 0.. in order; the rest unused. */
+static bool load_cutting_planes(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
+{
+    json_object *m;
+    if (!jr_get_member(root, "cutting_planes", &m))
+        return true;
+    size_t saved = jr_field_key(c, "cutting_planes");
+    bool ok = jr_expect_array(c, m);
+    size_t n = ok ? json_object_array_length(m) : 0;
+    if (ok && n > CLIP_MAX_PLANES)
+        ok = jr_field_fail(c, "%zu planes; at most %d", n, CLIP_MAX_PLANES);
+    clip_plane planes[CLIP_MAX_PLANES];
+    memset(planes, 0, sizeof planes);
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t at = jr_field_index(c, i);
+        ok = load_plane(c, json_object_array_get_idx(m, i), &planes[i]);
+        jr_field_leave(c, at);
+    }
+    jr_field_leave(c, saved);
+    if (ok)
+        memcpy(s->clip, planes, sizeof planes);
     return ok;
 }
 
@@ -305,7 +405,8 @@ bool cli_pipeline_config_load(const char *file, cli_pipeline_spec *s)
 bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, cli_pipeline_spec *s)
 {
     static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
-                                         "camera", "display", "path", "channels", "input", "governor", NULL};
+                                         "camera", "display", "path", "channels", "input", "governor",
+                                         "opacity", "cutting_planes", NULL};
     tess_error err = {{0}};
     json_object *root = NULL;
     bool ok = jr_parse(file, text, len, &root, &err);
@@ -315,7 +416,8 @@ bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, c
          opt_int(&c, root, "threads", 1, PIPELINE_MAX_THREADS, &s->threads) &&
          opt_int(&c, root, "frames", 0, 100000000, &s->frames) && load_time(&c, root, s) &&
          load_traverser(&c, root, s) && load_sampler(&c, root, s) && load_renderer(&c, root, s) &&
-         load_governor(&c, root, s) &&
+         load_governor(&c, root, s) && jr_opt_number(&c, root, "opacity", jr_range_unit, &s->opacity) &&
+         load_cutting_planes(&c, root, s) &&
          opt_size(&c, root, &s->channels[0].width_px, &s->channels[0].height_px) &&
          opt_camera(&c, root, &s->channels[0]) && opt_display(&c, root, &s->channels[0]) &&
          opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s) &&
@@ -656,6 +758,9 @@ pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene 
     cfg.still_s = s->still_s;
     cfg.upscale = s->upscale;
     cfg.render_scale = s->render_scale;
+    cfg.settings = s->settings;
+    cfg.opacity = s->opacity;
+    memcpy(cfg.clip, s->clip, sizeof cfg.clip);
     return cfg;
 }
 

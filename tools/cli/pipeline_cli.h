@@ -58,6 +58,11 @@ typedef struct cli_pipeline_spec {
     double budget_ms;
     int refine_k;
     double still_s;
+    /* inspection (the config's renderer.transparency, renderer.caps, renderer.ao, opacity,
+     * cutting_planes; docs/pipeline-config.md): copied into the pipeline config as they are */
+    render_settings settings;    /* render_settings_default(), then the config's */
+    float opacity;               /* initial global opacity, [0, 1]; 1 */
+    clip_plane clip[CLIP_MAX_PLANES]; /* initial planes, as pipeline_config.clip (unused: zeroed) */
     /* optional (NULL): put a display in front of each channel's display (not a wall's):
      * returns the display to add, owning `inner` (destroyed on failure, then NULL with err) */
     image_display *(*wrap_display)(void *ctx, int channel, image_display *inner, tess_error *err);
@@ -66,7 +71,8 @@ typedef struct cli_pipeline_spec {
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
  * `out`, threads = CPUs, real time at rate 30, 16-pixel row-order tiles,
- * single sample, Phong with shadows. */
+ * single sample, Phong with shadows, the default render settings, opaque, no
+ * cutting plane. */
 void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const char *out);
 
 /* Load --config FILE into s (only the fields it names). False after printing
