@@ -45,6 +45,15 @@ typedef struct clip_set {
     double d[CLIP_MAX_PLANES];       /* dot(n, point) */
 } clip_set;
 
+/* Whether any of the CLIP_MAX_PLANES planes is on. */
+static inline bool clip_planes_on(const clip_plane planes[CLIP_MAX_PLANES])
+{
+    for (int i = 0; i < CLIP_MAX_PLANES; i++)
+        if (planes[i].on)
+            return true;
+    return false;
+}
+
 /* The set of planes[i] that are on (count 0: nothing clipped). */
 void clip_set_make(clip_set *out, const clip_plane planes[CLIP_MAX_PLANES]);
 

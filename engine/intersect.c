@@ -138,6 +138,26 @@ bool intersect_triangle_degenerate(vec3 v0, vec3 v1, vec3 v2)
 }
 
 #ifndef TESSERA_UNROBUST
+/* Whether a ray that meets the edge from P to Q exactly (its edge function
+ * Qx Py - Qy Px is 0, in the sheared 2D space the test works in) belongs to
+ * this triangle, whose interior is where the edge function has the sign of
+ * det: it does when a step from the ray in the fixed direction (1, 0), or
+ * (0, 1) along an edge parallel to it, enters the interior. The triangle on
+ * the edge's other side computes the same two points (the same ray, the same
+ * vertices) and so the edge function's gradient negated, whatever its
+ * winding: exactly one of two triangles sharing an edge has the ray, and
+ * exactly one of a fan around a vertex (the step direction breaks every tie
+ * the same way, as rasterisers' top-left rule). So a surface is crossed once
+ * where its triangles meet: what transparency and parity counts need. */
+static bool edge_owned(double px, double py, double qx, double qy, double det)
+{
+    double step_x = qy - py; /* d(edge function) / d(ray position x) */
+    if (step_x != 0.0)
+        return (step_x > 0.0) == (det > 0.0);
+    double step_y = px - qx;
+    return step_y != 0.0 && (step_y > 0.0) == (det > 0.0);
+}
+
 /* The watertight test in double, from the original float coordinates: for
  * the rays and triangles float cannot decide. Same conventions as below. */
 static bool triangle_in_double(const ray *r, const ray_derived *d, vec3 v0, vec3 v1, vec3 v2, float *t_out,
@@ -156,6 +176,10 @@ static bool triangle_in_double(const ray *r, const ray_derived *d, vec3 v0, vec3
         return false;
     const double det = u + v + w;
     if (det == 0.0)
+        return false;
+    /* exactly on an edge (or a vertex): the point belongs to one triangle only */
+    if ((u == 0.0 && !edge_owned(bx, by, cx, cy, det)) || (v == 0.0 && !edge_owned(cx, cy, ax, ay, det)) ||
+        (w == 0.0 && !edge_owned(ax, ay, bx, by, det)))
         return false;
     const double t = sz * (u * az + v * bz + w * cz) / det;
     const float tf = (float)t;

@@ -12,6 +12,7 @@
 #include "log.h"
 #include "frame_state.h"
 #include "scene.h"
+#include "clip.h"
 #include "surface.h"
 
 /* Eyelight without shadow rays looks at normals only. */
@@ -99,9 +100,13 @@ static ray eyelight_shadow_ray(const scene *s, const surface *sf)
 /* Eyelight darkens to this fraction in shadow, as the peer harness's lit image. */
 #define EYELIGHT_SHADOW_FACTOR 0.2f
 
+static vec3 render_shade_layers(const render_view *v, const ray *r, uint64_t *shadow_rays);
+
 vec3 render_shade(const render_view *v, const ray *r, uint64_t *shadow_rays)
 {
     const scene *s = v->scene;
+    if (v->state && (frame_state_transparent(v->state) || clip_planes_on(frame_state_clip_planes(v->state))))
+        return render_shade_layers(v, r, shadow_rays);
     hit h;
     if (!accel_intersect(v->accel, r, &h))
         return v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
@@ -204,39 +209,108 @@ static surface lane_surface(const ray_packet *p, const packet_shading *ps, uint3
     return sf;
 }
 
-/* Shadow rays for the rays of `mask`, one packet; returns the occluded ones. */
-static uint64_t trace_shadows(const render_view *v, ray_packet *shadows, uint32_t count, uint64_t mask,
-                              uint32_t facts, const ray *rays, render_counts *counts)
+/* What a frame asks beyond opaque surfaces seen whole: transparency and
+ * cutting planes (frame_state.h), with the settings that bound them. Made
+ * once per tile or block from the view; the frame state does not change
+ * while a frame renders, so every tile of a frame makes the same one. */
+typedef struct view_extras {
+    render_settings set; /* the view's settings, or the defaults */
+    bool transparent;    /* some surface has opacity < 1 */
+    clip_set clip;       /* the cutting planes that are on (count 0: none) */
+} view_extras;
+
+static void view_extras_make(const render_view *v, view_extras *x)
 {
-    packet_reset(shadows, count, facts);
-    shadows->active = mask;
-    for (uint64_t m = mask; m; m &= m - 1) {
-        uint32_t i = (uint32_t)__builtin_ctzll(m);
-        packet_set_ray(shadows, i, &rays[i]);
-    }
-    counts->shadow_rays += (uint64_t)__builtin_popcountll(mask);
-    return accel_occluded_packet(v->accel, packet_whole(shadows));
+    x->set = v->settings ? *v->settings : render_settings_default();
+    x->transparent = v->state && frame_state_transparent(v->state);
+    x->clip.count = 0;
+    if (v->state)
+        clip_set_make(&x->clip, frame_state_clip_planes(v->state));
 }
 
-/* Trace and shade the primary packet p (rays [0, p->count)): the same
- * results as render_shade on each ray, with every ray cast in packets. */
-static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadows, packet_shading *ps,
-                         render_counts *counts)
+/* Whether rays walk their surfaces layer by layer (render_layers) rather
+ * than stop at the first: transparency, or planes (caps and clipped intervals). */
+static bool needs_layers(const view_extras *x) { return x->transparent || x->clip.count > 0; }
+
+static float opacity_of(const render_view *v, uint32_t geom_id)
+{
+    return v->state ? frame_state_opacity(v->state, geom_id) : 1.f;
+}
+
+/* Light that reaches the origins of the shadow rays of `mask` (rays[i]):
+ * transmit[i] = 1 unoccluded, 0 blocked, in between through transparent
+ * surfaces (the product of 1 - opacity over every surface crossed, when the
+ * frame is transparent and transparent_shadows is set; the walk stops as
+ * render_layers does: below min_transmittance, or after max_layers surfaces,
+ * as blocked). Rays are cut by the cutting planes first (a ray with nothing
+ * left reaches the light). */
+static void trace_shadows(const render_view *v, const view_extras *x, ray_packet *shadows, uint32_t count,
+                          uint64_t mask, uint32_t facts, const ray *rays, render_counts *counts,
+                          float transmit[PACKET_MAX_RAYS])
+{
+    ray cut[PACKET_MAX_RAYS];
+    uint64_t traced = 0;
+    for (uint64_t m = mask; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        transmit[i] = 1.f;
+        cut[i] = rays[i];
+        if (x->clip.count == 0 || clip_ray(&x->clip, &cut[i], NULL))
+            traced |= 1ull << i;
+    }
+    if (!traced)
+        return;
+    if (!x->transparent || !x->set.transparent_shadows) { /* any surface blocks: one any-hit query */
+        packet_reset(shadows, count, facts);
+        shadows->active = traced;
+        for (uint64_t m = traced; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            packet_set_ray(shadows, i, &cut[i]);
+        }
+        counts->shadow_rays += (uint64_t)__builtin_popcountll(traced);
+        for (uint64_t m = accel_occluded_packet(v->accel, packet_whole(shadows)); m; m &= m - 1)
+            transmit[__builtin_ctzll(m)] = 0.f;
+        return;
+    }
+    hit last[PACKET_MAX_RAYS];
+    uint64_t walking = traced;
+    for (int layer = 0; walking && layer < x->set.max_layers; layer++) {
+        packet_reset(shadows, count, facts);
+        shadows->active = walking;
+        for (uint64_t m = walking; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            packet_set_ray(shadows, i, &cut[i]);
+            if (layer > 0)
+                packet_set_after(shadows, i, &last[i]);
+        }
+        counts->shadow_rays += (uint64_t)__builtin_popcountll(walking);
+        accel_intersect_packet(v->accel, packet_whole(shadows));
+        for (uint64_t m = walking; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            if (shadows->hit_t[i] == INFINITY) {
+                walking &= ~(1ull << i);
+                continue;
+            }
+            last[i] = packet_get_hit(shadows, i);
+            transmit[i] *= 1.f - opacity_of(v, last[i].geom_id);
+            if (transmit[i] < x->set.min_transmittance) {
+                transmit[i] = 0.f;
+                walking &= ~(1ull << i);
+            }
+        }
+    }
+    for (uint64_t m = walking; m; m &= m - 1) /* more surfaces than max_layers: blocked */
+        transmit[__builtin_ctzll(m)] = 0.f;
+}
+
+/* Colours of the hits of ps->hits in p, whose surfaces are derived (and
+ * possibly replaced by caps): ambient and lights with shadows, or eyelight,
+ * into ps->colour. */
+static void shade_hits(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
+                       packet_shading *ps, render_counts *counts)
 {
     const scene *s = v->scene;
     ray shadow_rays[PACKET_MAX_RAYS];
-    accel_intersect_packet(v->accel, packet_whole(p));
-    counts->primary_rays += p->count;
-    ps->hits = 0;
-    for (uint32_t i = 0; i < p->count; i++)
-        if (p->hit_t[i] != INFINITY)
-            ps->hits |= 1ull << i;
-        else
-            ps->colour[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
-    if (!ps->hits)
-        return;
-    counts->primary_hits += (uint64_t)__builtin_popcountll(ps->hits);
-    packet_derive_hit_surfaces(v, p, ps, needs_position(v));
+    float transmit[PACKET_MAX_RAYS];
     for (uint64_t m = ps->hits; m; m &= m - 1) {
         uint32_t i = (uint32_t)__builtin_ctzll(m);
         ray r = packet_get_ray(p, i);
@@ -258,10 +332,12 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
             shadow_rays[i] = eyelight_shadow_ray(s, &sf);
         }
         uint32_t facts = s->lights[0].kind == LIGHT_DIRECTIONAL ? PACKET_CONSTANT_SIGNS : 0;
-        uint64_t dark = trace_shadows(v, shadows, p->count, ps->hits, facts, shadow_rays, counts);
-        for (uint64_t m = dark; m; m &= m - 1) {
+        trace_shadows(v, x, shadows, p->count, ps->hits, facts, shadow_rays, counts, transmit);
+        for (uint64_t m = ps->hits; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
-            ps->colour[i] = v3_scale(ps->colour[i], EYELIGHT_SHADOW_FACTOR);
+            if (transmit[i] < 1.f) /* 0: the harness's factor; between: blended towards it */
+                ps->colour[i] = v3_scale(ps->colour[i],
+                                         EYELIGHT_SHADOW_FACTOR + (1.f - EYELIGHT_SHADOW_FACTOR) * transmit[i]);
         }
         return;
     }
@@ -274,6 +350,7 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
             if (!sample_light(v, &sf, lt, &ps->ls[i]))
                 continue;
             lit |= 1ull << i;
+            transmit[i] = 1.f;
             if (ps->ls[i].needs_shadow_ray) {
                 need_ray |= 1ull << i;
                 shadow_rays[i] = shadow_ray(&sf, &ps->ls[i]);
@@ -281,14 +358,242 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
         }
         if (need_ray) {
             uint32_t facts = lt->kind == LIGHT_DIRECTIONAL ? PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED : 0;
-            lit &= ~trace_shadows(v, shadows, p->count, need_ray, facts, shadow_rays, counts);
+            trace_shadows(v, x, shadows, p->count, need_ray, facts, shadow_rays, counts, transmit);
         }
         for (uint64_t m = lit; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
+            if (transmit[i] == 0.f)
+                continue;
             surface sf = lane_surface(p, ps, i);
-            ps->colour[i] = v3_add(ps->colour[i], light_contribution(&sf, lt, &ps->ls[i], ps->to_viewer[i]));
+            vec3 c = light_contribution(&sf, lt, &ps->ls[i], ps->to_viewer[i]);
+            if (transmit[i] < 1.f)
+                c = v3_scale(c, transmit[i]);
+            ps->colour[i] = v3_add(ps->colour[i], c);
         }
     }
+}
+
+/* Trace and shade the primary packet p (rays [0, p->count)) when every
+ * surface is opaque and nothing is clipped: the same results as
+ * render_shade on each ray, with every ray cast in packets. */
+static void shade_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
+                         packet_shading *ps, render_counts *counts)
+{
+    const scene *s = v->scene;
+    accel_intersect_packet(v->accel, packet_whole(p));
+    counts->primary_rays += p->count;
+    ps->hits = 0;
+    for (uint32_t i = 0; i < p->count; i++)
+        if (p->hit_t[i] != INFINITY)
+            ps->hits |= 1ull << i;
+        else
+            ps->colour[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
+    if (!ps->hits)
+        return;
+    counts->primary_hits += (uint64_t)__builtin_popcountll(ps->hits);
+    packet_derive_hit_surfaces(v, p, ps, needs_position(v));
+    shade_hits(v, x, p, shadows, ps, counts);
+}
+
+/* Cap hatching: stripes this many pixels apart, half of them darkened by
+ * RENDER_CAP_HATCH_DARK. */
+#define RENDER_CAP_HATCH_PX 8.f
+#define RENDER_CAP_HATCH_DARK 0.45f
+/* Caps are drawn in their part's colour times this. */
+#define RENDER_CAP_TINT_FACTOR 0.8f
+/* Most crossings a parity count follows along one ray (a part's surface
+ * crossed more often is taken as not containing the point). */
+#define RENDER_PARITY_MAX_CROSSINGS 1024
+
+/* Whether the point where ray r (already cut: its t_near is just below the
+ * plane crossing) enters the kept region lies inside the closed part of its
+ * first hit `first`: the crossings of that part's surface from there on,
+ * counted one by one, are odd. */
+static bool inside_by_parity(const render_view *v, const ray *r, const hit *first, render_counts *counts)
+{
+    ray whole = *r;
+    whole.t_far = FLT_MAX; /* the part's surface beyond any other plane counts too */
+    hit prev = *first, h;
+    uint32_t crossings = 1;
+    while (crossings < RENDER_PARITY_MAX_CROSSINGS &&
+           accel_intersect_instance(v->accel, first->geom_id, &whole, &prev, &h)) {
+        crossings++;
+        prev = h;
+    }
+    counts->secondary_rays += crossings;
+    return crossings < RENDER_PARITY_MAX_CROSSINGS && (crossings & 1u);
+}
+
+/* Turn lane i's derived surface into the cap of plane `plane` where ray r
+ * crosses it: on the plane, facing the ray, in the part's colour (tinted or
+ * hatched). False (surface untouched) if the crossing cannot be placed. */
+static bool make_cap(const render_view *v, const view_extras *x, int plane, const ray *r, ray_packet *p,
+                     packet_shading *ps, uint32_t i)
+{
+    vec3 at;
+    if (!clip_crossing(&x->clip, plane, r, &at))
+        return false;
+    const clip_plane *pl = &frame_state_clip_planes(v->state)[plane];
+    vec3 n = v3_dot(pl->normal, r->dir) > 0.f ? v3_scale(pl->normal, -1.f) : pl->normal;
+    p->pos_x[i] = at.x, p->pos_y[i] = at.y, p->pos_z[i] = at.z;
+    /* rounded once from double: half an ulp of each coordinate, and as much again for the plane's own rounding */
+    ps->position_error[i] = v3(fabsf(at.x) * 0x1p-23f, fabsf(at.y) * 0x1p-23f, fabsf(at.z) * 0x1p-23f);
+    p->ng_x[i] = p->ns_x[i] = n.x;
+    p->ng_y[i] = p->ns_y[i] = n.y;
+    p->ng_z[i] = p->ns_z[i] = n.z;
+    vec3 kd = v3_scale(ps->kd[i], RENDER_CAP_TINT_FACTOR);
+    if (x->set.cap_style == RENDER_CAP_HATCH) {
+        /* stripes across the plane, RENDER_CAP_HATCH_PX pixels apart where the plane is
+         * nearest the eye: spaced by the eye's distance from the plane (one value per
+         * plane and frame, so the stripes are straight) */
+        vec3 helper = fabsf(n.x) < 0.9f ? v3(1.f, 0.f, 0.f) : v3(0.f, 1.f, 0.f);
+        vec3 across = v3_normalize(v3_cross(n, helper));
+        const camera_basis *cam = &v->camera;
+        float eye_distance = fabsf(v3_dot(v3_sub(cam->eye, pl->point), pl->normal));
+        float pixel = 2.f * v3_length(cam->up) / (float)cam->height_px;
+        float spacing = eye_distance * pixel * RENDER_CAP_HATCH_PX;
+        if (!(spacing > 0.f))
+            spacing = 1.f;
+        float phase = v3_dot(at, across) / spacing;
+        if (phase - floorf(phase) < 0.5f)
+            kd = v3_scale(kd, RENDER_CAP_HATCH_DARK);
+    }
+    ps->kd[i] = kd;
+    return true;
+}
+
+/* Per-ray state of a layer walk (render_layers), beside the packets. */
+typedef struct layer_walk {
+    ray base[PACKET_MAX_RAYS];       /* each ray cut by the planes */
+    int8_t entry[PACKET_MAX_RAYS];   /* plane bounding base[i].t_near, or -1 */
+    bool cap_checked[PACKET_MAX_RAYS];
+    hit last[PACKET_MAX_RAYS];       /* the surface shaded last (the next is after it) */
+    bool has_last[PACKET_MAX_RAYS];
+    float transmit[PACKET_MAX_RAYS]; /* light still passing: product of 1 - opacity so far */
+    vec3 sum[PACKET_MAX_RAYS];
+} layer_walk;
+
+/* Trace and shade the primary packet p surface after surface, front to back
+ * in the next-hit order (accel_intersect_after: exact depth order, coplanar
+ * faces by ids, the same for any thread or tile): each surface's colour
+ * (lit and shadowed) adds transmit x opacity of it, transmit shrinks by
+ * 1 - opacity; a ray stops at an opaque surface, when transmit falls below
+ * min_transmittance (the rest is dropped), or at its max_layers-th surface,
+ * which counts as opaque; a ray that leaves adds transmit x background.
+ * Rays are cut by the cutting planes first; where a ray enters the kept
+ * region through a plane inside a closed part, the part's cut face (a cap)
+ * is its first surface. With all opacities 1 and no planes this gives
+ * shade_packet's colours bit for bit. */
+static void render_layers(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
+                          packet_shading *ps, layer_walk *lw, render_counts *counts)
+{
+    const scene *s = v->scene;
+    const uint32_t count = p->count, facts = p->flags & (PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
+    const vec3 background = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
+    const bool caps = x->set.caps && x->clip.count > 0;
+    uint64_t walking = 0;
+    counts->primary_rays += count;
+    for (uint32_t i = 0; i < count; i++) {
+        lw->base[i] = packet_get_ray(p, i);
+        int entry = -1;
+        lw->sum[i] = v3(0.f, 0.f, 0.f);
+        lw->transmit[i] = 1.f;
+        lw->has_last[i] = lw->cap_checked[i] = false;
+        if (x->clip.count > 0 && !clip_ray(&x->clip, &lw->base[i], &entry))
+            lw->sum[i] = background; /* everything along it is cut away */
+        else
+            walking |= 1ull << i;
+        lw->entry[i] = (int8_t)entry;
+    }
+    for (int layer = 0; walking; layer++) {
+        packet_reset(p, count, facts);
+        p->active = walking;
+        for (uint64_t m = walking; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            packet_set_ray(p, i, &lw->base[i]);
+            if (lw->has_last[i])
+                packet_set_after(p, i, &lw->last[i]);
+        }
+        if (layer > 0)
+            counts->secondary_rays += (uint64_t)__builtin_popcountll(walking);
+        accel_intersect_packet(v->accel, packet_whole(p));
+        ps->hits = 0;
+        for (uint64_t m = walking; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            if (p->hit_t[i] != INFINITY) {
+                ps->hits |= 1ull << i;
+                continue;
+            }
+            lw->sum[i] = v3_add(lw->sum[i], v3_scale(background, lw->transmit[i]));
+            walking &= ~(1ull << i);
+        }
+        if (!ps->hits)
+            break;
+        if (layer == 0)
+            counts->primary_hits += (uint64_t)__builtin_popcountll(ps->hits);
+        packet_derive_hit_surfaces(v, p, ps, needs_position(v));
+        uint64_t capped = 0; /* lanes shading a cap this layer: their hit is still ahead */
+        if (caps)
+            for (uint64_t m = ps->hits; m; m &= m - 1) {
+                uint32_t i = (uint32_t)__builtin_ctzll(m);
+                if (lw->entry[i] < 0 || lw->cap_checked[i])
+                    continue;
+                lw->cap_checked[i] = true;
+                hit h = packet_get_hit(p, i);
+                const scene_instance *inst = &s->instances[h.geom_id];
+                if (scene_geometry_closed(s, inst->geometry) && inside_by_parity(v, &lw->base[i], &h, counts) &&
+                    make_cap(v, x, lw->entry[i], &lw->base[i], p, ps, i))
+                    capped |= 1ull << i;
+            }
+        shade_hits(v, x, p, shadows, ps, counts);
+        const bool last_layer = layer + 1 >= x->set.max_layers;
+        for (uint64_t m = ps->hits; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            float alpha = last_layer ? 1.f : opacity_of(v, p->geom_id[i]);
+            lw->sum[i] = v3_add(lw->sum[i], v3_scale(ps->colour[i], lw->transmit[i] * alpha));
+            lw->transmit[i] *= 1.f - alpha;
+            if (alpha >= 1.f || lw->transmit[i] < x->set.min_transmittance) {
+                walking &= ~(1ull << i);
+                continue;
+            }
+            if (!(capped >> i & 1u)) {
+                lw->last[i] = packet_get_hit(p, i);
+                lw->has_last[i] = true;
+            }
+        }
+    }
+    for (uint32_t i = 0; i < count; i++)
+        ps->colour[i] = lw->sum[i];
+}
+
+/* Trace and shade primary packet p into ps->colour, by the walk the frame needs. */
+static void trace_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
+                         packet_shading *ps, layer_walk *lw, render_counts *counts)
+{
+    if (needs_layers(x))
+        render_layers(v, x, p, shadows, ps, lw, counts);
+    else
+        shade_packet(v, x, p, shadows, ps, counts);
+}
+
+/* render_shade when surfaces are walked layer by layer: the packet walk on a
+ * packet of this one ray (the same kernels, single-ray path). */
+static vec3 render_shade_layers(const render_view *v, const ray *r, uint64_t *shadow_rays)
+{
+    static _Thread_local struct {
+        ray_packet primary, shadows;
+        packet_shading ps;
+        layer_walk walk;
+    } one;
+    view_extras x;
+    view_extras_make(v, &x);
+    packet_reset(&one.primary, 1, 0);
+    packet_set_ray(&one.primary, 0, r);
+    packet_detect_facts(&one.primary);
+    render_counts counts = {0};
+    render_layers(v, &x, &one.primary, &one.shadows, &one.ps, &one.walk, &counts);
+    *shadow_rays += counts.shadow_rays;
+    return one.ps.colour[0];
 }
 
 /* Primary rays per packet: 8 x 8 pixels, so a packet covers a compact patch. */
@@ -299,6 +604,7 @@ static void shade_packet(const render_view *v, ray_packet *p, ray_packet *shadow
 static _Thread_local struct render_scratch {
     ray_packet primary, shadows;
     packet_shading ps;
+    layer_walk walk;
 } scratch;
 
 /* Store the colours of a w x h block (row-major) at pixel (px, py) of the image. */
@@ -317,12 +623,14 @@ static void store_block(const camera_basis *cam, int px, int py, int w, int h, c
 void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rgb, render_counts *counts)
 {
     const camera_basis *cam = &v->camera;
+    view_extras x;
+    view_extras_make(v, &x);
     for (int py = y0; py < y1; py += RENDER_PACKET_EDGE_PX)
         for (int px = x0; px < x1; px += RENDER_PACKET_EDGE_PX) {
             int w = x1 - px < RENDER_PACKET_EDGE_PX ? x1 - px : RENDER_PACKET_EDGE_PX;
             int h = y1 - py < RENDER_PACKET_EDGE_PX ? y1 - py : RENDER_PACKET_EDGE_PX;
             packet_primary(&scratch.primary, cam, px, py, w, h);
-            shade_packet(v, &scratch.primary, &scratch.shadows, &scratch.ps, counts);
+            trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, counts);
             store_block(cam, px, py, w, h, scratch.ps.colour, rgb);
         }
 }
@@ -338,13 +646,15 @@ static void render_block_jittered(const render_view *v, const pixel_sampler *s, 
     alignas(64) float sample_x[PACKET_MAX_RAYS], sample_y[PACKET_MAX_RAYS];
     vec3 sum[PACKET_MAX_RAYS];
     const int k = s->k, n = w * h;
+    view_extras x;
+    view_extras_make(v, &x);
     for (int r = 0; r < n; r++)
         sum[r] = v3(0.f, 0.f, 0.f);
     for (int j = 0; j < k; j++)
         for (int i = 0; i < k; i++) {
             pixel_sampler_block_positions(s, x0, y0, w, h, i, j, sample_x, sample_y);
             packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)n);
-            shade_packet(v, &scratch.primary, &scratch.shadows, &scratch.ps, counts);
+            trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, counts);
             for (int r = 0; r < n; r++)
                 sum[r] = v3_add(sum[r], scratch.ps.colour[r]);
         }
@@ -362,9 +672,11 @@ static void render_block_stratum(const render_view *v, const pixel_sampler *s, i
 {
     alignas(64) float sample_x[PACKET_MAX_RAYS], sample_y[PACKET_MAX_RAYS];
     const int n = w * h;
+    view_extras x;
+    view_extras_make(v, &x);
     pixel_sampler_block_positions(s, x0, y0, w, h, 0, 0, sample_x, sample_y);
     packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)n);
-    shade_packet(v, &scratch.primary, &scratch.shadows, &scratch.ps, counts);
+    trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, counts);
     store_block(&v->camera, x0, y0, w, h, scratch.ps.colour, rgb);
 }
 
@@ -393,20 +705,21 @@ typedef struct tile_queue {
     float *rgb;
     int tiles_x, tile_count;
     atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
-    atomic_uint_fast64_t primary_rays, primary_hits, shadow_rays; /* totals, added once per thread */
+    atomic_uint_fast64_t primary_rays, primary_hits, shadow_rays, secondary_rays; /* totals, added once per thread */
 } tile_queue;
 
 static void *render_worker(void *arg)
 {
     tile_queue *q = arg;
     const camera_basis *cam = &q->view->camera;
-    render_counts counts = {0, 0, 0}; /* this thread's, folded in once at the end */
+    render_counts counts = {0, 0, 0, 0}; /* this thread's, folded in once at the end */
     for (;;) {
         int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
         if (tile >= q->tile_count) {
             atomic_fetch_add_explicit(&q->primary_rays, counts.primary_rays, memory_order_relaxed);
             atomic_fetch_add_explicit(&q->primary_hits, counts.primary_hits, memory_order_relaxed);
             atomic_fetch_add_explicit(&q->shadow_rays, counts.shadow_rays, memory_order_relaxed);
+            atomic_fetch_add_explicit(&q->secondary_rays, counts.secondary_rays, memory_order_relaxed);
             return NULL;
         }
         int x0 = (tile % q->tiles_x) * RENDER_TILE_PX, y0 = (tile / q->tiles_x) * RENDER_TILE_PX;
@@ -435,6 +748,7 @@ void render_image_sampled(const render_view *v, const pixel_sampler *s, int thre
     atomic_init(&q.primary_rays, 0);
     atomic_init(&q.primary_hits, 0);
     atomic_init(&q.shadow_rays, 0);
+    atomic_init(&q.secondary_rays, 0);
     if (threads < 1)
         threads = 1;
     if (threads > RENDER_MAX_THREADS)
@@ -457,6 +771,7 @@ void render_image_sampled(const render_view *v, const pixel_sampler *s, int thre
         counts->primary_rays = atomic_load(&q.primary_rays);
         counts->primary_hits = atomic_load(&q.primary_hits);
         counts->shadow_rays = atomic_load(&q.shadow_rays);
+        counts->secondary_rays = atomic_load(&q.secondary_rays);
     }
 }
 

@@ -82,6 +82,7 @@ typedef struct render_counts {
     uint64_t primary_rays;
     uint64_t primary_hits; /* primary rays that hit something */
     uint64_t shadow_rays;
+    uint64_t secondary_rays; /* transparency's layers past the first, caps' parity counts */
 } render_counts;
 
 /* Tile edge in pixels: 16 x 16 float RGB rows are 192 bytes, whole cache lines. */

@@ -220,7 +220,7 @@ static input_txn sample_record(int i)
     case TXN_OPACITY: return i % 2 ? txn_opacity_all(0.25f * (float)(i % 5)) : txn_opacity(5, 2, 0.5f);
     case TXN_CLIP_PLANE: {
         const float point[3] = {0.5f * (float)i, -1.f, 0.f}, normal[3] = {0.f, 0.f, 2.f};
-        return txn_clip_plane(i % CLIP_MAX_PLANES, i % 2 == 0, point, normal);
+        return txn_clip_plane(i % TXN_CLIP_PLANES, i % 2 == 0, point, normal);
     }
     case TXN_KIND_COUNT: break;
     }

@@ -367,7 +367,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
         render_image(view, o->threads, rgb, NULL);
     double busy0 = cli_machine_busy_s(), own0 = cli_own_cpu_s(), wall0 = cli_now_s();
     for (int f = 0; f < o->frames; f++) {
-        render_counts counts = {0, 0, 0};
+        render_counts counts = {0, 0, 0, 0};
         double t0 = cli_now_s();
         render_image(view, o->threads, rgb, &counts);
         samples[f].seconds = cli_now_s() - t0;
