@@ -32,6 +32,7 @@ scene *scene_create(void)
     s->ambient = scene_default_ambient;
     s->has_camera = false;
     s->sphere_instance = RAY_INVALID_ID;
+    atomic_init(&s->closed, NULL);
     return s;
 }
 
