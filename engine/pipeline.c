@@ -19,6 +19,7 @@
 #include "frame_state.h"
 #include "log.h"
 #include "overlay.h"
+#include "scene.h"
 #include "thread_name.h"
 #include "clock.h"
 
@@ -211,6 +212,8 @@ struct pipeline {
 
     /* display stage: written by thread 0 in the display stage, read by the serial section */
     double display_stage_s; /* duration of the last display stage */
+    bool closed_prepared; /* scene_prepare_closed ran (serial section, the first frame with a
+                             cutting plane on and caps drawn); serial sections only */
     bool display_failed;
     tess_error display_error;
 
@@ -1450,6 +1453,11 @@ static int serial_section_steps(pipeline *p)
     /* visibility changed by this barrier's records reaches the accel: one pass over the ids
      * they touched, accel_set_hidden only where a flag differs */
     frame_state_sync_accel(&p->state, p->cfg.accel);
+    if (!p->closed_prepared && p->cfg.settings.caps && clip_planes_on(frame_state_clip_planes(&p->state))) {
+        /* caps ask which parts are closed: answered here for all of them, not by a render thread mid-frame */
+        scene_prepare_closed(p->cfg.scene, p->state.threads);
+        p->closed_prepared = true;
+    }
     bool any_queued = false;
     for (int i = 0; i < p->channel_count; i++)
         any_queued = any_queued || p->channels[i].queued_valid;
