@@ -424,15 +424,52 @@ static bool inside_by_parity(const render_view *v, const ray *r, const hit *firs
     return crossings < RENDER_PARITY_MAX_CROSSINGS && (crossings & 1u);
 }
 
+/* Most surfaces the search for a closed part walks past (open parts in
+ * front of it), per ray. */
+#define RENDER_CAP_SEARCH_MAX 64
+
+/* The first surface of a closed part along ray r (cut by the planes) at or
+ * after its first hit `first`: where a cap may be. Open parts are walked past:
+ * if the plane point lies inside a closed part, everything met before that
+ * part's surface lies inside it too and is covered by the cap (solids do not
+ * overlap); if it does not, the parity says so. False when there is none. */
+static bool first_closed_hit(const render_view *v, const ray *r, hit first, hit *out, render_counts *counts)
+{
+    const scene *s = v->scene;
+    hit h = first;
+    for (int step = 0; step < RENDER_CAP_SEARCH_MAX; step++) {
+        if (scene_geometry_closed(s, s->instances[h.geom_id].geometry)) {
+            *out = h;
+            return true;
+        }
+        hit next;
+        counts->secondary_rays++;
+        if (!accel_intersect_after(v->accel, r, &h, &next))
+            return false;
+        h = next;
+    }
+    return false;
+}
+
 /* Turn lane i's derived surface into the cap of plane `plane` where ray r
- * crosses it: on the plane, facing the ray, in the part's colour (tinted or
- * hatched). False (surface untouched) if the crossing cannot be placed. */
-static bool make_cap(const render_view *v, const view_extras *x, int plane, const ray *r, ray_packet *p,
-                     packet_shading *ps, uint32_t i)
+ * crosses it: on the plane, facing the ray, in the colour of the closed part
+ * whose surface `part` is (tinted or hatched). False (surface untouched) if
+ * the crossing cannot be placed. */
+static bool make_cap(const render_view *v, const view_extras *x, int plane, const ray *r, const hit *part,
+                     ray_packet *p, packet_shading *ps, uint32_t i)
 {
     vec3 at;
     if (!clip_crossing(&x->clip, plane, r, &at))
         return false;
+    if (part->geom_id != p->geom_id[i] || part->prim_id != p->prim_id[i]) {
+        /* the cap is the closed part's, found behind the first surface: its colour and material */
+        surface sf = surface_describe(v, r, part, false);
+        ps->kd[i] = sf.kd;
+        ps->mat[i] = sf.mat;
+        p->material_id[i] = (uint32_t)(sf.mat - v->scene->materials);
+        p->geom_id[i] = part->geom_id; /* the cap's opacity is its part's */
+        p->prim_id[i] = part->prim_id;
+    }
     const clip_plane *pl = &frame_state_clip_planes(v->state)[plane];
     vec3 n = v3_dot(pl->normal, r->dir) > 0.f ? v3_scale(pl->normal, -1.f) : pl->normal;
     p->pos_x[i] = at.x, p->pos_y[i] = at.y, p->pos_z[i] = at.z;
@@ -539,10 +576,10 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
                 if (lw->entry[i] < 0 || lw->cap_checked[i])
                     continue;
                 lw->cap_checked[i] = true;
-                hit h = packet_get_hit(p, i);
-                const scene_instance *inst = &s->instances[h.geom_id];
-                if (scene_geometry_closed(s, inst->geometry) && inside_by_parity(v, &lw->base[i], &h, counts) &&
-                    make_cap(v, x, lw->entry[i], &lw->base[i], p, ps, i))
+                hit part;
+                if (first_closed_hit(v, &lw->base[i], packet_get_hit(p, i), &part, counts) &&
+                    inside_by_parity(v, &lw->base[i], &part, counts) &&
+                    make_cap(v, x, lw->entry[i], &lw->base[i], &part, p, ps, i))
                     capped |= 1ull << i;
             }
         shade_hits(v, x, p, shadows, ps, counts);

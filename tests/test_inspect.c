@@ -556,3 +556,39 @@ Test(cutting, images_are_the_same_for_any_thread_count)
     free(one);
     fixture_close(&fx);
 }
+
+/* A closed cube standing on an open floor (its bottom face coplanar with the
+ * floor, which comes first in id order), cut by x = 0: every ray entering
+ * through the plane inside the cube sees the cap, also where the first
+ * surface behind the plane is the floor at the same depth as the cube's
+ * bottom (the search walks past open parts to the closed one). */
+Test(cutting, an_open_surface_in_front_does_not_hide_the_cap)
+{
+    scene *s = bare_scene(v3(0.f, 0.f, 0.f), v3(1.f, 1.f, 1.f));
+    add_pane(s, -4.f, -4.f, 4.f, 4.f, -1.f, lambert(s, v3(0.9f, 0.9f, 0.9f), 1.f));
+    const vec3 kd = v3(0.2f, 0.5f, 0.8f);
+    add_grid_cube(s, 4, -1, lambert(s, kd, 1.f));
+    fixture fx;
+    fixture_open(&fx, s);
+    set_plane(&fx.st, 0, v3(0.f, 0.f, 0.f), v3(1.f, 0.f, 0.f));
+    camera_desc cam = {v3(6.f, 0.4f, 0.5f), v3(0.f, 0.f, -0.6f), v3(0.f, 0.f, 1.f), 40.f};
+    const int w = 120, h = 120;
+    float *rgb = render_fixture(&fx, cam, w, h, false, 1);
+    render_view v = fixture_view(&fx, cam, w, h, false);
+    vec3 cap = v3_scale(kd, 0.8f);
+    long inside = 0, wrong = 0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            ray r = packet_primary_ray_at(&v.camera, (float)x + 0.5f, (float)y + 0.5f);
+            double t = -(double)r.org.x / r.dir.x;
+            double py = r.org.y + t * r.dir.y, pz = r.org.z + t * r.dir.z;
+            if (fabs(py) < 1.0 - 1e-4 && fabs(pz) < 1.0 - 1e-4) {
+                inside++;
+                wrong += !near3(pixel(rgb, w, x, y), cap, 1e-6f);
+            }
+        }
+    cr_expect(inside > 1000, "%ld pixels see the cut", inside);
+    cr_expect_eq(wrong, 0, "%ld of %ld pixels inside the cut are not the cap", wrong, inside);
+    free(rgb);
+    fixture_close(&fx);
+}
