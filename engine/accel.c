@@ -39,6 +39,8 @@ struct accel {
      * render threads never trace while a refit runs, so they do not take it */
     pthread_mutex_t refit_lock;
     bool lock_ready;
+    aabb scene_box; /* union of the instances' world boxes as the scene placed them at build
+                       (accel_scene_bounds); empty when nothing can be hit; never changes */
 };
 
 /* Shared by the threads computing primitive boxes. */
@@ -134,6 +136,7 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
     aabb *build_boxes = malloc(((size_t)n + 1) * sizeof *build_boxes);
     if (!build_boxes)
         goto oom;
+    a->scene_box = aabb_empty();
     for (uint32_t i = 0; i < n; i++) {
         const scene_instance *si = &s->instances[i];
         a->instances[i] = (wbvh_instance){.geometry = &a->geoms[si->geometry], .to_object = si->to_object,
@@ -142,6 +145,8 @@ accel *accel_build(const scene *s, int threads, tess_error *err)
         a->instance_bounds[i] = instance_box(&a->placements[i], &a->geoms[si->geometry]);
         build_boxes[i] = aabb_is_empty(a->instance_bounds[i]) ? (aabb){v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 0.f)}
                                                               : a->instance_bounds[i];
+        if (!aabb_is_empty(a->instance_bounds[i]))
+            a->scene_box = aabb_grow(a->scene_box, a->instance_bounds[i]);
     }
     /* one instance per leaf: entering one costs a packet setup below, so the
      * wide nodes' exact per-ray masks should decide it, not a shared leaf */
@@ -192,6 +197,15 @@ size_t accel_bytes(const accel *a)
 }
 
 uint32_t accel_geometry_count(const accel *a) { return a->instance_count; }
+
+bool accel_scene_bounds(const accel *a, vec3 *lo, vec3 *hi)
+{
+    if (aabb_is_empty(a->scene_box))
+        return false;
+    *lo = a->scene_box.lo;
+    *hi = a->scene_box.hi;
+    return true;
+}
 
 /* Refit the instance level's stale nodes under the lock accel_pick takes. */
 static void refit(accel *a)

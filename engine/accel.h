@@ -75,6 +75,13 @@ bool accel_pick(const accel *a, const ray *r, hit *h);
 /* Instances: ids 0..count-1 as in scene.h (hit.geom_id). */
 uint32_t accel_geometry_count(const accel *a);
 
+/* The world box of every instance as the scene placed it, taken at build
+ * (the boxes traversal starts from: for triangles the vertices' box): what
+ * scene_bounds gives, in O(1), and the same whatever is hidden or moved
+ * later (ambient occlusion scales its ray length by it, and must not change
+ * while a part is hidden). False when nothing can be hit. Any thread. */
+bool accel_scene_bounds(const accel *a, vec3 *lo, vec3 *hi);
+
 /* Hide instance geom_id (or ids [first, first + count)) from every query
  * above, or show it again; ids out of range are ignored. Who may call these:
  * see the header comment. New accels hide nothing. */

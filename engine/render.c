@@ -831,6 +831,7 @@ render_settings render_settings_default(void)
 static const renderer renderers[] = {
     {"raytracer", RENDER_SHADE_PHONG, render_tile_sampled},
     {"eyelight", RENDER_SHADE_EYELIGHT, render_tile_sampled},
+    {"ao", RENDER_SHADE_PHONG, render_ao_tile}, /* engine/render_ao.c; shading unused */
 };
 
 const renderer *renderer_by_name(const char *name)

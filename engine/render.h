@@ -121,7 +121,11 @@ typedef struct renderer {
                         render_counts *counts);
 } renderer;
 
-#define RENDERER_NAMES "raytracer, eyelight"
+#define RENDERER_NAMES "raytracer, eyelight, ao"
+
+/* The ambient-occlusion renderer's tile function (engine/render_ao.h). */
+void render_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                    render_counts *counts);
 
 /* The renderer called `name`, or NULL. */
 const renderer *renderer_by_name(const char *name);

@@ -172,7 +172,8 @@ Test(bench_cli, help_documents_options_and_every_field)
     char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
     cr_assert_eq(run_bench(out, err, "--help"), 0, "%s", err);
     const char *options[] = {"--scene",  "--size",   "--threads", "--frames",  "--warmup",     "--shadows",
-                             "--camera", "--isa",    "--out",     "--flatten", "--part-txns", "PARTTXN"};
+                             "--camera", "--isa",    "--out",     "--flatten", "--part-txns", "PARTTXN",
+                             "--renderer", "--ao-rays", "--ao-dist", "--ao-filter", "--ao-interleave"};
     for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
         cr_expect(strstr(out, options[i]), "bench --help lacks %s", options[i]);
     for (size_t i = 0; i < BENCH_FIELD_COUNT; i++) {
@@ -208,6 +209,31 @@ Test(bench_cli, default_scene)
     cr_expect_eq(field(line, "spheres"), (double)s->spheres.count);
     cr_expect_eq(field(line, "mesh_bytes"), (double)mesh_b);
     scene_destroy(s);
+}
+
+/* --renderer ao: the AO fields; with the filter off the AO rays are hits x N
+ * (the peer's count), with it the apron adds primary and AO rays. */
+Test(bench_cli, ambient_occlusion_renderer)
+{
+    char line[OUTPUT_BYTES], buf[256];
+    run_ok("--size 64x36 --threads 2 --frames 2 --renderer ao --ao-rays 4 --ao-filter 1", line);
+    check_consistent(line);
+    cr_expect_str_eq(field_text(line, "renderer", buf, sizeof buf), "ao");
+    cr_expect_eq(field(line, "ao_rays"), 4);
+    cr_expect_eq(field(line, "ao_filter"), 1);
+    cr_expect(field(line, "ao_dist") > 0.0);
+    cr_expect_eq(field(line, "ao_rays_frame"), 4 * field(line, "hits"), "AO rays %g, hits %g", field(line, "ao_rays_frame"),
+                 field(line, "hits"));
+    cr_expect_eq(field(line, "primary_rays_frame"), 64 * 36);
+    cr_expect(field(line, "ao_mrays") > 0.0);
+    run_ok("--size 64x36 --threads 1 --frames 1 --renderer ao --ao-rays 4 --ao-dist 0.5", line);
+    cr_expect_eq(field(line, "ao_filter"), 5);
+    cr_expect_eq(field(line, "ao_dist"), 0.5);
+    cr_expect(field(line, "primary_rays_frame") > 64 * 36, "the apron traces pixels again");
+    char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
+    cr_expect_eq(run_bench(out, err, "--renderer ao --shadows --size 8x8"), 2, "ao with --shadows: %s", err);
+    cr_expect_eq(run_bench(out, err, "--renderer ao --ao-filter 4 --size 8x8"), 2, "an even filter: %s", err);
+    cr_expect_eq(run_bench(out, err, "--renderer phong --size 8x8"), 2, "an unknown renderer: %s", err);
 }
 
 Test(bench_cli, mesh_file_primary_and_shadows)

@@ -25,6 +25,7 @@
 #include "engine/frame_state.h"
 #include "engine/part_tree.h"
 #include "engine/render.h"
+#include "engine/render_ao.h"
 #include "engine/scene.h"
 #include "engine/txn.h"
 #include "wall/dump.h"
@@ -54,6 +55,8 @@ typedef struct bench_options {
     const char *isa;        /* kernels to use ("sse2", "avx2", "avx512"), or NULL: the engine's choice */
     bool flatten;           /* load the file as one mesh (mesh_load), not as an assembly */
     int part_txns;          /* > 0: time this many rounds of part transactions instead of frames */
+    bool ao;                /* --renderer ao: the ambient-occlusion renderer instead of eyelight */
+    render_settings settings; /* ao_rays, ao_distance, ao_interleave, ao_filter_px for --renderer ao */
 } bench_options;
 
 /* One timed frame. */
@@ -61,6 +64,8 @@ typedef struct frame_sample {
     double seconds;         /* wall time of render_image alone */
     uint64_t primary_rays, shadow_rays;
     uint64_t primary_hits; /* primary rays that hit something */
+    /* --renderer ao: shadow_rays holds its AO rays (render_ao.h), and primary rays include the
+     * filter's apron pixels traced again */
 } frame_sample;
 
 static void bench_usage(FILE *f)
@@ -82,6 +87,16 @@ static void bench_usage(FILE *f)
           "  --frames N       timed frames, each timed on its own (default 5)\n"
           "  --warmup N       untimed frames rendered first (default 1)\n"
           "  --shadows        trace a shadow ray per hit (default: primary rays only)\n"
+          "  --renderer NAME  eyelight (the default: the peer's shade) or ao: the ambient-occlusion\n"
+          "                   renderer (engine/render_ao.h), the peer's --ao workload: per hit N\n"
+          "                   cosine-distributed any-hit rays; its tiles are RENDER_TILE_PX as\n"
+          "                   render_image's\n"
+          "  --ao-rays N      AO rays per hit, 1..64 (default 8)\n"
+          "  --ao-dist D      AO ray length in world units (default: 0.1 x the scene box's diagonal,\n"
+          "                   as the peer's --ao-dist)\n"
+          "  --ao-filter PX   discontinuity filter edge, odd 1..9 (default 5; 1 = off: the peer's\n"
+          "                   workload exactly, no apron pixels traced twice)\n"
+          "  --ao-interleave K  K x K direction sets, 1..8 (default 4)\n"
           "  --camera ex,ey,ez,lx,ly,lz,ux,uy,uz,fov\n"
           "                   eye, look-at point, up vector, vertical field of view in degrees\n"
           "  --isa NAME       traversal kernels: sse2, avx2 or avx512 (default: the best this CPU\n"
@@ -108,6 +123,8 @@ static void bench_usage(FILE *f)
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
+          "        renderer=NAME and, with --renderer ao, ao_rays= ao_interleave= ao_filter= ao_dist=\n"
+          "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
           "                   '%' in it are written as %XX so that fields split on spaces\n"
           "  isa              the instruction set of the traversal kernels that ran\n"
@@ -138,6 +155,12 @@ static void bench_usage(FILE *f)
           "  geometries       geometries stored (meshes, the sphere set)\n"
           "  triangles_instanced  triangles over all instances: what the picture holds\n"
           "  bytes_per_instanced_tri  (mesh_bytes + accel_bytes) / triangles_instanced\n"
+          "  renderer         eyelight or ao\n"
+          "  ao_rays, ao_interleave, ao_filter  the AO settings used; ao_dist: the ray length used\n"
+          "  ao_rays_frame    AO rays of the last frame (apron pixels included)\n"
+          "  ao_mrays         median over the timed frames of (AO rays of the frame / seconds) / 1e6\n"
+          "  primary_rays_frame  primary rays of the last frame: W x H plus the apron pixels traced\n"
+          "                   again (with --ao-filter 1: W x H); prim_mrays and total_mrays count them\n"
           "--part-txns N prints instead, after the scene's status lines:\n"
           "  PARTTXN scene=PATH threads=N instances=N parts=N rounds=N check=ok|failed\n"
           "          section=PATH section_instances=N bolt=PATH bolt_instances=N part_instance=ID\n"
@@ -207,6 +230,32 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             o->isa = val;
         } else if (!strcmp(a, "--shadows")) {
             o->shadows = true;
+        } else if (!strcmp(a, "--renderer")) {
+            if (!(val = cli_option_value(argc, argv, &i)))
+                goto bad;
+            if (strcmp(val, "eyelight") && strcmp(val, "ao")) {
+                cli_error("--renderer: expected eyelight or ao, got '%s'", val);
+                goto bad;
+            }
+            o->ao = !strcmp(val, "ao");
+        } else if (!strcmp(a, "--ao-rays")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 64, &o->settings.ao_rays))
+                goto bad;
+        } else if (!strcmp(a, "--ao-interleave")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 8, &o->settings.ao_interleave))
+                goto bad;
+        } else if (!strcmp(a, "--ao-filter")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 9, &o->settings.ao_filter_px))
+                goto bad;
+            if (o->settings.ao_filter_px % 2 == 0) {
+                cli_error("--ao-filter: expected an odd edge 1..9, got %d", o->settings.ao_filter_px);
+                goto bad;
+            }
+        } else if (!strcmp(a, "--ao-dist")) {
+            double d;
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_double(a, val, 1e-30, 1e30, &d))
+                goto bad;
+            o->settings.ao_distance = (float)d;
         } else if (!strcmp(a, "--flatten")) {
             o->flatten = true;
         } else if (!strcmp(a, "--part-txns")) {
@@ -217,6 +266,10 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             cli_error("unknown option '%s' (see 'tessera bench --help')", a);
             goto bad;
         }
+    }
+    if (o->ao && o->shadows) {
+        cli_error("--shadows is for the eyelight renderer; --renderer ao traces AO rays only");
+        goto bad;
     }
     if (o->flatten && !o->scene_path) {
         cli_error("--flatten needs --scene FILE (a mesh or assembly file)");
@@ -363,13 +416,20 @@ static bool prepare(bench_options *o, cli_scene *cs)
 static void measure(const bench_options *o, const render_view *view, float *rgb, frame_sample *samples,
                     double *cpu_other)
 {
+    const pixel_sampler single = pixel_sampler_single();
     for (int f = 0; f < o->warmup; f++)
-        render_image(view, o->threads, rgb, NULL);
+        if (o->ao)
+            render_ao_image(view, &single, o->threads, RENDER_TILE_PX, rgb, NULL);
+        else
+            render_image(view, o->threads, rgb, NULL);
     double busy0 = cli_machine_busy_s(), own0 = cli_own_cpu_s(), wall0 = cli_now_s();
     for (int f = 0; f < o->frames; f++) {
         render_counts counts = {0, 0, 0, 0};
         double t0 = cli_now_s();
-        render_image(view, o->threads, rgb, &counts);
+        if (o->ao)
+            render_ao_image(view, &single, o->threads, RENDER_TILE_PX, rgb, &counts);
+        else
+            render_image(view, o->threads, rgb, &counts);
         samples[f].seconds = cli_now_s() - t0;
         samples[f].primary_rays = counts.primary_rays;
         samples[f].shadow_rays = counts.shadow_rays;
@@ -384,9 +444,11 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
     }
 }
 
-static void print_result(const bench_options *o, const scene *s, const accel *a, double load_s, double build_s,
+static void print_result(const bench_options *o, const render_view *view, double load_s, double build_s,
                          const frame_sample *samples, double cpu_other, double *scratch)
 {
+    const scene *s = view->scene;
+    const accel *a = view->accel;
     int n = o->frames;
     double prim_mrays, total_mrays, ms_median, ms_min = samples[0].seconds, ms_max = samples[0].seconds;
     for (int f = 0; f < n; f++) {
@@ -424,9 +486,21 @@ static void print_result(const bench_options *o, const scene *s, const accel *a,
     double bytes_per_instanced = instanced ? (double)(mesh_total + accel_total) / (double)instanced : 0.0;
     printf(" hit_rate=%.4f bytes_per_tri=%.1f mesh_bytes=%zu accel_bytes=%zu cpu_other=%.3f",
            hit_rate, bytes_per_tri, mesh_total, accel_total, cpu_other);
-    printf(" hits=%llu instances=%u geometries=%u triangles_instanced=%zu bytes_per_instanced_tri=%.2f\n",
+    printf(" hits=%llu instances=%u geometries=%u triangles_instanced=%zu bytes_per_instanced_tri=%.2f",
            (unsigned long long)last->primary_hits, s->instance_count, s->geometry_count, instanced,
            bytes_per_instanced);
+    printf(" renderer=%s", o->ao ? "ao" : "eyelight");
+    if (o->ao) {
+        for (int f = 0; f < n; f++) {
+            double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
+            scratch[f] = 1e-6 * (double)samples[f].shadow_rays / sec;
+        }
+        printf(" ao_rays=%d ao_interleave=%d ao_filter=%d ao_dist=%g ao_rays_frame=%llu ao_mrays=%.3f"
+               " primary_rays_frame=%llu", o->settings.ao_rays, o->settings.ao_interleave, o->settings.ao_filter_px,
+               (double)render_ao_distance(view), (unsigned long long)last->shadow_rays,
+               cli_median(scratch, (size_t)n), (unsigned long long)last->primary_rays);
+    }
+    printf("\n");
     fflush(stdout);
 }
 
@@ -621,7 +695,8 @@ int cli_bench(int argc, char **argv)
         if (!strcmp(argv[i], "--wall"))
             return cli_bench_wall(argc, argv);
     bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
-                       .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP};
+                       .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP,
+                       .settings = render_settings_default()};
     int code = 0;
     if (!parse_options(argc, argv, &o, &code))
         return code;
@@ -649,9 +724,9 @@ int cli_bench(int argc, char **argv)
         goto done;
     }
     render_view view = {cs.scene, cs.accel, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
-                        RENDER_SHADE_EYELIGHT, NULL, NULL};
+                        RENDER_SHADE_EYELIGHT, NULL, &o.settings};
     measure(&o, &view, rgb, samples, &cpu_other);
-    print_result(&o, cs.scene, cs.accel, cs.load_s, cs.build_s, samples, cpu_other, scratch);
+    print_result(&o, &view, cs.load_s, cs.build_s, samples, cpu_other, scratch);
     if (o.out) {
         tess_error err = {{0}};
         if (has_suffix(o.out, ".pfm")) {

@@ -1,0 +1,408 @@
+/* render_ao.c - the ambient-occlusion renderer (render_ao.h). */
+#include "render_ao.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "accel.h"
+#include "ao.h"
+#include "log.h"
+#include "packet.h"
+#include "scene.h"
+#include "surface.h"
+
+/* Primary rays per packet: 8 x 8 pixels, as the raytracer. */
+#define AO_BLOCK_PX 8
+/* A tile is worked through in sub-tiles of at most this edge, so the
+ * per-thread buffers (sub-tile plus apron) have a fixed size whatever tile
+ * size the caller uses; 16 is the render threads' tile (RENDER_TILE_PX). */
+#define AO_SUBTILE_PX 16
+#define AO_APRON_MAX_PX ((AO_MAX_FILTER_PX - 1) / 2)
+#define AO_REGION_MAX_PX (AO_SUBTILE_PX + 2 * AO_APRON_MAX_PX)
+#define AO_REGION_MAX_PIXELS (AO_REGION_MAX_PX * AO_REGION_MAX_PX)
+
+/* How AO rays are grouped into packets (measured on the bunny, see the
+ * report of issue 15 / tools/bench_ao.sh):
+ *   AO_PACKETS_BY_SAMPLE  ray s of every hit of an 8 x 8 block in one packet
+ *                         (N packets a block), as the Embree peer does;
+ *   AO_PACKETS_BY_OCTANT  a block's rays binned by the signs of their world
+ *                         directions, 64 to a packet, so every packet has
+ *                         constant signs (interval culling in traversal). */
+enum ao_packet_order { AO_PACKETS_BY_SAMPLE, AO_PACKETS_BY_OCTANT };
+#ifndef AO_PACKET_ORDER
+#define AO_PACKET_ORDER AO_PACKETS_BY_OCTANT
+#endif
+
+/* What one view's settings ask for, clamped into range once per tile. */
+typedef struct ao_params {
+    int rays;        /* N, 1 .. AO_MAX_RAYS */
+    int interleave;  /* K, 1 .. AO_MAX_INTERLEAVE */
+    int apron_px;    /* (filter edge - 1) / 2, 0 .. AO_APRON_MAX_PX */
+    float distance;  /* AO ray length, world units (unit directions) */
+} ao_params;
+
+/* The raw term and what the filter tests, per pixel of a region (row-major,
+ * region width `stride`). */
+typedef struct ao_region {
+    int x0, y0, width, height; /* pixels [x0, x0 + width) x [y0, y0 + height), inside the image */
+    uint32_t geom_id[AO_REGION_MAX_PIXELS]; /* hit instance, RAY_INVALID_ID for a miss */
+    float depth[AO_REGION_MAX_PIXELS];      /* hit distance along the unit primary ray */
+    vec3 position[AO_REGION_MAX_PIXELS];    /* world */
+    vec3 normal[AO_REGION_MAX_PIXELS];      /* unit geometric normal facing the eye */
+    vec3 kd[AO_REGION_MAX_PIXELS];
+    float open[AO_REGION_MAX_PIXELS];       /* raw unoccluded fraction, [0, 1] */
+} ao_region;
+
+/* Per thread, ~130 KB: too big for a worker's stack; one tile at a time. */
+static _Thread_local struct ao_scratch {
+    ray_packet primary;
+    ray_packet ao[8];                 /* by sample: [0]; by octant: one filling per octant */
+    uint8_t owner[8][PACKET_MAX_RAYS]; /* block pixel of each AO ray of ao[o] */
+    ao_direction_sets sets;           /* valid when sets_ready, for its (K, N, frame) */
+    bool sets_ready;
+    ao_region region;
+    vec3 sum[AO_SUBTILE_PX * AO_SUBTILE_PX]; /* jittered: colours summed over strata */
+} scratch;
+
+float render_ao_distance(const render_view *v)
+{
+    render_settings defaults = render_settings_default();
+    const render_settings *st = v->settings ? v->settings : &defaults;
+    if (st->ao_distance > 0.f)
+        return st->ao_distance;
+    vec3 lo, hi;
+    if (!accel_scene_bounds(v->accel, &lo, &hi))
+        return 0.f;
+    return 0.1f * v3_length(v3_sub(hi, lo));
+}
+
+static ao_params resolve_params(const render_view *v)
+{
+    render_settings defaults = render_settings_default();
+    const render_settings *st = v->settings ? v->settings : &defaults;
+    ao_params p;
+    p.rays = st->ao_rays < 1 ? 1 : st->ao_rays > AO_MAX_RAYS ? AO_MAX_RAYS : st->ao_rays;
+    p.interleave = st->ao_interleave < 1 ? 1 : st->ao_interleave > AO_MAX_INTERLEAVE ? AO_MAX_INTERLEAVE
+                                                                                       : st->ao_interleave;
+    /* an even edge counts as the odd one below it */
+    int filter = st->ao_filter_px < 1 ? 1 : st->ao_filter_px > AO_MAX_FILTER_PX ? AO_MAX_FILTER_PX : st->ao_filter_px;
+    p.apron_px = (filter - 1) / 2;
+    p.distance = render_ao_distance(v);
+    return p;
+}
+
+/* EVERY AO ray is cast here: the active rays of p, returns the occluded
+ * ones. (Cutting planes will clip the rays here: one place to change.) */
+static uint64_t trace_ao_packet(const render_view *v, ray_packet *p, render_counts *counts)
+{
+    counts->shadow_rays += (uint64_t)__builtin_popcountll(p->active);
+    return accel_occluded_packet(v->accel, packet_whole(p));
+}
+
+/* Put AO ray `lane` of packet p: from `origin` along unit `dir` for `length`. */
+static void set_ao_ray(ray_packet *p, uint32_t lane, vec3 origin, vec3 dir, float length)
+{
+    p->org_x[lane] = origin.x, p->org_y[lane] = origin.y, p->org_z[lane] = origin.z;
+    p->dir_x[lane] = dir.x, p->dir_y[lane] = dir.y, p->dir_z[lane] = dir.z;
+    p->t_near[lane] = 0.f;
+    p->t_far[lane] = length;
+}
+
+/* The AO rays of one traced primary block: hits `hits` (bits = block
+ * pixels, row-major w wide, block at (bx, by) of the image), their origins
+ * and world bases; adds each ray found occluded to occluded[pixel]. */
+static void trace_block_ao(const render_view *v, const ao_params *ap, int bx, int by, int w, uint64_t hits,
+                           const vec3 *origin, const ao_basis *basis, int *occluded, render_counts *counts)
+{
+    const ao_direction_sets *sets = &scratch.sets;
+    if (AO_PACKET_ORDER == AO_PACKETS_BY_SAMPLE) {
+        ray_packet *p = &scratch.ao[0];
+        uint32_t count = 64u - (uint32_t)__builtin_clzll(hits);
+        for (int s = 0; s < ap->rays; s++) {
+            packet_reset(p, count, PACKET_NORMALIZED);
+            p->active = hits;
+            for (uint64_t m = hits; m; m &= m - 1) {
+                uint32_t i = (uint32_t)__builtin_ctzll(m);
+                int set = ao_pixel_set(ap->interleave, bx + (int)i % w, by + (int)i / w);
+                vec3 dir = ao_basis_to_world(&basis[i], ao_direction_local(sets, set, s));
+                set_ao_ray(p, i, origin[i], dir, ap->distance);
+            }
+            for (uint64_t m = trace_ao_packet(v, p, counts); m; m &= m - 1)
+                occluded[__builtin_ctzll(m)]++;
+        }
+        return;
+    }
+    /* by octant: fill one packet per sign pattern, trace it when full, then the rest */
+    uint32_t fill[8] = {0};
+    for (uint64_t m = hits; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        int set = ao_pixel_set(ap->interleave, bx + (int)i % w, by + (int)i / w);
+        for (int s = 0; s < ap->rays; s++) {
+            vec3 dir = ao_basis_to_world(&basis[i], ao_direction_local(sets, set, s));
+            /* the sign pattern as the kernels see it: zero counts as + */
+            unsigned octant = (dir.x < 0.f ? 1u : 0u) | (dir.y < 0.f ? 2u : 0u) | (dir.z < 0.f ? 4u : 0u);
+            ray_packet *p = &scratch.ao[octant];
+            uint32_t lane = fill[octant]++;
+            set_ao_ray(p, lane, origin[i], dir, ap->distance);
+            scratch.owner[octant][lane] = (uint8_t)i;
+            if (lane + 1 == PACKET_MAX_RAYS) {
+                packet_reset(p, PACKET_MAX_RAYS, PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
+                for (uint64_t o = trace_ao_packet(v, p, counts); o; o &= o - 1)
+                    occluded[scratch.owner[octant][__builtin_ctzll(o)]]++;
+                fill[octant] = 0;
+            }
+        }
+    }
+    for (unsigned octant = 0; octant < 8; octant++) {
+        if (!fill[octant])
+            continue;
+        ray_packet *p = &scratch.ao[octant];
+        packet_reset(p, fill[octant], PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
+        for (uint64_t o = trace_ao_packet(v, p, counts); o; o &= o - 1)
+            occluded[scratch.owner[octant][__builtin_ctzll(o)]]++;
+    }
+}
+
+/* Primary rays of the w x h block at image pixel (bx, by) for sampler s's
+ * stratum (i, j) into scratch.primary. */
+static void block_primary(const render_view *v, const pixel_sampler *s, int bx, int by, int w, int h, int i, int j)
+{
+    if (s->kind == PIXEL_SAMPLER_SINGLE) {
+        packet_primary(&scratch.primary, &v->camera, bx, by, w, h);
+        return;
+    }
+    alignas(64) float sample_x[PACKET_MAX_RAYS], sample_y[PACKET_MAX_RAYS];
+    pixel_sampler_block_positions(s, bx, by, w, h, i, j, sample_x, sample_y);
+    packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)(w * h));
+}
+
+/* The raw term of every pixel of scratch.region for stratum (i, j). */
+static void region_raw(const render_view *v, const pixel_sampler *s, const ao_params *ap, int i, int j,
+                       render_counts *counts)
+{
+    ao_region *rg = &scratch.region;
+    ray_packet *p = &scratch.primary;
+    vec3 origin[PACKET_MAX_RAYS];
+    ao_basis basis[PACKET_MAX_RAYS];
+    int occluded[PACKET_MAX_RAYS];
+    for (int by = rg->y0; by < rg->y0 + rg->height; by += AO_BLOCK_PX)
+        for (int bx = rg->x0; bx < rg->x0 + rg->width; bx += AO_BLOCK_PX) {
+            int w = rg->x0 + rg->width - bx < AO_BLOCK_PX ? rg->x0 + rg->width - bx : AO_BLOCK_PX;
+            int h = rg->y0 + rg->height - by < AO_BLOCK_PX ? rg->y0 + rg->height - by : AO_BLOCK_PX;
+            block_primary(v, s, bx, by, w, h, i, j);
+            accel_intersect_packet(v->accel, packet_whole(p));
+            counts->primary_rays += p->count;
+            uint64_t hits = 0;
+            for (uint32_t r = 0; r < p->count; r++) {
+                int at = (by - rg->y0 + (int)r / w) * rg->width + (bx - rg->x0 + (int)r % w);
+                if (p->hit_t[r] == INFINITY) {
+                    rg->geom_id[at] = RAY_INVALID_ID;
+                    continue;
+                }
+                hits |= 1ull << r;
+                ray pr = packet_get_ray(p, r);
+                hit ph = packet_get_hit(p, r);
+                surface sf = surface_describe(v, &pr, &ph, true);
+                rg->geom_id[at] = ph.geom_id;
+                rg->depth[at] = ph.t;
+                rg->position[at] = sf.position;
+                rg->normal[at] = sf.geometric_n;
+                rg->kd[at] = sf.kd;
+                origin[r] = ray_offset_origin((surface_point){sf.position, sf.position_error}, sf.geometric_n);
+                basis[r] = ao_basis_from_normal(sf.geometric_n);
+                occluded[r] = 0;
+            }
+            if (!hits)
+                continue;
+            counts->primary_hits += (uint64_t)__builtin_popcountll(hits);
+            trace_block_ao(v, ap, bx, by, w, hits, origin, basis, occluded, counts);
+            const float rays = (float)ap->rays;
+            for (uint64_t m = hits; m; m &= m - 1) {
+                int r = __builtin_ctzll(m);
+                int at = (by - rg->y0 + r / w) * rg->width + (bx - rg->x0 + r % w);
+                rg->open[at] = (float)(ap->rays - occluded[r]) / rays;
+            }
+        }
+}
+
+/* The filtered colour of region pixel (x, y) (image coordinates, a pixel
+ * of the region whose whole box inside the image lies in the region). */
+static vec3 filtered_colour(const render_view *v, const ao_params *ap, int x, int y)
+{
+    const ao_region *rg = &scratch.region;
+    int at = (y - rg->y0) * rg->width + (x - rg->x0);
+    if (rg->geom_id[at] == RAY_INVALID_ID)
+        return v->scene->background;
+    const uint32_t id = rg->geom_id[at];
+    const vec3 n = rg->normal[at], pos = rg->position[at];
+    const float plane_tolerance = AO_FILTER_PLANE_REL * rg->depth[at];
+    int qx0 = x - ap->apron_px < rg->x0 ? rg->x0 : x - ap->apron_px;
+    int qy0 = y - ap->apron_px < rg->y0 ? rg->y0 : y - ap->apron_px;
+    int qx1 = x + ap->apron_px >= rg->x0 + rg->width ? rg->x0 + rg->width - 1 : x + ap->apron_px;
+    int qy1 = y + ap->apron_px >= rg->y0 + rg->height ? rg->y0 + rg->height - 1 : y + ap->apron_px;
+    float sum = 0.f;
+    int taken = 0;
+    for (int qy = qy0; qy <= qy1; qy++)
+        for (int qx = qx0; qx <= qx1; qx++) {
+            int q = (qy - rg->y0) * rg->width + (qx - rg->x0);
+            if (rg->geom_id[q] != id || v3_dot(rg->normal[q], n) < AO_FILTER_MIN_COS ||
+                fabsf(v3_dot(n, v3_sub(rg->position[q], pos))) > plane_tolerance)
+                continue;
+            sum += rg->open[q];
+            taken++;
+        }
+    /* taken >= 1: p passes its own tests */
+    return v3_scale(rg->kd[at], sum / (float)taken);
+}
+
+/* The frame index (ao.h) of stratum (i, j) of sampler s. */
+static uint32_t stratum_frame(const pixel_sampler *s, int i, int j)
+{
+    switch (s->kind) {
+    case PIXEL_SAMPLER_JITTERED:
+        return (uint32_t)(j * s->k + i);
+    case PIXEL_SAMPLER_STRATUM:
+        return (uint32_t)s->stratum;
+    case PIXEL_SAMPLER_SINGLE:
+    default:
+        return 0u;
+    }
+}
+
+static void ensure_sets(const ao_params *ap, uint32_t frame)
+{
+    ao_direction_sets *d = &scratch.sets;
+    if (scratch.sets_ready && d->interleave == ap->interleave && d->ray_count == ap->rays && d->frame == frame)
+        return;
+    ao_direction_sets_fill(d, ap->interleave, ap->rays, frame);
+    scratch.sets_ready = true;
+}
+
+static void store_pixel(const camera_basis *cam, int x, int y, vec3 c, float *rgb)
+{
+    float *out = rgb + 3 * ((size_t)y * (size_t)cam->width_px + (size_t)x);
+    out[0] = c.x;
+    out[1] = c.y;
+    out[2] = c.z;
+}
+
+/* One sub-tile [x0, x1) x [y0, y1) (at most AO_SUBTILE_PX a side). */
+static void render_subtile(const render_view *v, const pixel_sampler *s, const ao_params *ap, int x0, int y0,
+                           int x1, int y1, float *rgb, render_counts *counts)
+{
+    const camera_basis *cam = &v->camera;
+    ao_region *rg = &scratch.region;
+    int rx0 = x0 - ap->apron_px < 0 ? 0 : x0 - ap->apron_px;
+    int ry0 = y0 - ap->apron_px < 0 ? 0 : y0 - ap->apron_px;
+    int rx1 = x1 + ap->apron_px > cam->width_px ? cam->width_px : x1 + ap->apron_px;
+    int ry1 = y1 + ap->apron_px > cam->height_px ? cam->height_px : y1 + ap->apron_px;
+    rg->x0 = rx0, rg->y0 = ry0, rg->width = rx1 - rx0, rg->height = ry1 - ry0;
+    const int strata = pixel_sampler_strata(s), w = x1 - x0;
+    if (s->kind != PIXEL_SAMPLER_JITTERED) {
+        ensure_sets(ap, stratum_frame(s, 0, 0));
+        region_raw(v, s, ap, 0, 0, counts);
+        for (int y = y0; y < y1; y++)
+            for (int x = x0; x < x1; x++)
+                store_pixel(cam, x, y, filtered_colour(v, ap, x, y), rgb);
+        return;
+    }
+    for (int r = 0; r < w * (y1 - y0); r++)
+        scratch.sum[r] = v3(0.f, 0.f, 0.f);
+    for (int j = 0; j < strata; j++)
+        for (int i = 0; i < strata; i++) {
+            ensure_sets(ap, stratum_frame(s, i, j));
+            region_raw(v, s, ap, i, j, counts);
+            for (int y = y0; y < y1; y++)
+                for (int x = x0; x < x1; x++) {
+                    vec3 *sum = &scratch.sum[(y - y0) * w + (x - x0)];
+                    *sum = v3_add(*sum, filtered_colour(v, ap, x, y));
+                }
+        }
+    const float samples = (float)(strata * strata);
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            vec3 c = scratch.sum[(y - y0) * w + (x - x0)];
+            store_pixel(cam, x, y, v3(c.x / samples, c.y / samples, c.z / samples), rgb);
+        }
+}
+
+void render_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                    render_counts *counts)
+{
+    const ao_params ap = resolve_params(v);
+    for (int sy = y0; sy < y1; sy += AO_SUBTILE_PX)
+        for (int sx = x0; sx < x1; sx += AO_SUBTILE_PX) {
+            int ex = x1 - sx < AO_SUBTILE_PX ? x1 : sx + AO_SUBTILE_PX;
+            int ey = y1 - sy < AO_SUBTILE_PX ? y1 : sy + AO_SUBTILE_PX;
+            render_subtile(v, s, &ap, sx, sy, ex, ey, rgb, counts);
+        }
+}
+
+/* ---- a threaded driver (benchmarks, tests) ------------------------------ */
+
+/* Shared by the threads of one render_ao_image call. */
+typedef struct ao_tile_queue {
+    const render_view *view;
+    const pixel_sampler *sampler;
+    float *rgb;
+    int tile_px, tiles_x, tile_count;
+    atomic_int next_tile; /* next tile to hand out; >= tile_count: done */
+    atomic_uint_fast64_t primary_rays, primary_hits, ao_rays; /* totals, added once per thread */
+} ao_tile_queue;
+
+static void *ao_worker(void *arg)
+{
+    ao_tile_queue *q = arg;
+    const camera_basis *cam = &q->view->camera;
+    render_counts counts = {0, 0, 0};
+    for (;;) {
+        int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
+        if (tile >= q->tile_count)
+            break;
+        int x0 = (tile % q->tiles_x) * q->tile_px, y0 = (tile / q->tiles_x) * q->tile_px;
+        int x1 = x0 + q->tile_px < cam->width_px ? x0 + q->tile_px : cam->width_px;
+        int y1 = y0 + q->tile_px < cam->height_px ? y0 + q->tile_px : cam->height_px;
+        render_ao_tile(q->view, q->sampler, x0, y0, x1, y1, q->rgb, &counts);
+    }
+    atomic_fetch_add_explicit(&q->primary_rays, counts.primary_rays, memory_order_relaxed);
+    atomic_fetch_add_explicit(&q->primary_hits, counts.primary_hits, memory_order_relaxed);
+    atomic_fetch_add_explicit(&q->ao_rays, counts.shadow_rays, memory_order_relaxed);
+    return NULL;
+}
+
+/* Most threads render_ao_image starts (render.c's limit). */
+#define AO_MAX_THREADS 256
+
+void render_ao_image(const render_view *v, const pixel_sampler *s, int threads, int tile_px, float *rgb,
+                     render_counts *counts)
+{
+    ao_tile_queue q = {.view = v, .sampler = s, .rgb = rgb, .tile_px = tile_px < 1 ? 1 : tile_px};
+    q.tiles_x = (v->camera.width_px + q.tile_px - 1) / q.tile_px;
+    q.tile_count = q.tiles_x * ((v->camera.height_px + q.tile_px - 1) / q.tile_px);
+    atomic_init(&q.next_tile, 0);
+    atomic_init(&q.primary_rays, 0);
+    atomic_init(&q.primary_hits, 0);
+    atomic_init(&q.ao_rays, 0);
+    threads = threads < 1 ? 1 : threads > AO_MAX_THREADS ? AO_MAX_THREADS : threads;
+    pthread_t ids[AO_MAX_THREADS];
+    int started = 0;
+    for (int i = 1; i < threads; i++) {
+        if (pthread_create(&ids[started], NULL, ao_worker, &q) != 0) {
+            log_warn("render_ao: could start only %d of %d render threads", started + 1, threads);
+            break;
+        }
+        started++;
+    }
+    ao_worker(&q);
+    for (int i = 0; i < started; i++)
+        pthread_join(ids[i], NULL);
+    if (counts) {
+        counts->primary_rays = atomic_load(&q.primary_rays);
+        counts->primary_hits = atomic_load(&q.primary_hits);
+        counts->shadow_rays = atomic_load(&q.ao_rays);
+    }
+}

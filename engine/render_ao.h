@@ -1,0 +1,69 @@
+/* render_ao.h - the ambient-occlusion renderer "ao" (renderer table, render.h).
+ *
+ * Pixel value (linear RGB):
+ *   hit:  kd x A, where A is the filtered unoccluded fraction below and kd
+ *         the surface's diffuse colour (surface_describe: vertex colour,
+ *         material, frame-state colour and highlight): parts keep their
+ *         colour and darken in creases. (Grey AO alone is a white kd.)
+ *   miss: the scene's background.
+ * Lights, the ambient colour and materials' ambient factors play no part.
+ *
+ * RAW TERM. At a primary hit, N = settings.ao_rays rays leave the surface
+ * (origin ray_offset_origin along the geometric normal n facing the
+ * viewer) in cosine-distributed directions about n from the pixel's
+ * interleaved direction set (ao.h: set (x mod K, y mod K), frame = the pixel
+ * sampler's stratum), rotated into the world by ao_basis_from_normal(n), with
+ * length settings.ao_distance (<= 0: 0.1 x the diagonal of the scene's box,
+ * accel_scene_bounds). raw = 1 - occluded / N: the cosine-weighted
+ * unoccluded fraction of the hemisphere within that distance.
+ *
+ * FILTER (discontinuity buffer; Keller and Heidrich 2001, Wald et al.
+ * "Interactive Global Illumination", 2002). A = the mean of raw over the
+ * pixels q of the ao_filter_px x ao_filter_px box around pixel p (1: off)
+ * that pass all three tests against p:
+ *   part:   q hit the same instance (hit.geom_id);
+ *   normal: dot(n_q, n_p) >= AO_FILTER_MIN_COS (0.9: within ~26 degrees);
+ *   depth:  |dot(n_p, P_q - P_p)| <= AO_FILTER_PLANE_REL x t_p (q lies
+ *           within 1 % of p's distance from the eye of p's tangent plane:
+ *           a depth test that a surface seen at a grazing angle passes);
+ * p itself always passes. Only the occlusion term is filtered, never kd.
+ *
+ * TILES. A tile's pixels need raw terms of pixels up to (ao_filter_px - 1) / 2
+ * outside it (the apron): the renderer traces them again for each tile,
+ * each exactly as its own tile does (a pure function of the pixel), so an
+ * image does not depend on tile size, tile order or thread count. The apron
+ * costs rays: a 16 x 16 tile with the 5 x 5 filter traces 20 x 20 pixels.
+ *
+ * SAMPLERS. single: the pixel centre, frame 0. stratum: the stratum's jittered
+ * position, frame = stratum (the governor's accumulation converges: ao.h).
+ * jittered:k: the mean over the k^2 strata of what each stratum frame gives,
+ * summed in stratum order and divided by k^2 (so it equals the accumulation).
+ *
+ * COUNTS. render_counts has no AO field: AO rays are counted in
+ * counts->shadow_rays (this renderer traces no other secondary rays), primary
+ * rays (apron pixels included) in primary_rays, and hits in primary_hits. */
+#ifndef TESSERA_RENDER_AO_H
+#define TESSERA_RENDER_AO_H
+
+#include "render.h"
+#include "sampler.h"
+
+#define AO_FILTER_MIN_COS 0.9f
+#define AO_FILTER_PLANE_REL 0.01f
+
+/* The AO ray length a view uses (world units): its settings' ao_distance, or
+ * 0.1 x the scene box's diagonal when that is <= 0 (0 for an empty scene). */
+float render_ao_distance(const render_view *v);
+
+/* The renderer's tile function, render_ao_tile, is declared in render.h
+ * (the renderer table needs it there). */
+
+/* The whole image with `threads` threads (the caller's included) taking
+ * tile_px x tile_px tiles of render_ao_tile from an atomic counter (tile_px
+ * >= 1; RENDER_TILE_PX is what render_image uses). For benchmarks and tests;
+ * the pipeline drives render_ao_tile through its traverser. `counts` may be
+ * NULL. */
+void render_ao_image(const render_view *v, const pixel_sampler *s, int threads, int tile_px, float *rgb,
+                     render_counts *counts);
+
+#endif

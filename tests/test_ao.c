@@ -1,0 +1,448 @@
+/* test_ao.c - the ambient-occlusion renderer and its sampling (engine/ao.h,
+ * engine/render_ao.h) against analytic results, and its images' independence
+ * of threads, tiles and the filter where nothing is occluded.
+ *
+ * Materials are white (kd = 1), so a pixel's value is the AO term itself. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/accel.h"
+#include "engine/ao.h"
+#include "engine/render.h"
+#include "engine/render_ao.h"
+#include "engine/scene.h"
+
+static const double pi_d = 3.14159265358979323846;
+
+static scene *white_scene(int *material_id)
+{
+    scene *s = scene_create();
+    cr_assert(s);
+    s->background = v3(0.25f, 0.5f, 0.75f);
+    material m = material_default();
+    m.model = MATERIAL_LAMBERT;
+    m.diffuse = v3(1.f, 1.f, 1.f);
+    *material_id = scene_add_material(s, &m);
+    cr_assert(*material_id >= 0);
+    return s;
+}
+
+/* A quad v0 v1 v2 v3 (two triangles), appended to mesh m. */
+static void quad_into(mesh *m, vec3 a, vec3 b, vec3 c, vec3 d)
+{
+    uint32_t base = (uint32_t)m->vertex_count;
+    cr_assert(mesh_add_vertex(m, a.x, a.y, a.z) && mesh_add_vertex(m, b.x, b.y, b.z) &&
+              mesh_add_vertex(m, c.x, c.y, c.z) && mesh_add_vertex(m, d.x, d.y, d.z));
+    cr_assert(mesh_add_triangle(m, base, base + 1, base + 2) && mesh_add_triangle(m, base, base + 2, base + 3));
+}
+
+static void add_quad(scene *s, int mat, vec3 a, vec3 b, vec3 c, vec3 d, const char *name)
+{
+    mesh *m = mesh_create();
+    cr_assert(m);
+    quad_into(m, a, b, c, d);
+    cr_assert(scene_add_mesh(s, m, (uint32_t)mat, name) >= 0);
+}
+
+/* The floor y = 0, |x|, |z| <= half. */
+static void add_floor(scene *s, int mat, float half)
+{
+    add_quad(s, mat, v3(-half, 0.f, -half), v3(half, 0.f, -half), v3(half, 0.f, half), v3(-half, 0.f, half), "floor");
+}
+
+typedef struct ao_image {
+    int w, h;
+    float *rgb;
+} ao_image;
+
+/* Render with render_ao_image (threads, tile_px) and the given settings and sampler. */
+static ao_image render(const scene *s, const accel *a, camera_desc cam, int w, int h, const render_settings *st,
+                       pixel_sampler ps, int threads, int tile_px)
+{
+    ao_image im = {w, h, calloc((size_t)w * (size_t)h * 3, sizeof(float))};
+    cr_assert(im.rgb);
+    render_view v = {s, a, camera_basis_make(&cam, w, h), false, RENDER_SHADE_PHONG, NULL, st};
+    render_ao_image(&v, &ps, threads, tile_px, im.rgb, NULL);
+    return im;
+}
+
+static accel *build(const scene *s)
+{
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "accel_build: %s", err.msg);
+    return a;
+}
+
+static bool same_pixels(const ao_image *x, const ao_image *y)
+{
+    return x->w == y->w && x->h == y->h && !memcmp(x->rgb, y->rgb, (size_t)x->w * (size_t)x->h * 3 * sizeof(float));
+}
+
+/* ---- sampling ------------------------------------------------------------ */
+
+Test(ao, directions_are_unit_and_above_the_surface)
+{
+    static ao_direction_sets d;
+    for (int k = 1; k <= AO_MAX_INTERLEAVE; k += 3)
+        for (int n = 1; n <= AO_MAX_RAYS; n = n * 2 + 1)
+            for (uint32_t f = 0; f < 5; f++) {
+                ao_direction_sets_fill(&d, k, n, f);
+                for (int i = 0; i < k * k * n; i++) {
+                    float len = sqrtf(d.x[i] * d.x[i] + d.y[i] * d.y[i] + d.z[i] * d.z[i]);
+                    cr_assert(fabsf(len - 1.f) <= 4e-7f, "k %d n %d f %u: |dir %d| = %.9g", k, n, f, i, len);
+                    cr_assert(d.z[i] > 0.f, "k %d n %d f %u: dir %d has z %g", k, n, f, i, d.z[i]);
+                }
+            }
+}
+
+/* For N a power of 2 each set is a (0, log2 N, 2)-net: one u in each of the
+ * N strips [i / N, (i + 1) / N); the K^2 sets of a frame together one u in
+ * each of K^2 N strips (ao.h). */
+Test(ao, sets_are_stratified_alone_and_together)
+{
+    const int k = 4, n = 8;
+    for (uint32_t f = 0; f < 6; f++) {
+        int all[4 * 4 * 8] = {0};
+        for (int c = 0; c < k * k; c++) {
+            int own_u[8] = {0}, own_v[8] = {0};
+            for (int s = 0; s < n; s++) {
+                float u, v;
+                ao_set_point(n, f, c, s, &u, &v);
+                own_u[(int)(u * (float)n)]++;
+                own_v[(int)(v * (float)n)]++;
+                all[(int)(u * (float)(k * k * n))]++;
+            }
+            for (int i = 0; i < n; i++)
+                cr_assert(own_u[i] == 1 && own_v[i] == 1, "frame %u set %d: strip %d holds %d u, %d v", f, c, i,
+                          own_u[i], own_v[i]);
+        }
+        for (int i = 0; i < k * k * n; i++)
+            cr_assert_eq(all[i], 1, "frame %u: fine strip %d holds %d points", f, i, all[i]);
+    }
+}
+
+/* Cosine-weighted directions: E[z] = 2/3, E[z^2] = 1/2, E[x] = E[y] = 0, both
+ * over all sets and frame after frame for ONE set (what a pixel accumulates
+ * without the filter). */
+Test(ao, cosine_weighted_means_converge)
+{
+    static ao_direction_sets d;
+    const int k = 4, n = 8;
+    double all_z = 0, all_z2 = 0, all_x = 0, one_z = 0, one_x = 0, one_y = 0;
+    int all_count = 0, one_count = 0;
+    for (uint32_t f = 0; f < 256; f++) {
+        ao_direction_sets_fill(&d, k, n, f);
+        for (int i = 0; i < k * k * n; i++) {
+            all_z += d.z[i], all_z2 += (double)d.z[i] * d.z[i], all_x += d.x[i];
+            all_count++;
+        }
+        const int set = 5;
+        for (int s = 0; s < n; s++) {
+            vec3 w = ao_direction_local(&d, set, s);
+            one_z += w.z, one_x += w.x, one_y += w.y;
+            one_count++;
+        }
+    }
+    cr_expect(fabs(all_z / all_count - 2.0 / 3.0) < 1e-3, "mean z %g over all sets", all_z / all_count);
+    cr_expect(fabs(all_z2 / all_count - 0.5) < 1e-3, "mean z^2 %g over all sets", all_z2 / all_count);
+    cr_expect(fabs(all_x / all_count) < 1e-3, "mean x %g over all sets", all_x / all_count);
+    cr_expect(fabs(one_z / one_count - 2.0 / 3.0) < 3e-3, "mean z %g of one set over frames", one_z / one_count);
+    cr_expect(fabs(one_x / one_count) < 3e-3 && fabs(one_y / one_count) < 3e-3, "mean x %g, y %g of one set",
+              one_x / one_count, one_y / one_count);
+}
+
+Test(ao, basis_is_orthonormal_and_right_handed)
+{
+    const vec3 normals[] = {v3(0.f, 0.f, 1.f), v3(0.f, 0.f, -1.f), v3(1.f, 0.f, 0.f), v3(0.f, 1.f, 0.f),
+                            v3(0.f, 1e-7f, -1.f), v3(1e-8f, 0.f, 1.f), v3(0.6f, 0.f, -0.8f)};
+    for (size_t i = 0; i < sizeof normals / sizeof normals[0] + 200; i++) {
+        vec3 n;
+        if (i < sizeof normals / sizeof normals[0])
+            n = normals[i];
+        else { /* a spiral over the sphere */
+            double t = (double)(i - 7) / 200.0, z = 1.0 - 2.0 * t, r = sqrt(1.0 - z * z), phi = 2.399963 * (double)i;
+            n = v3_normalize(v3((float)(r * cos(phi)), (float)(r * sin(phi)), (float)z));
+        }
+        ao_basis f = ao_basis_from_normal(n);
+        cr_assert(fabsf(v3_length(f.t) - 1.f) < 1e-5f && fabsf(v3_length(f.b) - 1.f) < 1e-5f);
+        cr_assert(fabsf(v3_dot(f.t, f.b)) < 1e-5f && fabsf(v3_dot(f.t, n)) < 1e-5f && fabsf(v3_dot(f.b, n)) < 1e-5f);
+        vec3 c = v3_cross(f.t, f.b);
+        cr_assert(v3_dot(c, n) > 0.9999f, "normal %g %g %g: t x b is not n", n.x, n.y, n.z);
+    }
+}
+
+/* ---- analytic scenes ----------------------------------------------------- */
+
+/* Looking down at the floor from height 1 (up +Z: the view is along -Y). */
+static camera_desc look_down(float x, float z, float fov_deg)
+{
+    return (camera_desc){v3(x, 1.f, z), v3(x, 0.f, z), v3(0.f, 0.f, 1.f), fov_deg};
+}
+
+Test(ao, open_plane_is_unoccluded_exactly)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    add_floor(s, mat, 1000.f);
+    accel *a = build(s);
+    render_settings st = render_settings_default();
+    camera_desc cam = {v3(0.f, 2.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 60.f};
+    for (int filter = 1; filter <= 5; filter += 4) {
+        st.ao_filter_px = filter;
+        ao_image im = render(s, a, cam, 48, 32, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+        int hits = 0;
+        for (int p = 0; p < im.w * im.h; p++) {
+            const float *c = im.rgb + 3 * p;
+            bool background = c[0] == 0.25f && c[1] == 0.5f && c[2] == 0.75f;
+            cr_assert(background || (c[0] == 1.f && c[1] == 1.f && c[2] == 1.f), "filter %d pixel %d: %g %g %g",
+                      filter, p, c[0], c[1], c[2]);
+            hits += !background;
+        }
+        cr_assert(hits > im.w * im.h / 3 && hits < im.w * im.h, "hits %d: the view should show floor and sky", hits);
+        free(im.rgb);
+    }
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(ao, bottom_of_a_closed_box_is_fully_occluded)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    mesh *m = mesh_create();
+    cr_assert(m);
+    /* the unit cube [-0.5, 0.5]^3, six faces */
+    const float h = 0.5f;
+    quad_into(m, v3(-h, -h, -h), v3(h, -h, -h), v3(h, -h, h), v3(-h, -h, h));
+    quad_into(m, v3(-h, h, -h), v3(-h, h, h), v3(h, h, h), v3(h, h, -h));
+    quad_into(m, v3(-h, -h, -h), v3(-h, h, -h), v3(h, h, -h), v3(h, -h, -h));
+    quad_into(m, v3(-h, -h, h), v3(h, -h, h), v3(h, h, h), v3(-h, h, h));
+    quad_into(m, v3(-h, -h, -h), v3(-h, -h, h), v3(-h, h, h), v3(-h, h, -h));
+    quad_into(m, v3(h, -h, -h), v3(h, h, -h), v3(h, h, h), v3(h, -h, h));
+    cr_assert(scene_add_mesh(s, m, (uint32_t)mat, "box") >= 0);
+    accel *a = build(s);
+    render_settings st = render_settings_default();
+    st.ao_distance = 100.f; /* >> the box */
+    camera_desc cam = {v3(0.f, 0.3f, 0.f), v3(0.f, -0.5f, 0.f), v3(0.f, 0.f, 1.f), 60.f};
+    ao_image im = render(s, a, cam, 32, 32, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+    for (int p = 0; p < im.w * im.h * 3; p++)
+        cr_assert(im.rgb[p] == 0.f, "pixel %d channel %d: %g, expected 0 (fully enclosed)", p / 3, p % 3, im.rgb[p]);
+    free(im.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* A point on the floor at distance d from an upright wall (the half-plane
+ * x = d, y >= 0, wider and taller than the rays are long), AO rays of length
+ * L. A cosine-distributed direction's projection onto the floor is uniform
+ * on the unit disk (Malley), and the ray reaches the wall exactly when that
+ * projection's x is >= a = d / L (the wall rises forever above y = 0). So the
+ * occluded fraction is the disk segment x >= a over the disk's area:
+ *   occluded = (acos(a) - a sqrt(1 - a^2)) / pi,   unoccluded = 1 - occluded
+ * (a = 0: 1/2; a >= 1: 0). */
+static double wall_unoccluded(double a)
+{
+    if (a >= 1.0)
+        return 1.0;
+    return 1.0 - (acos(a) - a * sqrt(1.0 - a * a)) / pi_d;
+}
+
+Test(ao, floor_next_to_a_wall_matches_the_closed_form)
+{
+    const float d = 0.25f, big = 1000.f;
+    int mat;
+    scene *s = white_scene(&mat);
+    add_floor(s, mat, big);
+    add_quad(s, mat, v3(d, 0.f, -big), v3(d, big, -big), v3(d, big, big), v3(d, 0.f, big), "wall");
+    accel *a = build(s);
+    const float lengths[] = {0.5f, 0.3f, 250.f}; /* a = 0.5, 0.833, 0.001 */
+    for (size_t li = 0; li < sizeof lengths / sizeof lengths[0]; li++) {
+        render_settings st = render_settings_default();
+        st.ao_rays = 64;
+        st.ao_interleave = 1;
+        st.ao_filter_px = 1;
+        st.ao_distance = lengths[li];
+        /* one pixel over the point (0, 0, 0), 8 x 8 stratum frames of 64 rays: 4096 directions */
+        const int k = 8;
+        double sum = 0.0;
+        for (int f = 0; f < k * k; f++) {
+            ao_image im = render(s, a, look_down(0.f, 0.f, 0.01f), 1, 1, &st, pixel_sampler_stratum(k, 0, f), 1, 16);
+            sum += im.rgb[0];
+            free(im.rgb);
+        }
+        double got = sum / (k * k), want = wall_unoccluded((double)d / lengths[li]);
+        /* 4096 quasi-random points of a (0, 2)-sequence against an indicator with a straight
+         * edge: error ~ N^-3/4 ~ 2e-3; 0.01 leaves room */
+        cr_expect(fabs(got - want) < 0.01, "length %g: unoccluded %.4f, closed form %.4f", lengths[li], got, want);
+    }
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* ---- images -------------------------------------------------------------- */
+
+/* Floor, wall and spheres: something occluded everywhere. */
+static scene *cluttered_scene(void)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    add_floor(s, mat, 4.f);
+    add_quad(s, mat, v3(1.f, 0.f, -4.f), v3(1.f, 2.f, -4.f), v3(1.f, 2.f, 4.f), v3(1.f, 0.f, 4.f), "wall");
+    cr_assert(scene_add_sphere(s, v3(0.f, 0.4f, 0.f), 0.4f, (uint32_t)mat) >= 0);
+    cr_assert(scene_add_sphere(s, v3(-0.6f, 0.2f, 0.5f), 0.2f, (uint32_t)mat) >= 0);
+    return s;
+}
+
+Test(ao, images_do_not_depend_on_threads_or_tiles)
+{
+    scene *s = cluttered_scene();
+    accel *a = build(s);
+    camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    render_settings st = render_settings_default();
+    st.ao_distance = 1.f;
+    const pixel_sampler samplers[] = {pixel_sampler_single(), pixel_sampler_jittered(2, 7),
+                                      pixel_sampler_stratum(2, 7, 3)};
+    for (size_t si = 0; si < sizeof samplers / sizeof samplers[0]; si++) {
+        ao_image ref = render(s, a, cam, 75, 53, &st, samplers[si], 1, RENDER_TILE_PX);
+        const int tiles[][2] = {{2, RENDER_TILE_PX}, {2, 7}, {1, 5}, {2, 1000}, {1, 33}};
+        for (size_t t = 0; t < sizeof tiles / sizeof tiles[0]; t++) {
+            ao_image im = render(s, a, cam, 75, 53, &st, samplers[si], tiles[t][0], tiles[t][1]);
+            cr_assert(same_pixels(&ref, &im), "sampler %zu, %d threads, tiles of %d: the image differs", si,
+                      tiles[t][0], tiles[t][1]);
+            free(im.rgb);
+        }
+        free(ref.rgb);
+    }
+    /* the renderer table's entry is this renderer */
+    const renderer *r = renderer_by_name("ao");
+    cr_assert(r && r->render_tile == render_ao_tile);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* jittered:k is the mean of its k^2 stratum frames summed in stratum order,
+ * bit for bit (what the governor's accumulation gives). */
+Test(ao, jittered_equals_the_accumulated_stratum_frames)
+{
+    scene *s = cluttered_scene();
+    accel *a = build(s);
+    camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    render_settings st = render_settings_default();
+    st.ao_distance = 1.f;
+    const int k = 2, w = 40, h = 30;
+    ao_image jit = render(s, a, cam, w, h, &st, pixel_sampler_jittered(k, 3), 2, RENDER_TILE_PX);
+    float *sum = calloc((size_t)w * h * 3, sizeof(float));
+    cr_assert(sum);
+    for (int f = 0; f < k * k; f++) {
+        ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_stratum(k, 3, f), 1, RENDER_TILE_PX);
+        for (int p = 0; p < w * h * 3; p++)
+            sum[p] = sum[p] + im.rgb[p];
+        free(im.rgb);
+    }
+    for (int p = 0; p < w * h * 3; p++)
+        cr_assert(sum[p] / (float)(k * k) == jit.rgb[p], "value %d: strata %g, jittered %g", p,
+                  sum[p] / (float)(k * k), jit.rgb[p]);
+    free(sum);
+    free(jit.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(ao, filter_changes_nothing_where_nothing_is_occluded)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    add_floor(s, mat, 50.f);
+    accel *a = build(s);
+    render_settings st = render_settings_default();
+    camera_desc cam = {v3(0.f, 1.f, 3.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 70.f};
+    st.ao_filter_px = 1;
+    ao_image off = render(s, a, cam, 64, 48, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+    for (int filter = 3; filter <= AO_MAX_FILTER_PX; filter += 2) {
+        st.ao_filter_px = filter;
+        ao_image on = render(s, a, cam, 64, 48, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+        cr_assert(same_pixels(&off, &on), "filter %d changed an unoccluded image", filter);
+        free(on.rgb);
+    }
+    free(off.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* A plate at distance 1 in front of the eye and a far wall at distance 10,
+ * both facing the eye; a "ceiling" plane 0.5 behind the eye, parallel to
+ * them, occludes the plate (at 1.5 < the ray length 2: unoccluded fraction
+ * 1 - (1 - 0.75^2) = 0.5625, P(cos >= c) = 1 - c^2 for cosine weighting)
+ * but not the wall (11.5 away): the wall is exactly 1 everywhere. A filter
+ * that let plate pixels into a wall pixel's mean would darken the wall along
+ * the plate's edge; one that let wall pixels into the plate would brighten
+ * the plate's rim. As separate parts (the part test) and as one mesh (the
+ * depth test alone: the normals agree). */
+static void plate_and_wall(bool one_mesh)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    mesh *plate = mesh_create(), *wall = mesh_create(), *ceiling = mesh_create();
+    cr_assert(plate && wall && ceiling);
+    /* the eye at the origin looking along -Z */
+    quad_into(plate, v3(-0.2f, -0.2f, -1.f), v3(0.2f, -0.2f, -1.f), v3(0.2f, 0.2f, -1.f), v3(-0.2f, 0.2f, -1.f));
+    mesh *far = one_mesh ? plate : wall;
+    quad_into(far, v3(-50.f, -50.f, -10.f), v3(50.f, -50.f, -10.f), v3(50.f, 50.f, -10.f), v3(-50.f, 50.f, -10.f));
+    quad_into(ceiling, v3(-50.f, -50.f, 0.5f), v3(50.f, -50.f, 0.5f), v3(50.f, 50.f, 0.5f), v3(-50.f, 50.f, 0.5f));
+    cr_assert(scene_add_mesh(s, plate, (uint32_t)mat, "plate") >= 0);
+    if (!one_mesh)
+        cr_assert(scene_add_mesh(s, wall, (uint32_t)mat, "wall") >= 0);
+    else
+        mesh_destroy(wall);
+    cr_assert(scene_add_mesh(s, ceiling, (uint32_t)mat, "ceiling") >= 0);
+    accel *a = build(s);
+    render_settings st = render_settings_default();
+    st.ao_distance = 2.f;
+    st.ao_filter_px = AO_MAX_FILTER_PX;
+    camera_desc cam = {v3(0.f, 0.f, 0.f), v3(0.f, 0.f, -1.f), v3(0.f, 1.f, 0.f), 40.f};
+    const int w = 96, h = 96;
+    ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+    camera_basis b = camera_basis_make(&cam, w, h);
+    int plate_pixels = 0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            /* which surface the pixel centre sees: the plate is |x|, |y| <= 0.2 at z = -1 */
+            vec3 dir = camera_pixel_direction(&b, x, y);
+            float px = dir.x / -dir.z, py = dir.y / -dir.z;
+            float value = im.rgb[3 * (y * w + x)];
+            if (fabsf(px) < 0.2f && fabsf(py) < 0.2f) {
+                plate_pixels++;
+                cr_assert(value > 0.45f && value < 0.68f, "%s: plate pixel (%d, %d) = %g, expected ~0.5625",
+                          one_mesh ? "one mesh" : "two parts", x, y, value);
+            } else if (fabsf(px) > 0.2f || fabsf(py) > 0.2f) {
+                cr_assert(value == 1.f, "%s: wall pixel (%d, %d) = %g, expected exactly 1",
+                          one_mesh ? "one mesh" : "two parts", x, y, value);
+            }
+        }
+    cr_assert(plate_pixels > 100, "the plate covers %d pixels", plate_pixels);
+    free(im.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(ao, filter_does_not_bleed_across_parts) { plate_and_wall(false); }
+Test(ao, filter_does_not_bleed_across_depth_edges) { plate_and_wall(true); }
+
+Test(ao, default_distance_is_a_tenth_of_the_scene_diagonal)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    add_quad(s, mat, v3(0.f, 0.f, 0.f), v3(3.f, 0.f, 0.f), v3(3.f, 4.f, 0.f), v3(0.f, 4.f, 0.f), "quad");
+    accel *a = build(s);
+    render_settings st = render_settings_default();
+    camera_desc cam = {v3(0.f, 0.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    render_view v = {s, a, camera_basis_make(&cam, 4, 4), false, RENDER_SHADE_PHONG, NULL, &st};
+    cr_expect_float_eq(render_ao_distance(&v), 0.5f, 1e-6f);
+    st.ao_distance = 2.5f;
+    cr_expect_eq(render_ao_distance(&v), 2.5f);
+    accel_destroy(a);
+    scene_destroy(s);
+}
