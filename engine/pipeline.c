@@ -686,6 +686,8 @@ static bool record_in_range(const pipeline *p, const txn_record *r, tess_error *
 {
     const txn_geoms *g = r->kind == TXN_HIGHLIGHT ? &r->args.highlight.geoms
                          : r->kind == TXN_COLOUR  ? &r->args.colour.geoms
+                         : r->kind == TXN_MOVE    ? &r->args.move.geoms
+                         : r->kind == TXN_OPACITY && !r->args.opacity.all ? &r->args.opacity.geoms
                          : r->kind == TXN_HIDE || r->kind == TXN_SHOW || r->kind == TXN_ISOLATE ? &r->args.geoms
                                                                                                  : NULL;
     uint32_t count = p->state.geometry_count;

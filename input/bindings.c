@@ -48,6 +48,16 @@ static const char *const action_names[INPUT_ACTION_COUNT + 1] = {
     [INPUT_ACTION_SELECT_PARENT] = "select-parent",
     [INPUT_ACTION_HIGHLIGHT] = "highlight",
     [INPUT_ACTION_SHOW] = "show",
+    [INPUT_ACTION_OPACITY_DOWN] = "opacity-down",
+    [INPUT_ACTION_OPACITY_UP] = "opacity-up",
+    [INPUT_ACTION_PART_OPACITY_DOWN] = "part-opacity-down",
+    [INPUT_ACTION_PART_OPACITY_UP] = "part-opacity-up",
+    [INPUT_ACTION_PLANE_PLACE] = "plane-place",
+    [INPUT_ACTION_PLANE_NEXT] = "plane-next",
+    [INPUT_ACTION_PLANE_FLIP] = "plane-flip",
+    [INPUT_ACTION_PLANE_REMOVE] = "plane-remove",
+    [INPUT_ACTION_PLANE_REMOVE_ALL] = "plane-remove-all",
+    [INPUT_ACTION_PLANE_PUSH] = "plane-push",
     [INPUT_ACTION_COUNT] = NULL,
 };
 
@@ -66,6 +76,7 @@ static const char *const gesture_names[INPUT_GESTURE_COUNT + 1] = {
     [INPUT_GESTURE_TOUCHPAD_SWIPE] = "touchpad-swipe",
     [INPUT_GESTURE_LONG_PRESS] = "long-press",
     [INPUT_GESTURE_TWO_FINGER_TAP] = "two-finger-tap",
+    [INPUT_GESTURE_THREE_FINGER_TAP] = "three-finger-tap",
     [INPUT_GESTURE_COUNT] = NULL,
 };
 
@@ -83,7 +94,7 @@ const char *input_gesture_name(input_gesture g)
 
 bool input_action_is_drag(input_action a)
 {
-    return a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY;
+    return a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY || a == INPUT_ACTION_PLANE_PUSH;
 }
 
 /* Flight acts for as long as its key or button is held. */
@@ -97,7 +108,7 @@ static bool action_is_held(input_action a)
 static bool gesture_moves(input_gesture g)
 {
     return g != INPUT_GESTURE_CLICK && g != INPUT_GESTURE_TAP && g != INPUT_GESTURE_DOUBLE_TAP &&
-           g != INPUT_GESTURE_LONG_PRESS && g != INPUT_GESTURE_TWO_FINGER_TAP;
+           g != INPUT_GESTURE_LONG_PRESS && g != INPUT_GESTURE_TWO_FINGER_TAP && g != INPUT_GESTURE_THREE_FINGER_TAP;
 }
 
 /* A code is a (pointer, joystick, tablet, ...) button when its evdev name
@@ -129,8 +140,14 @@ static const code_binding default_codes[] = {
     {KEY_F, INPUT_ACTION_FLY_TO},
     {KEY_I, INPUT_ACTION_ISOLATE},        {KEY_BACKSPACE, INPUT_ACTION_SELECT_PARENT},
     {KEY_L, INPUT_ACTION_HIGHLIGHT},      {KEY_Z, INPUT_ACTION_SHOW},
-    {KEY_G, INPUT_ACTION_GOVERNOR_STATUS}, {BTN_LEFT, INPUT_ACTION_ORBIT},
-    {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PAN},
+    {KEY_G, INPUT_ACTION_GOVERNOR_STATUS},
+    {KEY_LEFTBRACE, INPUT_ACTION_OPACITY_DOWN}, {KEY_RIGHTBRACE, INPUT_ACTION_OPACITY_UP},
+    {KEY_SEMICOLON, INPUT_ACTION_PART_OPACITY_DOWN}, {KEY_APOSTROPHE, INPUT_ACTION_PART_OPACITY_UP},
+    {KEY_C, INPUT_ACTION_PLANE_PLACE},    {KEY_N, INPUT_ACTION_PLANE_NEXT},
+    {KEY_X, INPUT_ACTION_PLANE_FLIP},     {KEY_DELETE, INPUT_ACTION_PLANE_REMOVE},
+    {KEY_END, INPUT_ACTION_PLANE_REMOVE_ALL},
+    {BTN_LEFT, INPUT_ACTION_ORBIT},
+    {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
 };
 
 static const unsigned char default_gestures[INPUT_GESTURE_COUNT] = {
@@ -145,6 +162,7 @@ static const unsigned char default_gestures[INPUT_GESTURE_COUNT] = {
     [INPUT_GESTURE_TOUCHPAD_SWIPE] = INPUT_ACTION_PAN,
     [INPUT_GESTURE_LONG_PRESS] = INPUT_ACTION_ISOLATE,
     [INPUT_GESTURE_TWO_FINGER_TAP] = INPUT_ACTION_SHOW_ALL,
+    [INPUT_GESTURE_THREE_FINGER_TAP] = INPUT_ACTION_PLANE_PLACE,
 };
 
 static const int default_chord[] = {KEY_LEFTCTRL, KEY_LEFTALT, KEY_Q};
@@ -251,7 +269,8 @@ static bool check_gesture_action(jr_ctx *c, input_gesture g, input_action a)
         if (input_action_is_drag(a))
             return true;
         return jr_field_fail(c, "'%s' is a command action, but %s is a moving gesture, which takes only "
-                                "drag actions (orbit, pan, dolly) or none", action_names[a], gesture_names[g]);
+                                "drag actions (orbit, pan, dolly, plane-push) or none", action_names[a],
+                             gesture_names[g]);
     }
     if (input_action_is_drag(a))
         return jr_field_fail(c, "'%s' is a drag action, which follows motion, but %s is a discrete gesture "

@@ -3,11 +3,12 @@
  * evdev names as libevdev knows them ("KEY_W", "BTN_LEFT"), gestures by name.
  *
  * Actions come in two kinds:
- *  - drag actions (orbit, pan, dolly) follow a motion: bound to pointer
+ *  - drag actions (orbit, pan, dolly, plane-push) follow a motion: bound to pointer
  *    buttons (held while the pointer moves), the wheel, and the touch and
  *    touchpad gestures that move;
  *  - command actions (flight, speed, home, pick, fly-to, the part commands
- *    hide-object, isolate, show, show-all, select-parent, highlight) happen
+ *    hide-object, isolate, show, show-all, select-parent, highlight, the
+ *    opacity and cutting-plane commands) happen
  *    on a key or button press (flight keys and buttons act while held), or on
  *    a discrete gesture (click, tap, double tap, long press, two-finger tap).
  * Binding an action where its kind cannot happen is an error naming the
@@ -53,6 +54,17 @@ typedef enum input_action {
     INPUT_ACTION_SELECT_PARENT, /* widen the selection to its parent part */
     INPUT_ACTION_HIGHLIGHT,   /* highlight of the selection on / off */
     INPUT_ACTION_SHOW,        /* show the part hidden last again (undo hide-object) */
+    /* inspection (controller.h, OPACITY and CUTTING PLANES) */
+    INPUT_ACTION_OPACITY_DOWN,      /* global opacity one step (INPUT_OPACITY_STEPS) down, to 0 at least */
+    INPUT_ACTION_OPACITY_UP,        /* ... up, to 1 at most */
+    INPUT_ACTION_PART_OPACITY_DOWN, /* the selection's opacity one step down */
+    INPUT_ACTION_PART_OPACITY_UP,
+    INPUT_ACTION_PLANE_PLACE,       /* a cutting plane through the point under the cursor, facing the camera */
+    INPUT_ACTION_PLANE_NEXT,        /* select the next plane that is on */
+    INPUT_ACTION_PLANE_FLIP,        /* the selected plane removes the other side */
+    INPUT_ACTION_PLANE_REMOVE,      /* the selected plane off */
+    INPUT_ACTION_PLANE_REMOVE_ALL,  /* every plane off */
+    INPUT_ACTION_PLANE_PUSH,        /* drag: the selected plane along its normal (up: away from its normal) */
     INPUT_ACTION_COUNT
 } input_action;
 
@@ -71,6 +83,8 @@ typedef enum input_gesture {
     INPUT_GESTURE_LONG_PRESS,       /* "long-press": one finger held still (controller.h:
                                        INPUT_LONG_PRESS_S); selects the part under it first */
     INPUT_GESTURE_TWO_FINGER_TAP,   /* "two-finger-tap": two fingers down and up, short, without motion */
+    INPUT_GESTURE_THREE_FINGER_TAP, /* "three-finger-tap": three fingers down and up, short, without motion;
+                                       acts where the first finger landed */
     INPUT_GESTURE_COUNT
 } input_gesture;
 
@@ -93,8 +107,12 @@ typedef struct input_bindings {
  * finger orbit, two fingers pan and pinch dolly, tap pick, double tap fly-to,
  * touchpad pinch dolly and swipe pan, long press isolate, two-finger tap
  * show-all, P pick, F fly-to, H hide-object, U show-all, I isolate,
- * Backspace select-parent, L highlight, Z show (undo the last hide), quit
- * chord Ctrl+Alt+Q (left keys). The whole struct is written,
+ * Backspace select-parent, L highlight, Z show (undo the last hide), [ and ]
+ * opacity down / up, ; and ' the selection's opacity down / up, C places a
+ * cutting plane, N selects the next, X flips it, Delete removes it, End
+ * removes them all, the middle button drags the selected plane along its
+ * normal, a three-finger tap places a plane, quit chord Ctrl+Alt+Q (left
+ * keys). The whole struct is written,
  * padding included (memset), so bindings may be compared with memcmp. */
 void input_bindings_default(input_bindings *out);
 

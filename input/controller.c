@@ -88,6 +88,17 @@ struct input_controller {
     input_part hidden[INPUT_HIDDEN_MAX]; /* hide-object's parts not shown again yet, oldest first */
     int hidden_count;
 
+    /* inspection: what input asked for last (controller.h, OPACITY and CUTTING PLANES) */
+    float opacity;             /* global */
+    struct {
+        uint32_t first, count;
+        float opacity;
+    } part_opacity[INPUT_OPACITY_PARTS]; /* oldest first */
+    int part_opacity_count;
+    clip_plane planes[CLIP_MAX_PLANES]; /* as the records said (normals as sent) */
+    int plane_sel;             /* the selected plane (on), or -1 */
+    bool plane_dirty;          /* plane_sel moved since the last emitted record (plane-push) */
+
     /* touchpad gestures */
     vec3 gesture_point;
     double pinch_prev_scale;
@@ -104,6 +115,7 @@ void input_controller_config_default(input_controller_config *cfg)
     cfg->plane_aspect = 16.f / 9.f;
     cfg->home = (camera_desc){v3(0.f, 0.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), CAMERA_DEFAULT_FOV_DEG};
     cfg->scene_size = 1.0;
+    cfg->opacity = 1.f; /* clip: zeroed, every plane off */
 }
 
 input_controller *input_controller_create(const input_controller_config *cfg, const input_controller_hooks *hooks)
@@ -125,6 +137,12 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
         c->cfg.fly_to_s = 0.6;
     c->fly_speed = c->cfg.fly_speed > 0.0 ? c->cfg.fly_speed : c->cfg.scene_size / 4.0;
     c->cam = c->cfg.home;
+    c->opacity = c->cfg.opacity >= 0.f && c->cfg.opacity <= 1.f ? c->cfg.opacity : 1.f;
+    memcpy(c->planes, c->cfg.clip, sizeof c->planes);
+    c->plane_sel = -1;
+    for (int i = CLIP_MAX_PLANES - 1; i >= 0; i--)
+        if (c->planes[i].on)
+            c->plane_sel = i; /* the first one on */
     return c;
 }
 
@@ -150,9 +168,22 @@ static void emit_status(input_controller *c, const char *fmt, ...)
     emit(c, &t);
 }
 
-/* End of an input frame or tick: at most one camera and one cursor. */
+static void emit_plane(input_controller *c, int index)
+{
+    const clip_plane *p = &c->planes[index];
+    const float point[3] = {p->point.x, p->point.y, p->point.z}, normal[3] = {p->normal.x, p->normal.y, p->normal.z};
+    input_txn t = txn_clip_plane(index, p->on, point, normal);
+    emit(c, &t);
+}
+
+/* End of an input frame or tick: at most one camera, one cursor and one plane. */
 static void flush(input_controller *c)
 {
+    if (c->plane_dirty) {
+        if (c->plane_sel >= 0)
+            emit_plane(c, c->plane_sel);
+        c->plane_dirty = false;
+    }
     if (c->cam_dirty) {
         input_txn t = txn_camera(TXN_ALL_CHANNELS, &c->cam);
         emit(c, &t);
@@ -194,23 +225,23 @@ static vec3 point_under(input_controller *c, double sx, double sy, input_hit *hi
 {
     vec3 origin, dir;
     navigate_plane_ray(&c->cam, c->cfg.plane_aspect, sx, sy, &origin, &dir);
-    input_hit hit = {.hit = false};
-    c->hooks.pick(c->hooks.ctx, origin, dir, &hit);
-    if (hit.hit && hit.part.count == 0) { /* a pick that names no part: the instance hit is one */
-        hit.part.first = hit.geom_id;
-        hit.part.count = 1;
-        if (!hit.part.label[0])
-            snprintf(hit.part.label, sizeof hit.part.label, "%s", hit.what);
+    input_hit pk = {.hit = false};
+    c->hooks.pick(c->hooks.ctx, origin, dir, &pk);
+    if (pk.hit && pk.part.count == 0) { /* a pick that names no part: the instance hit is one */
+        pk.part.first = pk.geom_id;
+        pk.part.count = 1;
+        if (!pk.part.label[0])
+            snprintf(pk.part.label, sizeof pk.part.label, "%s", pk.what);
     }
-    hit.part.label[sizeof hit.part.label - 1] = '\0';
-    if (hit.ancestor_count < 0 || hit.ancestor_count > INPUT_HIT_ANCESTORS)
-        hit.ancestor_count = hit.ancestor_count < 0 ? 0 : INPUT_HIT_ANCESTORS;
-    for (int i = 0; i < hit.ancestor_count; i++)
-        hit.ancestors[i].label[sizeof hit.ancestors[i].label - 1] = '\0';
+    pk.part.label[sizeof pk.part.label - 1] = '\0';
+    if (pk.ancestor_count < 0 || pk.ancestor_count > INPUT_HIT_ANCESTORS)
+        pk.ancestor_count = pk.ancestor_count < 0 ? 0 : INPUT_HIT_ANCESTORS;
+    for (int i = 0; i < pk.ancestor_count; i++)
+        pk.ancestors[i].label[sizeof pk.ancestors[i].label - 1] = '\0';
     if (hit_out)
-        *hit_out = hit;
-    if (hit.hit)
-        return hit.point;
+        *hit_out = pk;
+    if (pk.hit)
+        return pk.point;
     vec3 view = v3_normalize(v3_sub(c->cam.look_at, c->cam.eye));
     double cosine = v3_dot(dir, view);
     double t = view_distance(&c->cam) / (cosine > 0.05 ? cosine : 0.05);
@@ -241,6 +272,17 @@ static void drag(input_controller *c, input_action action, vec3 point, double dx
     case INPUT_ACTION_DOLLY:
         set_camera(c, navigate_dolly(&c->cam, point, exp(-dy * DOLLY_PER_UNIT)));
         break;
+    case INPUT_ACTION_PLANE_PUSH: {
+        if (c->plane_sel < 0 || dy == 0.0)
+            break;
+        clip_plane *p = &c->planes[c->plane_sel];
+        double along = -dy * INPUT_PLANE_PUSH_PER_UNIT * c->cfg.scene_size; /* up: against the normal */
+        p->point = v3((float)((double)p->point.x + along * (double)p->normal.x),
+                      (float)((double)p->point.y + along * (double)p->normal.y),
+                      (float)((double)p->point.z + along * (double)p->normal.z));
+        c->plane_dirty = true;
+        break;
+    }
     default:
         break;
     }
@@ -317,14 +359,14 @@ static void highlight_follow(input_controller *c)
 }
 
 /* The selection becomes the part hit (nothing on a miss). */
-static void select_hit(input_controller *c, const input_hit *hit)
+static void select_hit(input_controller *c, const input_hit *pk)
 {
-    c->have_selection = hit->hit;
-    if (hit->hit) {
-        c->sel_levels[0] = hit->part;
-        for (int i = 0; i < hit->ancestor_count; i++)
-            c->sel_levels[1 + i] = hit->ancestors[i];
-        c->sel_level_count = 1 + hit->ancestor_count;
+    c->have_selection = pk->hit;
+    if (pk->hit) {
+        c->sel_levels[0] = pk->part;
+        for (int i = 0; i < pk->ancestor_count; i++)
+            c->sel_levels[1 + i] = pk->ancestors[i];
+        c->sel_level_count = 1 + pk->ancestor_count;
         c->sel_level = 0;
     }
     highlight_follow(c);
@@ -342,16 +384,16 @@ static void remember_hidden(input_controller *c, const input_part *p)
 /* The part commands (controller.h, PARTS) at plane point (sx, sy). */
 static void part_command(input_controller *c, input_action action, double sx, double sy)
 {
-    input_hit hit;
+    input_hit pk;
     const input_part *sel = selection(c);
     switch (action) {
     case INPUT_ACTION_HIDE_OBJECT:
-        point_under(c, sx, sy, &hit);
-        if (hit.hit) {
-            input_txn t = txn_geoms_record(TXN_HIDE, hit.part.first, hit.part.count);
+        point_under(c, sx, sy, &pk);
+        if (pk.hit) {
+            input_txn t = txn_geoms_record(TXN_HIDE, pk.part.first, pk.part.count);
             emit(c, &t);
-            remember_hidden(c, &hit.part);
-            emit_status(c, "hidden: %s", hit.part.label);
+            remember_hidden(c, &pk.part);
+            emit_status(c, "hidden: %s", pk.part.label);
         } else {
             emit_status(c, "nothing to hide there");
         }
@@ -368,12 +410,12 @@ static void part_command(input_controller *c, input_action action, double sx, do
         break;
     case INPUT_ACTION_ISOLATE:
         if (!sel) {
-            point_under(c, sx, sy, &hit);
-            if (!hit.hit) {
+            point_under(c, sx, sy, &pk);
+            if (!pk.hit) {
                 emit_status(c, "nothing to isolate there");
                 break;
             }
-            select_hit(c, &hit);
+            select_hit(c, &pk);
             sel = selection(c);
         }
         {
@@ -425,17 +467,187 @@ static void part_command(input_controller *c, input_action action, double sx, do
     }
 }
 
+/* ---- opacity and cutting planes ---------------------------------------------------- */
+
+/* One opacity step from `from` (dir -1 or +1) on the grid of INPUT_OPACITY_STEPS, clamped. */
+static float opacity_step(float from, int dir)
+{
+    double k = (double)from * INPUT_OPACITY_STEPS;
+    if (fabs(k - nearbyint(k)) < 1e-4) /* a grid value as a float (0.9f is not 9 / 10) */
+        k = nearbyint(k);
+    double next = dir < 0 ? ceil(k) - 1.0 : floor(k) + 1.0; /* the grid value beyond `from` */
+    if (next < 0.0)
+        next = 0.0;
+    if (next > INPUT_OPACITY_STEPS)
+        next = INPUT_OPACITY_STEPS;
+    return (float)(next / INPUT_OPACITY_STEPS);
+}
+
+/* What input last set for the range [first, first + count): its own entry, else the innermost
+ * remembered range holding it, else 1. */
+static float part_opacity_of(const input_controller *c, uint32_t first, uint32_t count)
+{
+    float found = 1.f;
+    uint64_t best = UINT64_MAX;
+    for (int i = 0; i < c->part_opacity_count; i++) {
+        uint64_t f = c->part_opacity[i].first, n = c->part_opacity[i].count;
+        if (f <= first && f + n >= (uint64_t)first + count && n < best) {
+            best = n;
+            found = c->part_opacity[i].opacity;
+        }
+    }
+    return found;
+}
+
+static void remember_part_opacity(input_controller *c, uint32_t first, uint32_t count, float opacity)
+{
+    int kept = 0;
+    for (int i = 0; i < c->part_opacity_count; i++) { /* ranges inside this one were overwritten */
+        uint64_t f = c->part_opacity[i].first, n = c->part_opacity[i].count;
+        if (!(f >= first && f + n <= (uint64_t)first + count))
+            c->part_opacity[kept++] = c->part_opacity[i];
+    }
+    c->part_opacity_count = kept;
+    if (c->part_opacity_count == INPUT_OPACITY_PARTS) {
+        memmove(&c->part_opacity[0], &c->part_opacity[1], (INPUT_OPACITY_PARTS - 1) * sizeof c->part_opacity[0]);
+        c->part_opacity_count--;
+    }
+    c->part_opacity[c->part_opacity_count].first = first;
+    c->part_opacity[c->part_opacity_count].count = count;
+    c->part_opacity[c->part_opacity_count++].opacity = opacity;
+}
+
+static void opacity_command(input_controller *c, input_action action)
+{
+    int dir = action == INPUT_ACTION_OPACITY_DOWN || action == INPUT_ACTION_PART_OPACITY_DOWN ? -1 : 1;
+    if (action == INPUT_ACTION_OPACITY_DOWN || action == INPUT_ACTION_OPACITY_UP) {
+        float next = opacity_step(c->opacity, dir);
+        if (next == c->opacity) {
+            emit_status(c, "opacity %.2g (the %s)", (double)next, dir < 0 ? "least" : "most");
+            return;
+        }
+        c->opacity = next;
+        input_txn t = txn_opacity_all(next);
+        emit(c, &t);
+        emit_status(c, "opacity %.2g", (double)next);
+        return;
+    }
+    const input_part *sel = selection(c);
+    if (!sel) {
+        emit_status(c, "nothing selected to make transparent (pick a part first)");
+        return;
+    }
+    float from = part_opacity_of(c, sel->first, sel->count), next = opacity_step(from, dir);
+    if (next == from) {
+        emit_status(c, "opacity of %s %.2g (the %s)", sel->label, (double)next, dir < 0 ? "least" : "most");
+        return;
+    }
+    remember_part_opacity(c, sel->first, sel->count, next);
+    input_txn t = txn_opacity(sel->first, sel->count, next);
+    emit(c, &t);
+    emit_status(c, "opacity of %s %.2g", sel->label, (double)next);
+}
+
+/* The next plane that is on after `after` (wrapping, `after` itself last), or -1. */
+static int next_plane_on(const input_controller *c, int after)
+{
+    for (int k = 1; k <= CLIP_MAX_PLANES; k++) {
+        int i = ((after < 0 ? -1 : after) + k) % CLIP_MAX_PLANES;
+        if (c->planes[i].on)
+            return i;
+    }
+    return -1;
+}
+
+static void plane_command(input_controller *c, input_action action, double sx, double sy)
+{
+    if (c->plane_dirty) /* a push still waiting for its frame's end goes first */
+        flush(c);
+    int sel = c->plane_sel;
+    switch (action) {
+    case INPUT_ACTION_PLANE_PLACE: {
+        input_hit pk;
+        point_under(c, sx, sy, &pk);
+        if (!pk.hit) {
+            emit_status(c, "no surface there to place a cutting plane on");
+            return;
+        }
+        double d[3] = {(double)c->cam.eye.x - pk.point.x, (double)c->cam.eye.y - pk.point.y,
+                       (double)c->cam.eye.z - pk.point.z};
+        double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(len > 0.0)) {
+            emit_status(c, "the eye is on that point: no direction for a plane");
+            return;
+        }
+        int index = -1;
+        for (int i = 0; i < CLIP_MAX_PLANES && index < 0; i++)
+            if (!c->planes[i].on)
+                index = i;
+        if (index < 0)
+            index = sel >= 0 ? sel : 0; /* all on: the selected one moves here */
+        c->planes[index] = (clip_plane){pk.point, v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len)),
+                                        true};
+        c->plane_sel = index;
+        emit_plane(c, index);
+        emit_status(c, "cutting plane %d at (%.4g, %.4g, %.4g)", index, (double)pk.point.x, (double)pk.point.y,
+                    (double)pk.point.z);
+        return;
+    }
+    case INPUT_ACTION_PLANE_REMOVE_ALL: {
+        int removed = 0;
+        for (int i = 0; i < CLIP_MAX_PLANES; i++)
+            if (c->planes[i].on) {
+                c->planes[i].on = false;
+                emit_plane(c, i);
+                removed++;
+            }
+        c->plane_sel = -1;
+        if (removed)
+            emit_status(c, "all cutting planes removed");
+        else
+            emit_status(c, "no cutting planes to remove");
+        return;
+    }
+    default:
+        break;
+    }
+    if (sel < 0) {
+        emit_status(c, "no cutting plane (place one first)");
+        return;
+    }
+    clip_plane *p = &c->planes[sel];
+    switch (action) {
+    case INPUT_ACTION_PLANE_NEXT:
+        c->plane_sel = next_plane_on(c, sel);
+        emit_status(c, "cutting plane %d selected", c->plane_sel);
+        break;
+    case INPUT_ACTION_PLANE_FLIP:
+        p->normal = v3(-p->normal.x, -p->normal.y, -p->normal.z);
+        emit_plane(c, sel);
+        emit_status(c, "cutting plane %d flipped", sel);
+        break;
+    case INPUT_ACTION_PLANE_REMOVE:
+        p->on = false;
+        emit_plane(c, sel);
+        c->plane_sel = next_plane_on(c, sel);
+        emit_status(c, "cutting plane %d removed", sel);
+        break;
+    default:
+        break;
+    }
+}
+
 /* A command action at plane point (sx, sy). */
 static void command(input_controller *c, input_action action, double sx, double sy, uint64_t now_us)
 {
-    input_hit hit;
+    input_hit pk;
     switch (action) {
     case INPUT_ACTION_PICK:
-        point_under(c, sx, sy, &hit);
-        select_hit(c, &hit);
-        if (hit.hit)
-            emit_status(c, "picked %s at (%.4g, %.4g, %.4g)", hit.what, (double)hit.point.x, (double)hit.point.y,
-                        (double)hit.point.z);
+        point_under(c, sx, sy, &pk);
+        select_hit(c, &pk);
+        if (pk.hit)
+            emit_status(c, "picked %s at (%.4g, %.4g, %.4g)", pk.what, (double)pk.point.x, (double)pk.point.y,
+                        (double)pk.point.z);
         else
             emit_status(c, "picked nothing (background)");
         break;
@@ -447,6 +659,19 @@ static void command(input_controller *c, input_action action, double sx, double 
     case INPUT_ACTION_HIGHLIGHT:
         part_command(c, action, sx, sy);
         break;
+    case INPUT_ACTION_OPACITY_DOWN:
+    case INPUT_ACTION_OPACITY_UP:
+    case INPUT_ACTION_PART_OPACITY_DOWN:
+    case INPUT_ACTION_PART_OPACITY_UP:
+        opacity_command(c, action);
+        break;
+    case INPUT_ACTION_PLANE_PLACE:
+    case INPUT_ACTION_PLANE_NEXT:
+    case INPUT_ACTION_PLANE_FLIP:
+    case INPUT_ACTION_PLANE_REMOVE:
+    case INPUT_ACTION_PLANE_REMOVE_ALL:
+        plane_command(c, action, sx, sy);
+        break;
     case INPUT_ACTION_GOVERNOR_STATUS: {
         c->governor_status_shown = !c->governor_status_shown;
         input_txn t = txn_flag(TXN_GOVERNOR_STATUS, c->governor_status_shown);
@@ -454,8 +679,8 @@ static void command(input_controller *c, input_action action, double sx, double 
         break;
     }
     case INPUT_ACTION_FLY_TO: {
-        vec3 p = point_under(c, sx, sy, &hit);
-        if (!hit.hit) {
+        vec3 p = point_under(c, sx, sy, &pk);
+        if (!pk.hit) {
             emit_status(c, "nothing there to fly to");
             break;
         }
@@ -628,6 +853,11 @@ static void touch_sequence_ended(input_controller *c, uint64_t now_us)
     double dt_s = (double)(now_us - c->seq_start_us) * 1e-6;
     bool still = dt_s <= TAP_MAX_S && c->seq_travel < TAP_SLOP;
     const unsigned char *g = c->cfg.bindings.gesture_action;
+    if (still && c->seq_max_fingers == 3) {
+        c->have_last_tap = false;
+        command(c, (input_action)g[INPUT_GESTURE_THREE_FINGER_TAP], c->seq_x0, c->seq_y0, now_us);
+        return;
+    }
     if (still && c->seq_max_fingers == 2) {
         c->have_last_tap = false;
         command(c, (input_action)g[INPUT_GESTURE_TWO_FINGER_TAP], c->seq_x0, c->seq_y0, now_us);
@@ -675,9 +905,9 @@ static void long_press(input_controller *c, uint64_t now_us)
         return;
     c->seq_long_pressed = true;
     c->have_last_tap = false;
-    input_hit hit;
-    point_under(c, a->x, a->y, &hit);
-    select_hit(c, &hit);
+    input_hit pk;
+    point_under(c, a->x, a->y, &pk);
+    select_hit(c, &pk);
     command(c, (input_action)c->cfg.bindings.gesture_action[INPUT_GESTURE_LONG_PRESS], a->x, a->y, now_us);
 }
 

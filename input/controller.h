@@ -7,7 +7,8 @@
  * with synthetic events and a synthetic clock.
  *
  * WHAT IT DOES (bindings.h names the actions; the defaults in brackets):
- *  - a button bound to a drag action [left: orbit, right/middle: pan] picks
+ *  - a button bound to a drag action [left: orbit, right: pan, middle:
+ *    plane-push (CUTTING PLANES below)] picks
  *    the point under the cursor when pressed (the pick callback: a ray into
  *    the scene; on a miss the point on the cursor ray at the view distance)
  *    and drags about it: orbit turns about the point, pan keeps the point
@@ -39,6 +40,32 @@
  *    the selection, which then follows the selection as it changes. Each
  *    says what it did in the status line ("hidden: PATH", "isolated: PATH
  *    (N instances)", "selected: PATH (N instances)", "all parts shown");
+ *  - OPACITY. opacity-down / -up step the global opacity by 1 /
+ *    INPUT_OPACITY_STEPS on the grid of those steps (from a value off the
+ *    grid, to the nearest grid value beyond it), clamped to [0, 1], as an
+ *    "opacity all A" record; part-opacity-down / -up do the same for the
+ *    selection ("opacity FIRST COUNT A", the whole range at once), stepping
+ *    from the value input last set for that range, else for the innermost
+ *    range it set that holds it, else 1 (what input set is remembered for
+ *    INPUT_OPACITY_PARTS ranges, the oldest forgotten first; a range set
+ *    forgets the ranges inside it, which it overwrote). At a limit only the
+ *    status line says so;
+ *  - CUTTING PLANES (engine/clip.h; "clip-plane" records). plane-place [C,
+ *    three-finger tap] puts a plane through the point picked under the
+ *    cursor with its normal the unit vector from that point towards the eye
+ *    (computed in double, rounded once): it removes what lies between the
+ *    camera and the point. It takes the lowest plane index that is off; with
+ *    all CLIP_MAX_PLANES on, the selected plane's. The plane placed is the
+ *    SELECTED PLANE; plane-next [N] selects the next plane that is on (in
+ *    index order, wrapping); plane-flip [X] negates its normal;
+ *    plane-remove [Delete] switches it off (its point and normal kept in the
+ *    record) and selects the next plane on; plane-remove-all [End] switches
+ *    every plane that is on off. plane-push [middle button] is a drag: the
+ *    selected plane moves along its normal, INPUT_PLANE_PUSH_PER_UNIT scene
+ *    sizes per plane unit of motion up (up: against its normal, deeper into
+ *    what it cuts when it faces the camera), one record per input frame.
+ *    The controller starts from the config's planes and opacity (what the
+ *    pipeline starts from);
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -60,6 +87,7 @@
 #include <stdint.h>
 
 #include "engine/camera.h"
+#include "engine/clip.h"
 #include "engine/txn.h"
 #include "engine/vec3.h"
 #include "input/bindings.h"
@@ -72,7 +100,7 @@
  * file stores (input/record.h). The controller emits camera (always
  * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide, show and
  * isolate (a part's instance range: input_part), show-all, highlight,
- * governor-status, and the input-level tour and quit. */
+ * governor-status, opacity, clip-plane, and the input-level tour and quit. */
 typedef txn_record input_txn;
 typedef txn_kind input_txn_kind;
 
@@ -115,6 +143,8 @@ typedef struct input_controller_config {
     double idle_timeout_s;       /* 0: no tour */
     bool have_tour;              /* a tour is configured (the tour player runs it) */
     double fly_to_s;             /* duration of fly-to and home animations; 0: 0.6 */
+    float opacity;               /* the global opacity the pipeline starts with, [0, 1]; default 1 */
+    clip_plane clip[CLIP_MAX_PLANES]; /* the planes it starts with (pipeline_config.clip); default all off */
 } input_controller_config;
 
 /* Defaults for the fields a caller need not set (bindings = the defaults). */
@@ -161,5 +191,12 @@ bool input_controller_touring(const input_controller *c);
 #define INPUT_LONG_PRESS_S 0.6
 /* Hidden parts remembered for `show` (undo the last hide). */
 #define INPUT_HIDDEN_MAX 32
+/* Opacity steps from 0 to 1: 0.1 a key press, eleven levels a person can count. */
+#define INPUT_OPACITY_STEPS 10
+/* Part ranges whose opacity input remembers (part-opacity-down / -up). */
+#define INPUT_OPACITY_PARTS 32
+/* plane-push: scene sizes (bounding-box diagonals) per plane unit dragged; a drag across
+ * the plane's height (2 units) moves the plane through the whole scene. */
+#define INPUT_PLANE_PUSH_PER_UNIT 0.5
 
 #endif

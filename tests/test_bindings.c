@@ -117,8 +117,13 @@ Test(bindings, defaults_are_as_documented)
         {KEY_F, INPUT_ACTION_FLY_TO},         {KEY_G, INPUT_ACTION_GOVERNOR_STATUS},
         {KEY_I, INPUT_ACTION_ISOLATE},        {KEY_BACKSPACE, INPUT_ACTION_SELECT_PARENT},
         {KEY_L, INPUT_ACTION_HIGHLIGHT},      {KEY_Z, INPUT_ACTION_SHOW},
+        {KEY_LEFTBRACE, INPUT_ACTION_OPACITY_DOWN}, {KEY_RIGHTBRACE, INPUT_ACTION_OPACITY_UP},
+        {KEY_SEMICOLON, INPUT_ACTION_PART_OPACITY_DOWN}, {KEY_APOSTROPHE, INPUT_ACTION_PART_OPACITY_UP},
+        {KEY_C, INPUT_ACTION_PLANE_PLACE},    {KEY_N, INPUT_ACTION_PLANE_NEXT},
+        {KEY_X, INPUT_ACTION_PLANE_FLIP},     {KEY_DELETE, INPUT_ACTION_PLANE_REMOVE},
+        {KEY_END, INPUT_ACTION_PLANE_REMOVE_ALL},
         {BTN_LEFT, INPUT_ACTION_ORBIT},
-        {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PAN},
+        {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
     };
     size_t n = sizeof want / sizeof want[0];
     for (size_t i = 0; i < n; i++)
@@ -135,6 +140,7 @@ Test(bindings, defaults_are_as_documented)
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_TOUCHPAD_SWIPE], INPUT_ACTION_PAN);
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_LONG_PRESS], INPUT_ACTION_ISOLATE);
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_TWO_FINGER_TAP], INPUT_ACTION_SHOW_ALL);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_THREE_FINGER_TAP], INPUT_ACTION_PLANE_PLACE);
     cr_expect_eq(b.quit_chord_len, 3);
     cr_expect_eq(b.quit_chord[0], KEY_LEFTCTRL);
     cr_expect_eq(b.quit_chord[1], KEY_LEFTALT);
@@ -158,7 +164,8 @@ Test(bindings, every_action_name_round_trips)
         cr_assert_not_null(name, "action %d has no name", a);
         for (int other = 0; other < a; other++)
             cr_expect_str_neq(name, input_action_name((input_action)other), "two actions named %s", name);
-        bool drag = a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY;
+        bool drag = a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY ||
+                    a == INPUT_ACTION_PLANE_PUSH;
         cr_expect_eq(input_action_is_drag((input_action)a), drag, "%s", name);
 
         /* a drag action on a button and the wheel; any other on a key and, unless
@@ -351,7 +358,9 @@ Test(bindings, bad_actions)
     expect_members_failure(", \"keys\": {\"KEY_W\": \"fly-fwd\"}", "keys.KEY_W",
                            "unknown action 'fly-fwd' (expected one of: none, orbit, pan, dolly, fly-forward, "
                            "fly-back, fly-left, fly-right, fly-up, fly-down, speed-up, speed-down, home, pick, "
-                           "hide-object, show-all, fly-to, governor-status, isolate, select-parent, highlight, show)");
+                           "hide-object, show-all, fly-to, governor-status, isolate, select-parent, highlight, show, "
+                           "opacity-down, opacity-up, part-opacity-down, part-opacity-up, plane-place, plane-next, "
+                           "plane-flip, plane-remove, plane-remove-all, plane-push)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -369,7 +378,8 @@ Test(bindings, drag_actions_need_motion)
     expect_members_failure(", \"gestures\": {\"tap\": \"orbit\"}", "gestures.tap",
                            "'orbit' is a drag action, which follows motion, but tap is a discrete gesture without "
                            "motion (it takes speed-up, speed-down, home, pick, hide-object, show-all, fly-to, governor-status, isolate, "
-                           "select-parent, highlight, show or none)");
+                           "select-parent, highlight, show, opacity-down, opacity-up, part-opacity-down, part-opacity-up, "
+                           "plane-place, plane-next, plane-flip, plane-remove, plane-remove-all or none)");
     expect_members_failure(", \"gestures\": {\"click\": \"pan\"}", "gestures.click", "'pan' is a drag action");
     expect_members_failure(", \"gestures\": {\"double-tap\": \"dolly\"}", "gestures.double-tap",
                            "'dolly' is a drag action");
@@ -379,7 +389,7 @@ Test(bindings, moving_gestures_take_only_drag_actions)
 {
     expect_members_failure(", \"gestures\": {\"wheel\": \"pick\"}", "gestures.wheel",
                            "'pick' is a command action, but wheel is a moving gesture, which takes only drag actions "
-                           "(orbit, pan, dolly) or none");
+                           "(orbit, pan, dolly, plane-push) or none");
     expect_members_failure(", \"gestures\": {\"two-finger-pinch\": \"speed-up\"}", "gestures.two-finger-pinch",
                            "'speed-up' is a command action");
     expect_members_failure(", \"gestures\": {\"touchpad-swipe\": \"fly-left\"}", "gestures.touchpad-swipe",
@@ -398,7 +408,7 @@ Test(bindings, bad_gestures_section)
     expect_members_failure(", \"gestures\": {\"triple-tap\": \"pick\"}", "gestures.triple-tap",
                            "unknown field (expected one of: click, wheel, tap, double-tap, one-finger-drag, "
                            "two-finger-drag, two-finger-pinch, touchpad-pinch, touchpad-swipe, long-press, "
-                           "two-finger-tap)");
+                           "two-finger-tap, three-finger-tap)");
     expect_members_failure(", \"gestures\": [\"tap\"]", "gestures", "expected an object, got array");
     expect_members_failure(", \"keys\": \"KEY_W\"", "keys", "expected an object, got string");
 }

@@ -439,6 +439,12 @@ Test(frame_state, submit_checks_records_against_the_pipeline)
     cr_expect_not(pipeline_submit(p, &tour));
     cr_expect_not(pipeline_submit(p, &bad));
     cr_expect(pipeline_submit(p, &ok));
+    /* part opacity is checked against the geometries; the global one needs none */
+    txn_record past_opacity = txn_opacity(n - 1, 2, 0.5f), part_opacity = txn_opacity(n - 1, 1, 0.5f),
+               all_opacity = txn_opacity_all(0.5f);
+    cr_expect_not(pipeline_submit(p, &past_opacity));
+    cr_expect(pipeline_submit(p, &part_opacity));
+    cr_expect(pipeline_submit(p, &all_opacity));
     /* not running: a record applies at once */
     txn_record iso = txn_geoms_record(TXN_ISOLATE, 0, 1);
     cr_assert(pipeline_apply(p, &iso));

@@ -7,6 +7,7 @@
 
 #include "engine/accel.h"
 #include "engine/camera_path.h"
+#include "engine/frame_state.h"
 #include "engine/log.h"
 #include "engine/scene.h"
 #include "input/bindings.h"
@@ -339,6 +340,11 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     sc.px_per_unit_x = (double)b0.width_px / (2.0 * (double)w0->half_width);
     sc.px_per_unit_y = (double)b0.height_px / (2.0 * (double)w0->half_height);
     cc.home = pipeline_camera(p, 0);
+    /* inspection starts where the pipeline does (its config's opacity and planes): read before
+     * the loop runs, so no barrier is needed */
+    const frame_state *st = pipeline_frame_state(p);
+    cc.opacity = st->opacity;
+    memcpy(cc.clip, frame_state_clip_planes(st), sizeof cc.clip);
     vec3 lo, hi;
     if (scene_bounds(cs->scene, &lo, &hi))
         cc.scene_size = v3_length(v3_sub(hi, lo));
