@@ -10,6 +10,8 @@
 
 #include "accel.h"
 #include "ao.h"
+#include "clip.h"
+#include "frame_state.h"
 #include "log.h"
 #include "packet.h"
 #include "scene.h"
@@ -95,10 +97,34 @@ static ao_params resolve_params(const render_view *v)
     return p;
 }
 
+/* Cut the active rays of p to what the frame's cutting planes keep
+ * (clip.h): a ray with nothing left is no longer active (it misses, or for
+ * an AO ray is not occluded). Every ray this renderer casts passes here, so
+ * the AO of a cut surface sees what the picture shows. No caps: the AO
+ * renderer shows the surfaces the planes leave. */
+static void clip_packet(const render_view *v, ray_packet *p)
+{
+    if (!v->state || !clip_planes_on(frame_state_clip_planes(v->state)))
+        return;
+    clip_set planes;
+    clip_set_make(&planes, frame_state_clip_planes(v->state));
+    for (uint64_t m = p->active; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        ray r = packet_get_ray(p, i);
+        if (!clip_ray(&planes, &r, NULL)) {
+            p->active &= ~(1ull << i);
+            continue;
+        }
+        p->t_near[i] = r.t_near;
+        p->t_far[i] = r.t_far;
+    }
+}
+
 /* EVERY AO ray is cast here: the active rays of p, returns the occluded
- * ones. (Cutting planes will clip the rays here: one place to change.) */
+ * ones. */
 static uint64_t trace_ao_packet(const render_view *v, ray_packet *p, render_counts *counts)
 {
+    clip_packet(v, p);
     counts->shadow_rays += (uint64_t)__builtin_popcountll(p->active);
     return accel_occluded_packet(v->accel, packet_whole(p));
 }
@@ -194,6 +220,7 @@ static void region_raw(const render_view *v, const pixel_sampler *s, const ao_pa
             int w = rg->x0 + rg->width - bx < AO_BLOCK_PX ? rg->x0 + rg->width - bx : AO_BLOCK_PX;
             int h = rg->y0 + rg->height - by < AO_BLOCK_PX ? rg->y0 + rg->height - by : AO_BLOCK_PX;
             block_primary(v, s, bx, by, w, h, i, j);
+            clip_packet(v, p);
             accel_intersect_packet(v->accel, packet_whole(p));
             counts->primary_rays += p->count;
             uint64_t hits = 0;
@@ -358,7 +385,7 @@ static void *ao_worker(void *arg)
 {
     ao_tile_queue *q = arg;
     const camera_basis *cam = &q->view->camera;
-    render_counts counts = {0, 0, 0};
+    render_counts counts = {0, 0, 0, 0};
     for (;;) {
         int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
         if (tile >= q->tile_count)

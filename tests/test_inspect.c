@@ -15,6 +15,7 @@
 #include "engine/frame_state.h"
 #include "engine/packet.h"
 #include "engine/render.h"
+#include "engine/render_ao.h"
 #include "engine/scene.h"
 
 static scene *bare_scene(vec3 background, vec3 ambient)
@@ -591,4 +592,51 @@ Test(cutting, an_open_surface_in_front_does_not_hide_the_cap)
     cr_expect_eq(wrong, 0, "%ld of %ld pixels inside the cut are not the cap", wrong, inside);
     free(rgb);
     fixture_close(&fx);
+}
+
+/* The ao renderer clips its rays too: a cube over a floor, cut away
+ * entirely, leaves the floor's ambient occlusion exactly as without it
+ * (and without the plane the cube does darken the floor). */
+Test(cutting, ao_rays_are_clipped)
+{
+    camera_desc cam = {v3(0.f, -5.f, 4.f), v3(0.f, 0.f, 0.f), v3(0.f, 0.f, 1.f), 50.f};
+    const int w = 48, h = 40;
+    float *img[2];
+    for (int k = 0; k < 2; k++) {
+        scene *s = bare_scene(v3(0.f, 0.f, 0.f), v3(1.f, 1.f, 1.f));
+        add_pane(s, -3.f, -3.f, 3.f, 3.f, -1.5f, lambert(s, v3(0.8f, 0.8f, 0.8f), 1.f));
+        if (k == 1)
+            add_grid_cube(s, 2, -1, lambert(s, v3(0.5f, 0.2f, 0.2f), 1.f)); /* 0.5 above the floor: occludes it */
+        fixture fx;
+        fixture_open(&fx, s);
+        fx.set.ao_distance = 2.f;
+        if (k == 1)
+            set_plane(&fx.st, 0, v3(0.f, 0.f, -1.2f), v3(0.f, 0.f, 1.f));
+        img[k] = calloc((size_t)w * h * 3, sizeof(float));
+        cr_assert(img[k]);
+        render_view v = fixture_view(&fx, cam, w, h, false);
+        pixel_sampler single = pixel_sampler_single();
+        render_ao_image(&v, &single, 1, 16, img[k], NULL);
+        fixture_close(&fx);
+    }
+    cr_expect(memcmp(img[0], img[1], sizeof(float) * (size_t)w * h * 3) == 0,
+              "the cut-away cube still occludes the floor");
+    {
+        scene *s = bare_scene(v3(0.f, 0.f, 0.f), v3(1.f, 1.f, 1.f));
+        add_pane(s, -3.f, -3.f, 3.f, 3.f, -1.5f, lambert(s, v3(0.8f, 0.8f, 0.8f), 1.f));
+        add_grid_cube(s, 2, -1, lambert(s, v3(0.5f, 0.2f, 0.2f), 1.f));
+        fixture fx;
+        fixture_open(&fx, s);
+        fx.set.ao_distance = 2.f;
+        float *uncut = calloc((size_t)w * h * 3, sizeof(float));
+        cr_assert(uncut);
+        render_view v = fixture_view(&fx, cam, w, h, false);
+        pixel_sampler single = pixel_sampler_single();
+        render_ao_image(&v, &single, 1, 16, uncut, NULL);
+        cr_expect(memcmp(img[0], uncut, sizeof(float) * (size_t)w * h * 3) != 0, "the cube should darken the floor");
+        free(uncut);
+        fixture_close(&fx);
+    }
+    free(img[0]);
+    free(img[1]);
 }
