@@ -27,8 +27,10 @@
 #define AO_REGION_MAX_PX (AO_SUBTILE_PX + 2 * AO_APRON_MAX_PX)
 #define AO_REGION_MAX_PIXELS (AO_REGION_MAX_PX * AO_REGION_MAX_PX)
 
-/* How AO rays are grouped into packets (measured on the bunny, see the
- * report of issue 15 / tools/bench_ao.sh):
+/* How AO rays are grouped into packets. Measured: bunny, 1920x1080, 8 rays,
+ * filter off, 1 thread, AMD EPYC, other programs <= 0.23 CPU, median frame of
+ * 3 over 3 alternating runs each: by octant 331 / 331 / 355 ms, by sample
+ * 338 / 336 / 338 ms; by octant stays the default (~2 %, within noise):
  *   AO_PACKETS_BY_SAMPLE  ray s of every hit of an 8 x 8 block in one packet
  *                         (N packets a block), as the Embree peer does;
  *   AO_PACKETS_BY_OCTANT  a block's rays binned by the signs of their world
