@@ -29,6 +29,7 @@ static const char *const bench_fields[] = {
     "triangles",    "spheres",      "load_s",   "build_s",       "prim_mrays", "total_mrays", "frame_ms_median",
     "frame_ms_min", "frame_ms_max", "hit_rate", "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
     "hits",         "instances",    "geometries", "triangles_instanced", "bytes_per_instanced_tri",
+    "renderer",     "opacity",      "secondary_rays_frame",
 };
 #define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
 
@@ -173,7 +174,7 @@ Test(bench_cli, help_documents_options_and_every_field)
     cr_assert_eq(run_bench(out, err, "--help"), 0, "%s", err);
     const char *options[] = {"--scene",  "--size",   "--threads", "--frames",  "--warmup",     "--shadows",
                              "--camera", "--isa",    "--out",     "--flatten", "--part-txns", "PARTTXN",
-                             "--renderer", "--ao-rays", "--ao-dist", "--ao-filter", "--ao-interleave"};
+                             "--renderer", "--ao-rays", "--ao-dist", "--ao-filter", "--ao-interleave", "--opacity"};
     for (size_t i = 0; i < sizeof options / sizeof options[0]; i++)
         cr_expect(strstr(out, options[i]), "bench --help lacks %s", options[i]);
     for (size_t i = 0; i < BENCH_FIELD_COUNT; i++) {
@@ -209,6 +210,20 @@ Test(bench_cli, default_scene)
     cr_expect_eq(field(line, "spheres"), (double)s->spheres.count);
     cr_expect_eq(field(line, "mesh_bytes"), (double)mesh_b);
     scene_destroy(s);
+}
+
+/* --opacity: rays blend what they cross; the layers past the first are counted */
+Test(bench_cli, opacity_blends_layers)
+{
+    char line[OUTPUT_BYTES];
+    run_ok("--size 64x36 --threads 2 --frames 2", line);
+    cr_expect_eq(field(line, "opacity"), 1.0);
+    cr_expect_eq(field(line, "secondary_rays_frame"), 0.0, "opaque: no layers");
+    run_ok("--size 64x36 --threads 2 --frames 2 --opacity 0.3", line);
+    check_consistent(line);
+    cr_expect_float_eq(field(line, "opacity"), 0.3, 1e-6);
+    cr_expect(field(line, "secondary_rays_frame") > field(line, "hits") / 4,
+              "opacity 0.3: few rays went past their first surface: %s", line);
 }
 
 /* --renderer ao: the AO fields; with the filter off the AO rays are hits x N
@@ -320,6 +335,7 @@ Test(bench_cli, bad_options_give_one_line)
     EXPECT_ERROR(2, "--bogus", "unknown option", "--bogus");
     EXPECT_ERROR(2, "--frames 0", "--frames", "from 1");
     EXPECT_ERROR(2, "--warmup -1", "--warmup", "from 0");
+    EXPECT_ERROR(2, "--opacity 1.5", "--opacity");
     EXPECT_ERROR(2, "--threads zero", "--threads", "whole number");
     EXPECT_ERROR(2, "--size 640", "--size", "WIDTHxHEIGHT");
     EXPECT_ERROR(2, "--camera 1,2,3", "--camera");

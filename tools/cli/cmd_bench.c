@@ -57,6 +57,7 @@ typedef struct bench_options {
     int part_txns;          /* > 0: time this many rounds of part transactions instead of frames */
     bool ao;                /* --renderer ao: the ambient-occlusion renderer instead of eyelight */
     render_settings settings; /* ao_rays, ao_distance, ao_interleave, ao_filter_px for --renderer ao */
+    float opacity;          /* --opacity: every surface's opacity (1: opaque, the plain path) */
 } bench_options;
 
 /* One timed frame. */
@@ -64,6 +65,7 @@ typedef struct frame_sample {
     double seconds;         /* wall time of render_image alone */
     uint64_t primary_rays, shadow_rays;
     uint64_t primary_hits; /* primary rays that hit something */
+    uint64_t secondary_rays; /* --opacity < 1: the layers traced past each ray's first surface */
     /* --renderer ao: shadow_rays holds its AO rays (render_ao.h), and primary rays include the
      * filter's apron pixels traced again */
 } frame_sample;
@@ -87,6 +89,9 @@ static void bench_usage(FILE *f)
           "  --frames N       timed frames, each timed on its own (default 5)\n"
           "  --warmup N       untimed frames rendered first (default 1)\n"
           "  --shadows        trace a shadow ray per hit (default: primary rays only)\n"
+          "  --opacity A      every surface's opacity, 0..1 (default 1): below 1 rays blend the\n"
+          "                   surfaces they cross front to back (docs/inspection.md), with the\n"
+          "                   default limits (transmittance 1/255, 16 layers)\n"
           "  --renderer NAME  eyelight (the default: the peer's shade) or ao: the ambient-occlusion\n"
           "                   renderer (engine/render_ao.h), the peer's --ao workload: per hit N\n"
           "                   cosine-distributed any-hit rays; its tiles are RENDER_TILE_PX as\n"
@@ -123,7 +128,8 @@ static void bench_usage(FILE *f)
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
-          "        renderer=NAME and, with --renderer ao, ao_rays= ao_interleave= ao_filter= ao_dist=\n"
+          "        renderer=NAME opacity= secondary_rays_frame= and, with --renderer ao, ao_rays=\n"
+          "        ao_interleave= ao_filter= ao_dist=\n"
           "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
           "                   '%' in it are written as %XX so that fields split on spaces\n"
@@ -156,6 +162,8 @@ static void bench_usage(FILE *f)
           "  triangles_instanced  triangles over all instances: what the picture holds\n"
           "  bytes_per_instanced_tri  (mesh_bytes + accel_bytes) / triangles_instanced\n"
           "  renderer         eyelight or ao\n"
+          "  opacity          --opacity's value (1: opaque)\n"
+          "  secondary_rays_frame  rays of the last frame traced past their first surface (transparency)\n"
           "  ao_rays, ao_interleave, ao_filter  the AO settings used; ao_dist: the ray length used\n"
           "  ao_rays_frame    AO rays of the last frame (apron pixels included)\n"
           "  ao_mrays         median over the timed frames of (AO rays of the frame / seconds) / 1e6\n"
@@ -256,6 +264,11 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_double(a, val, 1e-30, 1e30, &d))
                 goto bad;
             o->settings.ao_distance = (float)d;
+        } else if (!strcmp(a, "--opacity")) {
+            double op;
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_double(a, val, 0.0, 1.0, &op))
+                goto bad;
+            o->opacity = (float)op;
         } else if (!strcmp(a, "--flatten")) {
             o->flatten = true;
         } else if (!strcmp(a, "--part-txns")) {
@@ -434,6 +447,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
         samples[f].primary_rays = counts.primary_rays;
         samples[f].shadow_rays = counts.shadow_rays;
         samples[f].primary_hits = counts.primary_hits;
+        samples[f].secondary_rays = counts.secondary_rays;
     }
     double busy1 = cli_machine_busy_s(), own1 = cli_own_cpu_s(), wall1 = cli_now_s();
     if (busy0 < 0.0 || busy1 < 0.0 || !(wall1 > wall0))
@@ -489,7 +503,8 @@ static void print_result(const bench_options *o, const render_view *view, double
     printf(" hits=%llu instances=%u geometries=%u triangles_instanced=%zu bytes_per_instanced_tri=%.2f",
            (unsigned long long)last->primary_hits, s->instance_count, s->geometry_count, instanced,
            bytes_per_instanced);
-    printf(" renderer=%s", o->ao ? "ao" : "eyelight");
+    printf(" renderer=%s opacity=%g secondary_rays_frame=%llu", o->ao ? "ao" : "eyelight", (double)o->opacity,
+           (unsigned long long)last->secondary_rays);
     if (o->ao) {
         for (int f = 0; f < n; f++) {
             double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
@@ -696,7 +711,7 @@ int cli_bench(int argc, char **argv)
             return cli_bench_wall(argc, argv);
     bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
                        .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP,
-                       .settings = render_settings_default()};
+                       .settings = render_settings_default(), .opacity = 1.f};
     int code = 0;
     if (!parse_options(argc, argv, &o, &code))
         return code;
@@ -725,8 +740,18 @@ int cli_bench(int argc, char **argv)
     }
     render_view view = {cs.scene, cs.accel, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
                         RENDER_SHADE_EYELIGHT, NULL, &o.settings};
+    frame_state opacity_state;
+    bool have_state = o.opacity < 1.f;
+    if (have_state) { /* the frame state the pipeline would hold after an `opacity all A` */
+        frame_state_init(&opacity_state, renderer_by_name("eyelight"), o.shadows, o.threads,
+                         accel_geometry_count(cs.accel));
+        frame_state_set_global_opacity(&opacity_state, o.opacity);
+        view.state = &opacity_state;
+    }
     measure(&o, &view, rgb, samples, &cpu_other);
     print_result(&o, &view, cs.load_s, cs.build_s, samples, cpu_other, scratch);
+    if (have_state)
+        frame_state_finish(&opacity_state);
     if (o.out) {
         tess_error err = {{0}};
         if (has_suffix(o.out, ".pfm")) {
