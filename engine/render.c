@@ -737,10 +737,11 @@ void render_tile_sampled(const render_view *v, const pixel_sampler *s, int x0, i
 
 /* Shared by the threads of one render_image call. */
 typedef struct tile_queue {
+    const renderer *renderer;
     const render_view *view;
     const pixel_sampler *sampler;
     float *rgb;
-    int tiles_x, tile_count;
+    int tile_px, tiles_x, tile_count;
     atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
     atomic_uint_fast64_t primary_rays, primary_hits, shadow_rays, secondary_rays; /* totals, added once per thread */
 } tile_queue;
@@ -759,10 +760,10 @@ static void *render_worker(void *arg)
             atomic_fetch_add_explicit(&q->secondary_rays, counts.secondary_rays, memory_order_relaxed);
             return NULL;
         }
-        int x0 = (tile % q->tiles_x) * RENDER_TILE_PX, y0 = (tile / q->tiles_x) * RENDER_TILE_PX;
-        int x1 = x0 + RENDER_TILE_PX < cam->width_px ? x0 + RENDER_TILE_PX : cam->width_px;
-        int y1 = y0 + RENDER_TILE_PX < cam->height_px ? y0 + RENDER_TILE_PX : cam->height_px;
-        render_tile_sampled(q->view, q->sampler, x0, y0, x1, y1, q->rgb, &counts);
+        int x0 = (tile % q->tiles_x) * q->tile_px, y0 = (tile / q->tiles_x) * q->tile_px;
+        int x1 = x0 + q->tile_px < cam->width_px ? x0 + q->tile_px : cam->width_px;
+        int y1 = y0 + q->tile_px < cam->height_px ? y0 + q->tile_px : cam->height_px;
+        q->renderer->render_tile(q->view, q->sampler, x0, y0, x1, y1, q->rgb, &counts);
     }
 }
 
@@ -778,9 +779,16 @@ void render_image(const render_view *v, int threads, float *rgb, render_counts *
 void render_image_sampled(const render_view *v, const pixel_sampler *s, int threads, float *rgb,
                           render_counts *counts)
 {
-    tile_queue q = {.view = v, .sampler = s, .rgb = rgb};
-    q.tiles_x = (v->camera.width_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX;
-    q.tile_count = q.tiles_x * ((v->camera.height_px + RENDER_TILE_PX - 1) / RENDER_TILE_PX);
+    static const renderer tiles_sampled = {"raytracer", RENDER_SHADE_PHONG, render_tile_sampled};
+    render_image_tiles(&tiles_sampled, v, s, threads, RENDER_TILE_PX, rgb, counts);
+}
+
+void render_image_tiles(const renderer *r, const render_view *v, const pixel_sampler *s, int threads, int tile_px,
+                        float *rgb, render_counts *counts)
+{
+    tile_queue q = {.renderer = r, .view = v, .sampler = s, .rgb = rgb, .tile_px = tile_px < 1 ? 1 : tile_px};
+    q.tiles_x = (v->camera.width_px + q.tile_px - 1) / q.tile_px;
+    q.tile_count = q.tiles_x * ((v->camera.height_px + q.tile_px - 1) / q.tile_px);
     atomic_init(&q.next_tile, 0);
     atomic_init(&q.primary_rays, 0);
     atomic_init(&q.primary_hits, 0);

@@ -134,4 +134,13 @@ const renderer *renderer_by_name(const char *name);
 void render_image_sampled(const render_view *v, const pixel_sampler *s, int threads, float *rgb,
                           render_counts *counts);
 
+/* The threaded driver of the two above with renderer r's tile function and
+ * tiles of tile_px pixels (benchmarks and tests; a pipeline has its image
+ * traverser): `threads` threads, the caller's included, pull tiles from one
+ * atomic counter; `counts` (may be NULL) gets every ray the tiles counted.
+ * The shading in v is what r's tile function reads (render_tile_sampled:
+ * v->shading), not r->shading. */
+void render_image_tiles(const renderer *r, const render_view *v, const pixel_sampler *s, int threads, int tile_px,
+                        float *rgb, render_counts *counts);
+
 #endif

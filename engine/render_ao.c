@@ -2,9 +2,7 @@
 #include "render_ao.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdalign.h>
-#include <stdatomic.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -12,7 +10,6 @@
 #include "ao.h"
 #include "clip.h"
 #include "frame_state.h"
-#include "log.h"
 #include "packet.h"
 #include "scene.h"
 #include "surface.h"
@@ -371,67 +368,8 @@ void render_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0
         }
 }
 
-/* ---- a threaded driver (benchmarks, tests) ------------------------------ */
-
-/* Shared by the threads of one render_ao_image call. */
-typedef struct ao_tile_queue {
-    const render_view *view;
-    const pixel_sampler *sampler;
-    float *rgb;
-    int tile_px, tiles_x, tile_count;
-    atomic_int next_tile; /* next tile to hand out; >= tile_count: done */
-    atomic_uint_fast64_t primary_rays, primary_hits, ao_rays; /* totals, added once per thread */
-} ao_tile_queue;
-
-static void *ao_worker(void *arg)
-{
-    ao_tile_queue *q = arg;
-    const camera_basis *cam = &q->view->camera;
-    render_counts counts = {0, 0, 0, 0};
-    for (;;) {
-        int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
-        if (tile >= q->tile_count)
-            break;
-        int x0 = (tile % q->tiles_x) * q->tile_px, y0 = (tile / q->tiles_x) * q->tile_px;
-        int x1 = x0 + q->tile_px < cam->width_px ? x0 + q->tile_px : cam->width_px;
-        int y1 = y0 + q->tile_px < cam->height_px ? y0 + q->tile_px : cam->height_px;
-        render_ao_tile(q->view, q->sampler, x0, y0, x1, y1, q->rgb, &counts);
-    }
-    atomic_fetch_add_explicit(&q->primary_rays, counts.primary_rays, memory_order_relaxed);
-    atomic_fetch_add_explicit(&q->primary_hits, counts.primary_hits, memory_order_relaxed);
-    atomic_fetch_add_explicit(&q->ao_rays, counts.shadow_rays, memory_order_relaxed);
-    return NULL;
-}
-
-/* Most threads render_ao_image starts (render.c's limit). */
-#define AO_MAX_THREADS 256
-
 void render_ao_image(const render_view *v, const pixel_sampler *s, int threads, int tile_px, float *rgb,
                      render_counts *counts)
 {
-    ao_tile_queue q = {.view = v, .sampler = s, .rgb = rgb, .tile_px = tile_px < 1 ? 1 : tile_px};
-    q.tiles_x = (v->camera.width_px + q.tile_px - 1) / q.tile_px;
-    q.tile_count = q.tiles_x * ((v->camera.height_px + q.tile_px - 1) / q.tile_px);
-    atomic_init(&q.next_tile, 0);
-    atomic_init(&q.primary_rays, 0);
-    atomic_init(&q.primary_hits, 0);
-    atomic_init(&q.ao_rays, 0);
-    threads = threads < 1 ? 1 : threads > AO_MAX_THREADS ? AO_MAX_THREADS : threads;
-    pthread_t ids[AO_MAX_THREADS];
-    int started = 0;
-    for (int i = 1; i < threads; i++) {
-        if (pthread_create(&ids[started], NULL, ao_worker, &q) != 0) {
-            log_warn("render_ao: could start only %d of %d render threads", started + 1, threads);
-            break;
-        }
-        started++;
-    }
-    ao_worker(&q);
-    for (int i = 0; i < started; i++)
-        pthread_join(ids[i], NULL);
-    if (counts) {
-        counts->primary_rays = atomic_load(&q.primary_rays);
-        counts->primary_hits = atomic_load(&q.primary_hits);
-        counts->shadow_rays = atomic_load(&q.ao_rays);
-    }
+    render_image_tiles(renderer_by_name("ao"), v, s, threads, tile_px, rgb, counts);
 }
