@@ -832,7 +832,6 @@ render_settings render_settings_default(void)
         .ao_distance = 0.f,
         .ao_interleave = 4,
         .ao_filter_px = 5,
-        .ao_in_raytracer = false,
     };
 }
 

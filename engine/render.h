@@ -52,12 +52,11 @@ typedef struct render_settings {
     /* cutting planes */
     bool caps;                /* draw the cut faces of closed parts */
     render_cap_style cap_style;
-    /* ambient occlusion (renderer "ao", and the raytracer's ambient term when ao_in_raytracer) */
+    /* ambient occlusion (renderer "ao") */
     int ao_rays;              /* rays per hit, 1..64 */
     float ao_distance;        /* world units; <= 0: 0.1 x the scene's bounding-box diagonal */
     int ao_interleave;        /* K: a K x K pixel pattern of direction sets, 1..8 */
     int ao_filter_px;         /* discontinuity filter edge (odd, 1 = off), <= 9 */
-    bool ao_in_raytracer;     /* the raytracer's ambient term is scaled by the unoccluded fraction */
 } render_settings;
 
 #define RENDER_MIN_TRANSMITTANCE_DEFAULT (1.f / 255.f)
