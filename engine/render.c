@@ -613,36 +613,32 @@ static void trace_packet(const render_view *v, const view_extras *x, ray_packet 
         shade_packet(v, x, p, shadows, ps, counts);
 }
 
-/* render_shade when surfaces are walked layer by layer: the packet walk on a
- * packet of this one ray (the same kernels, single-ray path). */
-static vec3 render_shade_layers(const render_view *v, const ray *r, uint64_t *shadow_rays)
-{
-    static _Thread_local struct {
-        ray_packet primary, shadows;
-        packet_shading ps;
-        layer_walk walk;
-    } one;
-    view_extras x;
-    view_extras_make(v, &x);
-    packet_reset(&one.primary, 1, 0);
-    packet_set_ray(&one.primary, 0, r);
-    packet_detect_facts(&one.primary);
-    render_counts counts = {0};
-    render_layers(v, &x, &one.primary, &one.shadows, &one.ps, &one.walk, &counts);
-    *shadow_rays += counts.shadow_rays;
-    return one.ps.colour[0];
-}
-
-/* Primary rays per packet: 8 x 8 pixels, so a packet covers a compact patch. */
-#define RENDER_PACKET_EDGE_PX 8
-
-/* Per thread: two packets and the shading state, ~60 KB: too big for a
- * worker's stack. Used by one block at a time. */
+/* Per thread: two packets and the shading state, ~65 KB: too big for a
+ * worker's stack. Used by one block (or one render_shade) at a time. */
 static _Thread_local struct render_scratch {
     ray_packet primary, shadows;
     packet_shading ps;
     layer_walk walk;
 } scratch;
+
+/* render_shade when surfaces are walked layer by layer: the packet walk on a
+ * packet of this one ray (the same kernels, single-ray path), in the
+ * thread's scratch (render_shade is never called from inside a tile). */
+static vec3 render_shade_layers(const render_view *v, const ray *r, uint64_t *shadow_rays)
+{
+    view_extras x;
+    view_extras_make(v, &x);
+    packet_reset(&scratch.primary, 1, 0);
+    packet_set_ray(&scratch.primary, 0, r);
+    packet_detect_facts(&scratch.primary);
+    render_counts counts = {0};
+    render_layers(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, &counts);
+    *shadow_rays += counts.shadow_rays;
+    return scratch.ps.colour[0];
+}
+
+/* Primary rays per packet: 8 x 8 pixels, so a packet covers a compact patch. */
+#define RENDER_PACKET_EDGE_PX 8
 
 /* Store the colours of a w x h block (row-major) at pixel (px, py) of the image. */
 static void store_block(const camera_basis *cam, int px, int py, int w, int h, const vec3 *colour, float *rgb)
