@@ -30,14 +30,16 @@
 # idle timeout.
 # Then a third run on a 10,000-part glTF assembly (build/gen-assembly --parts
 # 10000 --triangles 2000000, made here on the host), no shadows, another
-# uinput touchscreen mapped to Virtual-4, in three checks (about 2.5 min):
+# uinput touchscreen mapped to Virtual-4, in four checks (about 3 min):
 # the tablet's click picks a skin panel (the record's status names its path:
 # "picked part assembly/..."), H hides it (a hide of its instance range; the
 # native render of the record without the hide differs where it was); I
 # isolates it (the same range); U shows all, a long press on the touchscreen
 # selects and isolates the part under the finger, a two-finger tap shows all
 # (the record's kinds in that order; heads 1 and 2, which show neither the
-# status line nor the cursor, equal the start's native render). Each check
+# status line nor the cursor, equal the start's native render); C places a
+# cutting plane at the tablet's cursor, a middle-button drag pushes it, [
+# lowers the opacity (two clip-plane records and an opacity record). Each check
 # also asks the heads to equal the native replay of the record, as above.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
@@ -330,6 +332,29 @@ assembly_run() {
         ok "assembly: U showed all; the long press $(echo "$_lp" | sed 's/^status "\(.*\)"$/\1/') ($_iso; $_n pixels of the replay changed); the two-finger tap showed all (heads 1 and 2 equal the start's)"
     else
         bad "assembly: U, long press, two-finger tap: after the I: '$_order'; '$_iso', '$_lp', $_n pixels of the replay changed; heads 1 and 2 against the start's: $(px_differ "$W/ref-asm0-Virtual-1.bmp" "$W/ref-$K-Virtual-1.bmp"), $(px_differ "$W/ref-asm0-Virtual-2.bmp" "$W/ref-$K-Virtual-2.bmp") pixels differ"
+    fi
+
+    # the inspection tools: C puts a cutting plane through the point under the tablet's cursor
+    # (the skin panel clicked first), facing the eye; the middle button dragged up the wall
+    # pushes it deeper into what it cuts; [ lowers every surface's opacity one step. One check
+    # for the three (the heads equal the native replay: clipping, caps by parity and blending
+    # are the same in the guest), the record read back: plane 0 set at least twice (placed,
+    # then moved), an `opacity all` record, and the picture changed
+    _k3=$K
+    qmp abs 25551 18496
+    qmp key c
+    qmp click middle down
+    for _i in 1 2 3; do qmp abs 25551 $((18496 - _i * 600)); sleep 0.2; done
+    qmp click middle up
+    qmp key bracket_left
+    check "assembly: C (a cutting plane at the cursor), middle drag (push it), [ (opacity down)"
+    _planes=$(grep -c ' clip-plane 0 1 ' "$W/rec-$K.txt")
+    _op=$(rec_last ' opacity ')
+    _n=$(heads_differ $_k3 $K)
+    if [ "$_planes" -ge 2 ] && echo "$_op" | grep -q '^opacity all ' && [ "$_n" -gt 2000 ]; then
+        ok "assembly: C placed cutting plane 0 and the drag moved it ($_planes clip-plane records), [ gave '$_op'; $_n pixels changed"
+    else
+        bad "assembly: C, middle drag, [: $_planes clip-plane records for plane 0, opacity record '$_op', $_n pixels changed"
     fi
 }
 
