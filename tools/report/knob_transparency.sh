@@ -1,0 +1,186 @@
+# knob_transparency.sh - the transparency section of REPORT.md: how far a
+# ray blends transparent surfaces (renderer.transparency.min_transmittance
+# and max_layers, docs/pipeline-config.md) against frame time and error, at
+# global opacity 0.3. Sourced by tools/report/report.sh, which calls
+# knob_transparency once with the scenes measured; it writes
+# $WORK/section_transparency.md and its pictures into $WORK/plots/.
+#
+# Scenes: a 10,000-part assembly (build/gen-assembly --parts 10000
+# --triangles 2000000, generated into $WORK: the same options give the same
+# bytes), seen from close by so that skin, frames and stringers overlap
+# along most rays, and the shared meshes among the scenes given (the dragon,
+# seen through itself). Not the built-in scene: the other knobs' scenes stay
+# as they are.
+#
+# Reference: NOT the scene's jittered mean. Transparency is blended per
+# pixel ray, so the reference is the same pixel-centre rays (--sampler
+# single, as every setting) with the limits removed: min_transmittance 1e-6,
+# max_layers 64 (report_knob_reference). The error of a setting is then only
+# what its limits cut off, with no antialiasing in it.
+#
+# Settings, named L<max_layers>-m<min_transmittance> ('1_255' for 1/255):
+# two series through the default L16-m1_255, one varying each limit.
+#
+# shellcheck shell=sh disable=SC2046,SC2034,SC2154
+# (SC2046: a series' settings are passed as separate words on purpose; SC2034,
+# SC2154: SCENE_ARG_assembly is read by lib.sh, rs and note are set through eval)
+
+TR_OPACITY=0.3
+TR_THRESHOLDS="1_255 0.02 0.05 0.1 0.25" # min_transmittance at max_layers 16
+TR_LAYERS="2 4 8 16 64"                  # max_layers at min_transmittance 1/255
+TR_DEFAULT=L16-m1_255
+# the assembly's camera: beside the fuselage, looking at its side from 5.7 units (eye, look-at, up, fov)
+TR_ASSEMBLY_CAMERA=40,1.5,5.5,40,0,0,0,1,0,60
+
+tr_value() { # threshold word -> the number
+    case $1 in
+        1_255) echo 0.00392156862745098 ;;
+        *) echo "$1" ;;
+    esac
+}
+tr_label() { # threshold word -> how the text writes it
+    case $1 in
+        1_255) echo 1/255 ;;
+        *) echo "$1" ;;
+    esac
+}
+tr_settings() { # every setting, in measuring order (the default once)
+    for m in $TR_THRESHOLDS; do printf 'L16-m%s ' "$m"; done
+    for l in $TR_LAYERS; do [ "$l" = 16 ] || printf 'L%s-m1_255 ' "$l"; done
+    echo
+}
+tr_config() { # setting -> its config file (written on first use)
+    tc_file=$WORK/transparency/$1.json
+    if [ ! -f "$tc_file" ]; then
+        tc_layers=${1%%-*}
+        tc_layers=${tc_layers#L}
+        printf '{"opacity": %s, "renderer": {"transparency": {"min_transmittance": %s, "max_layers": %s}}}\n' \
+            "$TR_OPACITY" "$(tr_value "${1#*-m}")" "$tc_layers" > "$tc_file"
+    fi
+    echo "$tc_file"
+}
+tr_camera() { # scene -> its camera option, '~' for the space
+    case $1 in
+        assembly) echo "~--camera~$TR_ASSEMBLY_CAMERA" ;;
+        *) echo "" ;;
+    esac
+}
+tr_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }'; }
+
+knob_transparency() { # scene labels...
+    out=$WORK/section_transparency.md
+    mkdir -p "$WORK/transparency"
+    tr_scenes=assembly
+    for scene in "$@"; do
+        [ "$scene" = default ] || tr_scenes="$tr_scenes $scene"
+    done
+    # the assembly: a scene of this knob's own
+    [ -x build/gen-assembly ] || report_fail "build/gen-assembly not built: run 'make build/gen-assembly' (or make report)"
+    report_run build/gen-assembly --parts 10000 --triangles 2000000 -o "$WORK/transparency/assembly.glb"
+    tr_gen=$(cat "$WORK/cmd.out")
+    SCENE_ARG_assembly=$WORK/transparency/assembly.glb
+    printf '{"opacity": %s, "renderer": {"transparency": {"min_transmittance": 1e-6, "max_layers": 64}}}\n' \
+        "$TR_OPACITY" > "$WORK/transparency/reference.json"
+    for scene in $tr_scenes; do
+        cam=$(tr_camera "$scene")
+        report_knob_reference transparency "$scene" "--sampler~single~--config~$WORK/transparency/reference.json$cam"
+        eval "TR_REF_SECONDS_$scene=\$REF_SECONDS"
+        set_list=""
+        for s in $(tr_settings); do
+            set_list="$set_list $s=--sampler~single~--config~$(tr_config "$s")$cam"
+        done
+        # shellcheck disable=SC2086
+        report_curve transparency "$scene" $set_list
+    done
+    thr_series="min_transmittance=$(for m in $TR_THRESHOLDS; do printf 'L16-m%s:%s,' "$m" "$(tr_label "$m")"; done | sed 's/,$//')"
+    lay_series="max_layers=$(for l in $TR_LAYERS; do
+        if [ "$l" = 16 ]; then printf 'L16-m1_255:,'; else printf 'L%s-m1_255:L%s,' "$l" "$l"; fi
+    done | sed 's/,$//')"
+    report_plot transparency flip "mean FLIP against the reference (0 = identical)" \
+        "Transparency at opacity $TR_OPACITY: frame time against mean FLIP" '' "$thr_series" "$lay_series"
+    report_plot transparency rmse "RMSE against the reference (linear RGB)" \
+        "Transparency at opacity $TR_OPACITY: frame time against RMSE" '' "$thr_series" "$lay_series"
+    cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
+    {
+        echo "## Transparency: termination threshold and layer count"
+        echo
+        echo "Every surface at opacity $TR_OPACITY (a pipeline config with \`\"opacity\": $TR_OPACITY\`), the raytracer with"
+        echo "transparent shadows (the default), one ray through each pixel centre (\`--sampler single\`). Two"
+        echo "series through the default (\`min_transmittance\` 1/255, \`max_layers\` 16): \`min_transmittance\`"
+        echo "$(for m in $TR_THRESHOLDS; do printf '%s, ' "$(tr_label "$m")"; done | sed 's/, $//') at \`max_layers\` 16, and \`max_layers\`"
+        echo "$(echo "$TR_LAYERS" | sed 's/ /, /g') at \`min_transmittance\` 1/255 (settings named L<layers>-m<threshold>)."
+        echo
+        echo "**Reference: not the jittered mean of the other sections.** Transparency is blended per pixel"
+        echo "ray, so the reference is the same pixel-centre rays with the limits removed (\`min_transmittance\`"
+        echo "1e-6, \`max_layers\` 64; \`report_knob_reference\` in tools/report/lib.sh): an error here is only what"
+        echo "the limits cut off, no antialiasing in it. At opacity $TR_OPACITY the 64th layer still lets"
+        echo "$(awk -v a="$TR_OPACITY" 'BEGIN { printf "%.1e", (1 - a) ^ 64 }') of the light through, below what any 8-bit output shows."
+        echo
+        echo "Scenes:"
+        for scene in $tr_scenes; do
+            eval "rs=\$TR_REF_SECONDS_$scene"
+            case $scene in
+                assembly)
+                    echo "- **assembly**: \`build/gen-assembly --parts 10000 --triangles 2000000\` ($(echo "$tr_gen" |
+                        sed 's/ file=.*//')), camera \`--camera $TR_ASSEMBLY_CAMERA\`: beside the fuselage, skin, frames,"
+                    echo "  stringers and pipes overlapping along most rays. Reference render: $rs s."
+                    ;;
+                *)
+                    eval "note=\$SCENE_NOTE_$scene"
+                    echo "- **$scene**: $note, seen through itself. Reference render: $rs s."
+                    ;;
+            esac
+        done
+        echo
+        echo "Machine: ${cpu:-unknown CPU} (lscpu), $(nproc) CPUs, $THREADS render threads. Frame time:"
+        echo "\`tessera render --scene S --size $SIZE --threads $THREADS --frames $FRAMES --display null --sampler single"
+        echo "--config L<layers>-m<threshold>.json\`, mean ms/frame of a run, median of $RUNS runs taken in turn over"
+        echo "the settings (min-max in brackets). Error: \`tessera compare REFERENCE IMAGE\` on EXR renders."
+        echo
+        echo "| scene | max_layers | min_transmittance | frame ms (min-max) | × default | mean FLIP | FLIP q3 | RMSE | PSNR dB |"
+        echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+        for scene in $tr_scenes; do
+            report_row transparency "$scene" "$TR_DEFAULT"
+            ms_def=$MS
+            for s in $(tr_settings); do
+                report_row transparency "$scene" "$s"
+                l=${s%%-*}
+                mark=""
+                [ "$s" != "$TR_DEFAULT" ] || mark=" (default)"
+                echo "| $scene | ${l#L} | $(tr_label "${s#*-m}")$mark | $MS ($MS_LO-$MS_HI) | $(tr_ratio "$MS" "$ms_def") |" \
+                    "$FLIP | $FLIP_Q3 | $RMSE | $PSNR |"
+            done
+        done
+        echo
+        echo "The numbers: [report/transparency.tsv](report/transparency.tsv) (columns as report/antialiasing.tsv)."
+        echo
+        echo "![frame time against mean FLIP](report/transparency_flip.png)"
+        echo
+        echo "![frame time against RMSE](report/transparency_rmse.png)"
+        echo
+        echo "### The defaults on the curves"
+        echo
+        for scene in $tr_scenes; do
+            report_knee transparency "$scene" flip $(for m in $TR_THRESHOLDS; do printf 'L16-m%s ' "$m"; done)
+            knee_m=$KNEE
+            report_knee transparency "$scene" flip $(for l in $TR_LAYERS; do printf 'L%s-m1_255 ' "$l"; done)
+            knee_l=$KNEE
+            report_row transparency "$scene" "$TR_DEFAULT"
+            d_ms=$MS d_flip=$FLIP
+            report_row transparency "$scene" L64-m1_255
+            l64_ms=$MS l64_flip=$FLIP
+            report_row transparency "$scene" L8-m1_255
+            l8_ms=$MS l8_flip=$FLIP
+            report_row transparency "$scene" L16-m0.02
+            m2_ms=$MS m2_flip=$FLIP
+            echo "- **$scene**: the knee (mean FLIP; Kneedle, as the antialiasing section) of the"
+            echo "  \`min_transmittance\` series is at $knee_m, of the \`max_layers\` series at $knee_l. The default"
+            echo "  ($d_ms ms, mean FLIP $d_flip): \`max_layers\` 64 costs $(tr_ratio "$l64_ms" "$d_ms")× and brings FLIP to $l64_flip;"
+            echo "  \`max_layers\` 8 costs $(tr_ratio "$l8_ms" "$d_ms")× with FLIP $l8_flip; \`min_transmittance\` 0.02"
+            echo "  costs $(tr_ratio "$m2_ms" "$d_ms")× with FLIP $m2_flip."
+        done
+        echo
+        echo "TR_VERDICT_PLACEHOLDER"
+    } > "$out"
+    cp "$WORK/transparency.tsv" "$WORK/plots/transparency.tsv"
+}
