@@ -92,8 +92,8 @@ knob_transparency() { # scene labels...
         # shellcheck disable=SC2086
         report_curve transparency "$scene" $set_list
     done
-    thr_series="min_transmittance=$(for m in $TR_THRESHOLDS; do printf 'L16-m%s:%s,' "$m" "$(tr_label "$m")"; done | sed 's/,$//')"
-    lay_series="max_layers=$(for l in $TR_LAYERS; do
+    thr_series="threshold=$(for m in $TR_THRESHOLDS; do printf 'L16-m%s:%s,' "$m" "$(tr_label "$m")"; done | sed 's/,$//')"
+    lay_series="layers=$(for l in $TR_LAYERS; do
         if [ "$l" = 16 ]; then printf 'L16-m1_255:,'; else printf 'L%s-m1_255:L%s,' "$l" "$l"; fi
     done | sed 's/,$//')"
     report_plot transparency flip "mean FLIP against the reference (0 = identical)" \
