@@ -58,6 +58,8 @@ ao_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0)
 
 knob_ao() { # scene labels...
     out=$WORK/section_ao.md
+    ao_load_before=$(cat /proc/loadavg)
+    ao_start=$(date -u '+%Y-%m-%d %H:%M UTC')
     mkdir -p "$WORK/ao"
     ao_scenes=""
     for scene in "$@"; do
@@ -93,6 +95,7 @@ knob_ao() { # scene labels...
         "Ambient occlusion: frame time against RMSE (labels: rays per hit, rays x frames)" '' \
         "$off_series" "$on_series" "$off_frames" "$on_frames"
     cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
+    ao_load_after=$(cat /proc/loadavg)
     {
         echo "## Ambient occlusion: rays per hit, filter, accumulated frames"
         echo
@@ -123,7 +126,15 @@ knob_ao() { # scene labels...
             esac
         done
         echo
-        echo "Machine: ${cpu:-unknown CPU} (lscpu), $(nproc) CPUs, $THREADS render threads. Frame time:"
+        echo "Machine: ${cpu:-unknown CPU} (lscpu), $(nproc) CPUs, $THREADS render threads; measured from $ao_start,"
+        echo "load average (/proc/loadavg) before: $ao_load_before; after: $ao_load_after."
+        if [ "$SIZE" != 1920x1080 ]; then
+            echo "Image size **$SIZE** (reduced: \`REPORT_SIZE=$SIZE REPORT_FRAMES=$FRAMES REPORT_KNOBS=\"transparency ao\" make report\`;"
+            echo "the other sections may be at another size, see the header)."
+        else
+            echo "Image size $SIZE."
+        fi
+        echo "Frame time:"
         echo "\`tessera render --scene S --size $SIZE --threads $THREADS --frames $FRAMES --display null --sampler single"
         echo "--config n<rays>-f<filter>-x<frames>.json\`, mean ms/frame of a run, median of $RUNS runs taken in turn"
         echo "over the settings (min-max in brackets). Error: \`tessera compare REFERENCE IMAGE\` on EXR renders."

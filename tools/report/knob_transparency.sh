@@ -69,6 +69,8 @@ tr_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0)
 
 knob_transparency() { # scene labels...
     out=$WORK/section_transparency.md
+    tr_load_before=$(cat /proc/loadavg)
+    tr_start=$(date -u '+%Y-%m-%d %H:%M UTC')
     mkdir -p "$WORK/transparency"
     tr_scenes=assembly
     for scene in "$@"; do
@@ -101,6 +103,7 @@ knob_transparency() { # scene labels...
     report_plot transparency rmse "RMSE against the reference (linear RGB)" \
         "Transparency at opacity $TR_OPACITY: frame time against RMSE" '' "$thr_series" "$lay_series"
     cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
+    tr_load_after=$(cat /proc/loadavg)
     {
         echo "## Transparency: termination threshold and layer count"
         echo
@@ -132,7 +135,15 @@ knob_transparency() { # scene labels...
             esac
         done
         echo
-        echo "Machine: ${cpu:-unknown CPU} (lscpu), $(nproc) CPUs, $THREADS render threads. Frame time:"
+        echo "Machine: ${cpu:-unknown CPU} (lscpu), $(nproc) CPUs, $THREADS render threads; measured from $tr_start,"
+        echo "load average (/proc/loadavg) before: $tr_load_before; after: $tr_load_after."
+        if [ "$SIZE" != 1920x1080 ]; then
+            echo "Image size **$SIZE** (reduced: \`REPORT_SIZE=$SIZE REPORT_FRAMES=$FRAMES REPORT_KNOBS=\"transparency ao\" make report\`;"
+            echo "the other sections may be at another size, see the header)."
+        else
+            echo "Image size $SIZE."
+        fi
+        echo "Frame time:"
         echo "\`tessera render --scene S --size $SIZE --threads $THREADS --frames $FRAMES --display null --sampler single"
         echo "--config L<layers>-m<threshold>.json\`, mean ms/frame of a run, median of $RUNS runs taken in turn over"
         echo "the settings (min-max in brackets). Error: \`tessera compare REFERENCE IMAGE\` on EXR renders."
