@@ -54,6 +54,12 @@ ao_camera() { # scene -> its camera option, '~' for the space
         *) echo "" ;;
     esac
 }
+# The fastest setting of a scene whose metric is at most BOUND, into FAST (empty: none).
+ao_fastest_within() { # scene metric bound
+    FAST=$(awk -F '\t' -v s="$1" -v c="$(report_metric_column "$2")" -v b="$3" \
+        '$1 == s && $c <= b && (best == "" || $3 < ms) { best = $2; ms = $3 } END { print best }' \
+        "$WORK/ao.tsv")
+}
 ao_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }'; }
 
 knob_ao() { # scene labels...
@@ -182,6 +188,17 @@ knob_ao() { # scene labels...
             echo "  divides mean FLIP by $(ao_ratio "$o_flip" "$d_flip"), RMSE by $(ao_ratio "$o_rmse" "$d_rmse");"
             echo "  64 rays unfiltered: $(ao_ratio "$n64_ms" "$d_ms")× the default's time, FLIP $n64_flip;"
             echo "  8 rays × 16 frames filtered: $(ao_ratio "$x16_ms" "$d_ms")×, FLIP $x16_flip."
+            for metric in flip rmse; do
+                eval "bound=\$d_$metric"
+                ao_fastest_within "$scene" "$metric" "$bound"
+                report_row ao "$scene" "$FAST"
+                if [ "$FAST" = "$AO_DEFAULT" ]; then
+                    echo "  No setting is faster at the default's $metric or lower."
+                else
+                    echo "  At the default's $metric or lower, the fastest setting is $FAST ($MS ms,"
+                    echo "  $(ao_ratio "$MS" "$d_ms")× the default's time; mean FLIP $FLIP, RMSE $RMSE)."
+                fi
+            done
         done
         echo
         echo "AO_VERDICT_PLACEHOLDER"
