@@ -231,13 +231,21 @@ knob_transparency() { # scene labels...
         l64_ms=$MS
         echo "**Defaults kept: \`min_transmittance\` 1/255, \`max_layers\` 16.** At opacity $TR_OPACITY they stop a ray at the"
         echo "same surface, the 16th, with at most $(awk -v a="$TR_OPACITY" 'BEGIN { printf "%.2f", 100 * (1 - a) ^ 16 }') % of the light left. On the assembly the default is"
-        echo "mean FLIP $d_flip from the reference with no limits: the defaults are not at the knee but past it,"
-        echo "on the flat part of both curves, on the side of the picture. The knees are $km (mean FLIP"
-        echo "$km_flip, $(tr_ratio "$km_ms" "$d_ms")× the default's time) and $kl (FLIP $kl_flip, $(tr_ratio "$kl_ms" "$d_ms")×); what they"
-        echo "cut off is the deep layers, which a see-through inspection view is for, so the default stays on"
-        echo "the side of the picture. Raising \`max_layers\` to 64"
-        echo "at 1/255 changes nothing the threshold has not already stopped ($(tr_ratio "$l64_ms" "$d_ms")× the time, within the runs'"
-        echo "spread when near 1). At a lower opacity the threshold lets more layers through (at 0.1: 53) and"
+        echo "mean FLIP $d_flip from the reference with no limits, the flat end of both curves."
+        for series in "min_transmittance:$km:$km_ms:$km_flip" "max_layers:$kl:$kl_ms:$kl_flip"; do
+            sn=${series%%:*} rest=${series#*:}
+            sk=${rest%%:*} rest=${rest#*:}
+            if [ "$sk" = "$TR_DEFAULT" ]; then
+                echo "The default is the knee of the \`$sn\` series."
+            else
+                echo "The knee of the \`$sn\` series is $sk (mean FLIP ${rest#*:}, $(tr_ratio "${rest%%:*}" "$d_ms")× the default's time): the"
+                echo "default lies past it, on the side of the picture."
+            fi
+        done
+        echo "What a lower limit cuts off is the deep layers, which a see-through inspection view is for,"
+        echo "so the defaults stay where the error is invisible. Raising \`max_layers\` to 64 at 1/255 blends"
+        echo "the same 16 layers (the table's layers blended; $(tr_ratio "$l64_ms" "$d_ms")× the default's time, which is the runs'"
+        echo "noise). At a lower opacity the threshold lets more layers through (at 0.1: 53) and"
         echo "\`max_layers\` 16 becomes the limit that binds; not measured here. *(This reading is written in"
         echo "tools/report/knob_transparency.sh; the numbers in it are computed from the table.)*"
     } > "$out"
