@@ -252,7 +252,7 @@ $(BUILD)/report_img: $(BUILD)/tools/report/report_img.o $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(BUILD)/tools/report/report_img.o $(LIB) $(LDLIBS)
 report:
 	@sh tools/deps.sh --report
-	$(MAKE) tessera $(BUILD)/report_img unrobust
+	$(MAKE) tessera $(BUILD)/report_img $(BUILD)/gen-assembly unrobust
 	sh tools/report/report.sh
 
 clean:

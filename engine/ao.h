@@ -27,7 +27,9 @@
  *    N -> infinity value for every pixel, with or without the filter.
  * The frame f is the pixel sampler's stratum (sampler.h): 0 for single,
  * the stratum index j k + i for jittered and stratum samplers, so the
- * governor's accumulation of stratum frames converges.
+ * governor's accumulation of stratum frames converges; with
+ * render_settings.ao_frames F > 1 each stratum stands for F consecutive
+ * frames, averaged (render_ao.h, FRAMES).
  *
  * DIRECTIONS. A point (u, v) maps to the unit disk by Shirley and Chiu's
  * concentric map ("A Low Distortion Map Between Disk and Square", JGT 1997),
@@ -48,6 +50,7 @@
 #define AO_MAX_INTERLEAVE 8  /* render_settings.ao_interleave K: 1 .. 8 */
 #define AO_MAX_SETS (AO_MAX_INTERLEAVE * AO_MAX_INTERLEAVE)
 #define AO_MAX_FILTER_PX 9   /* render_settings.ao_filter_px: odd, 1 .. 9 */
+#define AO_MAX_FRAMES 64     /* render_settings.ao_frames: 1 .. 64 */
 
 /* A fixed digital shift of the whole sequence (both coordinates): keeps
  * every net property and moves the first point off the square's corner,

@@ -365,6 +365,9 @@ static bool settings_validate(const render_settings *s, tess_error *err)
     if (s->ao_filter_px < 1 || s->ao_filter_px > PIPELINE_AO_FILTER_PX_MAX || s->ao_filter_px % 2 == 0)
         return tess_error_set(err, "pipeline: settings.ao_filter_px: %d is not odd in 1..%d", s->ao_filter_px,
                               PIPELINE_AO_FILTER_PX_MAX);
+    if (s->ao_frames < 1 || s->ao_frames > PIPELINE_AO_FRAMES_MAX)
+        return tess_error_set(err, "pipeline: settings.ao_frames: %d is not in 1..%d", s->ao_frames,
+                              PIPELINE_AO_FRAMES_MAX);
     return true;
 }
 

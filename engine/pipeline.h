@@ -217,6 +217,7 @@ typedef struct pipeline_config {
 #define PIPELINE_AO_RAYS_MAX 64      /* ambient occlusion rays per hit */
 #define PIPELINE_AO_INTERLEAVE_MAX 8 /* K of the K x K direction-set pattern */
 #define PIPELINE_AO_FILTER_PX_MAX 9  /* edge of the AO filter (odd) */
+#define PIPELINE_AO_FRAMES_MAX 64    /* AO frames averaged per pixel sample */
 
 /* Defaults: 1 thread, real time (rate 30 for FIXED_RATE), no frame limit,
  * 16-pixel tiles in row order, single sample, Phong with shadows, no

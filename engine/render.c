@@ -828,6 +828,8 @@ render_settings render_settings_default(void)
         .ao_distance = 0.f,
         .ao_interleave = 4,
         .ao_filter_px = 5,
+        .ao_frames = 1,
+        .ao_frame_base = 0,
     };
 }
 

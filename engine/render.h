@@ -57,6 +57,8 @@ typedef struct render_settings {
     float ao_distance;        /* world units; <= 0: 0.1 x the scene's bounding-box diagonal */
     int ao_interleave;        /* K: a K x K pixel pattern of direction sets, 1..8 */
     int ao_filter_px;         /* discontinuity filter edge (odd, 1 = off), <= 9 */
+    int ao_frames;            /* F: AO frames averaged per pixel sample, 1..64 (render_ao.h, FRAMES) */
+    uint32_t ao_frame_base;   /* first AO frame (render_ao.h, FRAMES); 0 but in tests */
 } render_settings;
 
 #define RENDER_MIN_TRANSMITTANCE_DEFAULT (1.f / 255.f)

@@ -43,6 +43,8 @@ typedef struct ao_params {
     int rays;        /* N, 1 .. AO_MAX_RAYS */
     int interleave;  /* K, 1 .. AO_MAX_INTERLEAVE */
     int apron_px;    /* (filter edge - 1) / 2, 0 .. AO_APRON_MAX_PX */
+    int frames;      /* F, 1 .. AO_MAX_FRAMES (render_ao.h, FRAMES) */
+    uint32_t frame_base;
     float distance;  /* AO ray length, world units (unit directions) */
 } ao_params;
 
@@ -92,6 +94,8 @@ static ao_params resolve_params(const render_view *v)
     /* an even edge counts as the odd one below it */
     int filter = st->ao_filter_px < 1 ? 1 : st->ao_filter_px > AO_MAX_FILTER_PX ? AO_MAX_FILTER_PX : st->ao_filter_px;
     p.apron_px = (filter - 1) / 2;
+    p.frames = st->ao_frames < 1 ? 1 : st->ao_frames > AO_MAX_FRAMES ? AO_MAX_FRAMES : st->ao_frames;
+    p.frame_base = st->ao_frame_base;
     p.distance = render_ao_distance(v);
     return p;
 }
@@ -285,8 +289,8 @@ static vec3 filtered_colour(const render_view *v, const ao_params *ap, int x, in
     return v3_scale(rg->kd[at], sum / (float)taken);
 }
 
-/* The frame index (ao.h) of stratum (i, j) of sampler s. */
-static uint32_t stratum_frame(const pixel_sampler *s, int i, int j)
+/* The stratum index of stratum (i, j) of sampler s: 0 for single. */
+static uint32_t stratum_index(const pixel_sampler *s, int i, int j)
 {
     switch (s->kind) {
     case PIXEL_SAMPLER_JITTERED:
@@ -297,6 +301,13 @@ static uint32_t stratum_frame(const pixel_sampler *s, int i, int j)
     default:
         return 0u;
     }
+}
+
+/* The frame index (ao.h) of AO frame f (0 .. F - 1) of stratum (i, j) of
+ * sampler s: base + stratum x F + f (render_ao.h, FRAMES). */
+static uint32_t stratum_frame(const pixel_sampler *s, const ao_params *ap, int i, int j, int f)
+{
+    return ap->frame_base + stratum_index(s, i, j) * (uint32_t)ap->frames + (uint32_t)f;
 }
 
 static void ensure_sets(const ao_params *ap, uint32_t frame)
@@ -328,8 +339,8 @@ static void render_subtile(const render_view *v, const pixel_sampler *s, const a
     int ry1 = y1 + ap->apron_px > cam->height_px ? cam->height_px : y1 + ap->apron_px;
     rg->x0 = rx0, rg->y0 = ry0, rg->width = rx1 - rx0, rg->height = ry1 - ry0;
     const int strata = pixel_sampler_strata(s), w = x1 - x0;
-    if (s->kind != PIXEL_SAMPLER_JITTERED) {
-        ensure_sets(ap, stratum_frame(s, 0, 0));
+    if (s->kind != PIXEL_SAMPLER_JITTERED && ap->frames == 1) {
+        ensure_sets(ap, stratum_frame(s, ap, 0, 0, 0));
         region_raw(v, s, ap, 0, 0, counts);
         for (int y = y0; y < y1; y++)
             for (int x = x0; x < x1; x++)
@@ -338,17 +349,21 @@ static void render_subtile(const render_view *v, const pixel_sampler *s, const a
     }
     for (int r = 0; r < w * (y1 - y0); r++)
         scratch.sum[r] = v3(0.f, 0.f, 0.f);
+    /* strata in row-major order, each stratum's F frames in order; the primary
+     * rays of a stratum are traced again for each frame (the same rays: each
+     * frame costs what it costs alone) */
     for (int j = 0; j < strata; j++)
-        for (int i = 0; i < strata; i++) {
-            ensure_sets(ap, stratum_frame(s, i, j));
-            region_raw(v, s, ap, i, j, counts);
-            for (int y = y0; y < y1; y++)
-                for (int x = x0; x < x1; x++) {
-                    vec3 *sum = &scratch.sum[(y - y0) * w + (x - x0)];
-                    *sum = v3_add(*sum, filtered_colour(v, ap, x, y));
-                }
-        }
-    const float samples = (float)(strata * strata);
+        for (int i = 0; i < strata; i++)
+            for (int f = 0; f < ap->frames; f++) {
+                ensure_sets(ap, stratum_frame(s, ap, i, j, f));
+                region_raw(v, s, ap, i, j, counts);
+                for (int y = y0; y < y1; y++)
+                    for (int x = x0; x < x1; x++) {
+                        vec3 *sum = &scratch.sum[(y - y0) * w + (x - x0)];
+                        *sum = v3_add(*sum, filtered_colour(v, ap, x, y));
+                    }
+            }
+    const float samples = (float)(strata * strata * ap->frames);
     for (int y = y0; y < y1; y++)
         for (int x = x0; x < x1; x++) {
             vec3 c = scratch.sum[(y - y0) * w + (x - x0)];

@@ -39,6 +39,17 @@
  * jittered:k: the mean over the k^2 strata of what each stratum frame gives,
  * summed in stratum order and divided by k^2 (so it equals the accumulation).
  *
+ * FRAMES (settings.ao_frames F, default 1; settings.ao_frame_base B, 0 but in
+ * tests). Each pixel sample (stratum t: 0 for single) averages the filtered
+ * colours of F AO frames at the same position, frames B + t F + f for
+ * f = 0 .. F - 1: summed in float in that order (strata row-major outer,
+ * frames inner, from +0) and divided by (float)(k^2 F). F = 1, B = 0 is the
+ * behaviour above, bit for bit. single with F frames is what accumulating F
+ * frames' direction sets would give at the pixel centre, without the
+ * jittered sampler's antialiasing mixed in: N rays x F frames converge to
+ * the N F-ray picture (ao.h: consecutive frames walk the one sequence). Each
+ * frame traces its primary rays again, so F frames cost what F frames do.
+ *
  * COUNTS. render_counts has no AO field: AO rays are counted in
  * counts->shadow_rays (this renderer traces no other secondary rays), primary
  * rays (apron pixels included) in primary_rays, and hits in primary_hits. */

@@ -446,3 +446,92 @@ Test(ao, default_distance_is_a_tenth_of_the_scene_diagonal)
     accel_destroy(a);
     scene_destroy(s);
 }
+
+/* settings.ao_frames F: the pixel-centre picture averaging F AO frames is
+ * the mean of the F single-frame pictures (frames base .. base + F - 1, each
+ * rendered alone with ao_frame_base), summed in frame order: bit for bit, as
+ * render_ao.h (FRAMES) promises; with the filter on. */
+Test(ao, frames_average_the_single_frame_images)
+{
+    scene *s = cluttered_scene();
+    accel *a = build(s);
+    camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    render_settings st = render_settings_default();
+    st.ao_distance = 1.f;
+    const int frames = 4, w = 40, h = 30;
+    const uint32_t base = 5;
+    st.ao_frames = frames;
+    st.ao_frame_base = base;
+    ao_image avg = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+    float *sum = calloc((size_t)w * h * 3, sizeof(float));
+    cr_assert(sum);
+    st.ao_frames = 1;
+    for (int f = 0; f < frames; f++) {
+        st.ao_frame_base = base + (uint32_t)f;
+        ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+        for (int p = 0; p < w * h * 3; p++)
+            sum[p] = sum[p] + im.rgb[p];
+        free(im.rgb);
+    }
+    for (int p = 0; p < w * h * 3; p++)
+        cr_assert(sum[p] / (float)frames == avg.rgb[p], "value %d: frames %g, averaged %g", p,
+                  sum[p] / (float)frames, avg.rgb[p]);
+    free(sum);
+    free(avg.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+static double rmse(const ao_image *x, const ao_image *y)
+{
+    double e = 0.;
+    for (int p = 0; p < x->w * x->h * 3; p++)
+        e += ((double)x->rgb[p] - y->rgb[p]) * ((double)x->rgb[p] - y->rgb[p]);
+    return sqrt(e / (x->w * x->h * 3));
+}
+
+/* F frames of N rays walk one sequence (ao.h): with one direction set
+ * (interleave 1) and the filter off they are the N F-ray picture to float
+ * rounding, and the error against 64 rays x 16 frames falls as F grows. */
+Test(ao, frames_converge_to_the_many_ray_picture)
+{
+    scene *s = cluttered_scene();
+    accel *a = build(s);
+    camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    render_settings st = render_settings_default();
+    const int w = 40, h = 30;
+    st.ao_distance = 1.f;
+    st.ao_filter_px = 1;
+    st.ao_interleave = 1;
+    st.ao_rays = 4;
+    st.ao_frames = 8;
+    ao_image frames = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+    st.ao_rays = 32;
+    st.ao_frames = 1;
+    ao_image rays = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+    for (int p = 0; p < w * h * 3; p++)
+        cr_assert(fabsf(frames.rgb[p] - rays.rgb[p]) <= 1e-6f, "value %d: 4 rays x 8 frames %g, 32 rays %g", p,
+                  frames.rgb[p], rays.rgb[p]);
+    free(frames.rgb);
+    free(rays.rgb);
+
+    st = render_settings_default();
+    st.ao_distance = 1.f;
+    st.ao_filter_px = 1;
+    st.ao_rays = 64;
+    st.ao_frames = 16;
+    ao_image ref = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+    st.ao_rays = 4;
+    double last = INFINITY;
+    for (int f = 1; f <= 16; f *= 4) {
+        st.ao_frames = f;
+        ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+        double e = rmse(&im, &ref);
+        cr_assert(e < 0.8 * last, "4 rays x %d frames: RMSE %g against 1024 rays, not below 0.8 x %g", f, e, last);
+        last = e;
+        free(im.rgb);
+    }
+    free(ref.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}

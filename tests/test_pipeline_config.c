@@ -30,7 +30,8 @@ static bool same_settings(const render_settings *a, const render_settings *b)
     return a->min_transmittance == b->min_transmittance && a->max_layers == b->max_layers &&
            a->transparent_shadows == b->transparent_shadows && a->caps == b->caps && a->cap_style == b->cap_style &&
            a->ao_rays == b->ao_rays && a->ao_distance == b->ao_distance && a->ao_interleave == b->ao_interleave &&
-           a->ao_filter_px == b->ao_filter_px;
+           a->ao_filter_px == b->ao_filter_px && a->ao_frames == b->ao_frames &&
+           a->ao_frame_base == b->ao_frame_base;
 }
 
 static const char full_config[] =
@@ -38,7 +39,7 @@ static const char full_config[] =
     " \"renderer\": {\"name\": \"raytracer\",\n"
     "   \"transparency\": {\"min_transmittance\": 0.015625, \"max_layers\": 4, \"shadows\": false},\n"
     "   \"caps\": {\"on\": false, \"style\": \"hatch\"},\n"
-    "   \"ao\": {\"rays\": 16, \"distance\": 2.5, \"interleave\": 2, \"filter_px\": 3}},\n"
+    "   \"ao\": {\"rays\": 16, \"distance\": 2.5, \"interleave\": 2, \"filter_px\": 3, \"frames\": 4}},\n"
     " \"cutting_planes\": [{\"point\": [0, 0.5, 0], \"normal\": [0, 2, 0]},\n"
     "                    {\"point\": [1, 0, -1], \"normal\": [3, 0, 4], \"on\": false}]}\n";
 
@@ -51,7 +52,8 @@ Test(pipeline_config, absent_keys_keep_the_defaults)
     cr_expect_eq(s.settings.min_transmittance, 1.f / 255.f);
     cr_expect_eq(s.settings.max_layers, 16);
     cr_expect(s.settings.transparent_shadows && s.settings.caps && s.settings.cap_style == RENDER_CAP_TINT);
-    cr_expect(s.settings.ao_rays == 8 && s.settings.ao_interleave == 4 && s.settings.ao_filter_px == 5);
+    cr_expect(s.settings.ao_rays == 8 && s.settings.ao_interleave == 4 && s.settings.ao_filter_px == 5 &&
+              s.settings.ao_frames == 1);
     cr_expect_eq(s.settings.ao_distance, 0.f, "absent: 0.1 x the scene's diagonal (the renderer's rule)");
     cr_expect_eq(s.opacity, 1.f);
     for (int i = 0; i < CLIP_MAX_PLANES; i++)
@@ -74,6 +76,7 @@ Test(pipeline_config, every_inspection_key_is_read)
     cr_expect_eq(s.settings.ao_distance, 2.5f);
     cr_expect_eq(s.settings.ao_interleave, 2);
     cr_expect_eq(s.settings.ao_filter_px, 3);
+    cr_expect_eq(s.settings.ao_frames, 4);
     /* planes as written (the pipeline normalises), "on" true unless said */
     cr_expect(s.clip[0].on && s.clip[0].point.y == 0.5f && s.clip[0].normal.y == 2.f);
     cr_expect(!s.clip[1].on && s.clip[1].point.z == -1.f && s.clip[1].normal.x == 3.f && s.clip[1].normal.z == 4.f);
@@ -104,6 +107,8 @@ Test(pipeline_config, bad_values_are_refused)
         "{\"renderer\": {\"ao\": {\"interleave\": 9}}}",
         "{\"renderer\": {\"ao\": {\"filter_px\": 4}}}",
         "{\"renderer\": {\"ao\": {\"filter_px\": 11}}}",
+        "{\"renderer\": {\"ao\": {\"frames\": 0}}}",
+        "{\"renderer\": {\"ao\": {\"frames\": 65}}}",
         "{\"renderer\": {\"ao\": {\"in_raytracer\": true}}}",
         "{\"opacity\": -0.1}",
         "{\"opacity\": 1.01}",

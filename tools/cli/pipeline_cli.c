@@ -272,10 +272,10 @@ static bool load_caps(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
     return ok;
 }
 
-/* "renderer.ao": {"rays", "distance", "interleave", "filter_px"}. */
+/* "renderer.ao": {"rays", "distance", "interleave", "filter_px", "frames"}. */
 static bool load_ao(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
 {
-    static const char *const fields[] = {"rays", "distance", "interleave", "filter_px", NULL};
+    static const char *const fields[] = {"rays", "distance", "interleave", "filter_px", "frames", NULL};
     json_object *m;
     if (!jr_get_member(renderer_obj, "ao", &m))
         return true;
@@ -285,7 +285,8 @@ static bool load_ao(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
               opt_int(c, m, "rays", 1, PIPELINE_AO_RAYS_MAX, &rs->ao_rays) &&
               jr_opt_number(c, m, "distance", jr_range_positive, &rs->ao_distance) &&
               opt_int(c, m, "interleave", 1, PIPELINE_AO_INTERLEAVE_MAX, &rs->ao_interleave) &&
-              opt_int(c, m, "filter_px", 1, PIPELINE_AO_FILTER_PX_MAX, &filter_px);
+              opt_int(c, m, "filter_px", 1, PIPELINE_AO_FILTER_PX_MAX, &filter_px) &&
+              opt_int(c, m, "frames", 1, PIPELINE_AO_FRAMES_MAX, &rs->ao_frames);
     if (ok && filter_px % 2 == 0)
         ok = jr_member_fail(c, "filter_px", "expected an odd filter edge (1 = off, 3, 5, 7 or 9)");
     if (ok)

@@ -17,6 +17,11 @@
 #   report_upscale_ms KNOB SCENE SETTING    sets UPSCALE_MS (median, --scale < 1)
 #   report_crops KNOB SCENE A B             side-by-side crops of settings A, B
 #   report_row KNOB SCENE SETTING           sets MS FLIP RMSE ... of one row
+#   report_knob_reference KNOB SCENE ARGS   the knob's own reference of a
+#       scene: one render with ARGS ('~' for spaces), which report_curve and
+#       report_crops of that knob then compare with, instead of the scene's
+#       jittered mean (for a knob whose reference must trace the same rays
+#       as its settings, with only the knob's limits removed)
 #
 # shellcheck shell=sh disable=SC2034
 # (SC2034: the variables set here are read by report.sh and the knob files)
@@ -87,6 +92,68 @@ report_time_run() { # scene_arg, then render options
     UPSCALE_RUN=$(sed -n 's/^render scale .*: \([0-9.]*\) ms\/frame upscaling.*/\1/p' "$WORK/cmd.out")
 }
 
+# The key of the sources that make a picture, into SOURCE_KEY: engine/,
+# tools/cli/, wall/ (committed state and any uncommitted diff), or the
+# tessera binary outside a git tree.
+report_source_key() {
+    if git rev-parse --git-dir > /dev/null 2>&1; then
+        SOURCE_KEY=$({ git ls-files -s engine tools/cli wall; git diff HEAD -- engine tools/cli wall; } | sha256sum | cut -c1-16)
+    else
+        SOURCE_KEY=$(sha256sum "$TESSERA" | cut -c1-16)
+    fi
+}
+
+# The scene argument's cache key: 'default', or the start of the file's sha256.
+report_scene_key() { # scene argument
+    if [ "$1" = default ]; then echo default; else sha256sum "$1" | cut -c1-16; fi
+}
+
+# A knob's own reference of a scene (see the top of this file): one render
+# of `tessera render` with ARGS ('~' for each space, as report_curve's),
+# cached in $CACHE under a key of the knob, the scene, the size, ARGS (a word
+# of ARGS naming a file counts by its contents, so config files made in
+# $WORK key by what they say) and the sources. Registers it for KNOB on
+# SCENE (report_ref_for) and sets REF, REF_SECONDS (render time, s).
+report_knob_reference() { # knob scene-label args
+    rk_knob=$1
+    rk_label=$2
+    rk_args=$(echo "$3" | tr '~' ' ')
+    rk_scene=$(report_scene_arg "$rk_label")
+    report_source_key
+    rk_args_key=$(for rk_w in $rk_args; do
+        if [ -f "$rk_w" ]; then cat "$rk_w"; else echo "$rk_w"; fi
+    done | sha256sum | cut -c1-16)
+    rk_dir=$CACHE/$rk_knob-$rk_label-$SIZE-$(report_scene_key "$rk_scene")-$rk_args_key-$SOURCE_KEY
+    if [ ! -f "$rk_dir/reference.exr" ]; then
+        echo "report: $rk_knob reference for $rk_label at $SIZE: $rk_args (not cached yet)" >&2
+        mkdir -p "$CACHE"
+        rr_tmp=$(mktemp -d "$CACHE/.new.XXXXXX")
+        rk_start=$(date +%s)
+        # shellcheck disable=SC2086
+        report_run "$TESSERA" render --scene "$rk_scene" --size "$SIZE" --threads "$THREADS" \
+            --out "$rr_tmp/reference.exr" $rk_args
+        echo "$(($(date +%s) - rk_start))" > "$rr_tmp/seconds.txt"
+        echo "$rk_args" > "$rr_tmp/args.txt"
+        rm -rf "$rk_dir"
+        mv "$rr_tmp" "$rk_dir"
+        rr_tmp=""
+    fi
+    eval "KNOB_REF_${rk_knob}_$rk_label=\$rk_dir/reference.exr"
+    REF=$rk_dir/reference.exr
+    REF_SECONDS=$(cat "$rk_dir/seconds.txt")
+}
+
+# The reference a knob's curve on a scene is measured against, into REF: the
+# knob's own (report_knob_reference) when it made one, else the scene's.
+report_ref_for() { # knob scene-label
+    eval "rf_ref=\${KNOB_REF_$1_$2:-}"
+    if [ -n "$rf_ref" ]; then
+        REF=$rf_ref
+    else
+        report_reference "$2"
+    fi
+}
+
 # The reference of a scene: REFERENCE_RENDERS renders of jittered:REFERENCE_K
 # (seeds 1..N: the curves use seed 0) averaged by report_img mean, cached in
 # $CACHE under a key of the scene, the size, the recipe and the sources that
@@ -97,16 +164,9 @@ report_time_run() { # scene_arg, then render options
 report_reference() { # scene label
     rr_label=$1
     rr_scene=$(report_scene_arg "$rr_label")
-    if [ "$rr_scene" = default ]; then
-        rr_scene_key=default
-    else
-        rr_scene_key=$(sha256sum "$rr_scene" | cut -c1-16)
-    fi
-    if git rev-parse --git-dir > /dev/null 2>&1; then
-        rr_src_key=$({ git ls-files -s engine tools/cli wall; git diff HEAD -- engine tools/cli wall; } | sha256sum | cut -c1-16)
-    else
-        rr_src_key=$(sha256sum "$TESSERA" | cut -c1-16)
-    fi
+    rr_scene_key=$(report_scene_key "$rr_scene")
+    report_source_key
+    rr_src_key=$SOURCE_KEY
     rr_dir=$CACHE/$rr_label-$SIZE-j${REFERENCE_K}x$REFERENCE_RENDERS-$rr_scene_key-$rr_src_key
     if [ ! -f "$rr_dir/reference.exr" ]; then
         echo "report: reference for $rr_label at $SIZE: $REFERENCE_RENDERS x jittered:$REFERENCE_K (not cached yet)" >&2
@@ -159,7 +219,7 @@ report_curve() { # knob scene label=args...
     rc_label=$2
     shift 2
     rc_scene=$(report_scene_arg "$rc_label")
-    report_reference "$rc_label"
+    report_ref_for "$rc_knob" "$rc_label"
     mkdir -p "$WORK/img" "$WORK/times"
     for rc_setting in "$@"; do
         rc_name=${rc_setting%%=*}
@@ -371,7 +431,7 @@ report_plot_span() { # knob column
 report_crops() { # knob scene A B
     rx_knob=$1
     rx_label=$2
-    report_reference "$rx_label"
+    report_ref_for "$rx_knob" "$rx_label"
     rx_height=${SIZE#*x}
     rx_width=${SIZE%x*}
     CROP_PX=$((CROP_AT_1080 * rx_height / 1080 / 8 * 8))

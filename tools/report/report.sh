@@ -3,8 +3,19 @@
 # report/*.png (gnuplot) with one section per quality knob, each a curve of
 # frame time against error (mean FLIP and RMSE, `tessera compare`) on named
 # scenes against a converged reference. `make report` runs it after
-# `tools/deps.sh --report` and building ./tessera, build/report_img and
+# `tools/deps.sh --report` and building ./tessera, build/report_img,
+# build/gen-assembly (the transparency and ao knobs' assembly) and
 # build-unrobust/tessera (make unrobust: the robustness knob's fast mode).
+#
+# The knobs: antialiasing (samples per pixel), render_scale (render at a
+# fraction of the size, upscale), governor (the frame-budget governor along a
+# path), robustness (the robust intersection kernels), transparency
+# (renderer.transparency.min_transmittance and max_layers at opacity 0.3) and
+# ao (the ao renderer's rays per hit, filter and accumulated frames). The
+# transparency and ao knobs add a generated 10,000-part assembly of their own
+# and measure against a reference of their own (lib.sh,
+# report_knob_reference: the same pixel-centre rays with the knob's limits
+# removed), not the scenes' jittered means.
 #
 # A knob is one file, tools/report/knob_NAME.sh, defining knob_NAME (called
 # with the scene labels; it writes $WORK/section_NAME.md and its pictures into
@@ -33,7 +44,7 @@ ROOT=$(pwd)
 . tools/report/lib.sh
 
 # the knobs, in report order (tools/report/knob_NAME.sh each)
-KNOBS="antialiasing render_scale governor robustness"
+KNOBS="antialiasing render_scale governor robustness transparency ao"
 
 SIZE=${REPORT_SIZE:-1920x1080}
 RUNS=${REPORT_RUNS:-3}
