@@ -818,19 +818,20 @@ void render_image_tiles(const renderer *r, const render_view *v, const pixel_sam
 
 render_settings render_settings_default(void)
 {
-    return (render_settings){
-        .min_transmittance = RENDER_MIN_TRANSMITTANCE_DEFAULT,
-        .max_layers = RENDER_MAX_LAYERS_DEFAULT,
-        .transparent_shadows = true,
-        .caps = true,
-        .cap_style = RENDER_CAP_TINT,
-        .ao_rays = 8,
-        .ao_distance = 0.f,
-        .ao_interleave = 4,
-        .ao_filter_px = 5,
-        .ao_frames = 1,
-        .ao_frame_base = 0,
-    };
+    render_settings s;
+    memset(&s, 0, sizeof s); /* padding too: configs that hold settings are compared byte for byte */
+    s.min_transmittance = RENDER_MIN_TRANSMITTANCE_DEFAULT;
+    s.max_layers = RENDER_MAX_LAYERS_DEFAULT;
+    s.transparent_shadows = true;
+    s.caps = true;
+    s.cap_style = RENDER_CAP_TINT;
+    s.ao_rays = 8;
+    s.ao_distance = 0.f;
+    s.ao_interleave = 4;
+    s.ao_filter_px = 5;
+    s.ao_frames = 1;
+    s.ao_frame_base = 0;
+    return s;
 }
 
 static const renderer renderers[] = {

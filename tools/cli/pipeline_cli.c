@@ -51,7 +51,8 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     s->budget_ms = 0.0;
     s->refine_k = GOVERNOR_DEFAULT_REFINE_K;
     s->still_s = GOVERNOR_DEFAULT_STILL_S;
-    s->settings = render_settings_default();
+    render_settings settings = render_settings_default();
+    memcpy(&s->settings, &settings, sizeof settings); /* with its zeroed padding (compared byte for byte) */
     s->opacity = 1.f; /* clip: zeroed above, every plane unused */
 }
 
