@@ -248,14 +248,20 @@ static void trace_shadows(const render_view *v, const view_extras *x, ray_packet
                           uint64_t mask, uint32_t facts, const ray *rays, render_counts *counts,
                           float transmit[PACKET_MAX_RAYS])
 {
-    ray cut[PACKET_MAX_RAYS];
-    uint64_t traced = 0;
-    for (uint64_t m = mask; m; m &= m - 1) {
-        uint32_t i = (uint32_t)__builtin_ctzll(m);
-        transmit[i] = 1.f;
-        cut[i] = rays[i];
-        if (x->clip.count == 0 || clip_ray(&x->clip, &cut[i], NULL))
-            traced |= 1ull << i;
+    ray cut_rays[PACKET_MAX_RAYS];
+    const ray *cut = rays; /* without planes the rays as they are: no copy on the opaque path */
+    uint64_t traced = mask;
+    for (uint64_t m = mask; m; m &= m - 1)
+        transmit[__builtin_ctzll(m)] = 1.f;
+    if (x->clip.count > 0) {
+        traced = 0;
+        for (uint64_t m = mask; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            cut_rays[i] = rays[i];
+            if (clip_ray(&x->clip, &cut_rays[i], NULL))
+                traced |= 1ull << i;
+        }
+        cut = cut_rays;
     }
     if (!traced)
         return;
