@@ -1191,7 +1191,7 @@ static int change_thread_count(pipeline *p)
 static void finish_previous_step(pipeline *p)
 {
     const loop_step *prev = &p->step;
-    render_counts sum = {0, 0, 0, 0};
+    render_counts sum = {0};
     double longest_render_s = 0.0, longest_upscale_s = 0.0;
     for (int i = 0; i < PIPELINE_MAX_THREADS; i++) {
         if (p->threads[i].upscale_stage_s > longest_upscale_s)
@@ -1202,6 +1202,7 @@ static void finish_previous_step(pipeline *p)
         sum.primary_hits += c->primary_hits;
         sum.shadow_rays += c->shadow_rays;
         sum.secondary_rays += c->secondary_rays;
+        sum.ao_rays += c->ao_rays;
         memset(c, 0, sizeof *c);
         if (p->threads[i].render_stage_s > longest_render_s)
             longest_render_s = p->threads[i].render_stage_s;
@@ -1214,6 +1215,7 @@ static void finish_previous_step(pipeline *p)
     p->stats.rays.primary_hits += sum.primary_hits;
     p->stats.rays.shadow_rays += sum.shadow_rays;
     p->stats.rays.secondary_rays += sum.secondary_rays;
+    p->stats.rays.ao_rays += sum.ao_rays;
     if (prev->render)
         p->stats.frames_rendered++;
     if (prev->render && p->reduced) {
@@ -1576,7 +1578,7 @@ static void upscale_stage(pipeline *p, render_thread *t)
  * (a reduced frame: its rung's traverser, the upscale barrier, upscaling). */
 static void render_stage(pipeline *p, render_thread *t)
 {
-    render_counts counts = {0, 0, 0, 0}; /* on this thread's stack: no shared cache line per packet */
+    render_counts counts = {0}; /* on this thread's stack: no shared cache line per packet */
     double t0 = now_s();
     if (p->reduced) {
         image_traverser *lowres = p->rung_traversers[p->frame_plan.rung];

@@ -379,11 +379,36 @@ static void shade_hits(const render_view *v, const view_extras *x, ray_packet *p
     }
 }
 
+/* The first surfaces of the hits of ps->hits (derived, shaded; the lanes of
+ * `capped` show a cap) into *first for the AO term (render_first_surfaces),
+ * each with the weight alpha[i] it has in the blend (alpha NULL: opaque, 1). */
+static void note_first_surfaces(const render_view *v, const ray_packet *p, const packet_shading *ps,
+                                const float *alpha, uint64_t capped, render_first_surfaces *first)
+{
+    first->hits = ps->hits;
+    for (uint64_t m = ps->hits; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        surface sf = lane_surface(p, ps, i);
+        first->geom_id[i] = p->geom_id[i];
+        first->t[i] = p->hit_t[i];
+        if (capped >> i & 1u) { /* on the plane, short of the hit */
+            vec3 dir = v3(p->dir_x[i], p->dir_y[i], p->dir_z[i]);
+            first->t[i] = v3_dot(v3_sub(sf.position, v3(p->org_x[i], p->org_y[i], p->org_z[i])), dir) / v3_dot(dir, dir);
+        }
+        first->position[i] = sf.position;
+        first->position_error[i] = sf.position_error;
+        first->normal[i] = sf.geometric_n;
+        first->ambient[i] = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : ambient_term(v->scene, &sf);
+        if (alpha)
+            first->ambient[i] = v3_scale(first->ambient[i], alpha[i]);
+    }
+}
+
 /* Trace and shade the primary packet p (rays [0, p->count)) when every
  * surface is opaque and nothing is clipped: the same results as
  * render_shade on each ray, with every ray cast in packets. */
 static void shade_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
-                         packet_shading *ps, render_counts *counts)
+                         packet_shading *ps, render_first_surfaces *first, render_counts *counts)
 {
     const scene *s = v->scene;
     accel_intersect_packet(v->accel, packet_whole(p));
@@ -399,6 +424,8 @@ static void shade_packet(const render_view *v, const view_extras *x, ray_packet 
     counts->primary_hits += (uint64_t)__builtin_popcountll(ps->hits);
     packet_derive_hit_surfaces(v, p, ps, needs_position(v));
     shade_hits(v, x, p, shadows, ps, counts);
+    if (first)
+        note_first_surfaces(v, p, ps, NULL, 0, first);
 }
 
 /* Cap hatching: stripes this many pixels apart, half of them darkened by
@@ -526,9 +553,10 @@ typedef struct layer_walk {
  * Rays are cut by the cutting planes first; where a ray enters the kept
  * region through a plane inside a closed part, the part's cut face (a cap)
  * is its first surface. With all opacities 1 and no planes this gives
- * shade_packet's colours bit for bit. */
+ * shade_packet's colours bit for bit. `first` (may be NULL) receives the
+ * surfaces of layer 0. */
 static void render_layers(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
-                          packet_shading *ps, layer_walk *lw, render_counts *counts)
+                          packet_shading *ps, layer_walk *lw, render_first_surfaces *first, render_counts *counts)
 {
     const scene *s = v->scene;
     const uint32_t count = p->count, facts = p->flags & (PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
@@ -590,9 +618,16 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
             }
         shade_hits(v, x, p, shadows, ps, counts);
         const bool last_layer = layer + 1 >= x->set.max_layers;
+        float alpha_of[PACKET_MAX_RAYS];
         for (uint64_t m = ps->hits; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
-            float alpha = last_layer ? 1.f : opacity_of(v, p->geom_id[i]);
+            alpha_of[i] = last_layer ? 1.f : opacity_of(v, p->geom_id[i]);
+        }
+        if (layer == 0 && first)
+            note_first_surfaces(v, p, ps, alpha_of, capped, first);
+        for (uint64_t m = ps->hits; m; m &= m - 1) {
+            uint32_t i = (uint32_t)__builtin_ctzll(m);
+            float alpha = alpha_of[i];
             lw->sum[i] = v3_add(lw->sum[i], v3_scale(ps->colour[i], lw->transmit[i] * alpha));
             lw->transmit[i] *= 1.f - alpha;
             if (alpha >= 1.f || lw->transmit[i] < x->set.min_transmittance) {
@@ -609,14 +644,17 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
         ps->colour[i] = lw->sum[i];
 }
 
-/* Trace and shade primary packet p into ps->colour, by the walk the frame needs. */
+/* Trace and shade primary packet p into ps->colour, by the walk the frame
+ * needs; `first` (may be NULL) receives each ray's first surface. */
 static void trace_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
-                         packet_shading *ps, layer_walk *lw, render_counts *counts)
+                         packet_shading *ps, layer_walk *lw, render_first_surfaces *first, render_counts *counts)
 {
+    if (first)
+        first->hits = 0;
     if (needs_layers(x))
-        render_layers(v, x, p, shadows, ps, lw, counts);
+        render_layers(v, x, p, shadows, ps, lw, first, counts);
     else
-        shade_packet(v, x, p, shadows, ps, counts);
+        shade_packet(v, x, p, shadows, ps, first, counts);
 }
 
 /* Per thread: two packets and the shading state, ~65 KB: too big for a
@@ -638,9 +676,18 @@ static vec3 render_shade_layers(const render_view *v, const ray *r, uint64_t *sh
     packet_set_ray(&scratch.primary, 0, r);
     packet_detect_facts(&scratch.primary);
     render_counts counts = {0};
-    render_layers(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, &counts);
+    render_layers(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, NULL, &counts);
     *shadow_rays += counts.shadow_rays;
     return scratch.ps.colour[0];
+}
+
+void render_trace_primary(const render_view *v, ray_packet *p, vec3 colour[PACKET_MAX_RAYS],
+                          render_first_surfaces *first, render_counts *counts)
+{
+    view_extras x;
+    view_extras_make(v, &x);
+    trace_packet(v, &x, p, &scratch.shadows, &scratch.ps, &scratch.walk, first, counts);
+    memcpy(colour, scratch.ps.colour, p->count * sizeof colour[0]);
 }
 
 /* Primary rays per packet: 8 x 8 pixels, so a packet covers a compact patch. */
@@ -669,7 +716,7 @@ void render_tile(const render_view *v, int x0, int y0, int x1, int y1, float *rg
             int w = x1 - px < RENDER_PACKET_EDGE_PX ? x1 - px : RENDER_PACKET_EDGE_PX;
             int h = y1 - py < RENDER_PACKET_EDGE_PX ? y1 - py : RENDER_PACKET_EDGE_PX;
             packet_primary(&scratch.primary, cam, px, py, w, h);
-            trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, counts);
+            trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, NULL, counts);
             store_block(cam, px, py, w, h, scratch.ps.colour, rgb);
         }
 }
@@ -693,7 +740,7 @@ static void render_block_jittered(const render_view *v, const pixel_sampler *s, 
         for (int i = 0; i < k; i++) {
             pixel_sampler_block_positions(s, x0, y0, w, h, i, j, sample_x, sample_y);
             packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)n);
-            trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, counts);
+            trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, NULL, counts);
             for (int r = 0; r < n; r++)
                 sum[r] = v3_add(sum[r], scratch.ps.colour[r]);
         }
@@ -715,7 +762,7 @@ static void render_block_stratum(const render_view *v, const pixel_sampler *s, i
     view_extras_make(v, &x);
     pixel_sampler_block_positions(s, x0, y0, w, h, 0, 0, sample_x, sample_y);
     packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)n);
-    trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, counts);
+    trace_packet(v, &x, &scratch.primary, &scratch.shadows, &scratch.ps, &scratch.walk, NULL, counts);
     store_block(&v->camera, x0, y0, w, h, scratch.ps.colour, rgb);
 }
 
@@ -745,14 +792,14 @@ typedef struct tile_queue {
     float *rgb;
     int tile_px, tiles_x, tile_count;
     atomic_int next_tile; /* next tile index to hand out; tiles >= tile_count mean done */
-    atomic_uint_fast64_t primary_rays, primary_hits, shadow_rays, secondary_rays; /* totals, added once per thread */
+    atomic_uint_fast64_t primary_rays, primary_hits, shadow_rays, secondary_rays, ao_rays; /* totals, added once per thread */
 } tile_queue;
 
 static void *render_worker(void *arg)
 {
     tile_queue *q = arg;
     const camera_basis *cam = &q->view->camera;
-    render_counts counts = {0, 0, 0, 0}; /* this thread's, folded in once at the end */
+    render_counts counts = {0}; /* this thread's, folded in once at the end */
     for (;;) {
         int tile = atomic_fetch_add_explicit(&q->next_tile, 1, memory_order_relaxed);
         if (tile >= q->tile_count) {
@@ -760,6 +807,7 @@ static void *render_worker(void *arg)
             atomic_fetch_add_explicit(&q->primary_hits, counts.primary_hits, memory_order_relaxed);
             atomic_fetch_add_explicit(&q->shadow_rays, counts.shadow_rays, memory_order_relaxed);
             atomic_fetch_add_explicit(&q->secondary_rays, counts.secondary_rays, memory_order_relaxed);
+            atomic_fetch_add_explicit(&q->ao_rays, counts.ao_rays, memory_order_relaxed);
             return NULL;
         }
         int x0 = (tile % q->tiles_x) * q->tile_px, y0 = (tile / q->tiles_x) * q->tile_px;
@@ -796,6 +844,7 @@ void render_image_tiles(const renderer *r, const render_view *v, const pixel_sam
     atomic_init(&q.primary_hits, 0);
     atomic_init(&q.shadow_rays, 0);
     atomic_init(&q.secondary_rays, 0);
+    atomic_init(&q.ao_rays, 0);
     if (threads < 1)
         threads = 1;
     if (threads > RENDER_MAX_THREADS)
@@ -819,6 +868,7 @@ void render_image_tiles(const renderer *r, const render_view *v, const pixel_sam
         counts->primary_hits = atomic_load(&q.primary_hits);
         counts->shadow_rays = atomic_load(&q.shadow_rays);
         counts->secondary_rays = atomic_load(&q.secondary_rays);
+        counts->ao_rays = atomic_load(&q.ao_rays);
     }
 }
 
@@ -844,6 +894,7 @@ static const renderer renderers[] = {
     {"raytracer", RENDER_SHADE_PHONG, render_tile_sampled},
     {"eyelight", RENDER_SHADE_EYELIGHT, render_tile_sampled},
     {"ao", RENDER_SHADE_PHONG, render_ao_tile}, /* engine/render_ao.c; shading unused */
+    {"raytracer-ao", RENDER_SHADE_PHONG, render_raytracer_ao_tile}, /* engine/render_ao.c */
 };
 
 const renderer *renderer_by_name(const char *name)

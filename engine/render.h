@@ -21,6 +21,7 @@
 
 #include "camera.h"
 #include "err.h"
+#include "packet.h"
 #include "ray.h"
 #include "sampler.h"
 #include "vec3.h"
@@ -52,7 +53,7 @@ typedef struct render_settings {
     /* cutting planes */
     bool caps;                /* draw the cut faces of closed parts */
     render_cap_style cap_style;
-    /* ambient occlusion (renderer "ao") */
+    /* ambient occlusion (renderers "ao" and "raytracer-ao") */
     int ao_rays;              /* rays per hit, 1..64 */
     float ao_distance;        /* world units; <= 0: 0.1 x the scene's bounding-box diagonal */
     int ao_interleave;        /* K: a K x K pixel pattern of direction sets, 1..8 */
@@ -84,6 +85,7 @@ typedef struct render_counts {
     uint64_t primary_hits; /* primary rays that hit something */
     uint64_t shadow_rays;
     uint64_t secondary_rays; /* transparency's layers past the first, caps' parity counts */
+    uint64_t ao_rays;        /* ambient-occlusion rays (renderers ao and raytracer-ao) */
 } render_counts;
 
 /* Tile edge in pixels: 16 x 16 float RGB rows are 192 bytes, whole cache lines. */
@@ -116,17 +118,44 @@ void render_image(const render_view *v, int threads, float *rgb, render_counts *
  * views it hands to render_tile. More renderers (transparency, ambient
  * occlusion, volumes) come with the visualization issues. */
 typedef struct renderer {
-    const char *name;       /* "raytracer" (Phong, shadows) or "eyelight" */
+    const char *name;       /* RENDERER_NAMES */
     render_shading shading;
     void (*render_tile)(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
                         render_counts *counts);
 } renderer;
 
-#define RENDERER_NAMES "raytracer, eyelight, ao"
+#define RENDERER_NAMES "raytracer, eyelight, ao, raytracer-ao"
 
-/* The ambient-occlusion renderer's tile function (engine/render_ao.h). */
+/* The tile functions of the ambient-occlusion renderers (engine/render_ao.h):
+ * "ao" (occlusion alone) and "raytracer-ao" (the raytracer with its ambient
+ * term scaled by the occlusion). */
 void render_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
                     render_counts *counts);
+void render_raytracer_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1,
+                              float *rgb, render_counts *counts);
+
+/* What the raytracer's AO term (render_raytracer_ao_tile) needs of the first
+ * surface each primary ray shows: the surface the raytracer shaded first (a
+ * cap where a plane cuts a closed part; the nearest surface, transparent or
+ * not, otherwise). Set for the rays of `hits` only. */
+typedef struct render_first_surfaces {
+    uint64_t hits;                            /* rays that met a surface (after the cutting planes) */
+    uint32_t geom_id[PACKET_MAX_RAYS];        /* its instance (a cap: its part's) */
+    float t[PACKET_MAX_RAYS];                 /* along the ray (its hit_t; a cap: where it meets the plane) */
+    vec3 position[PACKET_MAX_RAYS];           /* world */
+    vec3 position_error[PACKET_MAX_RAYS];     /* rounding allowance of position (ray.h surface_point) */
+    vec3 normal[PACKET_MAX_RAYS];             /* unit geometric normal facing the ray's origin */
+    vec3 ambient[PACKET_MAX_RAYS];            /* the part of the ray's colour that is this surface's ambient
+                                                 light, times the surface's weight in the blend (its opacity,
+                                                 layer 0): what occlusion darkens */
+} render_first_surfaces;
+
+/* The raytracer's colours of primary packet p (rays [0, p->count), set up
+ * and not yet traced: everything render_tile does to a packet, transparency
+ * and cutting planes included) into colour[], and the first surface of every
+ * ray into *first. Uses the calling thread's render scratch. */
+void render_trace_primary(const render_view *v, ray_packet *p, vec3 colour[PACKET_MAX_RAYS],
+                          render_first_surfaces *first, render_counts *counts);
 
 /* The renderer called `name`, or NULL. */
 const renderer *renderer_by_name(const char *name);

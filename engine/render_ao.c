@@ -46,6 +46,8 @@ typedef struct ao_params {
     int frames;      /* F, 1 .. AO_MAX_FRAMES (render_ao.h, FRAMES) */
     uint32_t frame_base;
     float distance;  /* AO ray length, world units (unit directions) */
+    bool term;       /* raytracer-ao: occlusion darkens the raytracer's ambient light (render_ao.h, TERM);
+                        false: renderer ao, occlusion alone */
 } ao_params;
 
 /* The raw term and what the filter tests, per pixel of a region (row-major,
@@ -56,13 +58,17 @@ typedef struct ao_region {
     float depth[AO_REGION_MAX_PIXELS];      /* hit distance along the unit primary ray */
     vec3 position[AO_REGION_MAX_PIXELS];    /* world */
     vec3 normal[AO_REGION_MAX_PIXELS];      /* unit geometric normal facing the eye */
-    vec3 kd[AO_REGION_MAX_PIXELS];
+    vec3 scaled[AO_REGION_MAX_PIXELS];      /* what the unoccluded fraction multiplies: ao, the diffuse
+                                               colour; raytracer-ao, the first surface's ambient light */
+    vec3 colour[AO_REGION_MAX_PIXELS];      /* raytracer-ao: the raytracer's colour (every pixel) */
     float open[AO_REGION_MAX_PIXELS];       /* raw unoccluded fraction, [0, 1] */
 } ao_region;
 
-/* Per thread, ~130 KB: too big for a worker's stack; one tile at a time. */
+/* Per thread, ~150 KB: too big for a worker's stack; one tile at a time. */
 static _Thread_local struct ao_scratch {
     ray_packet primary;
+    render_first_surfaces first;      /* raytracer-ao: the primary block's first surfaces */
+    vec3 block_colour[PACKET_MAX_RAYS]; /* raytracer-ao: the primary block's colours */
     ray_packet ao[8];                 /* by sample: [0]; by octant: one filling per octant */
     uint8_t owner[8][PACKET_MAX_RAYS]; /* block pixel of each AO ray of ao[o] */
     ao_direction_sets sets;           /* valid when sets_ready, for its (K, N, frame) */
@@ -83,7 +89,7 @@ float render_ao_distance(const render_view *v)
     return 0.1f * v3_length(v3_sub(hi, lo));
 }
 
-static ao_params resolve_params(const render_view *v)
+static ao_params resolve_params(const render_view *v, bool term)
 {
     render_settings defaults = render_settings_default();
     const render_settings *st = v->settings ? v->settings : &defaults;
@@ -97,6 +103,7 @@ static ao_params resolve_params(const render_view *v)
     p.frames = st->ao_frames < 1 ? 1 : st->ao_frames > AO_MAX_FRAMES ? AO_MAX_FRAMES : st->ao_frames;
     p.frame_base = st->ao_frame_base;
     p.distance = render_ao_distance(v);
+    p.term = term;
     return p;
 }
 
@@ -128,7 +135,7 @@ static void clip_packet(const render_view *v, ray_packet *p)
 static uint64_t trace_ao_packet(const render_view *v, ray_packet *p, render_counts *counts)
 {
     clip_packet(v, p);
-    counts->shadow_rays += (uint64_t)__builtin_popcountll(p->active);
+    counts->ao_rays += (uint64_t)__builtin_popcountll(p->active);
     return accel_occluded_packet(v->accel, packet_whole(p));
 }
 
@@ -209,12 +216,82 @@ static void block_primary(const render_view *v, const pixel_sampler *s, int bx, 
     packet_primary_at(&scratch.primary, &v->camera, sample_x, sample_y, (uint32_t)(w * h));
 }
 
+/* Where block pixel r (of a block w wide at (bx, by)) sits in the region. */
+static int region_index(int bx, int by, int w, int r)
+{
+    const ao_region *rg = &scratch.region;
+    return (by - rg->y0 + r / w) * rg->width + (bx - rg->x0 + r % w);
+}
+
+/* Record the surface of block pixel r in the region and prepare its AO rays. */
+static void note_surface(int at, uint32_t geom_id, float depth, vec3 position, vec3 position_error, vec3 normal,
+                         vec3 scaled, vec3 *origin, ao_basis *basis, int *occluded)
+{
+    ao_region *rg = &scratch.region;
+    rg->geom_id[at] = geom_id;
+    rg->depth[at] = depth;
+    rg->position[at] = position;
+    rg->normal[at] = normal;
+    rg->scaled[at] = scaled;
+    *origin = ray_offset_origin((surface_point){position, position_error}, normal);
+    *basis = ao_basis_from_normal(normal);
+    *occluded = 0;
+}
+
+/* Renderer ao: trace the primary block in scratch.primary (cut by the
+ * planes, closest hits) and note its surfaces; returns the hits. */
+static uint64_t block_unshaded(const render_view *v, int bx, int by, int w, vec3 *origin, ao_basis *basis,
+                               int *occluded, render_counts *counts)
+{
+    ray_packet *p = &scratch.primary;
+    clip_packet(v, p);
+    accel_intersect_packet(v->accel, packet_whole(p));
+    counts->primary_rays += p->count;
+    uint64_t hits = 0;
+    for (uint32_t r = 0; r < p->count; r++) {
+        int at = region_index(bx, by, w, (int)r);
+        if (p->hit_t[r] == INFINITY) {
+            scratch.region.geom_id[at] = RAY_INVALID_ID;
+            continue;
+        }
+        hits |= 1ull << r;
+        ray pr = packet_get_ray(p, r);
+        hit ph = packet_get_hit(p, r);
+        surface sf = surface_describe(v, &pr, &ph, true);
+        note_surface(at, ph.geom_id, ph.t, sf.position, sf.position_error, sf.geometric_n, sf.kd, &origin[r],
+                     &basis[r], &occluded[r]);
+    }
+    counts->primary_hits += (uint64_t)__builtin_popcountll(hits);
+    return hits;
+}
+
+/* Renderer raytracer-ao: the raytracer traces and shades the primary block
+ * (render_trace_primary: transparency, planes, caps, lights and shadows);
+ * its colours and first surfaces are noted; returns the hits. */
+static uint64_t block_shaded(const render_view *v, int bx, int by, int w, vec3 *origin, ao_basis *basis,
+                             int *occluded, render_counts *counts)
+{
+    ray_packet *p = &scratch.primary;
+    render_first_surfaces *f = &scratch.first;
+    render_trace_primary(v, p, scratch.block_colour, f, counts);
+    for (uint32_t r = 0; r < p->count; r++) {
+        int at = region_index(bx, by, w, (int)r);
+        scratch.region.colour[at] = scratch.block_colour[r];
+        if (!(f->hits >> r & 1u)) {
+            scratch.region.geom_id[at] = RAY_INVALID_ID;
+            continue;
+        }
+        note_surface(at, f->geom_id[r], f->t[r], f->position[r], f->position_error[r], f->normal[r],
+                     f->ambient[r], &origin[r], &basis[r], &occluded[r]);
+    }
+    return f->hits;
+}
+
 /* The raw term of every pixel of scratch.region for stratum (i, j). */
 static void region_raw(const render_view *v, const pixel_sampler *s, const ao_params *ap, int i, int j,
                        render_counts *counts)
 {
     ao_region *rg = &scratch.region;
-    ray_packet *p = &scratch.primary;
     vec3 origin[PACKET_MAX_RAYS];
     ao_basis basis[PACKET_MAX_RAYS];
     int occluded[PACKET_MAX_RAYS];
@@ -223,41 +300,22 @@ static void region_raw(const render_view *v, const pixel_sampler *s, const ao_pa
             int w = rg->x0 + rg->width - bx < AO_BLOCK_PX ? rg->x0 + rg->width - bx : AO_BLOCK_PX;
             int h = rg->y0 + rg->height - by < AO_BLOCK_PX ? rg->y0 + rg->height - by : AO_BLOCK_PX;
             block_primary(v, s, bx, by, w, h, i, j);
-            clip_packet(v, p);
-            accel_intersect_packet(v->accel, packet_whole(p));
-            counts->primary_rays += p->count;
-            uint64_t hits = 0;
-            for (uint32_t r = 0; r < p->count; r++) {
-                int at = (by - rg->y0 + (int)r / w) * rg->width + (bx - rg->x0 + (int)r % w);
-                if (p->hit_t[r] == INFINITY) {
-                    rg->geom_id[at] = RAY_INVALID_ID;
-                    continue;
-                }
-                hits |= 1ull << r;
-                ray pr = packet_get_ray(p, r);
-                hit ph = packet_get_hit(p, r);
-                surface sf = surface_describe(v, &pr, &ph, true);
-                rg->geom_id[at] = ph.geom_id;
-                rg->depth[at] = ph.t;
-                rg->position[at] = sf.position;
-                rg->normal[at] = sf.geometric_n;
-                rg->kd[at] = sf.kd;
-                origin[r] = ray_offset_origin((surface_point){sf.position, sf.position_error}, sf.geometric_n);
-                basis[r] = ao_basis_from_normal(sf.geometric_n);
-                occluded[r] = 0;
-            }
+            uint64_t hits;
+            if (ap->term)
+                hits = block_shaded(v, bx, by, w, origin, basis, occluded, counts);
+            else
+                hits = block_unshaded(v, bx, by, w, origin, basis, occluded, counts);
             if (!hits)
                 continue;
-            counts->primary_hits += (uint64_t)__builtin_popcountll(hits);
             trace_block_ao(v, ap, bx, by, w, hits, origin, basis, occluded, counts);
             const float rays = (float)ap->rays;
             for (uint64_t m = hits; m; m &= m - 1) {
                 int r = __builtin_ctzll(m);
-                int at = (by - rg->y0 + r / w) * rg->width + (bx - rg->x0 + r % w);
-                rg->open[at] = (float)(ap->rays - occluded[r]) / rays;
+                rg->open[region_index(bx, by, w, r)] = (float)(ap->rays - occluded[r]) / rays;
             }
         }
 }
+
 
 /* The filtered colour of region pixel (x, y) (image coordinates, a pixel
  * of the region whose whole box inside the image lies in the region). */
@@ -266,7 +324,7 @@ static vec3 filtered_colour(const render_view *v, const ao_params *ap, int x, in
     const ao_region *rg = &scratch.region;
     int at = (y - rg->y0) * rg->width + (x - rg->x0);
     if (rg->geom_id[at] == RAY_INVALID_ID)
-        return v->scene->background;
+        return ap->term ? rg->colour[at] : v->scene->background;
     const uint32_t id = rg->geom_id[at];
     const vec3 n = rg->normal[at], pos = rg->position[at];
     const float plane_tolerance = AO_FILTER_PLANE_REL * rg->depth[at];
@@ -286,7 +344,10 @@ static vec3 filtered_colour(const render_view *v, const ao_params *ap, int x, in
             taken++;
         }
     /* taken >= 1: p passes its own tests */
-    return v3_scale(rg->kd[at], sum / (float)taken);
+    const float open = sum / (float)taken;
+    if (ap->term) /* unoccluded (open 1): the raytracer's colour exactly */
+        return v3_sub(rg->colour[at], v3_scale(rg->scaled[at], 1.f - open));
+    return v3_scale(rg->scaled[at], open);
 }
 
 /* The stratum index of stratum (i, j) of sampler s: 0 for single. */
@@ -371,16 +432,29 @@ static void render_subtile(const render_view *v, const pixel_sampler *s, const a
         }
 }
 
-void render_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
-                    render_counts *counts)
+/* Both renderers' tiles: term false for ao, true for raytracer-ao. */
+static void ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                    render_counts *counts, bool term)
 {
-    const ao_params ap = resolve_params(v);
+    const ao_params ap = resolve_params(v, term);
     for (int sy = y0; sy < y1; sy += AO_SUBTILE_PX)
         for (int sx = x0; sx < x1; sx += AO_SUBTILE_PX) {
             int ex = x1 - sx < AO_SUBTILE_PX ? x1 : sx + AO_SUBTILE_PX;
             int ey = y1 - sy < AO_SUBTILE_PX ? y1 : sy + AO_SUBTILE_PX;
             render_subtile(v, s, &ap, sx, sy, ex, ey, rgb, counts);
         }
+}
+
+void render_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1, float *rgb,
+                    render_counts *counts)
+{
+    ao_tile(v, s, x0, y0, x1, y1, rgb, counts, false);
+}
+
+void render_raytracer_ao_tile(const render_view *v, const pixel_sampler *s, int x0, int y0, int x1, int y1,
+                              float *rgb, render_counts *counts)
+{
+    ao_tile(v, s, x0, y0, x1, y1, rgb, counts, true);
 }
 
 void render_ao_image(const render_view *v, const pixel_sampler *s, int threads, int tile_px, float *rgb,

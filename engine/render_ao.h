@@ -1,6 +1,7 @@
-/* render_ao.h - the ambient-occlusion renderer "ao" (renderer table, render.h).
+/* render_ao.h - the ambient-occlusion renderers (renderer table, render.h):
+ * "ao", occlusion alone, and "raytracer-ao", the raytracer with an AO term.
  *
- * Pixel value (linear RGB):
+ * Pixel value of "ao" (linear RGB):
  *   hit:  kd x A, where A is the filtered unoccluded fraction below and kd
  *         the surface's diffuse colour (surface_describe: vertex colour,
  *         material, frame-state colour and highlight): parts keep their
@@ -50,9 +51,26 @@
  * the N F-ray picture (ao.h: consecutive frames walk the one sequence). Each
  * frame traces its primary rays again, so F frames cost what F frames do.
  *
- * COUNTS. render_counts has no AO field: AO rays are counted in
- * counts->shadow_rays (this renderer traces no other secondary rays), primary
- * rays (apron pixels included) in primary_rays, and hits in primary_hits. */
+ * TERM (renderer "raytracer-ao"). The raytracer shades each primary ray as
+ * render_tile does (lights, shadows, transparency, cutting planes, caps;
+ * render_trace_primary) and reports the first surface the ray shows; the
+ * raw term and the filter above are computed there, with that surface's
+ * instance, normal and position, and the pixel is
+ *   colour - ambient x (1 - A)
+ * where colour is the raytracer's and ambient the part of it that is the
+ * first surface's ambient light (scene ambient x material ambient x kd,
+ * times the surface's opacity when it is transparent): occlusion darkens the
+ * light that comes from everywhere, never the lights' direct light (their
+ * shadow rays already say what blocks them). Unoccluded (A = 1) the pixel is
+ * the raytracer's bit for bit. Surfaces seen through a transparent first
+ * surface keep their plain ambient light; AO rays are blocked by transparent
+ * surfaces as by opaque ones. Misses are the raytracer's background. The
+ * apron costs primary and shadow rays too: with the 5 x 5 filter a 16 x 16
+ * tile shades 20 x 20 pixels.
+ *
+ * COUNTS. AO rays are counted in counts->ao_rays, primary rays (apron
+ * pixels included) in primary_rays, hits in primary_hits; raytracer-ao adds
+ * the raytracer's shadow and secondary rays (of the apron pixels too). */
 #ifndef TESSERA_RENDER_AO_H
 #define TESSERA_RENDER_AO_H
 

@@ -535,3 +535,167 @@ Test(ao, frames_converge_to_the_many_ray_picture)
     accel_destroy(a);
     scene_destroy(s);
 }
+
+/* ---- the raytracer's AO term (renderer raytracer-ao) ---------------------- */
+
+/* Render with renderer `name` through render_image_tiles, shadows on. */
+static ao_image render_with(const char *name, const scene *s, const accel *a, camera_desc cam, int w, int h,
+                            const render_settings *st, pixel_sampler ps, int threads, int tile_px)
+{
+    const renderer *r = renderer_by_name(name);
+    cr_assert(r, "no renderer %s", name);
+    ao_image im = {w, h, calloc((size_t)w * (size_t)h * 3, sizeof(float))};
+    cr_assert(im.rgb);
+    render_view v = {s, a, camera_basis_make(&cam, w, h), true, r->shading, NULL, st};
+    render_image_tiles(r, &v, &ps, threads, tile_px, im.rgb, NULL);
+    return im;
+}
+
+/* White Lambert surfaces under ambient light `ambient` (material ambient 1)
+ * and one directional light straight above (+y) of intensity `direct`. */
+static scene *lit_scene(int *material_id, float ambient, float direct)
+{
+    scene *s = white_scene(material_id);
+    s->ambient = v3(ambient, ambient, ambient);
+    s->materials[*material_id].ambient = 1.f;
+    light l = light_default_directional();
+    l.direction = v3(0.f, 1.f, 0.f);
+    l.color = v3(1.f, 1.f, 1.f);
+    l.intensity = direct;
+    cr_assert(scene_add_light(s, &l) >= 0);
+    return s;
+}
+
+/* Where nothing is occluded the term changes nothing: raytracer-ao is the
+ * raytracer bit for bit, filter on or off, for every sampler. */
+Test(ao_term, unoccluded_is_the_raytracer_bit_for_bit)
+{
+    int mat;
+    scene *s = lit_scene(&mat, 0.3f, 0.6f);
+    add_floor(s, mat, 1000.f);
+    accel *a = build(s);
+    camera_desc cam = {v3(0.f, 2.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 60.f};
+    const pixel_sampler samplers[] = {pixel_sampler_single(), pixel_sampler_jittered(2, 5),
+                                      pixel_sampler_stratum(2, 5, 1)};
+    for (size_t si = 0; si < sizeof samplers / sizeof samplers[0]; si++)
+        for (int filter = 1; filter <= 5; filter += 4) {
+            render_settings st = render_settings_default();
+            st.ao_filter_px = filter;
+            ao_image plain = render_with("raytracer", s, a, cam, 48, 32, &st, samplers[si], 1, RENDER_TILE_PX);
+            ao_image term = render_with("raytracer-ao", s, a, cam, 48, 32, &st, samplers[si], 2, 7);
+            cr_assert(same_pixels(&plain, &term), "sampler %zu filter %d: the term changed an open floor", si, filter);
+            free(plain.rgb);
+            free(term.rgb);
+        }
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* The floor next to a wall (the closed form above): the light straight
+ * above reaches the point unshadowed, so its direct light stays whole and
+ * only the ambient light is scaled by the unoccluded fraction:
+ *   pixel = direct + ambient x unoccluded. */
+Test(ao_term, darkens_only_the_ambient_light_by_the_closed_form)
+{
+    const float d = 0.25f, big = 1000.f, ambient = 0.3f, direct = 0.6f;
+    int mat;
+    scene *s = lit_scene(&mat, ambient, direct);
+    add_floor(s, mat, big);
+    add_quad(s, mat, v3(d, 0.f, -big), v3(d, big, -big), v3(d, big, big), v3(d, 0.f, big), "wall");
+    accel *a = build(s);
+    const float lengths[] = {0.5f, 0.3f}; /* a = 0.5, 0.833 */
+    for (size_t li = 0; li < sizeof lengths / sizeof lengths[0]; li++) {
+        render_settings st = render_settings_default();
+        st.ao_rays = 64;
+        st.ao_interleave = 1;
+        st.ao_filter_px = 1;
+        st.ao_distance = lengths[li];
+        const int k = 8;
+        double sum = 0.0;
+        for (int f = 0; f < k * k; f++) {
+            ao_image im = render_with("raytracer-ao", s, a, look_down(0.f, 0.f, 0.01f), 1, 1, &st,
+                                      pixel_sampler_stratum(k, 0, f), 1, 16);
+            cr_assert(im.rgb[0] == im.rgb[1] && im.rgb[1] == im.rgb[2], "grey light on a white floor");
+            sum += im.rgb[0];
+            free(im.rgb);
+        }
+        double got = sum / (k * k), want = direct + ambient * wall_unoccluded((double)d / lengths[li]);
+        /* the unoccluded fraction to 0.01 (the ao test above), times the ambient light */
+        cr_expect(fabs(got - want) < 0.01 * ambient, "length %g: pixel %.4f, closed form %.4f", lengths[li], got,
+                  want);
+    }
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* On an opaque scene the term is the ao renderer's picture applied to the
+ * ambient light: with white surfaces the ao renderer's pixel is A itself,
+ * so raytracer-ao = raytracer - ambient x (1 - A) at every hit, filter on;
+ * and the images do not depend on threads, tiles or how strata are summed. */
+Test(ao_term, is_the_ao_pictures_fraction_of_the_ambient_light)
+{
+    int mat;
+    scene *s = cluttered_scene();
+    s->ambient = v3(0.4f, 0.4f, 0.4f);
+    for (uint32_t m = 0; m < s->material_count; m++)
+        s->materials[m].ambient = 1.f;
+    light l = light_default_directional();
+    cr_assert(scene_add_light(s, &l) >= 0);
+    (void)mat;
+    accel *a = build(s);
+    camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    render_settings st = render_settings_default();
+    st.ao_distance = 1.f;
+    const int w = 75, h = 53;
+    ao_image plain = render_with("raytracer", s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+    ao_image occl = render_with("ao", s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+    ao_image term = render_with("raytracer-ao", s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
+    int darkened = 0;
+    for (int p = 0; p < w * h; p++) {
+        const float *o = occl.rgb + 3 * p;
+        if (o[0] == 0.25f && o[1] == 0.5f && o[2] == 0.75f) { /* a miss: the background */
+            cr_assert(!memcmp(term.rgb + 3 * p, plain.rgb + 3 * p, 3 * sizeof(float)), "pixel %d: a miss", p);
+            continue;
+        }
+        for (int c = 0; c < 3; c++) {
+            float want = plain.rgb[3 * p + c] - 0.4f * (1.f - o[c]);
+            cr_assert(fabsf(term.rgb[3 * p + c] - want) <= 1e-5f, "pixel %d channel %d: %g, expected %g", p, c,
+                      term.rgb[3 * p + c], want);
+        }
+        darkened += o[0] < 1.f;
+    }
+    cr_assert(darkened > w * h / 10, "only %d pixels occluded: the scene should show creases", darkened);
+    const pixel_sampler samplers[] = {pixel_sampler_single(), pixel_sampler_jittered(2, 7)};
+    for (size_t si = 0; si < 2; si++) {
+        ao_image ref = render_with("raytracer-ao", s, a, cam, w, h, &st, samplers[si], 1, RENDER_TILE_PX);
+        const int tiles[][2] = {{2, RENDER_TILE_PX}, {2, 5}, {1, 1000}};
+        for (size_t t = 0; t < sizeof tiles / sizeof tiles[0]; t++) {
+            ao_image im = render_with("raytracer-ao", s, a, cam, w, h, &st, samplers[si], tiles[t][0], tiles[t][1]);
+            cr_assert(same_pixels(&ref, &im), "sampler %zu, %d threads, tiles of %d: the image differs", si,
+                      tiles[t][0], tiles[t][1]);
+            free(im.rgb);
+        }
+        if (si == 1) { /* jittered:2 = its 4 stratum frames summed in order */
+            for (int p = 0; p < w * h * 3; p++)
+                plain.rgb[p] = 0.f;
+            for (int f = 0; f < 4; f++) {
+                ao_image im = render_with("raytracer-ao", s, a, cam, w, h, &st, pixel_sampler_stratum(2, 7, f), 2,
+                                          RENDER_TILE_PX);
+                for (int p = 0; p < w * h * 3; p++)
+                    plain.rgb[p] = plain.rgb[p] + im.rgb[p];
+                free(im.rgb);
+            }
+            for (int p = 0; p < w * h * 3; p++)
+                cr_assert(plain.rgb[p] / 4.f == ref.rgb[p], "value %d: strata %g, jittered %g", p,
+                          plain.rgb[p] / 4.f, ref.rgb[p]);
+        }
+        free(ref.rgb);
+    }
+    const renderer *r = renderer_by_name("raytracer-ao");
+    cr_assert(r && r->render_tile == render_raytracer_ao_tile && r->shading == RENDER_SHADE_PHONG);
+    free(plain.rgb);
+    free(occl.rgb);
+    free(term.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}

@@ -640,3 +640,98 @@ Test(cutting, ao_rays_are_clipped)
     free(img[0]);
     free(img[1]);
 }
+
+/* ---- the raytracer's AO term with planes, caps and transparency ---------- */
+
+static float *render_renderer(const fixture *fx, const char *name, camera_desc cam, int w, int h, bool shadows,
+                              int threads, int tile_px)
+{
+    const renderer *r = renderer_by_name(name);
+    cr_assert(r);
+    float *rgb = calloc((size_t)w * h * 3, sizeof(float));
+    cr_assert(rgb);
+    render_view v = fixture_view(fx, cam, w, h, shadows);
+    v.shading = r->shading;
+    pixel_sampler single = pixel_sampler_single();
+    render_image_tiles(r, &v, &single, threads, tile_px, rgb, NULL);
+    return rgb;
+}
+
+/* A unit sphere alone, cut by z = 0.3 and seen from above: the cap's AO rays
+ * leave into the cut-away half, which is gone for them as for the eye, and
+ * nothing else is near, so the cap (and the convex surface around it) is
+ * unoccluded: raytracer-ao is the raytracer bit for bit. Without the clip,
+ * the sphere's removed inside would darken the cap. */
+Test(cutting, ao_term_sees_the_cut_away_half_as_gone)
+{
+    scene *s = bare_scene(v3(0.f, 0.f, 0.f), v3(0.5f, 0.5f, 0.5f));
+    cr_assert(scene_add_sphere(s, v3(0.f, 0.f, 0.f), 1.f, lambert(s, v3(0.9f, 0.4f, 0.2f), 1.f)) >= 0);
+    light l = light_default_directional();
+    cr_assert(scene_add_light(s, &l) >= 0);
+    fixture fx;
+    fixture_open(&fx, s);
+    fx.set.ao_distance = 5.f;
+    set_plane(&fx.st, 0, v3(0.f, 0.f, 0.3f), v3(0.f, 0.f, 1.f));
+    camera_desc cam = {v3(0.05f, 0.1f, 6.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 30.f};
+    const int w = 64, h = 64;
+    float *plain = render_renderer(&fx, "raytracer", cam, w, h, true, 1, RENDER_TILE_PX);
+    float *term = render_renderer(&fx, "raytracer-ao", cam, w, h, true, 2, RENDER_TILE_PX);
+    cr_expect(memcmp(plain, term, sizeof(float) * (size_t)w * h * 3) == 0,
+              "the cap or the sphere was darkened by what the plane removed");
+    free(term);
+    fixture_close(&fx);
+    free(plain);
+}
+
+/* Every surface at opacity 0.5 over a floor with a box on it, a plane cutting
+ * the box: the term scales the first surface's ambient light by its weight in
+ * the blend (0.5) and the unoccluded fraction the ao renderer finds at the
+ * same surface (white surfaces: its pixel is that fraction), so
+ *   raytracer-ao = raytracer - 0.5 x ambient x (1 - A)
+ * wherever the first surface is not a cap (the ao renderer draws no caps);
+ * and the image does not depend on threads or tiles. */
+Test(transparency, ao_term_weights_the_first_surface_by_its_opacity)
+{
+    const float ambient = 0.4f;
+    scene *s = bare_scene(v3(0.1f, 0.2f, 0.3f), v3(ambient, ambient, ambient));
+    uint32_t white = lambert(s, v3(1.f, 1.f, 1.f), 1.f);
+    add_pane(s, -3.f, -3.f, 3.f, 3.f, -1.2f, white);
+    add_grid_cube(s, 2, -1, white);
+    light l = light_default_directional();
+    cr_assert(scene_add_light(s, &l) >= 0);
+    fixture fx;
+    fixture_open(&fx, s);
+    fx.set.ao_distance = 1.f;
+    camera_desc cam = {v3(0.5f, -4.f, 3.f), v3(0.f, 0.f, -0.5f), v3(0.f, 0.f, 1.f), 55.f};
+    const int w = 72, h = 56;
+    float *occl = render_renderer(&fx, "ao", cam, w, h, true, 1, RENDER_TILE_PX);
+    frame_state_set_global_opacity(&fx.st, 0.5f);
+    float *plain = render_renderer(&fx, "raytracer", cam, w, h, true, 1, RENDER_TILE_PX);
+    float *term = render_renderer(&fx, "raytracer-ao", cam, w, h, true, 1, RENDER_TILE_PX);
+    int darkened = 0;
+    for (int p = 0; p < w * h; p++) {
+        const float *o = occl + 3 * p;
+        for (int c = 0; c < 3; c++) {
+            float want = o[0] == 0.1f && o[1] == 0.2f && o[2] == 0.3f ? plain[3 * p + c] /* a miss */
+                                                                       : plain[3 * p + c] - 0.5f * ambient * (1.f - o[c]);
+            cr_assert(fabsf(term[3 * p + c] - want) <= 1e-5f, "pixel %d channel %d: %g, expected %g", p, c,
+                      term[3 * p + c], want);
+        }
+        darkened += o[0] < 1.f && !(o[0] == 0.1f && o[1] == 0.2f);
+    }
+    cr_assert(darkened > w * h / 20, "only %d pixels occluded", darkened);
+    set_plane(&fx.st, 0, v3(0.f, 0.f, 0.f), v3(0.3f, -1.f, 0.2f));
+    float *ref = render_renderer(&fx, "raytracer-ao", cam, w, h, true, 1, RENDER_TILE_PX);
+    const int runs[][2] = {{2, RENDER_TILE_PX}, {3, 5}, {2, 1000}};
+    for (size_t r = 0; r < sizeof runs / sizeof runs[0]; r++) {
+        float *im = render_renderer(&fx, "raytracer-ao", cam, w, h, true, runs[r][0], runs[r][1]);
+        cr_assert(memcmp(ref, im, sizeof(float) * (size_t)w * h * 3) == 0, "%d threads, tiles of %d: differs",
+                  runs[r][0], runs[r][1]);
+        free(im);
+    }
+    free(ref);
+    free(occl);
+    free(plain);
+    free(term);
+    fixture_close(&fx);
+}

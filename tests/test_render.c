@@ -310,7 +310,7 @@ Test(render, packets_shade_exactly_like_single_rays)
     const render_shading models[] = {RENDER_SHADE_PHONG, RENDER_SHADE_EYELIGHT};
     for (size_t k = 0; k < 2; k++) {
         render_view v = {s, a, camera_basis_make(&s->camera, w, h), true, models[k], NULL, NULL};
-        render_counts counts = {0, 0, 0, 0};
+        render_counts counts = {0};
         render_image(&v, 2, rgb, &counts);
         long differ = 0;
         uint64_t shadow_rays = 0, hits = 0;

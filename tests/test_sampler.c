@@ -339,7 +339,7 @@ Test(sampler, single_is_render_tile_bit_for_bit)
 {
     test_view t = default_view(45, 29, RENDER_SHADE_PHONG);
     float *want = image_buffer(&t.view), *got = image_buffer(&t.view);
-    render_counts cw = {0, 0, 0, 0}, cg = {0, 0, 0, 0};
+    render_counts cw = {0}, cg = {0};
     render_tile(&t.view, 0, 0, 45, 29, want, &cw);
     pixel_sampler single = pixel_sampler_single();
     render_in_tiles(&t.view, &single, 7, 5, got, &cg);
@@ -376,7 +376,7 @@ Test(sampler, jittered_pixels_are_means_of_single_ray_shading)
             test_view t = default_view(29, 19, models[m]);
             pixel_sampler s = pixel_sampler_jittered(ks[kk], 11u);
             float *rgb = image_buffer(&t.view);
-            render_counts counts = {0, 0, 0, 0};
+            render_counts counts = {0};
             render_image_sampled(&t.view, &s, 2, rgb, &counts);
             long differ = 0;
             uint64_t shadow_rays = 0;
@@ -402,12 +402,12 @@ Test(sampler, jittered_image_does_not_depend_on_tiles_or_threads)
     test_view t = default_view(45, 29, RENDER_SHADE_PHONG);
     pixel_sampler s = pixel_sampler_jittered(3, 2024u);
     float *whole = image_buffer(&t.view), *cut = image_buffer(&t.view);
-    render_counts c_whole = {0, 0, 0, 0};
+    render_counts c_whole = {0};
     render_tile_sampled(&t.view, &s, 0, 0, 45, 29, whole, &c_whole);
     const int splits[][2] = {{5, 3}, {7, 11}, {13, 1}, {1, 9}, {16, 16}, {3, 29}};
     for (size_t k = 0; k < sizeof splits / sizeof splits[0]; k++) {
         memset(cut, 0, image_bytes(&t.view));
-        render_counts c = {0, 0, 0, 0};
+        render_counts c = {0};
         render_in_tiles(&t.view, &s, splits[k][0], splits[k][1], cut, &c);
         cr_expect(memcmp(whole, cut, image_bytes(&t.view)) == 0, "%dx%d tiles differ from one tile", splits[k][0],
                   splits[k][1]);

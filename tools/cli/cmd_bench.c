@@ -66,8 +66,8 @@ typedef struct frame_sample {
     uint64_t primary_rays, shadow_rays;
     uint64_t primary_hits; /* primary rays that hit something */
     uint64_t secondary_rays; /* --opacity < 1: the layers traced past each ray's first surface */
-    /* --renderer ao: shadow_rays holds its AO rays (render_ao.h), and primary rays include the
-     * filter's apron pixels traced again */
+    uint64_t ao_rays;        /* --renderer ao: its AO rays; its primary rays include the filter's apron
+                                pixels traced again (render_ao.h) */
 } frame_sample;
 
 static void bench_usage(FILE *f)
@@ -437,7 +437,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
             render_image(view, o->threads, rgb, NULL);
     double busy0 = cli_machine_busy_s(), own0 = cli_own_cpu_s(), wall0 = cli_now_s();
     for (int f = 0; f < o->frames; f++) {
-        render_counts counts = {0, 0, 0, 0};
+        render_counts counts = {0};
         double t0 = cli_now_s();
         if (o->ao)
             render_ao_image(view, &single, o->threads, RENDER_TILE_PX, rgb, &counts);
@@ -448,6 +448,7 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
         samples[f].shadow_rays = counts.shadow_rays;
         samples[f].primary_hits = counts.primary_hits;
         samples[f].secondary_rays = counts.secondary_rays;
+        samples[f].ao_rays = counts.ao_rays;
     }
     double busy1 = cli_machine_busy_s(), own1 = cli_own_cpu_s(), wall1 = cli_now_s();
     if (busy0 < 0.0 || busy1 < 0.0 || !(wall1 > wall0))
@@ -474,7 +475,7 @@ static void print_result(const bench_options *o, const render_view *view, double
     prim_mrays = cli_median(scratch, (size_t)n);
     for (int f = 0; f < n; f++) {
         double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
-        scratch[f] = 1e-6 * (double)(samples[f].primary_rays + samples[f].shadow_rays) / sec;
+        scratch[f] = 1e-6 * (double)(samples[f].primary_rays + samples[f].shadow_rays + samples[f].ao_rays) / sec;
     }
     total_mrays = cli_median(scratch, (size_t)n);
     for (int f = 0; f < n; f++)
@@ -508,11 +509,11 @@ static void print_result(const bench_options *o, const render_view *view, double
     if (o->ao) {
         for (int f = 0; f < n; f++) {
             double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
-            scratch[f] = 1e-6 * (double)samples[f].shadow_rays / sec;
+            scratch[f] = 1e-6 * (double)samples[f].ao_rays / sec;
         }
         printf(" ao_rays=%d ao_interleave=%d ao_filter=%d ao_dist=%g ao_rays_frame=%llu ao_mrays=%.3f"
                " primary_rays_frame=%llu", o->settings.ao_rays, o->settings.ao_interleave, o->settings.ao_filter_px,
-               (double)render_ao_distance(view), (unsigned long long)last->shadow_rays,
+               (double)render_ao_distance(view), (unsigned long long)last->ao_rays,
                cli_median(scratch, (size_t)n), (unsigned long long)last->primary_rays);
     }
     printf("\n");
