@@ -65,6 +65,7 @@ typedef enum input_action {
     INPUT_ACTION_PLANE_REMOVE,      /* the selected plane off */
     INPUT_ACTION_PLANE_REMOVE_ALL,  /* every plane off */
     INPUT_ACTION_PLANE_PUSH,        /* drag: the selected plane along its normal (up: away from its normal) */
+    INPUT_ACTION_AMBIENT_OCCLUSION, /* the next renderer of the AO cycle (controller.h, AMBIENT OCCLUSION) */
     INPUT_ACTION_COUNT
 } input_action;
 

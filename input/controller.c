@@ -97,6 +97,8 @@ struct input_controller {
     int part_opacity_count;
     clip_plane planes[CLIP_MAX_PLANES]; /* as the records said (normals as sent) */
     int plane_sel;             /* the selected plane (on), or -1 */
+    char renderer[TXN_NAME_BYTES];   /* the renderer input asked for last (or the config's) */
+    char configured[TXN_NAME_BYTES]; /* the cycle's first renderer (controller.h, AMBIENT OCCLUSION) */
     bool plane_dirty;          /* plane_sel moved since the last emitted record (plane-push) */
 
     /* touchpad gestures */
@@ -139,6 +141,9 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
     c->cam = c->cfg.home;
     c->opacity = c->cfg.opacity >= 0.f && c->cfg.opacity <= 1.f ? c->cfg.opacity : 1.f;
     memcpy(c->planes, c->cfg.clip, sizeof c->planes);
+    snprintf(c->renderer, sizeof c->renderer, "%s", c->cfg.renderer[0] ? c->cfg.renderer : "raytracer");
+    bool ao_renderer = !strcmp(c->renderer, "ao") || !strcmp(c->renderer, "raytracer-ao");
+    snprintf(c->configured, sizeof c->configured, "%s", ao_renderer ? "raytracer" : c->renderer);
     c->plane_sel = -1;
     for (int i = CLIP_MAX_PLANES - 1; i >= 0; i--)
         if (c->planes[i].on)
@@ -548,6 +553,21 @@ static void opacity_command(input_controller *c, input_action action)
     emit_status(c, "opacity of %s %.2g", sel->label, (double)next);
 }
 
+/* ambient-occlusion: the next renderer of the cycle (controller.h, AMBIENT OCCLUSION). */
+static void ambient_occlusion_command(input_controller *c)
+{
+    const char *next = !strcmp(c->renderer, "raytracer-ao") ? "ao"
+                       : !strcmp(c->renderer, "ao")         ? c->configured
+                                                            : "raytracer-ao";
+    snprintf(c->renderer, sizeof c->renderer, "%s", next);
+    input_txn t = txn_renderer(next);
+    emit(c, &t);
+    emit_status(c, "renderer %s%s", next,
+                !strcmp(next, "raytracer-ao") ? " (ambient occlusion on)"
+                : !strcmp(next, "ao")         ? " (ambient occlusion alone)"
+                                              : " (ambient occlusion off)");
+}
+
 /* The next plane that is on after `after` (wrapping, `after` itself last), or -1. */
 static int next_plane_on(const input_controller *c, int after)
 {
@@ -671,6 +691,9 @@ static void command(input_controller *c, input_action action, double sx, double 
     case INPUT_ACTION_PLANE_REMOVE:
     case INPUT_ACTION_PLANE_REMOVE_ALL:
         plane_command(c, action, sx, sy);
+        break;
+    case INPUT_ACTION_AMBIENT_OCCLUSION:
+        ambient_occlusion_command(c);
         break;
     case INPUT_ACTION_GOVERNOR_STATUS: {
         c->governor_status_shown = !c->governor_status_shown;

@@ -66,6 +66,12 @@
  *    what it cuts when it faces the camera), one record per input frame.
  *    The controller starts from the config's planes and opacity (what the
  *    pipeline starts from);
+ *  - AMBIENT OCCLUSION. ambient-occlusion [O] steps the renderer through
+ *    the cycle CONFIGURED -> "raytracer-ao" -> "ao" -> CONFIGURED, where
+ *    CONFIGURED is the config's renderer (the one the pipeline starts with;
+ *    "raytracer" when that is one of the two AO renderers or unset), as
+ *    "renderer NAME" records; a renderer outside the cycle steps to
+ *    raytracer-ao;
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -100,7 +106,7 @@
  * file stores (input/record.h). The controller emits camera (always
  * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide, show and
  * isolate (a part's instance range: input_part), show-all, highlight,
- * governor-status, opacity, clip-plane, and the input-level tour and quit. */
+ * governor-status, opacity, clip-plane, renderer, and the input-level tour and quit. */
 typedef txn_record input_txn;
 typedef txn_kind input_txn_kind;
 
@@ -145,6 +151,7 @@ typedef struct input_controller_config {
     double fly_to_s;             /* duration of fly-to and home animations; 0: 0.6 */
     float opacity;               /* the global opacity the pipeline starts with, [0, 1]; default 1 */
     clip_plane clip[CLIP_MAX_PLANES]; /* the planes it starts with (pipeline_config.clip); default all off */
+    char renderer[TXN_NAME_BYTES]; /* the renderer the pipeline starts with; "" (default): raytracer */
 } input_controller_config;
 
 /* Defaults for the fields a caller need not set (bindings = the defaults). */

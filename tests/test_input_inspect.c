@@ -403,6 +403,7 @@ Test(input_inspect, what_input_made_is_recorded_and_replayed_bit_for_bit_and_app
     key(r, BTN_MIDDLE, false);
     press(r, KEY_DELETE);
     press(r, KEY_END);
+    press(r, KEY_O);
     int made[TXN_KIND_COUNT] = {0};
     char *text = NULL;
     size_t len = 0;
@@ -416,6 +417,7 @@ Test(input_inspect, what_input_made_is_recorded_and_replayed_bit_for_bit_and_app
     cr_assert_eq(fclose(f), 0);
     cr_expect_eq(made[TXN_OPACITY], 2);
     cr_expect_eq(made[TXN_CLIP_PLANE], 6, "two placed, a flip, a push, a removal, the rest removed");
+    cr_expect_eq(made[TXN_RENDERER], 1);
     input_record rec = {0};
     tess_error err = {{0}};
     cr_assert(input_record_parse("rec.txt", text, len, &rec, &err), "%s", err.msg);
@@ -426,15 +428,44 @@ Test(input_inspect, what_input_made_is_recorded_and_replayed_bit_for_bit_and_app
         cr_expect(memcmp(&rec.entries[i].txn, &r->txns[i], sizeof r->txns[i]) == 0, "entry %zu: %s", i,
                   text_of(r->txns[i]));
         txn_kind k = rec.entries[i].txn.kind;
-        if (k == TXN_OPACITY || k == TXN_CLIP_PLANE)
+        if (k == TXN_OPACITY || k == TXN_CLIP_PLANE || k == TXN_RENDERER)
             cr_expect(txn_apply(&rec.entries[i].txn, &st, &err), "entry %zu: %s", i, err.msg);
     }
     cr_expect_eq(frame_state_opacity(&st, 10), 0.9f * 0.9f);
     cr_expect_eq(st.translucent_count, 1u);
+    cr_expect_str_eq(st.renderer->name, "raytracer-ao");
     for (int i = 0; i < CLIP_MAX_PLANES; i++)
         cr_expect_not(frame_state_clip_planes(&st)[i].on, "plane %d", i);
     frame_state_finish(&st);
     input_record_free(&rec);
     free(text);
+    rig_free(r);
+}
+
+/* ---- ambient occlusion --------------------------------------------------------------- */
+
+Test(input_inspect, ambient_occlusion_steps_through_the_ao_renderers_and_back)
+{
+    rig *r = rig_make();
+    cr_expect_str_eq(made_since(r, press(r, KEY_O)),
+                     "renderer raytracer-ao | status \"renderer raytracer-ao (ambient occlusion on)\"");
+    cr_expect_str_eq(made_since(r, press(r, KEY_O)), "renderer ao | status \"renderer ao (ambient occlusion alone)\"");
+    cr_expect_str_eq(made_since(r, press(r, KEY_O)),
+                     "renderer raytracer | status \"renderer raytracer (ambient occlusion off)\"");
+    rig_free(r);
+    /* back to the renderer the pipeline started with */
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    snprintf(cfg.renderer, sizeof cfg.renderer, "eyelight");
+    r = rig_make_with(&cfg);
+    expect_same(only(r, press(r, KEY_O), TXN_RENDERER), txn_renderer("raytracer-ao"));
+    expect_same(only(r, press(r, KEY_O), TXN_RENDERER), txn_renderer("ao"));
+    expect_same(only(r, press(r, KEY_O), TXN_RENDERER), txn_renderer("eyelight"));
+    rig_free(r);
+    /* started on an AO renderer: the cycle's other end is the raytracer */
+    snprintf(cfg.renderer, sizeof cfg.renderer, "ao");
+    r = rig_make_with(&cfg);
+    expect_same(only(r, press(r, KEY_O), TXN_RENDERER), txn_renderer("raytracer"));
+    expect_same(only(r, press(r, KEY_O), TXN_RENDERER), txn_renderer("raytracer-ao"));
     rig_free(r);
 }

@@ -345,6 +345,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     const frame_state *st = pipeline_frame_state(p);
     cc.opacity = st->opacity;
     memcpy(cc.clip, frame_state_clip_planes(st), sizeof cc.clip);
+    snprintf(cc.renderer, sizeof cc.renderer, "%s", st->renderer->name);
     vec3 lo, hi;
     if (scene_bounds(cs->scene, &lo, &hi))
         cc.scene_size = v3_length(v3_sub(hi, lo));
