@@ -42,7 +42,8 @@ enum ao_packet_order { AO_PACKETS_BY_SAMPLE, AO_PACKETS_BY_OCTANT };
 typedef struct ao_params {
     int rays;        /* N, 1 .. AO_MAX_RAYS */
     int interleave;  /* K, 1 .. AO_MAX_INTERLEAVE */
-    int apron_px;    /* (filter edge - 1) / 2, 0 .. AO_APRON_MAX_PX */
+    int filter_px;   /* the configured filter edge, odd, 1 .. AO_MAX_FILTER_PX (frame 0's:
+                        render_ao_filter_edge) */
     int frames;      /* F, 1 .. AO_MAX_FRAMES (render_ao.h, FRAMES) */
     uint32_t frame_base;
     float distance;  /* AO ray length, world units (unit directions) */
@@ -99,7 +100,7 @@ static ao_params resolve_params(const render_view *v, bool term)
                                                                                        : st->ao_interleave;
     /* an even edge counts as the odd one below it */
     int filter = st->ao_filter_px < 1 ? 1 : st->ao_filter_px > AO_MAX_FILTER_PX ? AO_MAX_FILTER_PX : st->ao_filter_px;
-    p.apron_px = (filter - 1) / 2;
+    p.filter_px = filter % 2 ? filter : filter - 1;
     p.frames = st->ao_frames < 1 ? 1 : st->ao_frames > AO_MAX_FRAMES ? AO_MAX_FRAMES : st->ao_frames;
     p.frame_base = st->ao_frame_base;
     p.distance = render_ao_distance(v);
@@ -318,8 +319,9 @@ static void region_raw(const render_view *v, const pixel_sampler *s, const ao_pa
 
 
 /* The filtered colour of region pixel (x, y) (image coordinates, a pixel
- * of the region whose whole box inside the image lies in the region). */
-static vec3 filtered_colour(const render_view *v, const ao_params *ap, int x, int y)
+ * of the region whose whole box inside the image lies in the region), the
+ * box reaching apron_px pixels to each side. */
+static vec3 filtered_colour(const render_view *v, const ao_params *ap, int apron_px, int x, int y)
 {
     const ao_region *rg = &scratch.region;
     int at = (y - rg->y0) * rg->width + (x - rg->x0);
@@ -328,10 +330,10 @@ static vec3 filtered_colour(const render_view *v, const ao_params *ap, int x, in
     const uint32_t id = rg->geom_id[at];
     const vec3 n = rg->normal[at], pos = rg->position[at];
     const float plane_tolerance = AO_FILTER_PLANE_REL * rg->depth[at];
-    int qx0 = x - ap->apron_px < rg->x0 ? rg->x0 : x - ap->apron_px;
-    int qy0 = y - ap->apron_px < rg->y0 ? rg->y0 : y - ap->apron_px;
-    int qx1 = x + ap->apron_px >= rg->x0 + rg->width ? rg->x0 + rg->width - 1 : x + ap->apron_px;
-    int qy1 = y + ap->apron_px >= rg->y0 + rg->height ? rg->y0 + rg->height - 1 : y + ap->apron_px;
+    int qx0 = x - apron_px < rg->x0 ? rg->x0 : x - apron_px;
+    int qy0 = y - apron_px < rg->y0 ? rg->y0 : y - apron_px;
+    int qx1 = x + apron_px >= rg->x0 + rg->width ? rg->x0 + rg->width - 1 : x + apron_px;
+    int qy1 = y + apron_px >= rg->y0 + rg->height ? rg->y0 + rg->height - 1 : y + apron_px;
     float sum = 0.f;
     int taken = 0;
     for (int qy = qy0; qy <= qy1; qy++)
@@ -388,24 +390,45 @@ static void store_pixel(const camera_basis *cam, int x, int y, vec3 c, float *rg
     out[2] = c.z;
 }
 
+int render_ao_filter_edge(int filter_px, uint32_t frame)
+{
+    int shrink = 0; /* ceil(log4(frame + 1)) */
+    for (uint64_t limit = 1; limit < (uint64_t)frame + 1u; limit *= 4u)
+        shrink++;
+    int edge = filter_px - 2 * shrink;
+    return edge < 1 ? 1 : edge;
+}
+
+/* Set up scratch.region for the sub-tile [x0, x1) x [y0, y1) and AO frame
+ * `frame`, and fill it: its apron the frame's filter needs. Returns that
+ * apron. */
+static int region_for_frame(const render_view *v, const pixel_sampler *s, const ao_params *ap, int x0, int y0,
+                            int x1, int y1, int i, int j, uint32_t frame, render_counts *counts)
+{
+    const camera_basis *cam = &v->camera;
+    ao_region *rg = &scratch.region;
+    const int apron = (render_ao_filter_edge(ap->filter_px, frame) - 1) / 2;
+    int rx0 = x0 - apron < 0 ? 0 : x0 - apron;
+    int ry0 = y0 - apron < 0 ? 0 : y0 - apron;
+    int rx1 = x1 + apron > cam->width_px ? cam->width_px : x1 + apron;
+    int ry1 = y1 + apron > cam->height_px ? cam->height_px : y1 + apron;
+    rg->x0 = rx0, rg->y0 = ry0, rg->width = rx1 - rx0, rg->height = ry1 - ry0;
+    ensure_sets(ap, frame);
+    region_raw(v, s, ap, i, j, counts);
+    return apron;
+}
+
 /* One sub-tile [x0, x1) x [y0, y1) (at most AO_SUBTILE_PX a side). */
 static void render_subtile(const render_view *v, const pixel_sampler *s, const ao_params *ap, int x0, int y0,
                            int x1, int y1, float *rgb, render_counts *counts)
 {
     const camera_basis *cam = &v->camera;
-    ao_region *rg = &scratch.region;
-    int rx0 = x0 - ap->apron_px < 0 ? 0 : x0 - ap->apron_px;
-    int ry0 = y0 - ap->apron_px < 0 ? 0 : y0 - ap->apron_px;
-    int rx1 = x1 + ap->apron_px > cam->width_px ? cam->width_px : x1 + ap->apron_px;
-    int ry1 = y1 + ap->apron_px > cam->height_px ? cam->height_px : y1 + ap->apron_px;
-    rg->x0 = rx0, rg->y0 = ry0, rg->width = rx1 - rx0, rg->height = ry1 - ry0;
     const int strata = pixel_sampler_strata(s), w = x1 - x0;
     if (s->kind != PIXEL_SAMPLER_JITTERED && ap->frames == 1) {
-        ensure_sets(ap, stratum_frame(s, ap, 0, 0, 0));
-        region_raw(v, s, ap, 0, 0, counts);
+        int apron = region_for_frame(v, s, ap, x0, y0, x1, y1, 0, 0, stratum_frame(s, ap, 0, 0, 0), counts);
         for (int y = y0; y < y1; y++)
             for (int x = x0; x < x1; x++)
-                store_pixel(cam, x, y, filtered_colour(v, ap, x, y), rgb);
+                store_pixel(cam, x, y, filtered_colour(v, ap, apron, x, y), rgb);
         return;
     }
     for (int r = 0; r < w * (y1 - y0); r++)
@@ -416,12 +439,11 @@ static void render_subtile(const render_view *v, const pixel_sampler *s, const a
     for (int j = 0; j < strata; j++)
         for (int i = 0; i < strata; i++)
             for (int f = 0; f < ap->frames; f++) {
-                ensure_sets(ap, stratum_frame(s, ap, i, j, f));
-                region_raw(v, s, ap, i, j, counts);
+                int apron = region_for_frame(v, s, ap, x0, y0, x1, y1, i, j, stratum_frame(s, ap, i, j, f), counts);
                 for (int y = y0; y < y1; y++)
                     for (int x = x0; x < x1; x++) {
                         vec3 *sum = &scratch.sum[(y - y0) * w + (x - x0)];
-                        *sum = v3_add(*sum, filtered_colour(v, ap, x, y));
+                        *sum = v3_add(*sum, filtered_colour(v, ap, apron, x, y));
                     }
             }
     const float samples = (float)(strata * strata * ap->frames);

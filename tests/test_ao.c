@@ -699,3 +699,61 @@ Test(ao_term, is_the_ao_pictures_fraction_of_the_ambient_light)
     accel_destroy(a);
     scene_destroy(s);
 }
+
+/* ---- the filter over accumulated frames ---------------------------------- */
+
+Test(ao, filter_shrinks_one_ring_each_time_the_frames_quadruple)
+{
+    const struct {
+        int edge;
+        uint32_t frame;
+        int want;
+    } cases[] = {{5, 0, 5},  {5, 1, 3},  {5, 3, 3},  {5, 4, 1},  {5, 1000, 1}, {9, 0, 9},  {9, 4, 5},
+                 {9, 15, 5}, {9, 16, 3}, {9, 63, 3}, {9, 64, 1}, {1, 0, 1},    {1, 7, 1},  {7, UINT32_MAX, 1}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
+        cr_expect_eq(render_ao_filter_edge(cases[i].edge, cases[i].frame), cases[i].want, "edge %d frame %u: %d",
+                     cases[i].edge, cases[i].frame, render_ao_filter_edge(cases[i].edge, cases[i].frame));
+}
+
+/* A still picture accumulating frames with the filter on converges to the
+ * unfiltered many-ray reference, not to the filtered picture: its error
+ * falls frame after frame and ends near the unfiltered accumulation's (a
+ * filter kept on every frame stays at its own error, the blur of the AO
+ * term across each box). */
+Test(ao, accumulated_frames_with_the_filter_converge_to_the_unfiltered_reference)
+{
+    scene *s = cluttered_scene();
+    accel *a = build(s);
+    camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    const int w = 64, h = 48;
+    render_settings st = render_settings_default();
+    st.ao_distance = 1.f;
+    st.ao_filter_px = 1;
+    st.ao_rays = 64;
+    st.ao_frames = 64;
+    st.ao_frame_base = 4096; /* the reference: other directions than the frames measured */
+    ao_image ref = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+    st.ao_rays = 4;
+    st.ao_frame_base = 0;
+    double last = INFINITY, filtered = 0.0, unfiltered = 0.0;
+    for (int f = 1; f <= 64; f *= 4) {
+        st.ao_frames = f;
+        st.ao_filter_px = 5;
+        ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+        filtered = rmse(&im, &ref);
+        cr_expect(filtered < 0.8 * last, "filter 5, %d frames: RMSE %g, not below 0.8 x %g", f, filtered, last);
+        last = filtered;
+        free(im.rgb);
+        st.ao_filter_px = 1;
+        im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+        unfiltered = rmse(&im, &ref);
+        free(im.rgb);
+        if (f == 1)
+            cr_expect(filtered < 0.8 * unfiltered, "one frame: the filter should lower the error (%g, unfiltered %g)",
+                      filtered, unfiltered);
+    }
+    cr_expect(filtered < 1.25 * unfiltered, "64 frames: filtered RMSE %g, unfiltered %g", filtered, unfiltered);
+    free(ref.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
