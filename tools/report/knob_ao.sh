@@ -225,11 +225,11 @@ knob_ao() { # scene labels...
             else
                 printf '%s' "; unfiltered, no ray count up to 64 reaches the default's RMSE"
             fi
-            echo ". The filter has a floor: 64 rays filtered RMSE $f64_rmse against $u64_rmse unfiltered, and"
-            echo "  8 rays × 16 frames filtered $af_rmse against $au_rmse unfiltered ($(ao_ratio "$au_ms" "$d_ms")× the default's time)."
+            echo ". One frame's filter has a floor: 64 rays filtered RMSE $f64_rmse against $u64_rmse unfiltered; over"
+            echo "  frames it shrinks away: 8 rays × 16 frames filtered $af_rmse against $au_rmse unfiltered ($(ao_ratio "$au_ms" "$d_ms")× the default's time)."
         done
         echo
-        echo "**Defaults (8 rays per hit, filter 5): kept for a moving camera, not for refinement.** Per scene,"
+        echo "**Defaults (8 rays per hit, filter 5): kept.** Per scene,"
         echo "from the table:"
         for scene in $ao_scenes; do
             report_row ao "$scene" n8-f5-x1
@@ -257,12 +257,13 @@ knob_ao() { # scene labels...
         echo
         echo "More rays with the filter on buy little past the knee: what is left is the filter's own error"
         echo "(it averages the AO term over neighbours that pass its tests), the floor in the bullets above."
-        echo "Accumulated frames with the filter on end at that floor too: a still camera refining over frames"
-        echo "converges to the filtered picture, not to the reference, where unfiltered frames keep converging"
-        echo "(the two 8 × 16 points). So 8 rays with the filter suit moving frames, and a refinement over"
-        echo "frames should switch the filter off (or shrink it as frames accumulate), which the governor does"
-        echo "not do yet. *(This reading is written in tools/report/knob_ao.sh; the per-scene clauses are"
-        echo "computed from the table.)*"
+        echo "Accumulated frames do not stay on that floor: the filter shrinks one ring each time the frames"
+        echo "averaged quadruple (frame 0 the whole 5 × 5 box, frames 1-3 3 × 3, from frame 4 none;"
+        echo "engine/render_ao.h, render_ao_filter_edge), so a still camera refining over frames converges to"
+        echo "the reference with the filter on as without it (compare the two 8 × 16 points), while its first"
+        echo "frames keep the filter's smoothness. So 8 rays with the filter serve both the moving frames and"
+        echo "the start of a refinement. *(This reading is written in tools/report/knob_ao.sh; the per-scene"
+        echo "clauses are computed from the table.)*"
     } > "$out"
     cp "$WORK/ao.tsv" "$WORK/plots/ao.tsv"
 }
