@@ -24,19 +24,27 @@
 #define AO_REGION_MAX_PX (AO_SUBTILE_PX + 2 * AO_APRON_MAX_PX)
 #define AO_REGION_MAX_PIXELS (AO_REGION_MAX_PX * AO_REGION_MAX_PX)
 
-/* How AO rays are grouped into packets. Measured: bunny, 1920x1080, 8 rays,
- * filter off, 1 thread, AMD EPYC, other programs <= 0.23 CPU, median frame of
- * 3 over 3 alternating runs each: by octant 331 / 331 / 355 ms, by sample
- * 338 / 336 / 338 ms; by octant stays the default (~2 %, within noise):
- *   AO_PACKETS_BY_SAMPLE  ray s of every hit of an 8 x 8 block in one packet
- *                         (N packets a block), as the Embree peer does;
- *   AO_PACKETS_BY_OCTANT  a block's rays binned by the signs of their world
- *                         directions, 64 to a packet, so every packet has
- *                         constant signs (interval culling in traversal). */
-enum ao_packet_order { AO_PACKETS_BY_SAMPLE, AO_PACKETS_BY_OCTANT };
-#ifndef AO_PACKET_ORDER
-#define AO_PACKET_ORDER AO_PACKETS_BY_OCTANT
+/* How AO rays are grouped into packets. The AO rays of a whole region
+ * (sub-tile and apron) are generated into a pool, counting-sorted by
+ * direction (octant, then a cell of an AO_DIRECTION_GRID^2 grid over the
+ * octant's octahedral map; within a cell in pixel order) and cut into
+ * packets of up to 64 in that order, a new packet at each change of octant
+ * (constant signs for the kernels' interval culling). A packet then holds
+ * rays of neighbouring directions from neighbouring origins, which share
+ * more of the tree than rays binned by octant alone. Measured (dragon,
+ * 1920x1080, 8 rays, filter off, 1 thread, AMD EPYC, quiet, median frame of 3,
+ * runs alternating): 64 rays of one 8 x 8 block binned by octant 498 / 502
+ * ms, the block sorted by direction 493 / 484 ms, the region's pool sorted
+ * by direction: see BENCHMARKS.md, "Ambient occlusion". (Earlier, bunny:
+ * ray s of every pixel of a block in one packet, as the Embree peer does,
+ * 338 ms against 331 ms by octant; packets of 16 or 32 rays were slower than
+ * 64 on the dragon, 2-ray single-ray traversal 1.6x slower.) */
+#ifndef AO_DIRECTION_GRID
+#define AO_DIRECTION_GRID 8
 #endif
+#define AO_DIRECTION_KEYS (8 * AO_DIRECTION_GRID * AO_DIRECTION_GRID)
+/* Rays the pool holds: a region of AO_POOL_RAYS / N pixels at a time. */
+#define AO_POOL_RAYS 4096
 
 /* What one view's settings ask for, clamped into range once per tile. */
 typedef struct ao_params {
@@ -63,6 +71,12 @@ typedef struct ao_region {
                                                colour; raytracer-ao, the first surface's ambient light */
     vec3 colour[AO_REGION_MAX_PIXELS];      /* raytracer-ao: the raytracer's colour (every pixel) */
     float open[AO_REGION_MAX_PIXELS];       /* raw unoccluded fraction, [0, 1] */
+    /* hits: where their AO rays start and the frame they turn into the world */
+    vec3 ray_origin[AO_REGION_MAX_PIXELS];
+    ao_basis basis[AO_REGION_MAX_PIXELS];
+    uint16_t occluded[AO_REGION_MAX_PIXELS]; /* AO rays found blocked */
+    uint16_t hit_pixels[AO_REGION_MAX_PIXELS]; /* the region pixels that hit, in region order */
+    int hit_count;
 } ao_region;
 
 /* Per thread, ~150 KB: too big for a worker's stack; one tile at a time. */
@@ -70,8 +84,14 @@ static _Thread_local struct ao_scratch {
     ray_packet primary;
     render_first_surfaces first;      /* raytracer-ao: the primary block's first surfaces */
     vec3 block_colour[PACKET_MAX_RAYS]; /* raytracer-ao: the primary block's colours */
-    ray_packet ao[8];                 /* by sample: [0]; by octant: one filling per octant */
-    uint8_t owner[8][PACKET_MAX_RAYS]; /* block pixel of each AO ray of ao[o] */
+    ray_packet ao;                    /* the AO packet being filled */
+    uint16_t owner[PACKET_MAX_RAYS];  /* region pixel of each ray of ao */
+    /* the pool: a region's AO rays before they are sorted into packets */
+    vec3 pool_dir[AO_POOL_RAYS];
+    uint16_t pool_owner[AO_POOL_RAYS]; /* region pixel */
+    uint16_t pool_key[AO_POOL_RAYS];
+    uint16_t pool_order[AO_POOL_RAYS];
+    uint16_t key_start[AO_DIRECTION_KEYS + 1];
     ao_direction_sets sets;           /* valid when sets_ready, for its (K, N, frame) */
     bool sets_ready;
     ao_region region;
@@ -149,58 +169,89 @@ static void set_ao_ray(ray_packet *p, uint32_t lane, vec3 origin, vec3 dir, floa
     p->t_far[lane] = length;
 }
 
-/* The AO rays of one traced primary block: hits `hits` (bits = block
- * pixels, row-major w wide, block at (bx, by) of the image), their origins
- * and world bases; adds each ray found occluded to occluded[pixel]. */
-static void trace_block_ao(const render_view *v, const ao_params *ap, int bx, int by, int w, uint64_t hits,
-                           const vec3 *origin, const ao_basis *basis, int *occluded, render_counts *counts)
+/* The sign pattern of a direction as the kernels see it (zero counts as +),
+ * 0..7, and within it the cell of an AO_DIRECTION_GRID^2 grid over the
+ * octahedral map of |d| (|x|, |y|) / (|x| + |y| + |z|): the sort key of
+ * AO_PACKETS_BY_DIRECTION. */
+static unsigned direction_key(vec3 d)
+{
+    unsigned octant = (d.x < 0.f ? 1u : 0u) | (d.y < 0.f ? 2u : 0u) | (d.z < 0.f ? 4u : 0u);
+    float ax = fabsf(d.x), ay = fabsf(d.y), sum = ax + ay + fabsf(d.z);
+    float scale = sum > 0.f ? (float)AO_DIRECTION_GRID / sum : 0.f;
+    unsigned u = (unsigned)(ax * scale), w = (unsigned)(ay * scale);
+    u = u < AO_DIRECTION_GRID ? u : AO_DIRECTION_GRID - 1u;
+    w = w < AO_DIRECTION_GRID ? w : AO_DIRECTION_GRID - 1u;
+    return (octant * AO_DIRECTION_GRID + u) * AO_DIRECTION_GRID + w;
+}
+
+/* Trace the AO rays in scratch.ao (fill of them): each one found occluded
+ * counts for its owner's pixel. */
+static void flush_ao_packet(const render_view *v, uint32_t fill, render_counts *counts)
+{
+    ray_packet *p = &scratch.ao;
+    packet_reset(p, fill, PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
+    for (uint64_t m = trace_ao_packet(v, p, counts); m; m &= m - 1)
+        scratch.region.occluded[scratch.owner[__builtin_ctzll(m)]]++;
+}
+
+/* The AO rays of the region's hit pixels hit_pixels[first, end): into the
+ * pool, counting-sorted by direction_key (stable, so in pixel order within a
+ * key), then traced in packets of up to 64 in that order, a new packet at
+ * each change of octant. */
+static void trace_pool(const render_view *v, const ao_params *ap, int first, int end, render_counts *counts)
 {
     const ao_direction_sets *sets = &scratch.sets;
-    if (AO_PACKET_ORDER == AO_PACKETS_BY_SAMPLE) {
-        ray_packet *p = &scratch.ao[0];
-        uint32_t count = 64u - (uint32_t)__builtin_clzll(hits);
-        for (int s = 0; s < ap->rays; s++) {
-            packet_reset(p, count, PACKET_NORMALIZED);
-            p->active = hits;
-            for (uint64_t m = hits; m; m &= m - 1) {
-                uint32_t i = (uint32_t)__builtin_ctzll(m);
-                int set = ao_pixel_set(ap->interleave, bx + (int)i % w, by + (int)i / w);
-                vec3 dir = ao_basis_to_world(&basis[i], ao_direction_local(sets, set, s));
-                set_ao_ray(p, i, origin[i], dir, ap->distance);
-            }
-            for (uint64_t m = trace_ao_packet(v, p, counts); m; m &= m - 1)
-                occluded[__builtin_ctzll(m)]++;
-        }
-        return;
-    }
-    /* by octant: fill one packet per sign pattern, trace it when full, then the rest */
-    uint32_t fill[8] = {0};
-    for (uint64_t m = hits; m; m &= m - 1) {
-        uint32_t i = (uint32_t)__builtin_ctzll(m);
-        int set = ao_pixel_set(ap->interleave, bx + (int)i % w, by + (int)i / w);
-        for (int s = 0; s < ap->rays; s++) {
-            vec3 dir = ao_basis_to_world(&basis[i], ao_direction_local(sets, set, s));
-            /* the sign pattern as the kernels see it: zero counts as + */
-            unsigned octant = (dir.x < 0.f ? 1u : 0u) | (dir.y < 0.f ? 2u : 0u) | (dir.z < 0.f ? 4u : 0u);
-            ray_packet *p = &scratch.ao[octant];
-            uint32_t lane = fill[octant]++;
-            set_ao_ray(p, lane, origin[i], dir, ap->distance);
-            scratch.owner[octant][lane] = (uint8_t)i;
-            if (lane + 1 == PACKET_MAX_RAYS) {
-                packet_reset(p, PACKET_MAX_RAYS, PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
-                for (uint64_t o = trace_ao_packet(v, p, counts); o; o &= o - 1)
-                    occluded[scratch.owner[octant][__builtin_ctzll(o)]]++;
-                fill[octant] = 0;
-            }
+    ao_region *rg = &scratch.region;
+    uint16_t *start = scratch.key_start;
+    memset(start, 0, sizeof scratch.key_start);
+    uint32_t n = 0;
+    for (int k = first; k < end; k++) {
+        const int at = rg->hit_pixels[k];
+        const int set = ao_pixel_set(ap->interleave, rg->x0 + at % rg->width, rg->y0 + at / rg->width);
+        rg->occluded[at] = 0;
+        for (int s = 0; s < ap->rays; s++, n++) {
+            vec3 dir = ao_basis_to_world(&rg->basis[at], ao_direction_local(sets, set, s));
+            unsigned key = direction_key(dir);
+            scratch.pool_dir[n] = dir;
+            scratch.pool_owner[n] = (uint16_t)at;
+            scratch.pool_key[n] = (uint16_t)key;
+            start[key + 1]++;
         }
     }
-    for (unsigned octant = 0; octant < 8; octant++) {
-        if (!fill[octant])
-            continue;
-        ray_packet *p = &scratch.ao[octant];
-        packet_reset(p, fill[octant], PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
-        for (uint64_t o = trace_ao_packet(v, p, counts); o; o &= o - 1)
-            occluded[scratch.owner[octant][__builtin_ctzll(o)]]++;
+    for (unsigned k = 0; k < AO_DIRECTION_KEYS; k++)
+        start[k + 1] = (uint16_t)(start[k + 1] + start[k]);
+    for (uint32_t r = 0; r < n; r++)
+        scratch.pool_order[start[scratch.pool_key[r]]++] = (uint16_t)r;
+    uint32_t fill = 0;
+    unsigned octant = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        const uint32_t r = scratch.pool_order[k];
+        const unsigned o = scratch.pool_key[r] / (AO_DIRECTION_GRID * AO_DIRECTION_GRID);
+        if (fill && (fill == PACKET_MAX_RAYS || o != octant)) {
+            flush_ao_packet(v, fill, counts);
+            fill = 0;
+        }
+        octant = o;
+        const uint16_t at = scratch.pool_owner[r];
+        set_ao_ray(&scratch.ao, fill, rg->ray_origin[at], scratch.pool_dir[r], ap->distance);
+        scratch.owner[fill++] = at;
+    }
+    if (fill)
+        flush_ao_packet(v, fill, counts);
+}
+
+/* The raw term of every hit pixel of the region (rg->hit_pixels): its AO
+ * rays traced pool by pool. */
+static void trace_region_ao(const render_view *v, const ao_params *ap, render_counts *counts)
+{
+    ao_region *rg = &scratch.region;
+    const int per_pool = AO_POOL_RAYS / ap->rays; /* >= 64: N <= AO_MAX_RAYS */
+    for (int first = 0; first < rg->hit_count; first += per_pool)
+        trace_pool(v, ap, first, first + per_pool < rg->hit_count ? first + per_pool : rg->hit_count, counts);
+    const float rays = (float)ap->rays;
+    for (int k = 0; k < rg->hit_count; k++) {
+        const int at = rg->hit_pixels[k];
+        rg->open[at] = (float)(ap->rays - rg->occluded[at]) / rays;
     }
 }
 
@@ -224,9 +275,9 @@ static int region_index(int bx, int by, int w, int r)
     return (by - rg->y0 + r / w) * rg->width + (bx - rg->x0 + r % w);
 }
 
-/* Record the surface of block pixel r in the region and prepare its AO rays. */
+/* Record the hit surface of region pixel `at` and where its AO rays start. */
 static void note_surface(int at, uint32_t geom_id, float depth, vec3 position, vec3 position_error, vec3 normal,
-                         vec3 scaled, vec3 *origin, ao_basis *basis, int *occluded)
+                         vec3 scaled)
 {
     ao_region *rg = &scratch.region;
     rg->geom_id[at] = geom_id;
@@ -234,15 +285,14 @@ static void note_surface(int at, uint32_t geom_id, float depth, vec3 position, v
     rg->position[at] = position;
     rg->normal[at] = normal;
     rg->scaled[at] = scaled;
-    *origin = ray_offset_origin((surface_point){position, position_error}, normal);
-    *basis = ao_basis_from_normal(normal);
-    *occluded = 0;
+    rg->ray_origin[at] = ray_offset_origin((surface_point){position, position_error}, normal);
+    rg->basis[at] = ao_basis_from_normal(normal);
 }
 
 /* Renderer ao: trace the primary block in scratch.primary (cut by the
- * planes, closest hits) and note its surfaces; returns the hits. */
-static uint64_t block_unshaded(const render_view *v, int bx, int by, int w, vec3 *origin, ao_basis *basis,
-                               int *occluded, render_counts *counts)
+ * planes, closest hits) and note its surfaces; returns the hits (block
+ * pixels). */
+static uint64_t block_unshaded(const render_view *v, int bx, int by, int w, render_counts *counts)
 {
     ray_packet *p = &scratch.primary;
     clip_packet(v, p);
@@ -259,8 +309,7 @@ static uint64_t block_unshaded(const render_view *v, int bx, int by, int w, vec3
         ray pr = packet_get_ray(p, r);
         hit ph = packet_get_hit(p, r);
         surface sf = surface_describe(v, &pr, &ph, true);
-        note_surface(at, ph.geom_id, ph.t, sf.position, sf.position_error, sf.geometric_n, sf.kd, &origin[r],
-                     &basis[r], &occluded[r]);
+        note_surface(at, ph.geom_id, ph.t, sf.position, sf.position_error, sf.geometric_n, sf.kd);
     }
     counts->primary_hits += (uint64_t)__builtin_popcountll(hits);
     return hits;
@@ -269,8 +318,7 @@ static uint64_t block_unshaded(const render_view *v, int bx, int by, int w, vec3
 /* Renderer raytracer-ao: the raytracer traces and shades the primary block
  * (render_trace_primary: transparency, planes, caps, lights and shadows);
  * its colours and first surfaces are noted; returns the hits. */
-static uint64_t block_shaded(const render_view *v, int bx, int by, int w, vec3 *origin, ao_basis *basis,
-                             int *occluded, render_counts *counts)
+static uint64_t block_shaded(const render_view *v, int bx, int by, int w, render_counts *counts)
 {
     ray_packet *p = &scratch.primary;
     render_first_surfaces *f = &scratch.first;
@@ -282,41 +330,29 @@ static uint64_t block_shaded(const render_view *v, int bx, int by, int w, vec3 *
             scratch.region.geom_id[at] = RAY_INVALID_ID;
             continue;
         }
-        note_surface(at, f->geom_id[r], f->t[r], f->position[r], f->position_error[r], f->normal[r],
-                     f->ambient[r], &origin[r], &basis[r], &occluded[r]);
+        note_surface(at, f->geom_id[r], f->t[r], f->position[r], f->position_error[r], f->normal[r], f->ambient[r]);
     }
     return f->hits;
 }
 
-/* The raw term of every pixel of scratch.region for stratum (i, j). */
+/* The raw term of every pixel of scratch.region for stratum (i, j): the
+ * primary rays block by block, then the AO rays of the whole region. */
 static void region_raw(const render_view *v, const pixel_sampler *s, const ao_params *ap, int i, int j,
                        render_counts *counts)
 {
     ao_region *rg = &scratch.region;
-    vec3 origin[PACKET_MAX_RAYS];
-    ao_basis basis[PACKET_MAX_RAYS];
-    int occluded[PACKET_MAX_RAYS];
+    rg->hit_count = 0;
     for (int by = rg->y0; by < rg->y0 + rg->height; by += AO_BLOCK_PX)
         for (int bx = rg->x0; bx < rg->x0 + rg->width; bx += AO_BLOCK_PX) {
             int w = rg->x0 + rg->width - bx < AO_BLOCK_PX ? rg->x0 + rg->width - bx : AO_BLOCK_PX;
             int h = rg->y0 + rg->height - by < AO_BLOCK_PX ? rg->y0 + rg->height - by : AO_BLOCK_PX;
             block_primary(v, s, bx, by, w, h, i, j);
-            uint64_t hits;
-            if (ap->term)
-                hits = block_shaded(v, bx, by, w, origin, basis, occluded, counts);
-            else
-                hits = block_unshaded(v, bx, by, w, origin, basis, occluded, counts);
-            if (!hits)
-                continue;
-            trace_block_ao(v, ap, bx, by, w, hits, origin, basis, occluded, counts);
-            const float rays = (float)ap->rays;
-            for (uint64_t m = hits; m; m &= m - 1) {
-                int r = __builtin_ctzll(m);
-                rg->open[region_index(bx, by, w, r)] = (float)(ap->rays - occluded[r]) / rays;
-            }
+            uint64_t hits = ap->term ? block_shaded(v, bx, by, w, counts) : block_unshaded(v, bx, by, w, counts);
+            for (uint64_t m = hits; m; m &= m - 1)
+                rg->hit_pixels[rg->hit_count++] = (uint16_t)region_index(bx, by, w, __builtin_ctzll(m));
         }
+    trace_region_ao(v, ap, counts);
 }
-
 
 /* The filtered colour of region pixel (x, y) (image coordinates, a pixel
  * of the region whose whole box inside the image lies in the region), the
