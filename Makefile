@@ -56,7 +56,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-parts bench-pipeline bench-wall clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-parts bench-pipeline bench-wall clean check-headers unrobust \
         gen-assembly
 
 all: tessera
@@ -220,6 +220,7 @@ bench:
 	sh tools/bench_wall.sh
 	sh tools/bench_pipeline.sh
 	sh tools/bench_parts.sh
+	sh tools/bench_ao.sh
 
 # Embree's two-level scene on an assembly (tools/embree_parts/embree_parts.c): built only for the
 # benchmarks (it needs libembree-dev: tools/deps.sh --bench), never by make or make test
@@ -232,6 +233,13 @@ bench-parts:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera $(BUILD)/gen-assembly $(EMBREE_PARTS)
 	sh tools/bench_parts.sh
+
+# ambient occlusion against Embree's AO rays alone (tools/bench_ao.sh): the "## Ambient occlusion"
+# section of BENCHMARKS.md
+bench-ao:
+	@sh tools/deps.sh --bench
+	$(MAKE) tessera
+	sh tools/bench_ao.sh
 
 # the wall benchmarks alone (bench --wall): the "## Wall" section of BENCHMARKS.md
 bench-wall: deps
