@@ -135,7 +135,7 @@ knob_ao() { # scene labels...
         echo "Machine: ${cpu:-unknown CPU} (lscpu), $(nproc) CPUs, $THREADS render threads; measured from $ao_start,"
         echo "load average (/proc/loadavg) before: $ao_load_before; after: $ao_load_after."
         if [ "$SIZE" != 1920x1080 ]; then
-            echo "Image size **$SIZE** (reduced: \`REPORT_SIZE=$SIZE REPORT_FRAMES=$FRAMES REPORT_KNOBS=\"transparency ao\" make report\`;"
+            echo "Image size **$SIZE** (reduced: \`REPORT_SIZE=$SIZE REPORT_FRAMES=$FRAMES REPORT_KNOBS=\"$RUN_KNOBS\" make report\`;"
             echo "the other sections may be at another size, see the header)."
         else
             echo "Image size $SIZE."
