@@ -250,30 +250,59 @@ static double wall_unoccluded(double a)
     return 1.0 - (acos(a) - a * sqrt(1.0 - a * a)) / pi_d;
 }
 
-Test(ao, floor_next_to_a_wall_matches_the_closed_form)
+/* Render with renderer `name` through render_image_tiles, shadows on. */
+static ao_image render_with(const char *name, const scene *s, const accel *a, camera_desc cam, int w, int h,
+                            const render_settings *st, pixel_sampler ps, int threads, int tile_px)
 {
-    const float d = 0.25f, big = 1000.f;
-    int mat;
-    scene *s = white_scene(&mat);
+    const renderer *r = renderer_by_name(name);
+    cr_assert(r, "no renderer %s", name);
+    ao_image im = {w, h, calloc((size_t)w * (size_t)h * 3, sizeof(float))};
+    cr_assert(im.rgb);
+    render_view v = {s, a, camera_basis_make(&cam, w, h), true, r->shading, NULL, st};
+    render_image_tiles(r, &v, &ps, threads, tile_px, im.rgb, NULL);
+    return im;
+}
+
+/* The floor of add_floor(big) and an upright wall x = d (y >= 0) beside the
+ * point (0, 0, 0). */
+static void add_wall(scene *s, int mat, float d, float big)
+{
     add_floor(s, mat, big);
     add_quad(s, mat, v3(d, 0.f, -big), v3(d, big, -big), v3(d, big, big), v3(d, 0.f, big), "wall");
+}
+
+/* Renderer `name`'s value of the one pixel over the point (0, 0, 0), AO rays
+ * of `length`, 64 rays x 8 x 8 stratum frames (4096 directions, one set, no
+ * filter): the mean over the frames. The pixel is grey (asserted). */
+static double mean_over_the_point(const char *name, const scene *s, const accel *a, float length)
+{
+    render_settings st = render_settings_default();
+    st.ao_rays = 64;
+    st.ao_interleave = 1;
+    st.ao_filter_px = 1;
+    st.ao_distance = length;
+    const int k = 8;
+    double sum = 0.0;
+    for (int f = 0; f < k * k; f++) {
+        ao_image im = render_with(name, s, a, look_down(0.f, 0.f, 0.01f), 1, 1, &st, pixel_sampler_stratum(k, 0, f), 1,
+                                  16);
+        cr_assert(im.rgb[0] == im.rgb[1] && im.rgb[1] == im.rgb[2], "%s: a grey pixel", name);
+        sum += im.rgb[0];
+        free(im.rgb);
+    }
+    return sum / (k * k);
+}
+
+Test(ao, floor_next_to_a_wall_matches_the_closed_form)
+{
+    const float d = 0.25f;
+    int mat;
+    scene *s = white_scene(&mat);
+    add_wall(s, mat, d, 1000.f);
     accel *a = build(s);
     const float lengths[] = {0.5f, 0.3f, 250.f}; /* a = 0.5, 0.833, 0.001 */
     for (size_t li = 0; li < sizeof lengths / sizeof lengths[0]; li++) {
-        render_settings st = render_settings_default();
-        st.ao_rays = 64;
-        st.ao_interleave = 1;
-        st.ao_filter_px = 1;
-        st.ao_distance = lengths[li];
-        /* one pixel over the point (0, 0, 0), 8 x 8 stratum frames of 64 rays: 4096 directions */
-        const int k = 8;
-        double sum = 0.0;
-        for (int f = 0; f < k * k; f++) {
-            ao_image im = render(s, a, look_down(0.f, 0.f, 0.01f), 1, 1, &st, pixel_sampler_stratum(k, 0, f), 1, 16);
-            sum += im.rgb[0];
-            free(im.rgb);
-        }
-        double got = sum / (k * k), want = wall_unoccluded((double)d / lengths[li]);
+        double got = mean_over_the_point("ao", s, a, lengths[li]), want = wall_unoccluded((double)d / lengths[li]);
         /* 4096 quasi-random points of a (0, 2)-sequence against an indicator with a straight
          * edge: error ~ N^-3/4 ~ 2e-3; 0.01 leaves room */
         cr_expect(fabs(got - want) < 0.01, "length %g: unoccluded %.4f, closed form %.4f", lengths[li], got, want);
@@ -538,19 +567,6 @@ Test(ao, frames_converge_to_the_many_ray_picture)
 
 /* ---- the raytracer's AO term (renderer raytracer-ao) ---------------------- */
 
-/* Render with renderer `name` through render_image_tiles, shadows on. */
-static ao_image render_with(const char *name, const scene *s, const accel *a, camera_desc cam, int w, int h,
-                            const render_settings *st, pixel_sampler ps, int threads, int tile_px)
-{
-    const renderer *r = renderer_by_name(name);
-    cr_assert(r, "no renderer %s", name);
-    ao_image im = {w, h, calloc((size_t)w * (size_t)h * 3, sizeof(float))};
-    cr_assert(im.rgb);
-    render_view v = {s, a, camera_basis_make(&cam, w, h), true, r->shading, NULL, st};
-    render_image_tiles(r, &v, &ps, threads, tile_px, im.rgb, NULL);
-    return im;
-}
-
 /* White Lambert surfaces under ambient light `ambient` (material ambient 1)
  * and one directional light straight above (+y) of intensity `direct`. */
 static scene *lit_scene(int *material_id, float ambient, float direct)
@@ -597,29 +613,15 @@ Test(ao_term, unoccluded_is_the_raytracer_bit_for_bit)
  *   pixel = direct + ambient x unoccluded. */
 Test(ao_term, darkens_only_the_ambient_light_by_the_closed_form)
 {
-    const float d = 0.25f, big = 1000.f, ambient = 0.3f, direct = 0.6f;
+    const float d = 0.25f, ambient = 0.3f, direct = 0.6f;
     int mat;
     scene *s = lit_scene(&mat, ambient, direct);
-    add_floor(s, mat, big);
-    add_quad(s, mat, v3(d, 0.f, -big), v3(d, big, -big), v3(d, big, big), v3(d, 0.f, big), "wall");
+    add_wall(s, mat, d, 1000.f);
     accel *a = build(s);
     const float lengths[] = {0.5f, 0.3f}; /* a = 0.5, 0.833 */
     for (size_t li = 0; li < sizeof lengths / sizeof lengths[0]; li++) {
-        render_settings st = render_settings_default();
-        st.ao_rays = 64;
-        st.ao_interleave = 1;
-        st.ao_filter_px = 1;
-        st.ao_distance = lengths[li];
-        const int k = 8;
-        double sum = 0.0;
-        for (int f = 0; f < k * k; f++) {
-            ao_image im = render_with("raytracer-ao", s, a, look_down(0.f, 0.f, 0.01f), 1, 1, &st,
-                                      pixel_sampler_stratum(k, 0, f), 1, 16);
-            cr_assert(im.rgb[0] == im.rgb[1] && im.rgb[1] == im.rgb[2], "grey light on a white floor");
-            sum += im.rgb[0];
-            free(im.rgb);
-        }
-        double got = sum / (k * k), want = direct + ambient * wall_unoccluded((double)d / lengths[li]);
+        double got = mean_over_the_point("raytracer-ao", s, a, lengths[li]);
+        double want = direct + ambient * wall_unoccluded((double)d / lengths[li]);
         /* the unoccluded fraction to 0.01 (the ao test above), times the ambient light */
         cr_expect(fabs(got - want) < 0.01 * ambient, "length %g: pixel %.4f, closed form %.4f", lengths[li], got,
                   want);
