@@ -29,7 +29,7 @@ static const char *const bench_fields[] = {
     "triangles",    "spheres",      "load_s",   "build_s",       "prim_mrays", "total_mrays", "frame_ms_median",
     "frame_ms_min", "frame_ms_max", "hit_rate", "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
     "hits",         "instances",    "geometries", "triangles_instanced", "bytes_per_instanced_tri",
-    "renderer",     "opacity",      "secondary_rays_frame",
+    "renderer",     "opacity",      "secondary_rays_frame", "tile_px",
 };
 #define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
 

@@ -14,7 +14,8 @@
 # rays a frame, within 0.1 %), the same image size, AO rays per hit and ray
 # length; tessera with --ao-filter 1 (no filter, so no apron pixels traced
 # twice: exactly the peer's rays). A fourth run per round, tessera with the
-# default 5 x 5 filter, measures what the apron costs.
+# default 5 x 5 filter, measures what the apron costs, at the pipeline's
+# default 16-pixel tiles and (a fifth run) at 32-pixel tiles.
 #
 # Per mesh, thread count (1, 2) and round, each run its own process after a
 # quiet second, alternating A B A B:
@@ -176,6 +177,8 @@ for m in $MESHES; do
             run tessera "$m" "$t" filter5 $tess --ao-filter 5
             # shellcheck disable=SC2086
             run embree "$m" "$t" p16 $peer -m p16 "$f"
+            # shellcheck disable=SC2086
+            run tessera "$m" "$t" filter5t32 $tess --ao-filter 5 --tile-size 32
             r=$((r + 1))
         done
     done
@@ -209,11 +212,12 @@ END {
     printf "%s, revision %s; %d CPUs, %s (lscpu); load average at start %s. `sh tools/bench_ao.sh`:\n", date, rev, cpus, cpu, load
     printf "%s, %d AO rays per primary hit of length 0.1 x the mesh box diagonal, the same camera and rays in both\n", size, rays
     printf "programs (AO rays a frame checked equal); %d rounds of A B A B runs (tessera, Embree p8, tessera with\n", rounds
-    printf "the 5 x 5 filter, Embree p16), %d timed frames each; medians over the rounds of (AO rays of a frame /\n", frames
+    printf "the 5 x 5 filter, Embree p16, tessera with the filter at 32-pixel tiles), %d timed frames each; medians\n", frames
+    printf "over the rounds of (AO rays of a frame /\n"
     printf "median frame time); ratio = tessera / Embree (> 1: tessera faster). %d of %d kept runs were noisy\n", noisy + 0, runs + 0
     printf "(other programs > 0.05 CPU after the retries); the whole run took %d s.\n\n", total_s
-    printf "| mesh | threads | AO rays/frame | tessera Mrays/s | Embree p8 | Embree p16 | tessera / p8 | tessera / p16 | with 5x5 filter: Mrays/s | apron cost (frame time) |\n"
-    printf "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    printf "| mesh | threads | AO rays/frame | tessera Mrays/s | Embree p8 | Embree p16 | tessera / p8 | tessera / p16 | with 5x5 filter: Mrays/s | apron cost (frame time) | apron cost, 32-px tiles |\n"
+    printf "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     for (i = 1; i <= nm; i++) for (j = 1; j <= nt; j++) {
         m = meshes[i]; t = threads[j]
         k1 = m SUBSEP t SUBSEP "tessera" SUBSEP "filter1"; k5 = m SUBSEP t SUBSEP "tessera" SUBSEP "filter5"
@@ -225,18 +229,22 @@ END {
         n = cnt[k1]; for (r = 1; r <= n; r++) val[k1 "ms", r] = ms[k1, r]; cnt[k1 "ms"] = n
         n = cnt[k5]; for (r = 1; r <= n; r++) val[k5 "ms", r] = ms[k5, r]; cnt[k5 "ms"] = n
         apron = cnt[k5] ? median(k5 "ms") / median(k1 "ms") : 0
+        k32 = m SUBSEP t SUBSEP "tessera" SUBSEP "filter5t32"
+        n = cnt[k32]; for (r = 1; r <= n; r++) val[k32 "ms", r] = ms[k32, r]; cnt[k32 "ms"] = n
+        apron32 = cnt[k32] ? median(k32 "ms") / median(k1 "ms") : 0
         check = rays_frame[e8] > 0 ? (rays_frame[k1] - rays_frame[e8]) / rays_frame[e8] : 1
         if (check < 0) check = -check
         mismatch = (check > 0.001) ? " (MISMATCH: Embree " rays_frame[e8] ")" : ""
         rows++
         if (a >= b && a >= c) met++
-        printf "| %s | %s | %d%s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | x %.2f (%d rays) |\n", m, t, rays_frame[k1], \
-            mismatch, a, b, c, a / b, a / c, f5, apron, rays_frame[k5]
+        printf "| %s | %s | %d%s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | x %.2f (%d rays) | x %.2f (%d rays) |\n", m, t, \
+            rays_frame[k1], mismatch, a, b, c, a / b, a / c, f5, apron, rays_frame[k5], apron32, rays_frame[k32]
     }
     printf "\nTarget (issue 15): tessera >= 1.0x the faster Embree mode on every row; met on %d of %d rows.\n", met + 0, rows + 0
     printf "\nThe filter'"'"'s apron: a 16 x 16 tile traces its 2-pixel border again for the 5 x 5 box (20 x 20 pixels\n"
     printf "of primary and AO rays for 16 x 16 stored; less at the image border), so the filtered image costs the\n"
-    printf "factor in the last column; its Mrays/s counts the apron'"'"'s rays too.\n"
+    printf "factor in the apron column; its Mrays/s counts the apron'"'"'s rays too. With 32-pixel tiles\n"
+    printf "(traverser.tile_px 32, tessera bench --tile-size 32) the border is traced for 36 x 36 pixels per 32 x 32.\n"
 }' "$LOG" > "$SECTION"
 cat "$SECTION"
 echo "bench_ao: section written to $SECTION (runs in $LOG)" >&2

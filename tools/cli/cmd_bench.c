@@ -58,6 +58,7 @@ typedef struct bench_options {
     bool ao;                /* --renderer ao: the ambient-occlusion renderer instead of eyelight */
     render_settings settings; /* ao_rays, ao_distance, ao_interleave, ao_filter_px for --renderer ao */
     float opacity;          /* --opacity: every surface's opacity (1: opaque, the plain path) */
+    int tile_px;            /* --tile-size: tile edge in pixels */
 } bench_options;
 
 /* One timed frame. */
@@ -94,8 +95,8 @@ static void bench_usage(FILE *f)
           "                   default limits (transmittance 1/255, 16 layers)\n"
           "  --renderer NAME  eyelight (the default: the peer's shade) or ao: the ambient-occlusion\n"
           "                   renderer (engine/render_ao.h), the peer's --ao workload: per hit N\n"
-          "                   cosine-distributed any-hit rays; its tiles are RENDER_TILE_PX as\n"
-          "                   render_image's\n"
+          "                   cosine-distributed any-hit rays\n"
+          "  --tile-size N    tile edge in pixels, 4..256, as the pipeline's (default 16)\n"
           "  --ao-rays N      AO rays per hit, 1..64 (default 8)\n"
           "  --ao-dist D      AO ray length in world units (default: 0.1 x the scene box's diagonal,\n"
           "                   as the peer's --ao-dist)\n"
@@ -128,7 +129,7 @@ static void bench_usage(FILE *f)
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
-          "        renderer=NAME opacity= secondary_rays_frame= and, with --renderer ao, ao_rays=\n"
+          "        renderer=NAME opacity= secondary_rays_frame= tile_px= and, with --renderer ao, ao_rays=\n"
           "        ao_interleave= ao_filter= ao_dist=\n"
           "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
@@ -213,6 +214,9 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
                 goto bad;
         } else if (!strcmp(a, "--threads")) {
             if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, 256, &o->threads))
+                goto bad;
+        } else if (!strcmp(a, "--tile-size")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 4, 256, &o->tile_px))
                 goto bad;
         } else if (!strcmp(a, "--frames")) {
             if (!(val = cli_option_value(argc, argv, &i)) || !cli_parse_int(a, val, 1, BENCH_MAX_FRAMES, &o->frames))
@@ -424,25 +428,26 @@ static bool prepare(bench_options *o, cli_scene *cs)
 }
 
 
+/* One frame: the renderer's tiles of --tile-size pixels on --threads threads. */
+static void render_frame(const bench_options *o, const render_view *view, float *rgb, render_counts *counts)
+{
+    const pixel_sampler single = pixel_sampler_single();
+    render_image_tiles(renderer_by_name(o->ao ? "ao" : "eyelight"), view, &single, o->threads, o->tile_px, rgb,
+                       counts);
+}
+
 /* Render the warm-up and timed frames; fills samples[0..frames) and
  * *cpu_other. The image of the last frame stays in rgb. */
 static void measure(const bench_options *o, const render_view *view, float *rgb, frame_sample *samples,
                     double *cpu_other)
 {
-    const pixel_sampler single = pixel_sampler_single();
     for (int f = 0; f < o->warmup; f++)
-        if (o->ao)
-            render_ao_image(view, &single, o->threads, RENDER_TILE_PX, rgb, NULL);
-        else
-            render_image(view, o->threads, rgb, NULL);
+        render_frame(o, view, rgb, NULL);
     double busy0 = cli_machine_busy_s(), own0 = cli_own_cpu_s(), wall0 = cli_now_s();
     for (int f = 0; f < o->frames; f++) {
         render_counts counts = {0};
         double t0 = cli_now_s();
-        if (o->ao)
-            render_ao_image(view, &single, o->threads, RENDER_TILE_PX, rgb, &counts);
-        else
-            render_image(view, o->threads, rgb, &counts);
+        render_frame(o, view, rgb, &counts);
         samples[f].seconds = cli_now_s() - t0;
         samples[f].primary_rays = counts.primary_rays;
         samples[f].shadow_rays = counts.shadow_rays;
@@ -504,8 +509,8 @@ static void print_result(const bench_options *o, const render_view *view, double
     printf(" hits=%llu instances=%u geometries=%u triangles_instanced=%zu bytes_per_instanced_tri=%.2f",
            (unsigned long long)last->primary_hits, s->instance_count, s->geometry_count, instanced,
            bytes_per_instanced);
-    printf(" renderer=%s opacity=%g secondary_rays_frame=%llu", o->ao ? "ao" : "eyelight", (double)o->opacity,
-           (unsigned long long)last->secondary_rays);
+    printf(" renderer=%s opacity=%g secondary_rays_frame=%llu tile_px=%d", o->ao ? "ao" : "eyelight",
+           (double)o->opacity, (unsigned long long)last->secondary_rays, o->tile_px);
     if (o->ao) {
         for (int f = 0; f < n; f++) {
             double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
@@ -712,7 +717,7 @@ int cli_bench(int argc, char **argv)
             return cli_bench_wall(argc, argv);
     bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
                        .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP,
-                       .settings = render_settings_default(), .opacity = 1.f};
+                       .settings = render_settings_default(), .opacity = 1.f, .tile_px = RENDER_TILE_PX};
     int code = 0;
     if (!parse_options(argc, argv, &o, &code))
         return code;
