@@ -213,8 +213,8 @@ END {
     printf "%s, %d AO rays per primary hit of length 0.1 x the mesh box diagonal, the same camera and rays in both\n", size, rays
     printf "programs (AO rays a frame checked equal); %d rounds of A B A B runs (tessera, Embree p8, tessera with\n", rounds
     printf "the 5 x 5 filter, Embree p16, tessera with the filter at 32-pixel tiles), %d timed frames each; medians\n", frames
-    printf "over the rounds of (AO rays of a frame /\n"
-    printf "median frame time); ratio = tessera / Embree (> 1: tessera faster). %d of %d kept runs were noisy\n", noisy + 0, runs + 0
+    printf "over the rounds of (AO rays of a frame / median frame time); ratio = tessera / Embree (> 1: tessera\n"
+    printf "faster). %d of %d kept runs were noisy\n", noisy + 0, runs + 0
     printf "(other programs > 0.05 CPU after the retries); the whole run took %d s.\n\n", total_s
     printf "| mesh | threads | AO rays/frame | tessera Mrays/s | Embree p8 | Embree p16 | tessera / p8 | tessera / p16 | with 5x5 filter: Mrays/s | apron cost (frame time) | apron cost, 32-px tiles |\n"
     printf "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
