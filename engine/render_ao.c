@@ -37,8 +37,11 @@
  * more of the tree than rays binned by octant alone. Measured (dragon,
  * 1920x1080, 8 rays, filter off, 1 thread, AMD EPYC, quiet, median frame of 3,
  * runs alternating): 64 rays of one 8 x 8 block binned by octant 498 / 502
- * ms, the block sorted by direction 493 / 484 ms, the region's pool sorted
- * by direction: see BENCHMARKS.md, "Ambient occlusion". (Earlier, bunny:
+ * ms, the block sorted by direction 493 / 484 ms; octant 505 / 497 ms, the
+ * region's pool sorted 497 / 489 ms; grids of 2 to 32 cells a side within
+ * noise of 8. A small gain: these rays stay incoherent (K^2 direction sets
+ * interleaved); with one set (K = 1) the same frame took 408 ms against 538.
+ * BENCHMARKS.md, "Ambient occlusion", has the figures against Embree. (Earlier, bunny:
  * ray s of every pixel of a block in one packet, as the Embree peer does,
  * 338 ms against 331 ms by octant; packets of 16 or 32 rays were slower than
  * 64 on the dragon, 2-ray single-ray traversal 1.6x slower.) */
@@ -78,7 +81,7 @@ typedef struct ao_region {
     vec3 ray_origin[AO_REGION_MAX_PIXELS];
     ao_basis basis[AO_REGION_MAX_PIXELS];
     uint16_t occluded[AO_REGION_MAX_PIXELS]; /* AO rays found blocked */
-    uint16_t hit_pixels[AO_REGION_MAX_PIXELS]; /* the region pixels that hit, in region order */
+    uint16_t hit_pixels[AO_REGION_MAX_PIXELS]; /* the region pixels that hit, block by block */
     int hit_count;
 } ao_region;
 
@@ -174,8 +177,8 @@ static void set_ao_ray(ray_packet *p, uint32_t lane, vec3 origin, vec3 dir, floa
 
 /* The sign pattern of a direction as the kernels see it (zero counts as +),
  * 0..7, and within it the cell of an AO_DIRECTION_GRID^2 grid over the
- * octahedral map of |d| (|x|, |y|) / (|x| + |y| + |z|): the sort key of
- * AO_PACKETS_BY_DIRECTION. */
+ * octahedral map of |d| (|x|, |y|) / (|x| + |y| + |z|): the key AO rays
+ * are sorted by into packets (trace_pool). */
 static unsigned direction_key(vec3 d)
 {
     unsigned octant = (d.x < 0.f ? 1u : 0u) | (d.y < 0.f ? 2u : 0u) | (d.z < 0.f ? 4u : 0u);
