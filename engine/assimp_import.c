@@ -11,9 +11,12 @@
  *    (map_Kd, bump, disp, norm, ...) before the first "newmtl" and crashes
  *    (found by fuzzing), and drops colours given there silently;
  *    check_mtllib() reads the material libraries an .obj names first;
- *  - a vertex index of an "f", "l" or "p" line out of range after a second
- *    group ("g") makes it throw with the group's mesh half built and leak it
- *    (found by fuzzing); the check counts vertices and checks the indices;
+ *  - an index of an "f", "l" or "p" line out of range (vertex, texture
+ *    coordinate or normal) after a second group ("g") makes it throw with the
+ *    group's mesh half built and leak it, and it reads a corner such as
+ *    "-30-1" as two indices, and leaks the same way on an "l" line of one
+ *    corner (all found by fuzzing); the check reads corners strictly, counts
+ *    the data of each kind, checks every index and refuses short lines;
  *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
  *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
  *    therefore checked for non-finite values before that step runs;
@@ -155,38 +158,97 @@ static bool check_mtllib(char *rest, const char *obj_path, unsigned long obj_lin
     return check_mtl_file(mtl, obj_path, obj_line, err);
 }
 
-/* What the check carries from line to line: vertex positions are counted, and
- * of the positive vertex indices (which may point forward) the largest is
- * kept, to be checked against the count at the end. */
+/* The data an element line's corner indexes: "v", "vt", "vn" lines. */
+enum { OBJ_VERTEX, OBJ_TEXCOORD, OBJ_NORMAL, OBJ_KINDS };
+static const char *const obj_kind_name[OBJ_KINDS] = {"vertex", "texture coordinate", "normal"};
+static const char *const obj_kind_plural[OBJ_KINDS] = {"vertices", "texture coordinates", "normals"};
+
+/* What the check carries from line to line: the data of each kind is
+ * counted, and of the positive indices of each kind (which may point
+ * forward) the largest is kept, to be checked against the count at the end. */
 typedef struct obj_check {
     const char *path;
     tess_error *err;
-    unsigned long line_no;    /* the current line, from 1 */
-    long long vertices;       /* "v" lines so far */
-    long long max_index;      /* largest positive vertex index so far, 0 if none */
-    unsigned long max_line;   /* where it was */
+    unsigned long line_no;              /* the current line, from 1 */
+    long long count[OBJ_KINDS];         /* "v", "vt", "vn" lines so far */
+    long long max_index[OBJ_KINDS];     /* largest positive index so far, 0 if none */
+    unsigned long max_line[OBJ_KINDS];  /* where it was */
 } obj_check;
 
-/* The vertex indices of an element line ("f 1/2/3 -1//4 ..."): a negative one
- * counts back from the vertices so far and must land on one; positive ones are
- * checked at the end. Components that are not integers (and 0) are assimp's
- * to report. */
+/* An index as the check accepts it: an optional '-', then 1 to 15 digits.
+ * Advances *p past it; false (with *p unchanged) when there is none. */
+static bool read_obj_index(const char **p, long long *out)
+{
+    const char *q = *p;
+    bool negative = *q == '-';
+    q += negative;
+    long long value = 0;
+    int digits = 0;
+    for (; *q >= '0' && *q <= '9'; q++, digits++) {
+        if (digits == 15)
+            return false;
+        value = value * 10 + (*q - '0');
+    }
+    if (!digits)
+        return false;
+    *out = negative ? -value : value;
+    *p = q;
+    return true;
+}
+
+/* One index of kind k on the current line: a negative one counts back from
+ * the data so far and must land on one, a positive one is remembered for the
+ * check at the end; 0 is assimp's to refuse (it does, while parsing, before
+ * any mesh is built: "Invalid face index"). */
+static bool check_obj_index(obj_check *c, const char *keyword, int k, long long index)
+{
+    if (index < 0 && -index > c->count[k])
+        return tess_error_set(c->err, "%s:%lu: '%s' line: %s index %lld is before the first %s (%lld so far)", c->path,
+                              c->line_no, keyword, obj_kind_name[k], index, obj_kind_name[k], c->count[k]);
+    if (index > c->max_index[k]) {
+        c->max_index[k] = index;
+        c->max_line[k] = c->line_no;
+    }
+    return true;
+}
+
+/* The corners of an element line ("f 1/2/3 -1//4 ...", "l 1/2 3/4", "p 1"),
+ * each v, v/vt, v//vn or v/vt/vn. They are read strictly: assimp 5.2 reads
+ * other spellings its own way ("-30-1" as two indices, "+5" twice) and
+ * throws on an index out of range with a group's mesh half built (a leak), so
+ * a corner it could misread is refused here with the reason. So is an "l"
+ * line of fewer than two corners: after a second group assimp 5.2 leaks the
+ * group's mesh on one (found by fuzzing). */
 static bool check_obj_indices(obj_check *c, const char *keyword, char **save)
 {
+    int corners = 0;
     for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", save)) && token[0] != '#';) {
-        char *end;
-        errno = 0;
-        long long index = strtoll(token, &end, 10);
-        if (end == token || (*end != '\0' && *end != '/') || errno == ERANGE)
-            continue;
-        if (index < 0 && -index > c->vertices)
-            return tess_error_set(c->err, "%s:%lu: '%s' line: vertex index %lld is before the first vertex (%lld so far)",
-                                  c->path, c->line_no, keyword, index, c->vertices);
-        if (index > c->max_index) {
-            c->max_index = index;
-            c->max_line = c->line_no;
+        const char *p = token;
+        long long index[OBJ_KINDS];
+        bool present[OBJ_KINDS] = {false, false, false};
+        bool ok = present[OBJ_VERTEX] = read_obj_index(&p, &index[OBJ_VERTEX]);
+        if (ok && *p == '/') {
+            p++;
+            if (*p != '/')
+                ok = present[OBJ_TEXCOORD] = read_obj_index(&p, &index[OBJ_TEXCOORD]);
+            if (ok && *p == '/') {
+                p++;
+                ok = present[OBJ_NORMAL] = read_obj_index(&p, &index[OBJ_NORMAL]);
+            }
         }
+        if (!ok || *p != '\0')
+            return tess_error_set(c->err,
+                                  "%s:%lu: '%s' line: expected a corner like 1, 1/2, 1//3 or 1/2/3 (an index may be "
+                                  "negative), got '%.40s'",
+                                  c->path, c->line_no, keyword, token);
+        for (int k = 0; k < OBJ_KINDS; k++)
+            if (present[k] && !check_obj_index(c, keyword, k, index[k]))
+                return false;
+        corners++;
     }
+    if (strcmp(keyword, "l") == 0 && corners < 2)
+        return tess_error_set(c->err, "%s:%lu: 'l' line: a line needs 2 or more corners, got %d", c->path, c->line_no,
+                              corners);
     return true;
 }
 
@@ -206,7 +268,11 @@ static bool check_obj_line(obj_check *c, char *line)
     if (word && (strcmp(word, "f") == 0 || strcmp(word, "l") == 0 || strcmp(word, "p") == 0))
         return check_obj_indices(c, word, &save);
     if (word && strcmp(word, "v") == 0)
-        c->vertices++;
+        c->count[OBJ_VERTEX]++;
+    if (word && strcmp(word, "vt") == 0)
+        c->count[OBJ_TEXCOORD]++;
+    if (word && strcmp(word, "vn") == 0)
+        c->count[OBJ_NORMAL]++;
     const struct obj_vertex_data *kind = NULL;
     for (size_t i = 0; word && i < sizeof obj_vertex_data / sizeof obj_vertex_data[0]; i++)
         if (strcmp(word, obj_vertex_data[i].keyword) == 0)
@@ -263,9 +329,10 @@ static bool check_obj_numbers(const char *path, tess_error *err)
         ok = e == ENOMEM ? tess_error_set(err, "%s:%lu: out of memory reading the line", path, line_no + 1)
                          : tess_error_set(err, "%s: read error: %s", path, text);
     }
-    if (ok && c.max_index > c.vertices)
-        ok = tess_error_set(err, "%s:%lu: vertex index %lld out of range (the file has %lld vertices)", path,
-                            c.max_line, c.max_index, c.vertices);
+    for (int k = 0; ok && k < OBJ_KINDS; k++)
+        if (c.max_index[k] > c.count[k])
+            ok = tess_error_set(err, "%s:%lu: %s index %lld out of range (the file has %lld %s)", path, c.max_line[k],
+                                obj_kind_name[k], c.max_index[k], c.count[k], obj_kind_plural[k]);
     free(line);
     fclose(file);
     return ok;

@@ -992,6 +992,33 @@ Test(mesh_load, obj_errors)
     mesh_destroy(m);
     write_text(path, "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
     expect_error(mesh_load_assimp, path, "assimp:");
+    /* found by fuzzing (tests/fuzz/corpus/obj/crash-leak-corner-spelling): assimp 5.2 reads
+     * "-30-1" as two indices, throws on the first with the group's mesh half built and
+     * leaks it; corners are read strictly first */
+    write_text(path, "spelling.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\ng rest\nf -3 -30-1 -2\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 6), "expected a corner like 1, 1/2, 1//3 or 1/2/3",
+                 "'-30-1'");
+    write_text(path, "plus.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 +2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 4), "'+2'");
+    write_text(path, "slash.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1/ 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 4), "'1/'");
+    /* texture coordinate and normal indices are checked like vertex indices (assimp throws on
+     * them too, after the same half-built mesh) */
+    write_text(path, "vt_range.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nf 1/1 2/1 3/1\ng rest\nf 1/1 2/5 3/1\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 7),
+                 "texture coordinate index 5 out of range (the file has 1 texture coordinates)");
+    write_text(path, "vn_before.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//-3 3//1\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 5),
+                 "'f' line: normal index -3 is before the first normal (1 so far)");
+    /* found by fuzzing (tests/fuzz/corpus/obj/crash-leak-one-corner-line): an "l" line of one
+     * corner after a second group leaked its group's mesh in assimp 5.2 */
+    write_text(path, "short_line.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\ng rest\nl 2\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 6), "'l' line: a line needs 2 or more corners, got 1");
+    write_text(path, "corners.obj",
+               "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 1\nvn 0 0 1\nf 1/1 2/2 3/1\nf 1/2/1 3/1/1 -1//-1\n");
+    mesh *corners = load_ok(mesh_load_assimp, path);
+    cr_expect_eq(corners->triangle_count, 2, "v/vt, v/vt/vn and v//vn corners, negative ones too");
+    mesh_destroy(corners);
     /* assimp alone drops this line and shifts every later index: checked ourselves */
     write_text(path, "abc.obj", "v 0 0 0\nv 1 abc 0\nv 0 1 0\nv 1 1 0\nf 1 3 4\n");
     expect_error(mesh_load_assimp, path, at_line(line, path, 2), "expected a number", "'abc'");
