@@ -75,6 +75,14 @@ static const struct obj_vertex_data {
     {"vt", 1, 3}, /* u, optional v w */
 };
 
+/* What separates the words of an OBJ line for assimp's reader: blanks and
+ * tabs only. A line "\vv 0 1 0" is no vertex to it (it skips the line), so
+ * the check must not count one either (found by fuzzing: the vertex count
+ * then disagreed and an index out of range reached assimp); other control
+ * characters stay inside words, where the number and corner checks refuse
+ * them. */
+#define OBJ_SPACE " \t"
+
 /* assimp's OBJ and MTL readers end a line at '\n', '\r', '\f' and '\0' alike
  * ("#\0mtllib x.mtl" names a library for them; found by fuzzing): the next
  * such line of the bytes from *p to `end` (as getline gave them),
@@ -222,7 +230,7 @@ static bool check_obj_index(obj_check *c, const char *keyword, int k, long long 
 static bool check_obj_indices(obj_check *c, const char *keyword, char **save)
 {
     int corners = 0;
-    for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", save)) && token[0] != '#';) {
+    for (char *token; (token = strtok_r(NULL, OBJ_SPACE, save)) && token[0] != '#';) {
         const char *p = token;
         long long index[OBJ_KINDS];
         bool present[OBJ_KINDS] = {false, false, false};
@@ -262,7 +270,7 @@ static bool check_obj_line(obj_check *c, char *line)
     unsigned long line_no = c->line_no;
     tess_error *err = c->err;
     char *save;
-    char *word = strtok_r(line, " \t\r\n\v\f", &save);
+    char *word = strtok_r(line, OBJ_SPACE, &save);
     if (word && strcmp(word, "mtllib") == 0)
         return check_mtllib(save, path, line_no, err);
     if (word && (strcmp(word, "f") == 0 || strcmp(word, "l") == 0 || strcmp(word, "p") == 0))
@@ -280,7 +288,7 @@ static bool check_obj_line(obj_check *c, char *line)
     if (!kind)
         return true;
     int count = 0;
-    for (char *token; (token = strtok_r(NULL, " \t\r\n\v\f", &save)) && token[0] != '#'; count++) {
+    for (char *token; (token = strtok_r(NULL, OBJ_SPACE, &save)) && token[0] != '#'; count++) {
         char *end;
         double v = strtod(token, &end);
         if (end == token || *end != '\0')
