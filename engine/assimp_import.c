@@ -11,12 +11,16 @@
  *    (map_Kd, bump, disp, norm, ...) before the first "newmtl" and crashes
  *    (found by fuzzing), and drops colours given there silently;
  *    check_mtllib() reads the material libraries an .obj names first;
- *  - an index of an "f", "l" or "p" line out of range (vertex, texture
- *    coordinate or normal) after a second group ("g") makes it throw with the
- *    group's mesh half built and leak it, and it reads a corner such as
- *    "-30-1" as two indices, and leaks the same way on an "l" line of one
- *    corner (all found by fuzzing); the check reads corners strictly, counts
- *    the data of each kind, checks every index and refuses short lines;
+ *  - an index of an element line out of range (vertex, texture coordinate
+ *    or normal) after a second group ("g") makes it throw with the group's
+ *    mesh half built and leak it; so does an "l" line of one corner. The
+ *    check must therefore read every line as assimp does: assimp classifies a
+ *    line by its first character without skipping blanks ("fx 1 2 5" is a
+ *    face, an indented "  v 0 1 0" is skipped), drops a "v" line of 2, 5 or 7
+ *    numbers, reads a corner "-30-1" as two indices and a byte-order mark as
+ *    text (each found by fuzzing, each a way an index got past the check):
+ *    check_obj_line refuses what assimp would read differently, reads
+ *    corners strictly, counts the data of each kind and checks every index;
  *  - aiProcess_JoinIdenticalVertices merges a vertex with a NaN coordinate into
  *    an unrelated one, so the NaN never reaches mesh_validate; the scene is
  *    therefore checked for non-finite values before that step runs;
@@ -65,14 +69,17 @@ static bool has_extension(const char *path, const char *ext)
     return n >= e && strcasecmp(path + n - e, ext) == 0;
 }
 
-/* How many numbers an OBJ vertex-data line holds. */
+/* How many numbers an OBJ vertex-data line holds: the counts assimp 5.2's
+ * reader takes; it drops a "v" line of any other count without a word
+ * (shifting every later index) and throws on a "vt" line of another. */
 static const struct obj_vertex_data {
     const char *keyword; /* first word of the line */
-    int min, max;        /* numbers it may carry */
+    unsigned counts;     /* bit n: n numbers are allowed */
+    const char *allowed; /* the same, for messages */
 } obj_vertex_data[] = {
-    {"v", 3, 7},  /* x y z, optional w, or x y z r g b (a common extension) */
-    {"vn", 3, 3}, /* normal */
-    {"vt", 1, 3}, /* u, optional v w */
+    {"v", 1u << 3 | 1u << 4 | 1u << 6, "3, 4 or 6"}, /* x y z, x y z w, or x y z r g b (a common extension) */
+    {"vn", 1u << 3, "3"},                           /* normal */
+    {"vt", 1u << 2 | 1u << 3, "2 or 3"},            /* u v, optional w */
 };
 
 /* What separates the words of an OBJ line for assimp's reader: blanks and
@@ -181,6 +188,7 @@ typedef struct obj_check {
     long long count[OBJ_KINDS];         /* "v", "vt", "vn" lines so far */
     long long max_index[OBJ_KINDS];     /* largest positive index so far, 0 if none */
     unsigned long max_line[OBJ_KINDS];  /* where it was */
+    bool past_start;                    /* the file's first line was seen */
 } obj_check;
 
 /* An index as the check accepts it: an optional '-', then 1 to 15 digits.
@@ -260,33 +268,59 @@ static bool check_obj_indices(obj_check *c, const char *keyword, char **save)
     return true;
 }
 
-/* Check one line: a vertex-data line must carry only finite numbers, as many
- * as its keyword takes; an element line's vertex indices must be in range
- * (check_obj_indices); an "mtllib" line has its libraries checked
- * (check_mtllib). Other lines are assimp's business. */
+/* Check one line as assimp 5.2's OBJ reader will read it: it classifies a
+ * line by its first character alone, without skipping blanks ('v' then a
+ * blank, 't' or 'n': vertex data; 'f', 'l', 'p': an element, whatever the
+ * rest of the word), and skips a line it does not know. So:
+ *  - a data or element line indented by blanks is skipped by assimp, which
+ *    loses the data silently: refused;
+ *  - a word assimp would read as another ("vtx", "foo") is refused;
+ *  - a vertex-data line must carry only finite numbers, as many as its
+ *    keyword takes; it counts towards its kind;
+ *  - an element line's corners must be in range (check_obj_indices);
+ *  - "mtllib" has its libraries checked (check_mtllib); "cstype" (free-form
+ *    geometry, whose lines assimp skips) is refused.
+ * Other lines are assimp's business. Found by fuzzing: every disagreement
+ * between this check and assimp about what a line is let an index out of
+ * range through, and assimp leaks a half-built mesh on one. */
 static bool check_obj_line(obj_check *c, char *line)
 {
     const char *path = c->path;
     unsigned long line_no = c->line_no;
     tess_error *err = c->err;
+    if (!c->past_start && strncmp(line, "\xEF\xBB\xBF", 3) == 0) /* assimp 5.2 reads it as the line's first character */
+        return tess_error_set(err, "%s:1: a UTF-8 byte-order mark (assimp's reader would lose the first line: save "
+                                   "the file without it)",
+                              path);
+    c->past_start = true;
+    if (line[0] == ' ' || line[0] == '\t') {
+        const char *q = line + strspn(line, OBJ_SPACE);
+        if (*q == 'v' || *q == 'f' || *q == 'l' || *q == 'p' || strncmp(q, "mtllib", 6) == 0)
+            return tess_error_set(err, "%s:%lu: '%.40s': an indented line (assimp's reader skips a line that starts "
+                                       "with a blank, and its data would be lost)",
+                                  path, line_no, q);
+        return true;
+    }
     char *save;
     char *word = strtok_r(line, OBJ_SPACE, &save);
-    if (word && strcmp(word, "mtllib") == 0)
-        return check_mtllib(save, path, line_no, err);
-    if (word && (strcmp(word, "f") == 0 || strcmp(word, "l") == 0 || strcmp(word, "p") == 0))
-        return check_obj_indices(c, word, &save);
-    if (word && strcmp(word, "v") == 0)
-        c->count[OBJ_VERTEX]++;
-    if (word && strcmp(word, "vt") == 0)
-        c->count[OBJ_TEXCOORD]++;
-    if (word && strcmp(word, "vn") == 0)
-        c->count[OBJ_NORMAL]++;
-    const struct obj_vertex_data *kind = NULL;
-    for (size_t i = 0; word && i < sizeof obj_vertex_data / sizeof obj_vertex_data[0]; i++)
-        if (strcmp(word, obj_vertex_data[i].keyword) == 0)
-            kind = &obj_vertex_data[i];
-    if (!kind)
+    if (!word)
         return true;
+    if (strcmp(word, "mtllib") == 0)
+        return check_mtllib(save, path, line_no, err);
+    if (strcmp(word, "cstype") == 0)
+        return tess_error_set(err, "%s:%lu: free-form geometry ('cstype') is not supported", path, line_no);
+    const bool element = word[0] == 'f' || word[0] == 'l' || word[0] == 'p';
+    const bool data = word[0] == 'v' && (word[1] == '\0' || word[1] == 't' || word[1] == 'n');
+    if ((element && word[1] != '\0') || (data && word[1] != '\0' && word[2] != '\0'))
+        return tess_error_set(err, "%s:%lu: unknown keyword '%.40s' (assimp would read it as '%.*s')", path, line_no,
+                              word, element ? 1 : 2, word);
+    if (element)
+        return check_obj_indices(c, word, &save);
+    if (!data)
+        return true;
+    const int k = word[1] == 't' ? OBJ_TEXCOORD : word[1] == 'n' ? OBJ_NORMAL : OBJ_VERTEX;
+    const struct obj_vertex_data *kind = &obj_vertex_data[k == OBJ_VERTEX ? 0 : k == OBJ_NORMAL ? 1 : 2];
+    c->count[k]++;
     int count = 0;
     for (char *token; (token = strtok_r(NULL, OBJ_SPACE, &save)) && token[0] != '#'; count++) {
         char *end;
@@ -298,9 +332,9 @@ static bool check_obj_line(obj_check *c, char *line)
             return tess_error_set(err, "%s:%lu: '%s' line: value %d is %.40s (must be finite)", path, line_no,
                                   kind->keyword, count + 1, token);
     }
-    if (count < kind->min || count > kind->max)
-        return tess_error_set(err, "%s:%lu: '%s' line: expected %d to %d numbers, got %d", path, line_no,
-                              kind->keyword, kind->min, kind->max, count);
+    if (count > 30 || !(kind->counts >> count & 1u))
+        return tess_error_set(err, "%s:%lu: '%s' line: expected %s numbers, got %d", path, line_no, kind->keyword,
+                              kind->allowed, count);
     return true;
 }
 
