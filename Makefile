@@ -28,7 +28,7 @@ CXXFLAGS := -std=c++17 $(OPT) -g -Wall -Wextra $(if $(filter 1,$(WERROR)),-Werro
 LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lm -pthread
 TEST_LDLIBS := $(shell pkg-config --libs $(TEST_PKGS) 2>/dev/null)
 
-ENGINE_SRC := $(wildcard engine/*.c)
+ENGINE_SRC := $(wildcard engine/*.c engine/particles/*.c engine/volume/*.c)
 WALL_SRC := $(wildcard wall/*.c)
 WALL_CXX := $(wildcard wall/*.cpp)
 INPUT_SRC := $(wildcard input/*.c)
@@ -206,7 +206,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
+HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h input/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \
