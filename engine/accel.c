@@ -65,6 +65,14 @@ static void prim_boxes(void *ctx, size_t begin, size_t end, int worker)
 /* One geometry's wide BVH; primitives that can never be hit are left out. */
 static bool build_geometry(wbvh *out, const scene_geometry *g, int threads, tess_error *err)
 {
+    if (g->ops->leaf == GEOMETRY_LEAF_POINTS) { /* the kind keeps its tree: borrow it */
+        const wbvh *kept = g->ops->tree(g->data, threads, err);
+        if (!kept)
+            return false;
+        *out = *kept;
+        out->borrowed = true;
+        return true;
+    }
     uint32_t count = g->ops->prim_count(g->data);
     aabb *boxes = malloc(((size_t)count + 1) * sizeof *boxes);
     uint32_t *prim_ids = malloc(((size_t)count + 1) * sizeof *prim_ids);

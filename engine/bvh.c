@@ -1018,7 +1018,7 @@ static void builder_free(builder *B)
 
 bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, tess_error *err)
 {
-    return bvh_build_leaves(out, prim_bounds, count, threads, BVH_LEAF_MAX, err);
+    return bvh_build_leaves(out, prim_bounds, count, threads, BVH_LEAF_DEFAULT, err);
 }
 
 bool bvh_build_leaves(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,

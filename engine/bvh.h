@@ -38,10 +38,13 @@ typedef struct bvh {
  * which adds at most 32 levels for 2^32 primitives): traversal stacks use it. */
 #define BVH_MAX_DEPTH 96
 
-/* Leaves hold at most this many primitives: two 4-wide SIMD leaf tests. */
-#define BVH_LEAF_MAX 8
+/* Leaves hold at most this many primitives: one 16-wide test of points
+ * (wbvh.h WBVH_POINTS_LEAF_MAX). bvh_build's leaves hold at most
+ * BVH_LEAF_DEFAULT: two 4-wide SIMD tests of triangles. */
+#define BVH_LEAF_MAX 16
+#define BVH_LEAF_DEFAULT 8
 
-/* Build over `count` primitive boxes with `threads` threads, the caller's
+/* Build over `count` primitive boxes (leaves of at most BVH_LEAF_DEFAULT) with `threads` threads, the caller's
  * included (< 1 counts as 1; small inputs use one). `prim_bounds` is read only
  * during the build; boxes may be degenerate (zero size) or empty. An empty
  * input gives an empty BVH (node_count 0). */

@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "aabb.h"
+#include "err.h"
 #include "ray.h"
 #include "vec3.h"
 
@@ -33,7 +34,33 @@ typedef enum geometry_leaf_layout {
     GEOMETRY_LEAF_TRIANGLES, /* wbvh_tri_block, filled by fill_lane: the SIMD watertight kernels */
     GEOMETRY_LEAF_SPHERES,   /* wbvh_sphere_block, filled by fill_lane */
     GEOMETRY_LEAF_PRIMS,     /* wbvh_prim_block (ids only): `intersect` decides, one ray at a time */
+    GEOMETRY_LEAF_POINTS,    /* spheres read in place from the kind's arrays (geometry_points): a
+                                leaf is a range of them, tested RAY_LANES at a time, never copied;
+                                the kind builds and keeps its tree (`tree`) */
 } geometry_leaf_layout;
+
+/* A range of values that hides the points whose value lies outside it
+ * (particles cropped by an attribute). Read by every query; changed only
+ * where nothing traces (a pipeline's serial section), like hidden flags. */
+typedef struct geometry_crop {
+    bool active; /* false: every point is seen */
+    float lo, hi; /* seen: lo <= value <= hi */
+} geometry_crop;
+
+/* What the kernels read of a GEOMETRY_LEAF_POINTS kind, in place. Every
+ * array may be read GEOMETRY_POINTS_PAD floats past its last point (the
+ * SIMD lanes beyond a leaf's range are loaded and masked off). */
+#define GEOMETRY_POINTS_PAD 16
+typedef struct geometry_points {
+    uint32_t count;
+    const float *x, *y, *z; /* centres */
+    const float *radius;    /* per point, or NULL: every point has radius_all */
+    float radius_all;       /* > 0 */
+    const float *crop_value; /* the value each point is cropped by, or NULL: no cropping */
+    const geometry_crop *crop; /* the range (with crop_value) */
+} geometry_points;
+
+struct wbvh;
 
 /* The surface at a hit, in the geometry's own (object) space; render.c
  * places it in the world by the instance's transform. */
@@ -81,6 +108,15 @@ typedef struct geometry_ops {
      * slow (a pass over the data); the scene caches it
      * (scene_geometry_closed). */
     bool (*closed)(const void *data);
+    /* GEOMETRY_LEAF_POINTS only. The arrays the leaves read (valid as long
+     * as the data, in the order of the kind's tree). */
+    void (*points)(const void *data, geometry_points *out);
+    /* GEOMETRY_LEAF_POINTS only: the kind's wide BVH, built on the first
+     * call over `threads` threads (which may reorder the kind's points so
+     * that each leaf is a range of them) and kept with the data: every
+     * accel borrows it. Safe to call from several threads at once; NULL
+     * with err set on failure. */
+    const struct wbvh *(*tree)(void *data, int threads, tess_error *err);
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */

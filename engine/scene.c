@@ -174,7 +174,8 @@ static bool reserve_one(void **array, uint32_t count, uint32_t *capacity, size_t
 int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char *name)
 {
     bool ops_ok = ops && ops->prim_count && ops->prim_bounds && ops->intersect && ops->describe &&
-                  (ops->leaf == GEOMETRY_LEAF_PRIMS || ops->fill_lane);
+                  (ops->leaf == GEOMETRY_LEAF_PRIMS || ops->fill_lane ||
+                   (ops->leaf == GEOMETRY_LEAF_POINTS && ops->points && ops->tree));
     if (!ops_ok || !reserve_one((void **)&s->geometries, s->geometry_count, &s->geometry_capacity,
                                 sizeof *s->geometries)) {
         if (ops && ops->destroy)

@@ -101,10 +101,11 @@ static bool run_collapse(collapse *c, tess_error *err)
     size_t max_nodes = binary->node_count; /* one wide node per binary inner node at most (+1 for a leaf root) */
     size_t max_blocks = binary->prim_count;
     out->nodes = memory_alloc_large(max_nodes * sizeof(wbvh_node));
-    out->blocks = memory_alloc_large(max_blocks * c->block_bytes);
+    if (c->block_bytes > 0)
+        out->blocks = memory_alloc_large(max_blocks * c->block_bytes);
     /* work list: (binary node, wide node) pairs still to fill; at most one per wide node */
     uint32_t *todo_binary = malloc(max_nodes * sizeof(uint32_t)), *todo_wide = malloc(max_nodes * sizeof(uint32_t));
-    if (!out->nodes || !out->blocks || !todo_binary || !todo_wide) {
+    if (!out->nodes || (c->block_bytes > 0 && !out->blocks) || !todo_binary || !todo_wide) {
         free(todo_binary);
         free(todo_wide);
         return tess_error_set(err, "wbvh: out of memory for %zu nodes", max_nodes);
@@ -136,7 +137,10 @@ static bool run_collapse(collapse *c, tess_error *err)
             node->hi_x[i] = k->bounds.hi.x, node->hi_y[i] = k->bounds.hi.y, node->hi_z[i] = k->bounds.hi.z;
             node->child_mask |= (uint8_t)(1u << i);
             node->slot_mask |= (uint8_t)(1u << i);
-            if (k->count > 0) {
+            if (k->count > 0 && out->kind == WBVH_POINTS) { /* a range of the kind's points */
+                node->child[i] = k->first;
+                node->leaf_blocks[i] = (uint8_t)k->count;
+            } else if (k->count > 0) {
                 node->child[i] = emit_leaf(c, k, &node->leaf_blocks[i]);
             } else {
                 node->child[i] = out->node_count++;
@@ -170,6 +174,7 @@ static size_t block_bytes_of(wbvh_kind kind)
     case WBVH_SPHERES: return sizeof(wbvh_sphere_block);
     case WBVH_PRIMS:
     case WBVH_INSTANCES: return sizeof(wbvh_prim_block);
+    case WBVH_POINTS: return 0;
     }
     return sizeof(wbvh_prim_block);
 }
@@ -185,6 +190,54 @@ bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const voi
         return false;
     out->ops = ops;
     out->data = data;
+    return true;
+}
+
+/* Crop ranges of every child slot, children before parents (a child node's
+ * index is above its parent's: the collapse numbers them as it goes down). */
+static bool crop_ranges(wbvh *w, tess_error *err)
+{
+    size_t slots = (size_t)w->node_count * WBVH_WIDTH;
+    w->crop_lo = malloc((slots + 1) * sizeof *w->crop_lo);
+    w->crop_hi = malloc((slots + 1) * sizeof *w->crop_hi);
+    if (!w->crop_lo || !w->crop_hi)
+        return tess_error_set(err, "wbvh: out of memory for the crop ranges of %u nodes", w->node_count);
+    const float *value = w->points.crop_value;
+    for (uint32_t k = w->node_count; k-- > 0;) {
+        const wbvh_node *n = &w->nodes[k];
+        for (int i = 0; i < WBVH_WIDTH; i++) {
+            float lo = INFINITY, hi = -INFINITY;
+            if (n->slot_mask >> i & 1u) {
+                if (n->leaf_blocks[i]) {
+                    for (uint32_t p = n->child[i]; p < n->child[i] + n->leaf_blocks[i]; p++)
+                        lo = value[p] < lo ? value[p] : lo, hi = value[p] > hi ? value[p] : hi;
+                } else {
+                    const size_t c = (size_t)n->child[i] * WBVH_WIDTH;
+                    for (int j = 0; j < WBVH_WIDTH; j++)
+                        lo = w->crop_lo[c + j] < lo ? w->crop_lo[c + j] : lo,
+                        hi = w->crop_hi[c + j] > hi ? w->crop_hi[c + j] : hi;
+                }
+            }
+            w->crop_lo[(size_t)k * WBVH_WIDTH + i] = lo;
+            w->crop_hi[(size_t)k * WBVH_WIDTH + i] = hi;
+        }
+    }
+    return true;
+}
+
+bool wbvh_build_points(wbvh *out, const bvh *binary, const geometry_points *points, tess_error *err)
+{
+    for (uint32_t i = 0; i < binary->node_count; i++)
+        if (binary->nodes[i].count > WBVH_POINTS_LEAF_MAX)
+            return tess_error_set(err, "wbvh: a leaf of %u points (at most %d)", binary->nodes[i].count,
+                                  WBVH_POINTS_LEAF_MAX);
+    if (!build(out, WBVH_POINTS, binary, 0, NULL, NULL, NULL, err))
+        return false;
+    out->points = *points;
+    if (points->crop_value && !crop_ranges(out, err)) {
+        wbvh_finish(out);
+        return false;
+    }
     return true;
 }
 
@@ -328,6 +381,12 @@ void wbvh_finish(wbvh *w)
 {
     if (!w)
         return;
+    if (w->borrowed) {
+        memset(w, 0, sizeof *w);
+        return;
+    }
+    free(w->crop_lo);
+    free(w->crop_hi);
     free(w->nodes);
     free(w->blocks);
     free(w->parent);
@@ -342,5 +401,7 @@ size_t wbvh_bytes(const wbvh *w)
     if (w->stale) /* the instance level's refit indices */
         bytes += (size_t)w->node_count * (sizeof *w->parent + sizeof *w->stale) +
                  (size_t)w->instance_count * sizeof *w->leaf_node;
+    if (w->crop_lo)
+        bytes += (size_t)w->node_count * WBVH_WIDTH * 2 * sizeof(float);
     return bytes;
 }

@@ -25,7 +25,8 @@
 
 #define WBVH_WIDTH 8
 #define WBVH_BLOCK 4
-/* Most blocks one leaf can hold: BVH_LEAF_MAX primitives in blocks of 4. */
+/* Most blocks one leaf can hold: BVH_LEAF_MAX primitives in blocks of 4
+ * (triangle leaves hold at most BVH_LEAF_DEFAULT, points leaves no blocks). */
 #define WBVH_MAX_LEAF_BLOCKS ((BVH_LEAF_MAX + WBVH_BLOCK - 1) / WBVH_BLOCK)
 /* Traversal stack entries: at most 7 siblings wait per level of the binary depth bound. */
 #define WBVH_STACK_SIZE (BVH_MAX_DEPTH * (WBVH_WIDTH - 1) + 1)
@@ -65,7 +66,19 @@ typedef struct wbvh_prim_block {
     uint32_t prim_id[WBVH_BLOCK];
 } wbvh_prim_block;
 
-typedef enum wbvh_kind { WBVH_TRIANGLES, WBVH_SPHERES, WBVH_PRIMS, WBVH_INSTANCES } wbvh_kind;
+typedef enum wbvh_kind {
+    WBVH_TRIANGLES,
+    WBVH_SPHERES,
+    WBVH_PRIMS,
+    WBVH_INSTANCES,
+    /* GEOMETRY_LEAF_POINTS: no blocks; a leaf child's `child` is its first
+     * point and `leaf_blocks` its point count (1..WBVH_POINTS_LEAF_MAX),
+     * read in place through `points` */
+    WBVH_POINTS,
+} wbvh_kind;
+
+/* Most points in one leaf of a WBVH_POINTS tree (one AVX-512 test). */
+#define WBVH_POINTS_LEAF_MAX 16
 
 struct wbvh;
 
@@ -100,6 +113,15 @@ typedef struct wbvh {
     uint32_t *leaf_node;
     uint8_t *stale;
     uint32_t instance_count;
+    /* WBVH_POINTS: the kind's arrays, and when it crops (points.crop_value),
+     * the range of crop values under each child slot (node_count * 8 each;
+     * an empty slot has lo = +inf, hi = -inf), so a crop skips whole
+     * subtrees. */
+    geometry_points points;
+    float *crop_lo, *crop_hi;
+    /* a copy of a tree its kind keeps (geometry_ops.tree): wbvh_finish
+     * leaves the arrays to the kind */
+    bool borrowed;
 } wbvh;
 
 
@@ -112,6 +134,11 @@ typedef struct wbvh {
  * primitives that can never be hit may be left out. */
 bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const void *data, const uint32_t *prim_ids,
                 tess_error *err);
+/* A GEOMETRY_LEAF_POINTS tree: the binary BVH's primitive i must be point
+ * i (the kind has put its points in the binary tree's prim_order), so every
+ * leaf is the range [first, first + count) of `points`; leaves hold at most
+ * WBVH_POINTS_LEAF_MAX points. */
+bool wbvh_build_points(wbvh *out, const bvh *binary, const geometry_points *points, tess_error *err);
 /* The instance level: the binary BVH's primitive i is instance i. */
 bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *instances, const atomic_uchar *hidden,
                           tess_error *err);

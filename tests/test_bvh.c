@@ -336,7 +336,7 @@ Test(bvh, nine_primitives_split_above_the_leaf_limit)
 {
     aabb *boxes = same_centroid_boxes(9, 7); /* even without an SAH split */
     bvh b = check_all_thread_counts(boxes, 9);
-    cr_assert_eq(b.nodes[0].count, 0, "9 > BVH_LEAF_MAX primitives in the root leaf");
+    cr_assert_eq(b.nodes[0].count, 0, "9 > BVH_LEAF_DEFAULT primitives in the root leaf");
     bvh_finish(&b);
     free(boxes);
     boxes = random_boxes(9, 8);

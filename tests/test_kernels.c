@@ -10,6 +10,7 @@
 #include "engine/accel.h"
 #include "engine/intersect.h"
 #include "engine/kernels.h"
+#include "engine/particles/particle_kind.h"
 #include "engine/scene.h"
 
 /* xorshift64*: a fixed, portable stream so failures reproduce */
@@ -149,6 +150,50 @@ Test(kernels, every_isa_matches_brute_force_through_transformed_instances, .time
 {
     rng_state = 0x2545F4914F6CDD1Dull;
     matches_brute_force(make_instanced_scene());
+}
+
+/* make_scene plus a particle set (GEOMETRY_LEAF_POINTS: read in place, up
+ * to 16 per leaf) with a radius per particle from an attribute and a crop
+ * by another, placed as it is and again by a rotation and scale. */
+static scene *make_particle_scene(bool crop_active)
+{
+    scene *s = make_scene();
+    particle_set *set = particle_set_create();
+    cr_assert(set);
+    int r_attr = particle_set_add_attribute(set, "r"), e_attr = particle_set_add_attribute(set, "energy");
+    cr_assert(r_attr == 0 && e_attr == 1);
+    for (int i = 0; i < 4000; i++) {
+        float values[2] = {rng_range(0.02f, 0.6f), rng_range(-1.f, 1.f)};
+        /* clusters and a few exact duplicates: ties in t between particles */
+        vec3 c = v3(rng_range(-10.f, 10.f), rng_range(-10.f, 10.f), rng_range(-10.f, 10.f));
+        cr_assert(particle_set_add(set, c.x, c.y, c.z, values));
+        if (i % 97 == 0)
+            cr_assert(particle_set_add(set, c.x, c.y, c.z, values));
+    }
+    tess_error err = {{0}};
+    cr_assert(particle_set_finish(set, "test", &err), "%s", err.msg);
+    particle_kind_options opt = {.radius_attribute = "r", .crop_attribute = "energy",
+                                 .crop = {crop_active, -0.3f, 0.5f}};
+    particle_kind *k = particle_kind_create(set, &opt, "test", &err);
+    cr_assert(k, "%s", err.msg);
+    int g = scene_add_geometry(s, &particle_kind_ops, k, "particles");
+    cr_assert_geq(g, 0);
+    cr_assert_geq(scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART), 0);
+    affine3 m = {{0.f, -1.5f, 0.f, 3.f, 1.5f, 0.f, 0.f, -2.f, 0.f, 0.f, 0.7f, 1.f}};
+    cr_assert_geq(scene_add_instance(s, (uint32_t)g, &m, SCENE_NO_PART), 0);
+    return s;
+}
+
+Test(kernels, particles_match_brute_force_in_every_isa, .timeout = 120)
+{
+    rng_state = 0x51ED2701u;
+    matches_brute_force(make_particle_scene(false));
+}
+
+Test(kernels, cropped_particles_match_brute_force_in_every_isa, .timeout = 120)
+{
+    rng_state = 0x51ED2702u;
+    matches_brute_force(make_particle_scene(true));
 }
 
 /* Single rays and packets of every width, every ISA, against brute_force;

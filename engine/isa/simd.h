@@ -97,6 +97,14 @@ static inline vm vm_from_bits(unsigned bits) { return (vm)bits; }
 static inline vr vr_select(vm m, vr a, vr b) { return _mm512_mask_blend_ps(m, b, a); }
 static inline vr vr_abs(vr a) { return _mm512_andnot_ps(_mm512_set1_ps(-0.f), a); }
 static inline vr vr_load_u32_as_ps(const uint32_t *p) { return _mm512_castsi512_ps(_mm512_load_si512(p)); }
+static inline vr vr_loadu(const float *p) { return _mm512_loadu_ps(p); }
+static inline vr vr_neg(vr a) { return _mm512_xor_ps(a, _mm512_set1_ps(-0.f)); }
+/* |mag| with the sign of sign (copysignf lane by lane) */
+static inline vr vr_copysign(vr mag, vr sign)
+{
+    const vr s = _mm512_set1_ps(-0.f);
+    return _mm512_or_ps(_mm512_andnot_ps(s, mag), _mm512_and_ps(s, sign));
+}
 static inline void vr_store_ps_as_u32(uint32_t *p, vr a) { _mm512_store_si512(p, _mm512_castps_si512(a)); }
 #elif defined(TESS_ISA_AVX2)
 typedef __m256 vr;
@@ -128,6 +136,13 @@ static inline vm vm_from_bits(unsigned bits)
 static inline vr vr_select(vm m, vr a, vr b) { return _mm256_blendv_ps(b, a, m); }
 static inline vr vr_abs(vr a) { return _mm256_andnot_ps(_mm256_set1_ps(-0.f), a); }
 static inline vr vr_load_u32_as_ps(const uint32_t *p) { return _mm256_load_ps((const float *)(const void *)p); }
+static inline vr vr_loadu(const float *p) { return _mm256_loadu_ps(p); }
+static inline vr vr_neg(vr a) { return _mm256_xor_ps(a, _mm256_set1_ps(-0.f)); }
+static inline vr vr_copysign(vr mag, vr sign)
+{
+    const vr s = _mm256_set1_ps(-0.f);
+    return _mm256_or_ps(_mm256_andnot_ps(s, mag), _mm256_and_ps(s, sign));
+}
 static inline void vr_store_ps_as_u32(uint32_t *p, vr a) { _mm256_store_ps((float *)(void *)p, a); }
 #else
 typedef __m128 vr;
@@ -159,6 +174,13 @@ static inline vm vm_from_bits(unsigned bits)
 static inline vr vr_select(vm m, vr a, vr b) { return _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)); }
 static inline vr vr_abs(vr a) { return _mm_andnot_ps(_mm_set1_ps(-0.f), a); }
 static inline vr vr_load_u32_as_ps(const uint32_t *p) { return _mm_load_ps((const float *)(const void *)p); }
+static inline vr vr_loadu(const float *p) { return _mm_loadu_ps(p); }
+static inline vr vr_neg(vr a) { return _mm_xor_ps(a, _mm_set1_ps(-0.f)); }
+static inline vr vr_copysign(vr mag, vr sign)
+{
+    const vr s = _mm_set1_ps(-0.f);
+    return _mm_or_ps(_mm_andnot_ps(s, mag), _mm_and_ps(s, sign));
+}
 static inline void vr_store_ps_as_u32(uint32_t *p, vr a) { _mm_store_ps((float *)(void *)p, a); }
 #endif
 

@@ -53,9 +53,10 @@
 #define PACKET_SINGLE_RAY_MAX_ANY 4
 #define LEAF_SINGLE_RAY_MAX_ANY (3 * RAY_LANES / 4)
 
-/* Stack references: inner node index, or leaf = LEAF bit | first block << 3 | blocks. */
+/* Stack references: inner node index, or leaf = LEAF bit | first << 5 | count, where
+ * first and count are blocks, or for WBVH_POINTS points (count <= 16). */
 #define REF_LEAF 0x80000000u
-#define REF_BLOCKS_BITS 3u
+#define REF_BLOCKS_BITS 5u
 
 static inline uint32_t child_ref(const wbvh_node *n, int i)
 {
@@ -293,6 +294,105 @@ static bool prim_block1(const wbvh *w, const wbvh_prim_block *b, uint32_t geom_i
     return found;
 }
 
+/* The children of a WBVH_POINTS node that hold a point inside the crop
+ * range (all of them without a crop). */
+static inline unsigned crop_children(const wbvh *w, uint32_t node)
+{
+    const geometry_crop *crop = w->points.crop;
+    if (!crop->active)
+        return 0xFFu;
+    const float *lo = w->crop_lo + (size_t)node * WBVH_WIDTH, *hi = w->crop_hi + (size_t)node * WBVH_WIDTH;
+    unsigned bits = 0;
+    for (int i = 0; i < WBVH_WIDTH; i++)
+        bits |= (unsigned)(lo[i] <= crop->hi && hi[i] >= crop->lo) << i;
+    return bits;
+}
+
+/* Whether point p is seen under the crop. */
+static inline bool point_seen(const geometry_points *pt, uint32_t p)
+{
+    return !pt->crop_value || !pt->crop->active || (pt->crop->lo <= pt->crop_value[p] && pt->crop_value[p] <= pt->crop->hi);
+}
+
+/* One ray against points [first, first + count) under a next-hit bound: one
+ * at a time, each from the bound's t when its ids do not come after it. */
+static bool points_leaf1_after(const wbvh *w, uint32_t first, uint32_t count, uint32_t geom_id, ray *r,
+                               const ray_derived *d, hit *h)
+{
+    const geometry_points *pt = &w->points;
+    bool found = false;
+    for (uint32_t p = first; p < first + count; p++) {
+        if (!point_seen(pt, p))
+            continue;
+        float t;
+        ray scratch;
+        const ray *q = prim_query_ray(r, d, geom_id, p, &scratch);
+        float radius = pt->radius ? pt->radius[p] : pt->radius_all;
+        if (q->t_near < r->t_far && intersect_sphere(q, v3(pt->x[p], pt->y[p], pt->z[p]), radius, &t))
+            found |= offer1(r, d, h, t, 0.f, 0.f, geom_id, p);
+    }
+    return found;
+}
+
+/* One ray against the points [first, first + count) of a WBVH_POINTS tree,
+ * RAY_LANES spheres per instruction, read in place (the arrays are padded:
+ * lanes past the range load defined values and are masked off). The
+ * arithmetic is intersect_sphere's, operation for operation and in the same
+ * order, so hits equal the scalar test's bit for bit. */
+static bool points_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t geom_id, ray *r,
+                         const ray_derived *d, hit *h, bool any)
+{
+    if (d->after_t != -INFINITY && !any)
+        return points_leaf1_after(w, first, count, geom_id, r, d, h);
+    const geometry_points *pt = &w->points;
+    const float a_s = v3_dot(r->dir, r->dir);
+    const vr a = vr_set1(a_s), dx = vr_set1(r->dir.x), dy = vr_set1(r->dir.y), dz = vr_set1(r->dir.z);
+    const vr ox = vr_set1(r->org.x), oy = vr_set1(r->org.y), oz = vr_set1(r->org.z), zero = vr_set1(0.f);
+    const bool cropping = pt->crop_value && pt->crop->active;
+    bool found = false;
+    for (uint32_t base = first; base < first + count; base += RAY_LANES) {
+        const uint32_t n = first + count - base < RAY_LANES ? first + count - base : RAY_LANES;
+        unsigned valid = n >= 32 ? ~0u : (1u << n) - 1u;
+        if (cropping) {
+            const vr v = vr_loadu(pt->crop_value + base);
+            valid &= vm_bits(vm_and(vr_le(vr_set1(pt->crop->lo), v), vr_le(v, vr_set1(pt->crop->hi))));
+            if (!valid)
+                continue;
+        }
+        const vr rad = pt->radius ? vr_loadu(pt->radius + base) : vr_set1(pt->radius_all);
+        const vr fx = vr_sub(ox, vr_loadu(pt->x + base)), fy = vr_sub(oy, vr_loadu(pt->y + base)),
+                 fz = vr_sub(oz, vr_loadu(pt->z + base));
+        const vr b_half = vr_add(vr_add(vr_mul(fx, dx), vr_mul(fy, dy)), vr_mul(fz, dz));
+        const vr s = vr_div(b_half, a);
+        const vr lx = vr_sub(fx, vr_mul(dx, s)), ly = vr_sub(fy, vr_mul(dy, s)), lz = vr_sub(fz, vr_mul(dz, s));
+        const vr rr = vr_mul(rad, rad);
+        const vr disc = vr_mul(a, vr_sub(rr, vr_add(vr_add(vr_mul(lx, lx), vr_mul(ly, ly)), vr_mul(lz, lz))));
+        valid &= ~vm_bits(vr_lt(disc, zero));
+        if (!valid)
+            continue;
+        const vr c = vr_sub(vr_add(vr_add(vr_mul(fx, fx), vr_mul(fy, fy)), vr_mul(fz, fz)), rr);
+        const vr q = vr_neg(vr_add(b_half, vr_copysign(vr_sqrt(disc), b_half)));
+        const vm q_zero = vr_eq(q, zero);
+        const vr t0 = vr_select(q_zero, zero, vr_div(c, q)), t1 = vr_select(q_zero, zero, vr_div(q, a));
+        const vm swap = vr_gt(t0, t1);
+        const vr lo = vr_select(swap, t1, t0), hi = vr_select(swap, t0, t1);
+        const vr tn = vr_set1(r->t_near), tf = vr_set1(r->t_far);
+        const vm in_lo = vm_and(vr_gt(lo, tn), vr_le(lo, tf)), in_hi = vm_and(vr_gt(hi, tn), vr_le(hi, tf));
+        unsigned hits = valid & vm_bits(vm_or(in_lo, in_hi));
+        if (!hits)
+            continue;
+        if (any)
+            return true;
+        alignas(64) float t[RAY_LANES];
+        vr_store(t, vr_select(in_lo, lo, hi));
+        for (; hits; hits &= hits - 1u) {
+            int lane = __builtin_ctz(hits);
+            found |= offer1(r, d, h, t[lane], 0.f, 0.f, geom_id, base + (uint32_t)lane);
+        }
+    }
+    return found;
+}
+
 static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d_in, hit *h, bool any);
 
 static inline bool instance_hidden(const wbvh *w, uint32_t id)
@@ -335,6 +435,8 @@ static bool instance_block1(const wbvh *w, const wbvh_prim_block *b, ray *r, con
 static bool leaf1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
 {
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    if (w->kind == WBVH_POINTS)
+        return points_leaf1(w, first, count, geom_id, r, d, h, any);
     bool found = false;
     for (uint32_t k = first; k < first + count; k++) {
         bool hit_here;
@@ -379,6 +481,8 @@ static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, con
             const wbvh_node *n = &w->nodes[ref];
             alignas(32) float dist[WBVH_WIDTH];
             unsigned bits = node_hit1(n, r, d, dist);
+            if (w->crop_lo)
+                bits &= crop_children(w, ref);
             if (bits) {
                 int i = __builtin_ctz(bits);
                 bits &= bits - 1u;
@@ -1015,6 +1119,8 @@ static uint64_t ISA_SUFFIX(intersect_packet)(const wbvh *w, uint32_t geom_id, ra
                     for (int i = 0; i < WBVH_WIDTH; i++)
                         dist[i] = 0.f;
                 }
+                if (w->crop_lo)
+                    children &= crop_children(w, ref);
                 if (children) {
                     uint64_t child_rays[WBVH_WIDTH];
                     node_rays(&c, n, children, rays, child_rays);

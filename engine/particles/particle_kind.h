@@ -1,0 +1,54 @@
+/* particle_kind.h - particles as a geometry kind (geometry.h): a particle
+ * set drawn as spheres, read in place by the kernels (GEOMETRY_LEAF_POINTS),
+ * with a radius, a crop by an attribute's value and its own wide BVH.
+ *
+ * MEMORY. The kind keeps the set's arrays (12 bytes a particle, plus its
+ * attributes) and one wide BVH whose leaves are ranges of them: no centre
+ * is copied. Building the tree reorders the set (particles.h ORDER), once.
+ *
+ * CROP. With a crop attribute, only particles whose value lies in the crop
+ * range are seen (by every ray: primary, shadow, AO). The tree keeps each
+ * child's range of that attribute, so a crop skips whole subtrees; the range
+ * changes (particle_kind_set_crop) without a rebuild, in a serial section
+ * (nothing traces meanwhile), like hiding a part.
+ *
+ * Registration: scene_add_geometry(s, &particle_kind_ops, kind, name). */
+#ifndef TESSERA_PARTICLE_KIND_H
+#define TESSERA_PARTICLE_KIND_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "engine/err.h"
+#include "engine/geometry.h"
+#include "particles.h"
+
+typedef struct particle_kind particle_kind;
+
+typedef struct particle_kind_options {
+    float radius;                  /* every particle's radius (> 0), when radius_attribute is NULL */
+    const char *radius_attribute;  /* per-particle radius from this attribute (values > 0), or NULL */
+    const char *crop_attribute;    /* the attribute a crop range applies to, or NULL: no crop */
+    geometry_crop crop;            /* the range at start (active or not) */
+    uint32_t material_id;          /* scene material of every particle */
+} particle_kind_options;
+
+/* A kind over `set` (taken: owned from now on, also on failure). `source`
+ * names the set in messages ("particles[0]: radius attribute 'r' ..."). */
+particle_kind *particle_kind_create(particle_set *set, const particle_kind_options *opt, const char *source,
+                                    tess_error *err);
+void particle_kind_destroy(particle_kind *k); /* NULL is fine; what ops.destroy calls */
+
+const particle_set *particle_kind_set(const particle_kind *k);
+/* The crop now (the attribute's min and max bound any range worth giving). */
+geometry_crop particle_kind_crop(const particle_kind *k);
+/* The crop attribute's index in the set, or -1 without one. */
+int particle_kind_crop_attribute(const particle_kind *k);
+/* Change the crop range: only while nothing traces (a serial section). A
+ * kind without a crop attribute ignores it. */
+void particle_kind_set_crop(particle_kind *k, geometry_crop crop);
+
+/* The kind's ops; data is a particle_kind. */
+extern const geometry_ops particle_kind_ops;
+
+#endif
