@@ -58,7 +58,6 @@
  * started block, not per primitive: leaves of 1..4 cost the same. 0 gives the
  * classic per-primitive cost (and, with costs 1 : 1, the original builder's tree). */
 #define BVH_SAH_BLOCK_LOG2 2
-#define BVH_SAH_BLOCK (1u << BVH_SAH_BLOCK_LOG2)
 /* Beyond this depth splits are by count (halves), so depth stays below BVH_MAX_DEPTH. */
 #define BVH_SAH_DEPTH_LIMIT 60
 /* Refs per block of the canonical in-place partition: 128 KiB, fits in L2. Part of
@@ -327,7 +326,11 @@ static void bin_refs(const prim_ref *refs, size_t begin, size_t end, const bin_m
 
 /* --- split choice --- */
 
-static inline float leaf_blocks(uint32_t n) { return (float)((n + BVH_SAH_BLOCK - 1) >> BVH_SAH_BLOCK_LOG2); }
+static inline float leaf_blocks_of(uint32_t n, unsigned block_log2)
+{
+    return (float)((n + (1u << block_log2) - 1) >> block_log2);
+}
+static inline float leaf_blocks(uint32_t n) { return leaf_blocks_of(n, BVH_SAH_BLOCK_LOG2); }
 
 typedef struct split {
     int axis;            /* -1: no split with primitives on both sides */
@@ -341,7 +344,7 @@ typedef struct split {
  * the three axes sweep side by side in lanes 0..2. An axis without extent has all
  * its refs in bin 0 and so no candidate. Ties go to the lowest axis, then the
  * lowest bin. */
-static split find_split(const bin_set *s, float parent_half_area)
+static split find_split(const bin_set *s, float parent_half_area, unsigned block_log2)
 {
     /* sweep from the right: area and blocks of bins (b, BINS) per axis */
     v4 right_area[BVH_BINS], right_blocks[BVH_BINS];
@@ -352,7 +355,7 @@ static split find_split(const bin_set *s, float parent_half_area)
             acc[axis] = box4_merge(acc[axis], s->box[b][axis]);
         n = v4u_add(n, v4u_load(s->count[b]));
         right_area[b - 1] = box4_half_areas3(acc);
-        right_blocks[b - 1] = v4u_blocks(n, BVH_SAH_BLOCK_LOG2);
+        right_blocks[b - 1] = v4u_blocks(n, block_log2);
     }
     v4 zero = v4_splat(0.f), traversal = v4_splat(BVH_COST_TRAVERSAL), intersect = v4_splat(BVH_COST_INTERSECT);
     v4 parent = v4_splat(parent_half_area);
@@ -363,7 +366,7 @@ static split find_split(const bin_set *s, float parent_half_area)
         for (int axis = 0; axis < 3; axis++)
             acc[axis] = box4_merge(acc[axis], s->box[b][axis]);
         n = v4u_add(n, v4u_load(s->count[b]));
-        v4 left_blocks = v4u_blocks(n, BVH_SAH_BLOCK_LOG2);
+        v4 left_blocks = v4u_blocks(n, block_log2);
         /* traversal + intersect * (A_l * blocks_l + A_r * blocks_r) / A_parent */
         v4 sides = v4_add(v4_mul(box4_half_areas3(acc), left_blocks), v4_mul(right_area[b], right_blocks[b]));
         v4 cost = v4_add(traversal, v4_div(v4_mul(intersect, sides), parent));
@@ -439,6 +442,7 @@ typedef struct builder {
     uint32_t *task_next;    /* per task: first final index of its root's descendants */
     bvh_node *out_nodes;    /* the canonical layout being written */
     uint32_t leaf_max;      /* most primitives in a leaf, 1..BVH_LEAF_MAX */
+    unsigned block_log2;    /* leaves are tested 2^this primitives at a time (the SAH's leaf cost) */
 } builder;
 
 static uint32_t alloc_pair(builder *B, worker_state *w)
@@ -733,13 +737,13 @@ static bool split_node(builder *B, parallel_pool *pool, worker_state *w, const b
     box_pair centroids = box_pair_empty();
     /* Up to one block, a leaf costs BVH_COST_INTERSECT and any split at least
      * BVH_COST_TRAVERSAL: when that is no less, the leaf wins without binning. */
-    bool leaf_wins = n <= BVH_SAH_BLOCK && n <= B->leaf_max && BVH_COST_TRAVERSAL >= BVH_COST_INTERSECT;
+    bool leaf_wins = n <= (1u << B->block_log2) && n <= B->leaf_max && BVH_COST_TRAVERSAL >= BVH_COST_INTERSECT;
     if (n > 1 && !leaf_wins && it->depth < BVH_SAH_DEPTH_LIMIT) {
         bin_map map = bin_map_make(it->centroids);
         bin_set local_bins;
         bin_range(B, pool, it, &map, &local_bins);
-        split s = find_split(&local_bins, box4_half_area(it->bounds));
-        float leaf_cost = BVH_COST_INTERSECT * leaf_blocks(n);
+        split s = find_split(&local_bins, box4_half_area(it->bounds), B->block_log2);
+        float leaf_cost = BVH_COST_INTERSECT * leaf_blocks_of(n, B->block_log2);
         if (s.axis >= 0 && (n > B->leaf_max || s.cost < leaf_cost)) {
             side_rule rule = {map, s.axis, s.bin};
             uint32_t left_count = partition_range(B, pool, it->begin, it->end, &rule, w->scratch, &centroids);
@@ -1024,15 +1028,24 @@ bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, t
 bool bvh_build_leaves(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,
                       tess_error *err)
 {
+    return bvh_build_blocks(out, prim_bounds, count, threads, leaf_max, BVH_SAH_BLOCK_LOG2, err);
+}
+
+bool bvh_build_blocks(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,
+                      unsigned block_log2, tess_error *err)
+{
     memset(out, 0, sizeof *out);
     if (leaf_max < 1 || leaf_max > BVH_LEAF_MAX)
         return tess_error_set(err, "bvh: leaves of %u primitives (1..%d)", leaf_max, BVH_LEAF_MAX);
+    if (block_log2 > 4)
+        return tess_error_set(err, "bvh: leaf tests of 2^%u primitives (at most 2^4)", block_log2);
     if (count == 0)
         return true;
     if (threads < 1 || count <= BVH_PARALLEL_NODE_MIN)
         threads = 1;
     builder B = {0};
     B.leaf_max = leaf_max;
+    B.block_log2 = block_log2;
     B.threads = threads > 1 ? parallel_pool_create(threads) : NULL; /* NULL: serial build */
     B.thread_count = parallel_pool_threads(B.threads);
     /* slots: the root, at most 2 * count - 2 below it, and each thread's unused block */

@@ -53,6 +53,11 @@ bool bvh_build(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, t
  * 1 where a primitive is costly to enter (an instance: a whole BVH below). */
 bool bvh_build_leaves(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,
                       tess_error *err);
+/* The same with leaves whose test takes 2^block_log2 (0..4) primitives at
+ * once, so the SAH prices a leaf by its started blocks (bvh_build: 2, four
+ * triangles; particles tested 16 at a time: 4). */
+bool bvh_build_blocks(bvh *out, const aabb *prim_bounds, uint32_t count, int threads, uint32_t leaf_max,
+                      unsigned block_log2, tess_error *err);
 void bvh_finish(bvh *b); /* frees arrays; the struct itself is the caller's */
 
 size_t bvh_bytes(const bvh *b);

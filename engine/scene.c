@@ -11,6 +11,7 @@
 
 #include "parallel.h"
 #include "part_tree.h"
+#include "particles/particle_kind.h"
 
 /* First capacity of a growing array; it doubles from there. Small because most
  * scenes hold a handful of materials, lights and meshes. */
@@ -488,12 +489,19 @@ static const char *path_basename(const char *path)
     return slash ? slash + 1 : path;
 }
 
+static scene *scene_load_particle_file(const char *path, tess_error *err);
+
 /* A scene of one mesh file in file coordinates, the default material and light. */
 static scene *scene_load_mesh_file(const char *path, tess_error *err)
 {
     mesh *m = mesh_load(path, err);
     if (!m)
         return NULL;
+    if (m->triangle_count == 0 && m->vertex_count > 0 && has_extension(path, ".ply")) {
+        /* vertices only: a point set, drawn as particles (as the Embree peer does) */
+        mesh_destroy(m);
+        return scene_load_particle_file(path, err);
+    }
     if (m->triangle_count == 0) {
         mesh_destroy(m);
         tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
@@ -509,6 +517,40 @@ static scene *scene_load_mesh_file(const char *path, tess_error *err)
             mesh_destroy(m); /* scene_add_mesh was never reached to take it */
         scene_destroy(s);
         tess_error_set(err, "%s: out of memory building the scene", path);
+        return NULL;
+    }
+    return s;
+}
+
+/* A scene of one particle file (a LAMMPS dump, a PLY of vertices only) as
+ * spheres of the default radius, the default material and light. */
+static scene *scene_load_particle_file(const char *path, tess_error *err)
+{
+    particle_set *set = particles_load(path, err);
+    if (!set)
+        return NULL;
+    if (set->count == 0) {
+        particle_set_destroy(set);
+        tess_error_set(err, "%s: scene has no geometry (no particles)", path);
+        return NULL;
+    }
+    scene *s = scene_create();
+    material def_mat = material_default();
+    light def_light = light_default_directional();
+    int mat_id = s ? scene_add_material(s, &def_mat) : -1;
+    if (mat_id < 0 || scene_add_light(s, &def_light) < 0) {
+        particle_set_destroy(set);
+        scene_destroy(s);
+        tess_error_set(err, "%s: out of memory building the scene", path);
+        return NULL;
+    }
+    particle_kind_options opt = {.radius = particle_kind_default_radius(set), .material_id = (uint32_t)mat_id};
+    particle_kind *k = particle_kind_create(set, &opt, path, err);
+    int g = k ? scene_add_geometry(s, &particle_kind_ops, k, path_basename(path)) : -1;
+    if (g < 0 || scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART) < 0) {
+        scene_destroy(s);
+        if (k) /* else particle_kind_create said why */
+            tess_error_set(err, "%s: out of memory building the scene", path);
         return NULL;
     }
     return s;
@@ -542,5 +584,25 @@ scene *scene_load(const char *path, tess_error *err)
         return scene_load_json(path, err);
     if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
         return scene_load_assembly_file(path, err);
+    if (has_extension(path, ".dump") || has_extension(path, ".lammpstrj"))
+        return scene_load_particle_file(path, err);
     return scene_load_mesh_file(path, err);
+}
+
+size_t scene_point_count(const scene *s)
+{
+    size_t n = 0;
+    for (uint32_t g = 0; g < s->geometry_count; g++)
+        if (s->geometries[g].ops->leaf == GEOMETRY_LEAF_POINTS)
+            n += s->geometries[g].ops->prim_count(s->geometries[g].data);
+    return n;
+}
+
+size_t scene_point_bytes(const scene *s)
+{
+    size_t bytes = 0;
+    for (uint32_t g = 0; g < s->geometry_count; g++)
+        if (s->geometries[g].ops->leaf == GEOMETRY_LEAF_POINTS && s->geometries[g].ops->bytes)
+            bytes += s->geometries[g].ops->bytes(s->geometries[g].data);
+    return bytes;
 }

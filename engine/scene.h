@@ -218,6 +218,12 @@ size_t scene_triangle_count(const scene *s);
 /* Triangles over all instances (a mesh placed twice counts twice). */
 size_t scene_instanced_triangle_count(const scene *s);
 
+/* Points (primitives of GEOMETRY_LEAF_POINTS kinds: particles) over all
+ * geometries, each stored once, and the bytes of those kinds' own data
+ * (ops->bytes: positions and attributes; their trees are in accel_bytes). */
+size_t scene_point_count(const scene *s);
+size_t scene_point_bytes(const scene *s);
+
 /* Defaults used by loaders. */
 material material_default(void);          /* grey Lambert */
 light light_default_directional(void);    /* direction (0.4, 1, 0.3), white, casts shadows */

@@ -58,9 +58,15 @@
  *        "material": "NAME"}        default: the default material
  *   ]
  *
+ *   "particles": [                  docs/scene-format.md "Particles" (particles/particle_json.c)
+ *       {"file": "atoms.dump", "radius": 0.5 | "ATTRIBUTE", "crop": {...},
+ *        "material", "transform" | "matrix", "optional": as for meshes}
+ *   ]
+ *
  * The default material is material_default() (grey Lambert), or the file's own
  * material if "materials" names one "default". A scene must end up with at
- * least one triangle or sphere. Numbers must be finite (json-c would otherwise
+ * least one thing to hit (a triangle, sphere or particle). Numbers must be
+ * finite (json-c would otherwise
  * accept NaN and Infinity) and fit a float.
  *
  * Errors are one line: "PATH: cannot open: REASON", "PATH:LINE:COL: JSON syntax
@@ -85,6 +91,7 @@
 
 #include "json_read.h"
 #include "log.h"
+#include "particles/particle_json.h"
 
 /* Scene files describe; the geometry lives in mesh files. Refusing anything
  * larger keeps a mistaken path (a mesh, /dev/zero) from eating memory. */
@@ -563,10 +570,58 @@ static bool load_sphere(loader *L, json_object *v)
 }
 
 
+/* A "particles" entry: the file and where it goes here, the rest in
+ * particles/particle_json.c. */
+static bool load_particles(loader *L, json_object *v)
+{
+    jr_ctx *c = &L->ctx;
+    const char *file = NULL;
+    bool optional = false;
+    float xform[12];
+    char resolved[MESH_PATH_BYTES];
+    uint32_t material_id = 0;
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, particle_json_fields) ||
+        !jr_require_member(c, v, "file") || !jr_opt_string(c, v, "file", &file) ||
+        !jr_opt_bool(c, v, "optional", &optional) || !material_ref(L, v, &material_id) ||
+        !mesh_xform(c, v, xform) || !resolve_path(L, file, resolved, sizeof resolved))
+        return false;
+    struct stat st;
+    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
+        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+        return true;
+    }
+    tess_error why = {{0}};
+    particle_set *set = particles_load(resolved, &why);
+    if (!set)
+        return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the particles");
+    particle_kind *k = particle_json_kind(c, v, set, material_id);
+    if (!k)
+        return false;
+    int g = scene_add_geometry(L->s, &particle_kind_ops, k, base_name(resolved));
+    if (g < 0)
+        return out_of_memory(L);
+    affine3 placement;
+    memcpy(placement.m, xform, sizeof placement.m);
+    return scene_add_instance(L->s, (uint32_t)g, affine3_is_identity(&placement) ? NULL : &placement,
+                              SCENE_NO_PART) >= 0 ||
+           out_of_memory(L);
+}
+
+/* Whether anything in the scene can be hit. */
+static bool scene_has_geometry(const scene *s)
+{
+    for (uint32_t i = 0; i < s->instance_count; i++) {
+        const scene_geometry *g = scene_instance_geometry(s, i);
+        if (g->ops->prim_count(g->data) > 0)
+            return true;
+    }
+    return false;
+}
+
 static bool load_scene(loader *L, json_object *root)
 {
     static const char *const fields[] = {"camera", "background", "ambient",    "materials", "lights",
-                                         "meshes", "spheres",    "assemblies", NULL};
+                                         "meshes", "spheres",    "assemblies", "particles", NULL};
     jr_ctx *c = &L->ctx;
     if (!json_object_is_type(root, json_type_object))
         return tess_error_set(c->err, "%s: expected a JSON object at the top level, got %s", c->path,
@@ -574,9 +629,10 @@ static bool load_scene(loader *L, json_object *root)
     if (!jr_check_fields(c, root, fields) || !jr_opt_vec3(c, root, "background", jr_range_nonneg, &L->s->background) ||
         !jr_opt_vec3(c, root, "ambient", jr_range_nonneg, &L->s->ambient) || !load_materials(L, root) ||
         !load_lights(L, root) || !load_camera(L, root) || !load_each(L, root, "meshes", load_mesh) ||
-        !load_each(L, root, "spheres", load_sphere) || !load_each(L, root, "assemblies", load_assembly))
+        !load_each(L, root, "spheres", load_sphere) || !load_each(L, root, "assemblies", load_assembly) ||
+        !load_each(L, root, "particles", load_particles))
         return false;
-    if (scene_instanced_triangle_count(L->s) == 0 && L->s->spheres.count == 0)
+    if (!scene_has_geometry(L->s))
         return tess_error_set(c->err, "%s: scene has no geometry", c->path);
     return true;
 }

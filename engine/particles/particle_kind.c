@@ -14,8 +14,10 @@
 #include "engine/wbvh.h"
 
 /* Particles a leaf of the tree holds at most: one 16-lane AVX-512 test
- * (the SAH decides below that). */
+ * (the SAH decides below that), and how many one leaf test takes in the
+ * SAH's cost of a leaf (2^this). */
 #define PARTICLE_LEAF_MAX WBVH_POINTS_LEAF_MAX
+#define PARTICLE_LEAF_BLOCK_LOG2 4u
 /* Particles per parallel chunk of box computation. */
 #define PARTICLE_BOX_GRAIN 16384
 
@@ -45,6 +47,19 @@ static inline bool seen(const particle_kind *k, uint32_t p)
         return true;
     float v = k->set->attributes[k->crop_attribute].values[p];
     return k->crop.lo <= v && v <= k->crop.hi;
+}
+
+/* the default radius as a fraction of the centres' box diagonal */
+#define DEFAULT_RADIUS_OF_DIAGONAL 0.001f
+
+float particle_kind_default_radius(const particle_set *set)
+{
+    float lo[3], hi[3];
+    if (!particle_set_bounds(set, lo, hi))
+        return 1.f;
+    float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    float diag = sqrtf(dx * dx + dy * dy + dz * dz);
+    return diag > 0.f ? DEFAULT_RADIUS_OF_DIAGONAL * diag : 1.f;
 }
 
 particle_kind *particle_kind_create(particle_set *set, const particle_kind_options *opt, const char *source,
@@ -89,8 +104,7 @@ particle_kind *particle_kind_create(particle_set *set, const particle_kind_optio
         k->crop = opt->crop;
     }
     /* the kernels read GEOMETRY_POINTS_PAD floats past the last particle */
-    if (set->count > PARTICLE_MAX_COUNT - GEOMETRY_POINTS_PAD ||
-        !particle_set_reserve(set, set->count + GEOMETRY_POINTS_PAD)) {
+    if (!particle_set_fit(set, GEOMETRY_POINTS_PAD)) {
         tess_error_set(err, "%s: out of memory for %u particles", source, set->count);
         goto fail;
     }
@@ -209,7 +223,7 @@ static bool build_tree(particle_kind *k, int threads, tess_error *err)
     box_job job = {k, boxes};
     parallel_for(threads, n, PARTICLE_BOX_GRAIN, particle_boxes, &job);
     bvh binary;
-    bool ok = bvh_build_leaves(&binary, boxes, n, threads, PARTICLE_LEAF_MAX, err);
+    bool ok = bvh_build_blocks(&binary, boxes, n, threads, PARTICLE_LEAF_MAX, PARTICLE_LEAF_BLOCK_LOG2, err);
     free(boxes);
     if (!ok)
         return false;

@@ -33,6 +33,11 @@ typedef struct particle_kind_options {
     uint32_t material_id;          /* scene material of every particle */
 } particle_kind_options;
 
+/* The radius a set gets when nothing says: 0.001 x the diagonal of its
+ * centres' box (what the Embree peer gives a point set), 1 for a set
+ * without extent. */
+float particle_kind_default_radius(const particle_set *set);
+
 /* A kind over `set` (taken: owned from now on, also on failure). `source`
  * names the set in messages ("particles[0]: radius attribute 'r' ..."). */
 particle_kind *particle_kind_create(particle_set *set, const particle_kind_options *opt, const char *source,

@@ -51,6 +51,30 @@ bool particle_set_reserve(particle_set *p, uint32_t n)
     return true;
 }
 
+bool particle_set_fit(particle_set *p, uint32_t spare)
+{
+    if (spare > PARTICLE_MAX_COUNT - p->count)
+        return false;
+    uint32_t n = p->count + spare;
+    if (n == p->capacity)
+        return true;
+    if (n > p->capacity)
+        return particle_set_reserve(p, n);
+    /* shrinking: realloc to fewer bytes keeps the data; a failure leaves the old block */
+    float **arrays[3 + PARTICLE_MAX_ATTRIBUTES] = {&p->x, &p->y, &p->z};
+    uint32_t count = 3;
+    for (uint32_t a = 0; a < p->attribute_count; a++)
+        arrays[count++] = &p->attributes[a].values;
+    for (uint32_t i = 0; i < count; i++) {
+        float *smaller = realloc(*arrays[i], (size_t)n * sizeof *smaller);
+        if (smaller)
+            *arrays[i] = smaller;
+        memset(*arrays[i] + p->count, 0, (size_t)spare * sizeof **arrays[i]);
+    }
+    p->capacity = n;
+    return true;
+}
+
 int particle_set_find_attribute(const particle_set *p, const char *name)
 {
     for (uint32_t a = 0; a < p->attribute_count; a++)

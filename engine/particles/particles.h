@@ -54,6 +54,12 @@ void particle_set_destroy(particle_set *p); /* NULL is fine */
  * false on allocation failure or n > PARTICLE_MAX_COUNT. */
 bool particle_set_reserve(particle_set *p, uint32_t n);
 
+/* Make every array hold exactly count + spare particles (the spare zeroed):
+ * what a set keeps once loaded (geometric growth may have left up to twice
+ * its size). False on no memory (the set is unchanged) or past
+ * PARTICLE_MAX_COUNT. */
+bool particle_set_fit(particle_set *p, uint32_t spare);
+
 /* Add an attribute named `name` (its values array sized to the capacity,
  * zeroed); returns its index, or -1 when the name is taken, empty or too
  * long, the set already has PARTICLE_MAX_ATTRIBUTES, or memory is short. */

@@ -129,7 +129,8 @@ static void bench_usage(FILE *f)
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
-          "        renderer=NAME opacity= secondary_rays_frame= tile_px= and, with --renderer ao, ao_rays=\n"
+          "        renderer=NAME opacity= secondary_rays_frame= tile_px= points= point_bytes=\n"
+          "        bytes_per_point= and, with --renderer ao, ao_rays=\n"
           "        ao_interleave= ao_filter= ao_dist=\n"
           "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
@@ -165,6 +166,10 @@ static void bench_usage(FILE *f)
           "  renderer         eyelight or ao\n"
           "  opacity          --opacity's value (1: opaque)\n"
           "  secondary_rays_frame  rays of the last frame traced past their first surface (transparency)\n"
+          "  points           particles (points of every particle set, each stored once)\n"
+          "  point_bytes      their own data: positions and attributes (counts, not capacities)\n"
+          "  bytes_per_point  (point_bytes + accel_bytes) / points, 0 when there are none: the\n"
+          "                   whole cost of a particle when the scene holds particles only\n"
           "  ao_rays, ao_interleave, ao_filter  the AO settings used; ao_dist: the ray length used\n"
           "  ao_rays_frame    AO rays of the last frame (apron pixels included)\n"
           "  ao_mrays         median over the timed frames of (AO rays of the frame / seconds) / 1e6\n"
@@ -511,6 +516,9 @@ static void print_result(const bench_options *o, const render_view *view, double
            bytes_per_instanced);
     printf(" renderer=%s opacity=%g secondary_rays_frame=%llu tile_px=%d", o->ao ? "ao" : "eyelight",
            (double)o->opacity, (unsigned long long)last->secondary_rays, o->tile_px);
+    size_t points = scene_point_count(s), point_bytes = scene_point_bytes(s);
+    printf(" points=%zu point_bytes=%zu bytes_per_point=%.2f", points, point_bytes,
+           points ? (double)(point_bytes + accel_total) / (double)points : 0.0);
     if (o->ao) {
         for (int f = 0; f < n; f++) {
             double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;

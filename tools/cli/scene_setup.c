@@ -26,9 +26,10 @@ bool cli_scene_prepare(const char *scene_path, int threads, cli_scene *out)
     out->load_s = t1 - t0;
     out->build_s = cli_now_s() - t1;
     fprintf(stderr,
-            "tessera: scene %s: %zu triangles, %u spheres, %u lights; loaded in %.3f s, BVH built in %.3f s "
-            "(%s kernels)\n",
-            out->name, scene_triangle_count(out->scene), out->scene->spheres.count, out->scene->light_count,
+            "tessera: scene %s: %zu triangles, %u spheres, %zu particles, %u lights; loaded in %.3f s, BVH built in "
+            "%.3f s (%s kernels)\n",
+            out->name, scene_triangle_count(out->scene), out->scene->spheres.count, scene_point_count(out->scene),
+            out->scene->light_count,
             out->load_s, out->build_s, accel_isa_name(out->accel));
     return true;
 }

@@ -1,0 +1,210 @@
+/* test_particles.c - particles as a geometry kind (engine/particles/):
+ * cropping by an attribute without a rebuild, next-hit walks through
+ * overlapping particles, the memory a particle costs, and the set's own
+ * operations. Every set is generated here. (Bit-identical hits against
+ * brute force in every ISA: tests/test_kernels.c.) */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "engine/accel.h"
+#include "engine/particles/particle_kind.h"
+#include "engine/scene.h"
+
+/* A scene holding only `set` as particles (options as given), and its accel. */
+static scene *particle_scene(particle_set *set, particle_kind_options opt, accel **a)
+{
+    scene *s = scene_create();
+    material m = material_default();
+    opt.material_id = (uint32_t)scene_add_material(s, &m);
+    tess_error err = {{0}};
+    cr_assert(particle_set_finish(set, "test", &err), "%s", err.msg);
+    particle_kind *k = particle_kind_create(set, &opt, "test", &err);
+    cr_assert(k, "%s", err.msg);
+    int g = scene_add_geometry(s, &particle_kind_ops, k, "particles");
+    cr_assert_geq(g, 0);
+    cr_assert_geq(scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART), 0);
+    *a = accel_build(s, 2, &err);
+    cr_assert(*a, "%s", err.msg);
+    return s;
+}
+
+static particle_kind *kind_of(const scene *s) { return (particle_kind *)s->geometries[0].data; }
+
+/* 100 particles of radius 0.4 on the x axis at x = 0..99, "energy" = x. */
+static particle_set *particle_line(void)
+{
+    particle_set *set = particle_set_create();
+    cr_assert(set && particle_set_add_attribute(set, "energy") == 0);
+    for (int i = 0; i < 100; i++) {
+        float e = (float)i;
+        cr_assert(particle_set_add(set, (float)i, 0.f, 0.f, &e));
+    }
+    return set;
+}
+
+/* The energy of what a ray along +x from x = -5 meets first (-1: nothing),
+ * asked as a single ray and in a packet of 64 copies (both must agree). */
+static float first_energy(const scene *s, const accel *a)
+{
+    ray r = {v3(-5.f, 0.f, 0.f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+    hit h;
+    bool found = accel_intersect(a, &r, &h);
+    static ray_packet p;
+    packet_reset(&p, 64, 0);
+    for (uint32_t i = 0; i < 64; i++) {
+        ray q = r;
+        q.org.y = 0.001f * (float)i; /* not all one ray: a real packet */
+        packet_set_ray(&p, i, &q);
+    }
+    packet_detect_facts(&p);
+    accel_intersect_packet(a, packet_whole(&p));
+    const particle_set *set = particle_kind_set(kind_of(s));
+    for (uint32_t i = 0; i < 64; i++) {
+        hit ph = packet_get_hit(&p, i);
+        cr_assert_eq(ph.t != INFINITY, found, "packet ray %u disagrees with the single ray", i);
+        if (found)
+            cr_assert_eq(set->attributes[0].values[ph.prim_id], set->attributes[0].values[h.prim_id]);
+    }
+    cr_assert_eq(accel_occluded(a, &r), found);
+    return found ? set->attributes[0].values[h.prim_id] : -1.f;
+}
+
+Test(particles, crop_changes_what_is_seen_without_a_rebuild)
+{
+    accel *a;
+    particle_kind_options opt = {.radius = 0.4f, .crop_attribute = "energy", .crop = {true, 10.f, 20.f}};
+    scene *s = particle_scene(particle_line(), opt, &a);
+    cr_assert_float_eq(first_energy(s, a), 10.f, 0.f);
+    particle_kind_set_crop(kind_of(s), (geometry_crop){true, 30.5f, 40.f});
+    cr_assert_float_eq(first_energy(s, a), 31.f, 0.f);
+    particle_kind_set_crop(kind_of(s), (geometry_crop){true, 99.f, 99.f});
+    cr_assert_float_eq(first_energy(s, a), 99.f, 0.f);
+    particle_kind_set_crop(kind_of(s), (geometry_crop){true, 100.5f, 200.f});
+    cr_assert_float_eq(first_energy(s, a), -1.f, 0.f, "a crop above every value hides everything");
+    particle_kind_set_crop(kind_of(s), (geometry_crop){false, 100.5f, 200.f});
+    cr_assert_float_eq(first_energy(s, a), 0.f, 0.f, "an inactive crop shows everything");
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(particles, a_set_without_a_crop_attribute_ignores_crops)
+{
+    accel *a;
+    particle_kind_options opt = {.radius = 0.4f};
+    scene *s = particle_scene(particle_line(), opt, &a);
+    particle_kind_set_crop(kind_of(s), (geometry_crop){true, 10.f, 20.f});
+    cr_assert_float_eq(first_energy(s, a), 0.f, 0.f);
+    cr_assert_eq(particle_kind_crop_attribute(kind_of(s)), -1);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* Three overlapping particles on the axis: walking next hits meets every
+ * entry and exit once, in order, as the analytic crossings say. */
+Test(particles, next_hits_walk_every_crossing_in_order)
+{
+    particle_set *set = particle_set_create();
+    cr_assert(set && particle_set_add_attribute(set, "r") == 0);
+    const float centre[3] = {0.f, 0.5f, 3.f}, radius[3] = {1.f, 1.f, 0.25f};
+    for (int i = 0; i < 3; i++)
+        cr_assert(particle_set_add(set, centre[i], 0.f, 0.f, &radius[i]));
+    accel *a;
+    scene *s = particle_scene(set, (particle_kind_options){.radius_attribute = "r"}, &a);
+    float want[6] = {-1.f, -0.5f, 1.f, 1.5f, 2.75f, 3.25f};
+    ray r = {v3(-10.f, 0.f, 0.f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+    hit h;
+    cr_assert(accel_intersect(a, &r, &h));
+    for (int k = 0; k < 6; k++) {
+        cr_assert_float_eq(h.t, want[k] + 10.f, 1e-5f, "crossing %d at t %g, want %g", k, (double)h.t,
+                           (double)(want[k] + 10.f));
+        hit next;
+        bool more = accel_intersect_after(a, &r, &h, &next);
+        cr_assert_eq(more, k < 5, "after crossing %d", k);
+        h = next;
+    }
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* Particles read in place: positions, the tree and its crop ranges come to
+ * at most 24 bytes a particle (issue 16), attributes apart. */
+Test(particles, a_particle_costs_at_most_24_bytes_plus_its_attributes)
+{
+    particle_set *set = particle_set_create();
+    cr_assert(set && particle_set_add_attribute(set, "energy") == 0);
+    uint64_t state = 88172645463325252ull;
+    for (int i = 0; i < 200000; i++) {
+        float c[3], e;
+        for (int k = 0; k < 3; k++) {
+            state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+            c[k] = (float)(state >> 40) * (100.f / 16777216.f);
+        }
+        e = c[0] + c[1];
+        cr_assert(particle_set_add(set, c[0], c[1], c[2], &e));
+    }
+    accel *a;
+    particle_kind_options opt = {.radius = 0.3f, .crop_attribute = "energy"};
+    scene *s = particle_scene(set, opt, &a);
+    size_t n = scene_point_count(s), attributes = (size_t)n * sizeof(float);
+    double per = (double)(scene_point_bytes(s) - attributes + accel_bytes(a)) / (double)n;
+    cr_log_info("%.2f bytes a particle (positions %zu, tree and crop ranges %zu)", per, 12 * n, accel_bytes(a));
+    cr_assert_leq(per, 24.0, "%.2f bytes a particle", per);
+    cr_assert_eq(n, 200000u);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(particles, set_operations)
+{
+    particle_set *set = particle_set_create();
+    cr_assert(set);
+    cr_assert_eq(particle_set_add_attribute(set, "a"), 0);
+    cr_assert_eq(particle_set_add_attribute(set, "a"), -1, "a name given twice");
+    cr_assert_eq(particle_set_add_attribute(set, ""), -1, "an empty name");
+    cr_assert_eq(particle_set_add_attribute(set, "b"), 1);
+    for (int i = 0; i < 10; i++) {
+        float v[2] = {(float)i, (float)-i};
+        cr_assert(particle_set_add(set, (float)i, 2.f * (float)i, 0.f, v));
+    }
+    tess_error err = {{0}};
+    cr_assert(particle_set_finish(set, "test", &err));
+    cr_assert_float_eq(set->attributes[0].min, 0.f, 0.f);
+    cr_assert_float_eq(set->attributes[0].max, 9.f, 0.f);
+    cr_assert_float_eq(set->attributes[1].min, -9.f, 0.f);
+    uint32_t order[10] = {9, 8, 7, 6, 5, 4, 3, 2, 1, 0};
+    cr_assert(particle_set_permute(set, order));
+    cr_assert_float_eq(set->x[0], 9.f, 0.f);
+    cr_assert_float_eq(set->y[0], 18.f, 0.f);
+    cr_assert_float_eq(set->attributes[1].values[0], -9.f, 0.f);
+    cr_assert(particle_set_fit(set, 16));
+    cr_assert_eq(set->capacity, 26u);
+    cr_assert_float_eq(set->x[9], 0.f, 0.f);
+    cr_assert_float_eq(set->attributes[0].values[25], 0.f, 0.f, "the spare is zeroed");
+    set->attributes[1].values[3] = NAN;
+    cr_assert_not(particle_set_finish(set, "pts.ply", &err));
+    cr_assert_str_eq(err.msg, "pts.ply: particle 3: attribute 'b' is not finite");
+    particle_set_destroy(set);
+}
+
+Test(particles, bad_radius_and_crop_attribute_are_named)
+{
+    particle_set *set = particle_line();
+    tess_error err = {{0}};
+    cr_assert(particle_set_finish(set, "test", &err));
+    particle_kind_options opt = {.radius_attribute = "energy"}; /* energy 0 at particle 0 */
+    cr_assert_null(particle_kind_create(set, &opt, "atoms.dump", &err));
+    cr_assert_str_eq(err.msg, "atoms.dump: particle 0: radius attribute 'energy' is 0 (must be > 0)");
+    set = particle_line();
+    cr_assert(particle_set_finish(set, "test", &err));
+    err.msg[0] = '\0';
+    opt = (particle_kind_options){.radius = 1.f, .crop_attribute = "temperature"};
+    cr_assert_null(particle_kind_create(set, &opt, "atoms.dump", &err));
+    cr_assert_str_eq(err.msg, "atoms.dump: no attribute 'temperature' to crop by");
+    set = particle_line();
+    cr_assert(particle_set_finish(set, "test", &err));
+    err.msg[0] = '\0';
+    opt = (particle_kind_options){.radius = -1.f};
+    cr_assert_null(particle_kind_create(set, &opt, "atoms.dump", &err));
+    cr_assert_str_eq(err.msg, "atoms.dump: the radius must be a finite number > 0");
+}
