@@ -376,7 +376,7 @@ Test(bvh, identical_centroids_halve_by_count)
         bvh b = check_all_thread_counts(boxes, n);
         /* halving gives a balanced tree: depth ceil(log2(n / 8)) + 1 at most */
         uint32_t bound = 1;
-        for (uint32_t leaves = BVH_LEAF_MAX; leaves < n; leaves *= 2)
+        for (uint32_t leaves = BVH_LEAF_DEFAULT; leaves < n; leaves *= 2)
             bound++;
         cr_assert(b.depth <= bound, "n %u: depth %u, halving gives at most %u", n, b.depth, bound);
         bvh_finish(&b);
