@@ -195,6 +195,15 @@ void accel_destroy(accel *a)
     free(a);
 }
 
+void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop)
+{
+    if (geom_id >= a->instance_count)
+        return;
+    const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
+    if (g->ops->set_crop)
+        g->ops->set_crop(g->data, crop);
+}
+
 size_t accel_bytes(const accel *a)
 {
     size_t bytes = sizeof *a + wbvh_bytes(&a->top) + a->geom_count * sizeof *a->geoms +

@@ -111,6 +111,12 @@ const accel_placement *accel_placement_of(const accel *a, uint32_t geom_id);
  * accel_set_hidden. */
 void accel_set_placement(const accel *a, uint32_t first, uint32_t count, const affine3 *moves);
 
+/* Set the crop of instance geom_id's geometry (geometry_ops.set_crop:
+ * particles seen only where their crop attribute lies in the range; every
+ * instance of that geometry follows). Ids out of range and kinds without a
+ * crop are ignored. Same callers as accel_set_hidden. */
+void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop);
+
 /* Bytes of acceleration data (nodes, primitive blocks), not counting the scene. */
 size_t accel_bytes(const accel *a);
 

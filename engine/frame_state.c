@@ -62,6 +62,10 @@ void frame_state_finish(frame_state *st)
     free(st->colour);
     free(st->moved);
     free(st->part_opacity);
+    free(st->crop);
+    free(st->cropped);
+    st->crop = NULL;
+    st->cropped = NULL;
     st->moved = NULL;
     st->part_opacity = NULL;
     st->translucent_count = 0;
@@ -324,6 +328,49 @@ bool frame_state_set_opacity(frame_state *st, uint32_t first, uint32_t count, fl
     return true;
 }
 
+bool frame_state_set_crop(frame_state *st, uint32_t first, uint32_t count, geometry_crop crop)
+{
+    if (!st->crop) {
+        geometry_crop *c = calloc((size_t)(st->geometry_count ? st->geometry_count : 1), sizeof *c);
+        if (!c)
+            return false;
+        if (!ensure_bits(st, &st->cropped)) {
+            free(c);
+            return false;
+        }
+        st->crop = c;
+    }
+    bool changed = false;
+    for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+        geometry_crop *c = &st->crop[id];
+        if (!bit(st->cropped, (uint32_t)id) || c->active != crop.active || c->lo != crop.lo || c->hi != crop.hi)
+            changed = true;
+        *c = crop;
+        st->cropped[id / 64] |= 1ull << (id % 64);
+    }
+    if (count > 0) {
+        uint32_t end = (uint32_t)((uint64_t)first + count);
+        if (st->crop_first == st->crop_end)
+            st->crop_first = first, st->crop_end = end;
+        else
+            st->crop_first = first < st->crop_first ? first : st->crop_first,
+            st->crop_end = end > st->crop_end ? end : st->crop_end;
+    }
+    if (changed)
+        st->picture_serial++;
+    st->version++;
+    return true;
+}
+
+bool frame_state_crop(const frame_state *st, uint32_t id, geometry_crop *out)
+{
+    if (id >= st->geometry_count || !bit(st->cropped, id))
+        return false;
+    if (out)
+        *out = st->crop[id];
+    return true;
+}
+
 void frame_state_set_clip_plane(frame_state *st, int index, const clip_plane *p)
 {
     clip_plane *old = &st->clip[index];
@@ -398,6 +445,12 @@ uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
         calls++;
     }
     st->moved_first = st->moved_end = 0;
+    for (uint32_t id = st->crop_first; id < st->crop_end; id++)
+        if (bit(st->cropped, id)) {
+            accel_set_crop(a, id, st->crop[id]);
+            calls++;
+        }
+    st->crop_first = st->crop_end = 0;
     /* what was hidden leaves the instance level's boxes (one refit) */
     accel_commit(a);
     return calls;

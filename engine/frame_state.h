@@ -6,8 +6,9 @@
  * whether the governor's line is shown); render options (renderer,
  * shadows); per geometry (ids 0..geometry_count-1, what hits report as
  * geom_id) visibility, a highlight flag, a colour override (linear RGB) and
- * an opacity; a global opacity; the cutting planes (clip.h, CLIP_MAX_PLANES,
- * all off initially).
+ * an opacity and a crop (particles seen by an attribute's range, given by
+ * crop records; the scene's own until then); a global opacity; the cutting
+ * planes (clip.h, CLIP_MAX_PLANES, all off initially).
  * Room for more: what the next issues add (accumulation) goes here, with a
  * record kind in txn.h that edits it.
  *
@@ -37,7 +38,8 @@
  *                   highlight or colour changed, shadows or renderer changed,
  *                   the global or a part's opacity changed, a cutting plane
  *                   switched on or off, or one that is on moved or turned
- *                   (a plane that stays off may change unseen: no bump);
+ *                   (a plane that stays off may change unseen: no bump),
+ *                   a crop given or changed;
  *   overlay_serial  bumped when the overlay changes: the cursor moved,
  *                   shown or hidden (cursor setter), and by the pipeline when
  *                   the status line as drawn changes (frame_state_bump_overlay);
@@ -110,11 +112,15 @@ typedef struct frame_state {
     float *part_opacity;     /* geometry_count opacities in [0, 1] (1: opaque), NULL until the first
                                 part set below 1 */
     uint32_t translucent_count; /* entries of part_opacity below 1 (0 while it is NULL) */
+    geometry_crop *crop;     /* geometry_count crops given by records (particles: geometry.h), with
+                                `cropped`; NULL until the first crop record */
+    uint64_t *cropped;       /* bit set: crop[id] was given (the scene's own crop holds until then) */
 
     /* what frame_state_sync_accel still has to do */
     bool accel_unhide_all;   /* a show-all since the last sync */
     uint32_t dirty_first, dirty_end; /* ids [first, end) may differ from the accel's flags */
     uint32_t moved_first, moved_end; /* ids [first, end) moved since the last sync */
+    uint32_t crop_first, crop_end;   /* ids [first, end) whose crop may differ from their kind's */
 } frame_state;
 
 /* A state for geometry_count geometries with no channels, nothing hidden,
@@ -157,6 +163,11 @@ void frame_state_set_global_opacity(frame_state *st, float opacity);
 bool frame_state_set_opacity(frame_state *st, uint32_t first, uint32_t count, float opacity);
 /* Cutting plane `index` (0..CLIP_MAX_PLANES-1) becomes *p, whose normal must
  * be unit: txn_apply normalises a record's normal before calling this. */
+/* The crop of geometries [first, first + count) (their particle kinds'
+ * range, frame_state_sync_accel passes it on); false on no memory. */
+bool frame_state_set_crop(frame_state *st, uint32_t first, uint32_t count, geometry_crop crop);
+/* The crop a record gave geometry id; false when none did. */
+bool frame_state_crop(const frame_state *st, uint32_t id, geometry_crop *out);
 void frame_state_set_clip_plane(frame_state *st, int index, const clip_plane *p);
 /* The pipeline: the drawn status line changed. */
 void frame_state_bump_overlay(frame_state *st);

@@ -117,6 +117,9 @@ typedef struct geometry_ops {
      * accel borrows it. Safe to call from several threads at once; NULL
      * with err set on failure. */
     const struct wbvh *(*tree)(void *data, int threads, tess_error *err);
+    /* Kinds that crop (geometry_points.crop_value): set the range. Only
+     * where nothing traces (a serial section). NULL: the kind has no crop. */
+    void (*set_crop)(void *data, geometry_crop crop);
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */

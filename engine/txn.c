@@ -26,6 +26,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_SHADOWS] = "shadows",       [TXN_RENDERER] = "renderer",
     [TXN_THREADS] = "threads",       [TXN_CHANNEL_ACTIVE] = "channel-active", [TXN_MOVE] = "move",
     [TXN_OPACITY] = "opacity",       [TXN_CLIP_PLANE] = "clip-plane",
+    [TXN_CROP] = "crop",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -152,6 +153,16 @@ txn_record txn_clip_plane(int index, bool on, const float point[3], const float 
     r.args.clip_plane.on = on;
     memcpy(r.args.clip_plane.point, point, sizeof r.args.clip_plane.point);
     memcpy(r.args.clip_plane.normal, normal, sizeof r.args.clip_plane.normal);
+    return r;
+}
+
+txn_record txn_crop(uint32_t first, uint32_t count, bool on, float lo, float hi)
+{
+    txn_record r = blank(TXN_CROP);
+    r.args.crop.geoms = (txn_geoms){first, count};
+    r.args.crop.on = on;
+    r.args.crop.lo = lo;
+    r.args.crop.hi = hi;
     return r;
 }
 
@@ -298,6 +309,18 @@ bool txn_validate(const txn_record *r, tess_error *err)
             return tess_error_set(err, "clip-plane: normal: zero length (a plane needs a direction)");
         return true;
     }
+    case TXN_CROP: {
+        if (!geoms_valid(name, &r->args.crop.geoms, err))
+            return false;
+        float lo = r->args.crop.lo, hi = r->args.crop.hi;
+        if (!isfinite(lo))
+            return tess_error_set(err, "crop: lo: %g is not finite", (double)lo);
+        if (!isfinite(hi))
+            return tess_error_set(err, "crop: hi: %g is not finite", (double)hi);
+        if (lo > hi)
+            return tess_error_set(err, "crop: lo %g is above hi %g", (double)lo, (double)hi);
+        return true;
+    }
     case TXN_SHOW_ALL:
     case TXN_TOUR:
     case TXN_QUIT:
@@ -431,6 +454,13 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
         frame_state_set_clip_plane(st, r->args.clip_plane.index, &plane);
         return true;
     }
+    case TXN_CROP:
+        if (!geoms_in(st, name, &r->args.crop.geoms, err))
+            return false;
+        if (!frame_state_set_crop(st, r->args.crop.geoms.first, r->args.crop.geoms.count,
+                                  (geometry_crop){r->args.crop.on, r->args.crop.lo, r->args.crop.hi}))
+            return out_of_memory(name, err);
+        return true;
     case TXN_TOUR:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -556,6 +586,10 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
             (double)p[0], (double)p[1], (double)p[2], (double)n[0], (double)n[1], (double)n[2]);
         break;
     }
+    case TXN_CROP:
+        put_geoms(&o, &r->args.crop.geoms);
+        put(&o, " %d %a %a", r->args.crop.on ? 1 : 0, (double)r->args.crop.lo, (double)r->args.crop.hi);
+        break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -839,6 +873,9 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
                 return false;
         return true;
     }
+    case TXN_CROP:
+        return geoms_text(r, name, &t->args.crop.geoms) && flag(r, &t->args.crop.on, "crop on/off") &&
+               float_value(r, &t->args.crop.lo, "crop lo") && float_value(r, &t->args.crop.hi, "crop hi");
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -1012,6 +1049,13 @@ static void layout(txn_record *t, unsigned char *b, bool write)
             F32(12 + 4 * i, t->args.clip_plane.point[i]);
         for (int i = 0; i < 3; i++)
             F32(24 + 4 * i, t->args.clip_plane.normal[i]);
+        break;
+    case TXN_CROP:
+        U32(4, t->args.crop.geoms.first);
+        U32(8, t->args.crop.geoms.count);
+        U8(12, t->args.crop.on);
+        F32(16, t->args.crop.lo);
+        F32(20, t->args.crop.hi);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:

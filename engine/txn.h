@@ -40,6 +40,10 @@
  *                                                  double and rounded once to float (a record
  *                                                  holds any nonzero normal, the state a unit one;
  *                                                  an off plane keeps its place to come back to)
+ *   crop             first, count, on, lo, hi      the particles of those instances' geometries
+ *                    (finite, lo <= hi)            seen only where their crop attribute lies in
+ *                                                  [lo, hi] (on), or all of them (off); kinds
+ *                                                  without a crop ignore it
  *   shadows          on                            shadow rays traced or not
  *   renderer         name                          the renderer (renderer_by_name)
  *   threads          count (1..TXN_MAX_THREADS)    render threads
@@ -67,6 +71,7 @@
  *   move FIRST COUNT M0 .. M11
  *   opacity all A | opacity FIRST COUNT A
  *   clip-plane I ON PX PY PZ NX NY NZ
+ *   crop FIRST COUNT ON LO HI
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -89,6 +94,7 @@
  *     move            u32 first, u32 count, 12 x f32 m (row-major 3x4)
  *     opacity         u8 all, 3 zero bytes, u32 first, u32 count, f32 a (all: first and count 0)
  *     clip-plane      i32 index, u8 on, 3 zero bytes, f32 point xyz, f32 normal xyz
+ *     crop            u32 first, u32 count, u8 on, 3 zero bytes, f32 lo, f32 hi
  *     show-all, quit  nothing
  * Decoding checks the kind, the zero bytes and then txn_validate. */
 #ifndef TESSERA_TXN_H
@@ -135,6 +141,7 @@ typedef enum txn_kind {
     TXN_MOVE,
     TXN_OPACITY,
     TXN_CLIP_PLANE,
+    TXN_CROP,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -189,6 +196,11 @@ typedef struct txn_record {
             float normal[3];    /* world, finite, nonzero (the removed side; apply normalises) */
         } clip_plane;
         struct {
+            txn_geoms geoms;    /* instances: their geometries' crop */
+            bool on;
+            float lo, hi;       /* finite, lo <= hi */
+        } crop;
+        struct {
             int32_t count;
         } threads;
         struct {
@@ -223,6 +235,7 @@ txn_record txn_move(uint32_t first, uint32_t count, const float m[12]);
 txn_record txn_opacity_all(float a);
 txn_record txn_opacity(uint32_t first, uint32_t count, float a);
 txn_record txn_clip_plane(int index, bool on, const float point[3], const float normal[3]);
+txn_record txn_crop(uint32_t first, uint32_t count, bool on, float lo, float hi);
 txn_record txn_renderer(const char *name);
 txn_record txn_threads(int count);
 txn_record txn_channel_active(int channel, bool on);

@@ -222,6 +222,7 @@ static input_txn sample_record(int i)
         const float point[3] = {0.5f * (float)i, -1.f, 0.f}, normal[3] = {0.f, 0.f, 2.f};
         return txn_clip_plane(i % TXN_CLIP_PLANES, i % 2 == 0, point, normal);
     }
+    case TXN_CROP: return txn_crop(2, 1, i % 2 == 0, -0.5f * (float)i, 1.f);
     case TXN_KIND_COUNT: break;
     }
     return txn_simple(TXN_QUIT);

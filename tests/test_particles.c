@@ -6,10 +6,14 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "engine/accel.h"
+#include "engine/frame_state.h"
 #include "engine/particles/particle_kind.h"
+#include "engine/render.h"
 #include "engine/scene.h"
+#include "engine/txn.h"
 
 /* A scene holding only `set` as particles (options as given), and its accel. */
 static scene *particle_scene(particle_set *set, particle_kind_options opt, accel **a)
@@ -207,4 +211,34 @@ Test(particles, bad_radius_and_crop_attribute_are_named)
     opt = (particle_kind_options){.radius = -1.f};
     cr_assert_null(particle_kind_create(set, &opt, "atoms.dump", &err));
     cr_assert_str_eq(err.msg, "atoms.dump: the radius must be a finite number > 0");
+}
+
+/* A crop record applied to a frame state reaches the particles at the next
+ * sync (what a pipeline's serial section does), and only then. */
+Test(particles, crop_records_reach_the_kind_at_the_sync)
+{
+    accel *a;
+    particle_kind_options opt = {.radius = 0.4f, .crop_attribute = "energy"};
+    scene *s = particle_scene(particle_line(), opt, &a);
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+    tess_error err = {{0}};
+    uint64_t serial = st.picture_serial;
+    txn_record r = txn_crop(0, 1, true, 50.f, 60.f);
+    char text[TXN_TEXT_MAX];
+    cr_assert_gt(txn_encode_text(&r, text, sizeof text), 0);
+    txn_record back;
+    cr_assert(txn_decode_text(text, strlen(text), TXN_TEXT_V2, &back, &err), "%s", err.msg);
+    cr_assert(txn_apply(&back, &st, &err), "%s", err.msg);
+    cr_assert_gt(st.picture_serial, serial);
+    cr_assert_float_eq(first_energy(s, a), 0.f, 0.f, "applied but not yet synced");
+    frame_state_sync_accel(&st, a);
+    cr_assert_float_eq(first_energy(s, a), 50.f, 0.f);
+    geometry_crop c;
+    cr_assert(frame_state_crop(&st, 0, &c) && c.active && c.lo == 50.f && c.hi == 60.f);
+    txn_record past = txn_crop(1, 1, true, 0.f, 1.f);
+    cr_assert_not(txn_apply(&past, &st, &err), "instance 1 does not exist");
+    frame_state_finish(&st);
+    accel_destroy(a);
+    scene_destroy(s);
 }

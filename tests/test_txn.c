@@ -49,6 +49,7 @@ static txn_record sample(txn_kind k)
         const float point[3] = {0.1f, -3.4028235e38f, 1e-7f}, normal[3] = {0.f, 3.f, -4.f};
         return txn_clip_plane(3, true, point, normal);
     }
+    case TXN_CROP: return txn_crop(2, 3, true, -3.4028235e38f, 0.1f);
     case TXN_KIND_COUNT: break;
     }
     cr_assert_fail("no sample for kind %d", (int)k);
@@ -229,7 +230,11 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_clip_plane(0, true, nan_point, up), "clip-plane: point.y: nan is not finite"},
         {txn_clip_plane(0, true, origin, inf_normal), "clip-plane: normal.z: inf is not finite"},
         {txn_clip_plane(0, false, origin, origin), "clip-plane: normal: zero length"},
-        {txn_simple(TXN_KIND_COUNT), "kind: 19 is not a transaction kind"},
+        {txn_crop(0, 1, true, NAN, 1.f), "crop: lo: nan is not finite"},
+        {txn_crop(0, 1, true, 0.f, INFINITY), "crop: hi: inf is not finite"},
+        {txn_crop(0, 1, true, 2.f, 1.f), "crop: lo 2 is above hi 1"},
+        {txn_crop(0, 0, false, 0.f, 1.f), "crop: count: 0 geometries"},
+        {txn_simple(TXN_KIND_COUNT), "kind: 20 is not a transaction kind"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};

@@ -251,6 +251,8 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
     return ok ? &k->tree : NULL;
 }
 
+static void kind_set_crop(void *data, geometry_crop crop) { particle_kind_set_crop(data, crop); }
+
 const geometry_ops particle_kind_ops = {
     .name = "particles",
     .leaf = GEOMETRY_LEAF_POINTS,
@@ -265,4 +267,5 @@ const geometry_ops particle_kind_ops = {
     .closed = kind_closed,
     .points = kind_points,
     .tree = kind_tree,
+    .set_crop = kind_set_crop,
 };
