@@ -66,6 +66,10 @@ typedef enum input_action {
     INPUT_ACTION_PLANE_REMOVE_ALL,  /* every plane off */
     INPUT_ACTION_PLANE_PUSH,        /* drag: the selected plane along its normal (up: away from its normal) */
     INPUT_ACTION_AMBIENT_OCCLUSION, /* the next renderer of the AO cycle (controller.h, AMBIENT OCCLUSION) */
+    /* scientific data (controller.h, CROP) */
+    INPUT_ACTION_CROP_DOWN,         /* the particles' crop window one step down its attribute's range */
+    INPUT_ACTION_CROP_UP,           /* ... up */
+    INPUT_ACTION_CROP_OFF,          /* every particle seen again */
     INPUT_ACTION_COUNT
 } input_action;
 

@@ -100,6 +100,7 @@ struct input_controller {
     char renderer[TXN_NAME_BYTES];   /* the renderer input asked for last (or the config's) */
     char configured[TXN_NAME_BYTES]; /* the cycle's first renderer (controller.h, AMBIENT OCCLUSION) */
     bool plane_dirty;          /* plane_sel moved since the last emitted record (plane-push) */
+    geometry_crop crops[INPUT_CROP_MAX]; /* as the records said, per cfg.crops entry */
 
     /* touchpad gestures */
     vec3 gesture_point;
@@ -144,6 +145,10 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
     snprintf(c->renderer, sizeof c->renderer, "%s", c->cfg.renderer[0] ? c->cfg.renderer : "raytracer");
     bool ao_renderer = !strcmp(c->renderer, "ao") || !strcmp(c->renderer, "raytracer-ao");
     snprintf(c->configured, sizeof c->configured, "%s", ao_renderer ? "raytracer" : c->renderer);
+    if (c->cfg.crop_count < 0 || c->cfg.crop_count > INPUT_CROP_MAX)
+        c->cfg.crop_count = 0;
+    for (int i = 0; i < c->cfg.crop_count; i++)
+        c->crops[i] = c->cfg.crops[i].crop;
     c->plane_sel = -1;
     for (int i = CLIP_MAX_PLANES - 1; i >= 0; i--)
         if (c->planes[i].on)
@@ -568,6 +573,46 @@ static void ambient_occlusion_command(input_controller *c)
                                               : " (ambient occlusion off)");
 }
 
+/* crop-down, crop-up, crop-off on every particle set with a crop (controller.h, CROP). */
+static void crop_command(input_controller *c, input_action action)
+{
+    if (c->cfg.crop_count == 0) {
+        emit_status(c, "nothing to crop (no particles with a crop attribute)");
+        return;
+    }
+    char text[INPUT_TEXT_BYTES] = "";
+    size_t used = 0;
+    for (int i = 0; i < c->cfg.crop_count; i++) {
+        const input_crop_target *tg = &c->cfg.crops[i];
+        geometry_crop *cur = &c->crops[i];
+        float range = tg->max - tg->min;
+        if (action == INPUT_ACTION_CROP_OFF) {
+            cur->active = false;
+        } else if (!cur->active) { /* start at the end the step comes from */
+            float width = INPUT_CROP_WINDOW * range;
+            *cur = action == INPUT_ACTION_CROP_UP ? (geometry_crop){true, tg->min, tg->min + width}
+                                                  : (geometry_crop){true, tg->max - width, tg->max};
+        } else {
+            float width = cur->hi - cur->lo;
+            if (!(width > 0.f))
+                width = INPUT_CROP_WINDOW * range;
+            float lo = cur->lo + (action == INPUT_ACTION_CROP_UP ? 0.5f : -0.5f) * width;
+            lo = lo + width > tg->max ? tg->max - width : lo;
+            lo = lo < tg->min ? tg->min : lo;
+            *cur = (geometry_crop){true, lo, lo + width};
+        }
+        input_txn t = txn_crop(tg->first, tg->count, cur->active, cur->lo, cur->hi);
+        emit(c, &t);
+        int n = cur->active ? snprintf(text + used, sizeof text - used, "%scrop %s [%.4g, %.4g]", i ? "; " : "",
+                                       tg->attribute, (double)cur->lo, (double)cur->hi)
+                            : snprintf(text + used, sizeof text - used, "%scrop %s off", i ? "; " : "",
+                                       tg->attribute);
+        if (n > 0 && (size_t)n < sizeof text - used)
+            used += (size_t)n;
+    }
+    emit_status(c, "%s", text);
+}
+
 /* The next plane that is on after `after` (wrapping, `after` itself last), or -1. */
 static int next_plane_on(const input_controller *c, int after)
 {
@@ -694,6 +739,11 @@ static void command(input_controller *c, input_action action, double sx, double 
         break;
     case INPUT_ACTION_AMBIENT_OCCLUSION:
         ambient_occlusion_command(c);
+        break;
+    case INPUT_ACTION_CROP_DOWN:
+    case INPUT_ACTION_CROP_UP:
+    case INPUT_ACTION_CROP_OFF:
+        crop_command(c, action);
         break;
     case INPUT_ACTION_GOVERNOR_STATUS: {
         c->governor_status_shown = !c->governor_status_shown;

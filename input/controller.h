@@ -72,6 +72,13 @@
  *    "raytracer" when that is one of the two AO renderers or unset), as
  *    "renderer NAME" records; a renderer outside the cycle steps to
  *    raytracer-ao;
+ *  - CROP. crop-down [,] and crop-up [.] move a window over the crop
+ *    attribute of every particle set that has one (config `crops`, from the
+ *    scene), one step of half a window (a window is INPUT_CROP_WINDOW of the
+ *    attribute's range) down or up, clamped to the range; the first step
+ *    from an inactive crop starts at the bottom (up) or the top (down) of the
+ *    range. crop-off [/] shows every particle. "crop FIRST COUNT ON LO HI"
+ *    records, one per set, and the window in the status line;
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -94,6 +101,7 @@
 
 #include "engine/camera.h"
 #include "engine/clip.h"
+#include "engine/geometry.h"
 #include "engine/txn.h"
 #include "engine/vec3.h"
 #include "input/bindings.h"
@@ -106,7 +114,7 @@
  * file stores (input/record.h). The controller emits camera (always
  * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide, show and
  * isolate (a part's instance range: input_part), show-all, highlight,
- * governor-status, opacity, clip-plane, renderer, and the input-level tour and quit. */
+ * governor-status, opacity, clip-plane, renderer, crop, and the input-level tour and quit. */
 typedef txn_record input_txn;
 typedef txn_kind input_txn_kind;
 
@@ -138,6 +146,17 @@ typedef struct input_hit {
                               INPUT_HIT_ANCESTORS when deeper */
 } input_hit;
 
+/* A particle set input may crop (a scene's "crop"): its instance range,
+ * the crop attribute's name and range, and the crop it starts with. */
+#define INPUT_CROP_MAX 8
+#define INPUT_CROP_WINDOW 0.25f /* of the attribute's range: the window crop-up/-down start with */
+typedef struct input_crop_target {
+    uint32_t first, count;
+    char attribute[32];
+    float min, max;    /* the attribute's values span [min, max] */
+    geometry_crop crop; /* at start */
+} input_crop_target;
+
 typedef struct input_controller_config {
     input_bindings bindings;
     float plane_aspect;          /* the wall's image plane, width / height */
@@ -152,6 +171,8 @@ typedef struct input_controller_config {
     float opacity;               /* the global opacity the pipeline starts with, [0, 1]; default 1 */
     clip_plane clip[CLIP_MAX_PLANES]; /* the planes it starts with (pipeline_config.clip); default all off */
     char renderer[TXN_NAME_BYTES]; /* the renderer the pipeline starts with; "" (default): raytracer */
+    input_crop_target crops[INPUT_CROP_MAX]; /* particle sets with a crop attribute (CROP); crop_count of them */
+    int crop_count;
 } input_controller_config;
 
 /* Defaults for the fields a caller need not set (bindings = the defaults). */

@@ -122,6 +122,8 @@ Test(bindings, defaults_are_as_documented)
         {KEY_C, INPUT_ACTION_PLANE_PLACE},    {KEY_N, INPUT_ACTION_PLANE_NEXT},
         {KEY_X, INPUT_ACTION_PLANE_FLIP},     {KEY_DELETE, INPUT_ACTION_PLANE_REMOVE},
         {KEY_END, INPUT_ACTION_PLANE_REMOVE_ALL}, {KEY_O, INPUT_ACTION_AMBIENT_OCCLUSION},
+        {KEY_COMMA, INPUT_ACTION_CROP_DOWN},  {KEY_DOT, INPUT_ACTION_CROP_UP},
+        {KEY_SLASH, INPUT_ACTION_CROP_OFF},
         {BTN_LEFT, INPUT_ACTION_ORBIT},
         {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
     };
@@ -360,7 +362,8 @@ Test(bindings, bad_actions)
                            "fly-back, fly-left, fly-right, fly-up, fly-down, speed-up, speed-down, home, pick, "
                            "hide-object, show-all, fly-to, governor-status, isolate, select-parent, highlight, show, "
                            "opacity-down, opacity-up, part-opacity-down, part-opacity-up, plane-place, plane-next, "
-                           "plane-flip, plane-remove, plane-remove-all, plane-push, ambient-occlusion)");
+                           "plane-flip, plane-remove, plane-remove-all, plane-push, ambient-occlusion, crop-down, crop-up, "
+                           "crop-off)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -379,7 +382,8 @@ Test(bindings, drag_actions_need_motion)
                            "'orbit' is a drag action, which follows motion, but tap is a discrete gesture without "
                            "motion (it takes speed-up, speed-down, home, pick, hide-object, show-all, fly-to, governor-status, isolate, "
                            "select-parent, highlight, show, opacity-down, opacity-up, part-opacity-down, part-opacity-up, "
-                           "plane-place, plane-next, plane-flip, plane-remove, plane-remove-all, ambient-occlusion or none)");
+                           "plane-place, plane-next, plane-flip, plane-remove, plane-remove-all, ambient-occlusion, crop-down, "
+                           "crop-up, crop-off or none)");
     expect_members_failure(", \"gestures\": {\"click\": \"pan\"}", "gestures.click", "'pan' is a drag action");
     expect_members_failure(", \"gestures\": {\"double-tap\": \"dolly\"}", "gestures.double-tap",
                            "'dolly' is a drag action");

@@ -469,3 +469,42 @@ Test(input_inspect, ambient_occlusion_steps_through_the_ao_renderers_and_back)
     expect_same(only(r, press(r, KEY_O), TXN_RENDERER), txn_renderer("raytracer-ao"));
     rig_free(r);
 }
+
+/* The crop window over a particle set's attribute (controller.h, CROP):
+ * up from an inactive crop starts at the bottom, steps of half a window,
+ * clamped at the top; off shows everything; down starts at the top. */
+Test(input_inspect, crop_keys_move_a_window_over_the_attribute)
+{
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.crops[0] = (input_crop_target){.first = 3, .count = 1, .attribute = "c_ke", .min = 0.f, .max = 8.f};
+    cfg.crop_count = 1;
+    rig *r = rig_make_with(&cfg);
+    const struct {
+        int key;
+        const char *record;
+    } steps[] = {
+        {KEY_DOT, "crop 3 1 1 0x0p+0 0x1p+1"},          /* [0, 2] */
+        {KEY_DOT, "crop 3 1 1 0x1p+0 0x1.8p+1"},        /* [1, 3] */
+        {KEY_DOT, "crop 3 1 1 0x1p+1 0x1p+2"},          /* [2, 4] */
+        {KEY_COMMA, "crop 3 1 1 0x1p+0 0x1.8p+1"},      /* back to [1, 3] */
+        {KEY_SLASH, "crop 3 1 0 0x1p+0 0x1.8p+1"},      /* off (the window kept in the record) */
+        {KEY_COMMA, "crop 3 1 1 0x1.8p+2 0x1p+3"},      /* down from off: the top, [6, 8] */
+        {KEY_DOT, "crop 3 1 1 0x1.8p+2 0x1p+3"},        /* clamped at the top */
+    };
+    for (size_t i = 0; i < sizeof steps / sizeof steps[0]; i++) {
+        int at = press(r, steps[i].key);
+        cr_expect_str_eq(text_of(only(r, at, TXN_CROP)), steps[i].record, "step %zu", i);
+    }
+    int at = press(r, KEY_COMMA);
+    cr_expect_str_eq(text_of(only(r, at, TXN_STATUS)), "status \"crop c_ke [5, 7]\"");
+    rig_free(r);
+}
+
+Test(input_inspect, crop_keys_without_particles_say_so)
+{
+    rig *r = rig_make();
+    int at = press(r, KEY_DOT);
+    cr_expect_str_eq(made_since(r, at), "status \"nothing to crop (no particles with a crop attribute)\"");
+    rig_free(r);
+}

@@ -2,6 +2,7 @@
 #include "input_cli.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -9,6 +10,7 @@
 #include "engine/camera_path.h"
 #include "engine/frame_state.h"
 #include "engine/log.h"
+#include "engine/particles/particle_kind.h"
 #include "engine/scene.h"
 #include "input/bindings.h"
 #include "input/controller.h"
@@ -319,6 +321,25 @@ static void pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
     cli_input_pick(cs->scene, cs->accel, origin, dir, out);
 }
 
+/* The particle sets input may crop: instances of kinds that crop. */
+static void crop_targets(const scene *s, input_controller_config *cc)
+{
+    for (uint32_t i = 0; i < s->instance_count && cc->crop_count < INPUT_CROP_MAX; i++) {
+        const scene_geometry *g = scene_instance_geometry(s, i);
+        if (g->ops != &particle_kind_ops)
+            continue;
+        const particle_kind *k = g->data;
+        int attr = particle_kind_crop_attribute(k);
+        if (attr < 0)
+            continue;
+        const particle_attribute *a = &particle_kind_set(k)->attributes[attr];
+        input_crop_target *t = &cc->crops[cc->crop_count++];
+        *t = (input_crop_target){.first = i, .count = 1, .min = a->min, .max = a->max,
+                                 .crop = particle_kind_crop(k)};
+        snprintf(t->attribute, sizeof t->attribute, "%s", a->name);
+    }
+}
+
 static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs,
                           const cli_input_files *files)
 {
@@ -346,6 +367,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.opacity = st->opacity;
     memcpy(cc.clip, frame_state_clip_planes(st), sizeof cc.clip);
     snprintf(cc.renderer, sizeof cc.renderer, "%s", st->renderer->name);
+    crop_targets(cs->scene, &cc);
     vec3 lo, hi;
     if (scene_bounds(cs->scene, &lo, &hi))
         cc.scene_size = v3_length(v3_sub(hi, lo));
