@@ -57,13 +57,14 @@ static const uint32_t greyscale_srgb[] = {
 /* ct-bone: CT bone, laid out for a range of [-1000, 2000] Hounsfield units
  * (t = (HU + 1000) / 3000): air (t 0) to soft tissue and water (t 0.33 to
  * 0.35) stay transparent; opacity rises from t 0.40 (200 HU, where
- * cancellous bone starts) to 0.8 at t 0.70 (1100 HU, cortical bone); the
- * colour goes from dark red through beige to ivory and white. Our own simple
- * design, not a published one. */
-static const float ct_bone_pos[] = {0.f, 0.40f, 0.45f, 0.70f, 1.f};
+ * cancellous bone starts) through 0.3 at t 0.50 (500 HU) to 0.8 at t 0.70
+ * (1100 HU, cortical bone); the colour goes from dark red through beige to
+ * ivory and white. Our own simple design, not a published one; no segment
+ * is steeper than COLORMAP_TABLE_TOLERANCE allows. */
+static const float ct_bone_pos[] = {0.f, 0.40f, 0.50f, 0.70f, 1.f};
 static const uint32_t ct_bone_srgb[] = {0x000000, 0x8c3a26, 0xe0bc8c, 0xfff2d8, 0xffffff};
 static const colormap_opacity_point ct_bone_opacity[] = {
-    {0.f, 0.f}, {0.40f, 0.f}, {0.45f, 0.2f}, {0.70f, 0.8f}, {1.f, 0.95f},
+    {0.f, 0.f}, {0.40f, 0.f}, {0.50f, 0.3f}, {0.70f, 0.8f}, {1.f, 0.95f},
 };
 
 /* mri-soft: soft tissue in a T1-weighted MRI volume with the automatic range:
@@ -266,6 +267,22 @@ void colormap_bake(const colormap *cm, colormap_table *out)
     out->scale = span > 0.0 ? (double)(COLORMAP_TABLE_SIZE - 1) / span : 0.0;
     for (int i = 0; i < COLORMAP_TABLE_SIZE; i++)
         out->entry[i] = colormap_eval_unit(cm, (double)i / (double)(COLORMAP_TABLE_SIZE - 1));
+}
+
+float colormap_table_error(const colormap *cm)
+{
+    double steepest = 0.0;
+    for (uint32_t i = 0; i + 1 < cm->color_count; i++) {
+        double dt = (double)cm->colors[i + 1].pos - cm->colors[i].pos;
+        for (int k = 0; k < 3; k++)
+            steepest = fmax(steepest, fabs((double)cm->colors[i + 1].rgb[k] - cm->colors[i].rgb[k]) / dt);
+    }
+    for (uint32_t i = 0; i + 1 < cm->opacity_count; i++) {
+        double dt = (double)cm->opacity[i + 1].pos - cm->opacity[i].pos;
+        steepest = fmax(steepest, fabs((double)cm->opacity[i + 1].opacity - cm->opacity[i].opacity) / dt);
+    }
+    /* plus the float rounding of the entries and of the index */
+    return (float)(steepest * 0.5 / (COLORMAP_TABLE_SIZE - 1) + 1e-6);
 }
 
 /* ---- JSON ---------------------------------------------------------------------- */

@@ -40,13 +40,17 @@ struct jr_ctx;      /* engine/json_read.h */
 #define COLORMAP_MAX_POINTS 64
 /* the longest built-in name plus room; custom maps have name "" */
 #define COLORMAP_NAME_BYTES 32
-/* entries of a baked table: nearest-entry lookup is then off by at most half
- * an entry, 1/2046 of the range, times the steepest segment's slope; for the
- * built-in maps that is below COLORMAP_TABLE_TOLERANCE */
+/* entries of a baked table (16 KiB): nearest-entry lookup is then off by at
+ * most half an entry, 1/2046 of the range, times the steepest segment's
+ * slope (colormap_table_error) */
 #define COLORMAP_TABLE_SIZE 1024
 /* largest difference, in linear RGB and in opacity, between colormap_lookup
- * and colormap_eval for every built-in map (tests/test_colormap.c checks it) */
-#define COLORMAP_TABLE_TOLERANCE 0.002f
+ * and colormap_eval for every built-in map (tests/test_colormap.c checks it):
+ * viridis' red rises 5.1 per unit of t at its top end, so half an entry is
+ * 0.0025 there. That is under one 8-bit sRGB code value where the linear
+ * value is above 0.2; in darker colours the same linear error is up to a few
+ * code values. */
+#define COLORMAP_TABLE_TOLERANCE 0.003f
 
 typedef struct colormap_color_point {
     float pos;    /* in [0, 1], strictly increasing along the map */
@@ -119,6 +123,12 @@ colormap_rgba colormap_eval(const colormap *cm, float value);
 /* Sample *cm into *out for colormap_lookup (COLORMAP_TABLE_SIZE exact
  * evaluations; call once per map and range, not per frame). */
 void colormap_bake(const colormap *cm, colormap_table *out);
+
+/* An upper bound of |colormap_lookup - colormap_eval| in any channel for a
+ * table baked from *cm: its steepest slope (per unit of t, over colour and
+ * opacity segments) times half an entry. A hand-made map with two points
+ * very close together has a large bound: bake is then no substitute for eval. */
+float colormap_table_error(const colormap *cm);
 
 /* The table entry nearest to `value`: what a renderer calls per hit. Agrees
  * with colormap_eval on NaN, infinities, clamping and lo == hi; between
