@@ -154,6 +154,9 @@ bool colormap_preset(const char *name, colormap *out)
     return true;
 }
 
+/* room for every name in names_text */
+#define NAMES_TEXT_BYTES 128
+
 /* "viridis, magma, ..." into buf, for messages. */
 static const char *names_text(char *buf, size_t size)
 {
@@ -163,9 +166,6 @@ static const char *names_text(char *buf, size_t size)
         used += (size_t)snprintf(buf + used, size - used, "%s%s", i ? ", " : "", preset_names[i]);
     return buf;
 }
-
-/* room for every name in names_text */
-#define NAMES_TEXT_BYTES 128
 
 /* ---- checks ------------------------------------------------------------------ */
 
@@ -184,7 +184,8 @@ bool colormap_validate(const colormap *cm, tess_error *err)
         if (!unit(c->pos) || !unit(c->rgb[0]) || !unit(c->rgb[1]) || !unit(c->rgb[2]))
             return tess_error_set(err, "colour map: colour point %u: position and channels must be in [0, 1]", i);
         if (i > 0 && !(c->pos > cm->colors[i - 1].pos))
-            return tess_error_set(err, "colour map: colour point %u: position %g is not greater than the previous point's (%g)",
+            return tess_error_set(err,
+                                  "colour map: colour point %u: position %g is not greater than the previous point's (%g)",
                                   i, c->pos, cm->colors[i - 1].pos);
     }
     for (uint32_t i = 0; i < cm->opacity_count; i++) {
@@ -192,7 +193,8 @@ bool colormap_validate(const colormap *cm, tess_error *err)
         if (!unit(o->pos) || !unit(o->opacity))
             return tess_error_set(err, "colour map: opacity point %u: position and opacity must be in [0, 1]", i);
         if (i > 0 && !(o->pos > cm->opacity[i - 1].pos))
-            return tess_error_set(err, "colour map: opacity point %u: position %g is not greater than the previous point's (%g)",
+            return tess_error_set(err,
+                                  "colour map: opacity point %u: position %g is not greater than the previous point's (%g)",
                                   i, o->pos, cm->opacity[i - 1].pos);
     }
     if (!isfinite(cm->lo) || !isfinite(cm->hi) || !(cm->lo <= cm->hi))
@@ -211,9 +213,10 @@ void colormap_fit_range(colormap *cm, float data_min, float data_max)
 /* ---- evaluation ------------------------------------------------------------- */
 
 /* Index i of the segment [pos(i), pos(i+1)] holding t, and the fraction along
- * it, for `count` >= 2 strictly increasing positions read through `pos_at`
- * (stride `stride` bytes from `first`). Before the first point the fraction
- * is 0 of segment 0, after the last 1 of the last segment. */
+ * it, for `count` >= 2 strictly increasing positions: the float at `first`
+ * and every `stride` bytes after it (the pos of each colour or opacity
+ * point). Before the first point the fraction is 0 of segment 0, after the
+ * last 1 of the last segment. */
 static uint32_t find_segment(const float *first, size_t stride, uint32_t count, double t, double *frac)
 {
     const char *base = (const char *)first;
