@@ -544,7 +544,12 @@ static scene *scene_load_particle_file(const char *path, tess_error *err)
         tess_error_set(err, "%s: out of memory building the scene", path);
         return NULL;
     }
-    particle_kind_options opt = {.radius = particle_kind_default_radius(set), .material_id = (uint32_t)mat_id};
+    /* a scanner's colours when the file has them */
+    bool rgb = particle_set_find_attribute(set, "red") >= 0 && particle_set_find_attribute(set, "green") >= 0 &&
+               particle_set_find_attribute(set, "blue") >= 0;
+    particle_kind_options opt = {.radius = particle_kind_default_radius(set),
+                                 .material_id = (uint32_t)mat_id,
+                                 .colouring = rgb ? PARTICLE_COLOUR_RGB : PARTICLE_COLOUR_MATERIAL};
     particle_kind *k = particle_kind_create(set, &opt, path, err);
     int g = k ? scene_add_geometry(s, &particle_kind_ops, k, path_basename(path)) : -1;
     if (g < 0 || scene_add_instance(s, (uint32_t)g, NULL, SCENE_NO_PART) < 0) {

@@ -242,3 +242,55 @@ Test(particles, crop_records_reach_the_kind_at_the_sync)
     accel_destroy(a);
     scene_destroy(s);
 }
+
+/* What a hit reports: the attribute through the colour map (auto range over
+ * the attribute), a scanner's sRGB codes decoded, or the material's colour. */
+Test(particles, hits_are_coloured_by_the_attribute_or_the_file_s_rgb)
+{
+    accel *a;
+    colormap grey;
+    cr_assert(colormap_preset("greyscale", &grey));
+    particle_kind_options opt = {.radius = 0.4f, .colouring = PARTICLE_COLOUR_MAP, .colour_attribute = "energy",
+                                 .map = &grey};
+    scene *s = particle_scene(particle_line(), opt, &a);
+    const scene_geometry *g = &s->geometries[0];
+    ray r = {v3(-5.f, 0.f, 0.f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+    for (float x = 0.f; x < 100.f; x += 33.f) {
+        r.org = v3(x, 5.f, 0.f);
+        r.dir = v3(0.f, -1.f, 0.f);
+        hit h;
+        cr_assert(accel_intersect(a, &r, &h));
+        geometry_surface surf;
+        g->ops->describe(g->data, h.prim_id, &r, &h, true, &surf);
+        cr_assert(surf.has_colour);
+        colormap_rgba want = colormap_eval(particle_kind_colormap(kind_of(s)), x); /* energy = x; range [0, 99] */
+        cr_assert_float_eq(surf.colour.x, want.r, COLORMAP_TABLE_TOLERANCE, "x %g: %g vs %g", (double)x,
+                           (double)surf.colour.x, (double)want.r);
+        cr_assert_float_eq(surf.geometric_n.y, 1.f, 1e-6f, "the top of the particle faces up");
+    }
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(particles, rgb_colours_are_the_file_s_srgb_codes)
+{
+    particle_set *set = particle_set_create();
+    cr_assert(set && particle_set_add_attribute(set, "red") == 0 && particle_set_add_attribute(set, "green") == 1 &&
+              particle_set_add_attribute(set, "blue") == 2);
+    const float codes[3] = {255.f, 128.f, 0.f};
+    cr_assert(particle_set_add(set, 0.f, 0.f, 0.f, codes));
+    accel *a;
+    scene *s = particle_scene(set, (particle_kind_options){.radius = 1.f, .colouring = PARTICLE_COLOUR_RGB}, &a);
+    ray r = {v3(0.f, 5.f, 0.f), v3(0.f, -1.f, 0.f), 0.f, INFINITY};
+    hit h;
+    cr_assert(accel_intersect(a, &r, &h));
+    const scene_geometry *g = &s->geometries[0];
+    geometry_surface surf;
+    g->ops->describe(g->data, h.prim_id, &r, &h, false, &surf);
+    cr_assert(surf.has_colour);
+    cr_assert_float_eq(surf.colour.x, 1.f, 1e-6f);
+    cr_assert_float_eq(surf.colour.y, 0.2158605f, 1e-5f, "sRGB 128 is linear 0.2159");
+    cr_assert_float_eq(surf.colour.z, 0.f, 0.f);
+    accel_destroy(a);
+    scene_destroy(s);
+}

@@ -3,10 +3,11 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
-const char *const particle_json_fields[] = {"file", "material", "transform", "matrix", "optional", "radius", "crop",
-                                            NULL};
+const char *const particle_json_fields[] = {"file",   "material", "transform", "matrix",    "optional",
+                                            "radius", "crop",     "color_by",  "color_map", NULL};
 
 /* "id, type, c_ke" (cut to fit) for messages about a name the set lacks. */
 static void attribute_names(const particle_set *set, char *out, size_t size)
@@ -96,10 +97,57 @@ static bool read_crop(jr_ctx *c, json_object *v, const particle_set *set, partic
     return ok;
 }
 
+/* "color_by": an attribute (through "color_map", default viridis over the
+ * attribute's range) or "rgb" (the attributes red, green, blue); absent:
+ * "rgb" when the set has those three, else the material's colour. */
+static bool read_colour(jr_ctx *c, json_object *v, const particle_set *set, particle_kind_options *opt,
+                        colormap *map)
+{
+    const char *by = NULL;
+    json_object *m;
+    bool has_map = jr_get_member(v, "color_map", &m);
+    if (!jr_opt_string(c, v, "color_by", &by))
+        return false;
+    bool has_rgb = particle_set_find_attribute(set, "red") >= 0 && particle_set_find_attribute(set, "green") >= 0 &&
+                   particle_set_find_attribute(set, "blue") >= 0;
+    if (!by) {
+        if (has_map)
+            return jr_member_fail(c, "color_map", "needs 'color_by' (the attribute it colours)");
+        opt->colouring = has_rgb ? PARTICLE_COLOUR_RGB : PARTICLE_COLOUR_MATERIAL;
+        return true;
+    }
+    size_t saved = jr_field_key(c, "color_by");
+    int index = -1;
+    bool ok = true;
+    if (strcmp(by, "rgb") == 0) {
+        ok = has_rgb || jr_field_fail(c, "'rgb' needs the attributes red, green and blue");
+        opt->colouring = PARTICLE_COLOUR_RGB;
+    } else {
+        ok = find_attribute(c, set, by, &index);
+        opt->colouring = PARTICLE_COLOUR_MAP;
+    }
+    jr_field_leave(c, saved);
+    if (!ok)
+        return false;
+    if (opt->colouring == PARTICLE_COLOUR_RGB) {
+        return !has_map || jr_member_fail(c, "color_map", "a colour map needs an attribute in 'color_by', not 'rgb'");
+    }
+    opt->colour_attribute = set->attributes[index].name;
+    if (!has_map)
+        return true;
+    saved = jr_field_key(c, "color_map");
+    ok = colormap_from_json(m, c, map);
+    jr_field_leave(c, saved);
+    if (ok)
+        opt->map = map;
+    return ok;
+}
+
 particle_kind *particle_json_kind(jr_ctx *c, json_object *v, particle_set *set, uint32_t material_id)
 {
     particle_kind_options opt = {.material_id = material_id};
-    if (!read_radius(c, v, set, &opt) || !read_crop(c, v, set, &opt)) {
+    colormap map; /* read_colour fills it when given; the kind copies it */
+    if (!read_radius(c, v, set, &opt) || !read_crop(c, v, set, &opt) || !read_colour(c, v, set, &opt, &map)) {
         particle_set_destroy(set);
         return NULL;
     }

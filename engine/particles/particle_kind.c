@@ -11,6 +11,7 @@
 #include "engine/bvh.h"
 #include "engine/intersect.h"
 #include "engine/parallel.h"
+#include "engine/srgb.h"
 #include "engine/wbvh.h"
 
 /* Particles a leaf of the tree holds at most: one 16-lane AVX-512 test
@@ -28,6 +29,13 @@ struct particle_kind {
     int crop_attribute;    /* index in set, or -1 */
     geometry_crop crop;    /* written only in serial sections (particle_kind_set_crop) */
     uint32_t material_id;
+    /* COLOUR: what describe reports (particle_colouring) */
+    particle_colouring colouring;
+    int colour_attribute;  /* PARTICLE_COLOUR_MAP: index in set */
+    int rgb_attribute[3];  /* PARTICLE_COLOUR_RGB: red, green, blue */
+    colormap map;          /* PARTICLE_COLOUR_MAP, range fitted */
+    colormap_table *table; /* PARTICLE_COLOUR_MAP: map baked for the per-hit lookup; else NULL */
+    float srgb_decode[256]; /* PARTICLE_COLOUR_RGB: linear value of each code */
     /* THE TREE, built once by the first kind_tree call. tree_lock guards
      * the build; tree_ready (release after the build, acquire before use)
      * lets later calls skip the lock. */
@@ -60,6 +68,36 @@ float particle_kind_default_radius(const particle_set *set)
     float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
     float diag = sqrtf(dx * dx + dy * dy + dz * dz);
     return diag > 0.f ? DEFAULT_RADIUS_OF_DIAGONAL * diag : 1.f;
+}
+
+static bool set_colouring(particle_kind *k, const particle_kind_options *opt, const char *source, tess_error *err)
+{
+    k->colouring = opt->colouring;
+    if (opt->colouring == PARTICLE_COLOUR_RGB) {
+        static const char *const names[3] = {"red", "green", "blue"};
+        for (int c = 0; c < 3; c++)
+            if ((k->rgb_attribute[c] = particle_set_find_attribute(k->set, names[c])) < 0)
+                return tess_error_set(err, "%s: colour by rgb needs the attributes red, green and blue (no '%s')",
+                                      source, names[c]);
+        for (int v = 0; v < 256; v++)
+            k->srgb_decode[v] = (float)srgb_curve_decode(v / 255.0);
+        return true;
+    }
+    if (opt->colouring != PARTICLE_COLOUR_MAP)
+        return true;
+    if (!opt->colour_attribute || (k->colour_attribute = particle_set_find_attribute(k->set, opt->colour_attribute)) < 0)
+        return tess_error_set(err, "%s: no attribute '%s' to colour by", source,
+                              opt->colour_attribute ? opt->colour_attribute : "");
+    if (opt->map)
+        k->map = *opt->map;
+    else
+        colormap_preset("viridis", &k->map);
+    const particle_attribute *a = &k->set->attributes[k->colour_attribute];
+    colormap_fit_range(&k->map, a->min, a->max);
+    if (!(k->table = malloc(sizeof *k->table)))
+        return tess_error_set(err, "%s: out of memory for the colour map", source);
+    colormap_bake(&k->map, k->table);
+    return true;
 }
 
 particle_kind *particle_kind_create(particle_set *set, const particle_kind_options *opt, const char *source,
@@ -95,6 +133,8 @@ particle_kind *particle_kind_create(particle_set *set, const particle_kind_optio
         tess_error_set(err, "%s: the radius must be a finite number > 0", source);
         goto fail;
     }
+    if (!set_colouring(k, opt, source, err))
+        goto fail;
     if (opt->crop_attribute) {
         k->crop_attribute = particle_set_find_attribute(set, opt->crop_attribute);
         if (k->crop_attribute < 0) {
@@ -119,12 +159,17 @@ void particle_kind_destroy(particle_kind *k)
     if (!k)
         return;
     wbvh_finish(&k->tree);
+    free(k->table);
     pthread_mutex_destroy(&k->tree_lock);
     particle_set_destroy(k->set);
     free(k);
 }
 
 const particle_set *particle_kind_set(const particle_kind *k) { return k->set; }
+const colormap *particle_kind_colormap(const particle_kind *k)
+{
+    return k->colouring == PARTICLE_COLOUR_MAP ? &k->map : NULL;
+}
 geometry_crop particle_kind_crop(const particle_kind *k) { return k->crop; }
 int particle_kind_crop_attribute(const particle_kind *k) { return k->crop_attribute; }
 
@@ -168,7 +213,20 @@ static void kind_describe(const void *data, uint32_t prim, const ray *r, const h
     out->position_error = pt.error;
     out->shading_n = out->geometric_n;
     out->material_id = k->material_id;
-    out->has_colour = false;
+    out->has_colour = k->colouring != PARTICLE_COLOUR_MATERIAL;
+    if (k->colouring == PARTICLE_COLOUR_MAP) {
+        colormap_rgba mapped = colormap_lookup(k->table, s->attributes[k->colour_attribute].values[prim]);
+        out->colour = v3(mapped.r, mapped.g, mapped.b);
+    } else if (k->colouring == PARTICLE_COLOUR_RGB) {
+        float rgb[3];
+        for (int ch = 0; ch < 3; ch++) {
+            float code = s->attributes[k->rgb_attribute[ch]].values[prim];
+            /* code values 0..255 (rounded; outside clamped) */
+            int i = code > 0.f ? (code < 255.f ? (int)(code + 0.5f) : 255) : 0;
+            rgb[ch] = k->srgb_decode[i];
+        }
+        out->colour = v3(rgb[0], rgb[1], rgb[2]);
+    }
 }
 
 static size_t kind_bytes(const void *data) { return particle_set_bytes(((const particle_kind *)data)->set); }

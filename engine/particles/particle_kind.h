@@ -19,11 +19,19 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "engine/colormap.h"
 #include "engine/err.h"
 #include "engine/geometry.h"
 #include "particles.h"
 
 typedef struct particle_kind particle_kind;
+
+/* How particles are coloured. */
+typedef enum particle_colouring {
+    PARTICLE_COLOUR_MATERIAL, /* the material's diffuse colour */
+    PARTICLE_COLOUR_MAP,      /* an attribute through a colour map */
+    PARTICLE_COLOUR_RGB,      /* the attributes red, green, blue: sRGB code values 0..255 (a scanner's) */
+} particle_colouring;
 
 typedef struct particle_kind_options {
     float radius;                  /* every particle's radius (> 0), when radius_attribute is NULL */
@@ -31,6 +39,10 @@ typedef struct particle_kind_options {
     const char *crop_attribute;    /* the attribute a crop range applies to, or NULL: no crop */
     geometry_crop crop;            /* the range at start (active or not) */
     uint32_t material_id;          /* scene material of every particle */
+    particle_colouring colouring;
+    const char *colour_attribute;  /* PARTICLE_COLOUR_MAP: the attribute coloured */
+    const colormap *map;           /* PARTICLE_COLOUR_MAP: the map (an automatic range is fitted to the
+                                      attribute's values); NULL: viridis */
 } particle_kind_options;
 
 /* The radius a set gets when nothing says: 0.001 x the diagonal of its
@@ -52,6 +64,9 @@ int particle_kind_crop_attribute(const particle_kind *k);
 /* Change the crop range: only while nothing traces (a serial section). A
  * kind without a crop attribute ignores it. */
 void particle_kind_set_crop(particle_kind *k, geometry_crop crop);
+
+/* The colour map in use (PARTICLE_COLOUR_MAP), its range fitted; NULL otherwise. */
+const colormap *particle_kind_colormap(const particle_kind *k);
 
 /* The kind's ops; data is a particle_kind. */
 extern const geometry_ops particle_kind_ops;
