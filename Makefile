@@ -56,7 +56,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-parts bench-pipeline bench-wall clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts bench-pipeline bench-wall clean check-headers unrobust \
         gen-assembly
 
 all: tessera
@@ -221,6 +221,7 @@ bench:
 	sh tools/bench_pipeline.sh
 	sh tools/bench_parts.sh
 	sh tools/bench_ao.sh
+	sh tools/bench_particles.sh
 
 # Embree's two-level scene on an assembly (tools/embree_parts/embree_parts.c): built only for the
 # benchmarks (it needs libembree-dev: tools/deps.sh --bench), never by make or make test
@@ -240,6 +241,13 @@ bench-ao:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera
 	sh tools/bench_ao.sh
+
+# particles against Embree's sphere points alone (tools/bench_particles.sh): the "## Particles"
+# section of BENCHMARKS.md
+bench-particles:
+	@sh tools/deps.sh --bench
+	$(MAKE) tessera
+	sh tools/bench_particles.sh
 
 # the wall benchmarks alone (bench --wall): the "## Wall" section of BENCHMARKS.md
 bench-wall: deps

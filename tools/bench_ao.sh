@@ -37,6 +37,9 @@
 set -eu
 
 cd "$(dirname "$0")/.."
+BENCH_NAME=bench_ao
+# shellcheck source=tools/bench_lib.sh
+. tools/bench_lib.sh
 SHARED=${TESSERA_SHARED:-../shared}
 DATA=$SHARED/data/meshes
 PEER_SRC=$SHARED/tools/peer
@@ -77,37 +80,12 @@ LOG=$WORK/runs.log
 echo "bench_ao: work directory $WORK" >&2
 cp ./tessera "$WORK/tessera"
 TESSERA=$WORK/tessera
-mkdir -p "$PEER_DIR"
-rm -f "$PEER_DIR/Makefile" "$PEER_DIR/embree_bench.c"
-cp "$PEER_SRC/Makefile" "$PEER_SRC/embree_bench.c" "$PEER_DIR/"
-if ! env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s -C "$PEER_DIR" embree_bench > "$WORK/peer_build.log" 2>&1; then
+if ! build_peer "$PEER_DIR" "$PEER_SRC" "$WORK/peer_build.log"; then
     echo "bench_ao: building the Embree harness failed (sh tools/deps.sh --bench installs libembree-dev):" >&2
     cat "$WORK/peer_build.log" >&2
     exit 1
 fi
 EMBREE=$PEER_DIR/embree_bench
-
-WAIT_MS=0
-QUIET_TICKS=$(($(getconf CLK_TCK 2>/dev/null || echo 100) * 4 / 100))
-[ "$QUIET_TICKS" -lt 4 ] && QUIET_TICKS=4
-now_ms() { echo $(($(date +%s%N) / 1000000)); }
-busy_ticks() { awk '/^cpu /{print $2+$3+$4+$7+$8+$9}' /proc/stat; }
-kv() { printf '%s\n' "$1" | tr ' \t' '\n\n' | sed -n "s/^$2=//p" | head -n 1; }
-
-# wait_quiet: up to 30 s for a second with < 0.04 CPU used, while the budget lasts
-wait_quiet() {
-    [ $((WAIT_MS / 1000)) -ge "$WAIT_BUDGET_S" ] && return 0
-    w0=$(now_ms)
-    i=0
-    while [ $i -lt 30 ]; do
-        qa=$(busy_ticks)
-        sleep 1
-        qb=$(busy_ticks)
-        [ $((qb - qa)) -le "$QUIET_TICKS" ] && break
-        i=$((i + 1))
-    done
-    WAIT_MS=$((WAIT_MS + $(now_ms) - w0))
-}
 
 # run ENGINE MESH THREADS VARIANT COMMAND...: one measurement (repeated while noisy), logged as
 #   engine mesh threads variant status ao_rays_per_frame frame_ms cpu_other

@@ -1,0 +1,47 @@
+# bench_lib.sh - what the benchmark scripts share (sourced, not run):
+# waiting for a quiet machine, reading KEY=VALUE fields, timing.
+#   WAIT_BUDGET_S  seconds of waiting for quiet over the whole run (the caller sets it)
+#   BENCH_NAME     the script's name for messages (the caller sets it)
+# The caller may set QUIET_TICKS; by default a second counts as quiet when the
+# machine's busy ticks in it stay at most 4 % of one CPU (at least 4 ticks).
+WAIT_MS=0
+WAIT_BUDGET_SPENT=0
+: "${QUIET_TICKS:=$(($(getconf CLK_TCK 2>/dev/null || echo 100) * 4 / 100))}"
+[ "$QUIET_TICKS" -lt 4 ] && QUIET_TICKS=4
+
+now_ms() { echo $(($(date +%s%N) / 1000000)); }
+busy_ticks() { awk '/^cpu /{print $2+$3+$4+$7+$8+$9}' /proc/stat; }
+# kv LINE KEY: the value of KEY=VALUE in LINE (fields split on blanks)
+kv() { printf '%s\n' "$1" | tr ' \t' '\n\n' | sed -n "s/^$2=//p" | head -n 1; }
+
+# wait_quiet: up to 30 s for a quiet second, while the budget lasts
+wait_quiet() {
+    if [ $((WAIT_MS / 1000)) -ge "$WAIT_BUDGET_S" ]; then
+        if [ "$WAIT_BUDGET_SPENT" = 0 ]; then
+            echo "$BENCH_NAME: $WAIT_BUDGET_S s of waiting for quiet used up; runs start at once from now on" >&2
+            WAIT_BUDGET_SPENT=1
+        fi
+        return 0
+    fi
+    w0=$(now_ms)
+    i=0
+    while [ $i -lt 30 ]; do
+        qa=$(busy_ticks)
+        sleep 1
+        qb=$(busy_ticks)
+        [ $((qb - qa)) -le "$QUIET_TICKS" ] && break
+        i=$((i + 1))
+    done
+    WAIT_MS=$((WAIT_MS + $(now_ms) - w0))
+}
+
+# median of the numbers on stdin (one per line)
+median() { sort -g | awk '{ v[NR] = $1 } END { if (NR == 0) print 0; else if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+# build_peer DIR SRC LOG: the Embree harness from SRC (../shared/tools/peer) built in DIR
+build_peer() {
+    mkdir -p "$1"
+    rm -f "$1/Makefile" "$1/embree_bench.c"
+    cp "$2/Makefile" "$2/embree_bench.c" "$1/"
+    env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s -C "$1" embree_bench > "$3" 2>&1
+}
