@@ -5,6 +5,7 @@
  * brute force in every ISA: tests/test_kernels.c.) */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,6 +15,7 @@
 #include "engine/render.h"
 #include "engine/scene.h"
 #include "engine/txn.h"
+#include "tools/cli/input_pick.h"
 
 /* A scene holding only `set` as particles (options as given), and its accel. */
 static scene *particle_scene(particle_set *set, particle_kind_options opt, accel **a)
@@ -291,6 +293,24 @@ Test(particles, rgb_colours_are_the_file_s_srgb_codes)
     cr_assert_float_eq(surf.colour.x, 1.f, 1e-6f);
     cr_assert_float_eq(surf.colour.y, 0.2158605f, 1e-5f, "sRGB 128 is linear 0.2159");
     cr_assert_float_eq(surf.colour.z, 0.f, 0.f);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* Picking a particle names it and its attributes' values (the status line). */
+Test(particles, a_pick_reports_the_particle_s_attributes)
+{
+    accel *a;
+    scene *s = particle_scene(particle_line(), (particle_kind_options){.radius = 0.4f}, &a);
+    input_hit out;
+    cli_input_pick(s, a, v3(42.f, 5.f, 0.f), v3(0.f, -1.f, 0.f), &out);
+    cr_assert(out.hit);
+    const particle_set *set = particle_kind_set(kind_of(s));
+    char want[128];
+    snprintf(want, sizeof want, "particle %u of 'particles': energy 42", out.prim_id);
+    cr_assert_str_eq(out.what, want);
+    cr_assert_float_eq(set->x[out.prim_id], 42.f, 0.f);
+    cr_assert_str_eq(out.part.label, "the particles 'particles' (100)");
     accel_destroy(a);
     scene_destroy(s);
 }

@@ -7,6 +7,7 @@
 
 #include "engine/accel.h"
 #include "engine/part_tree.h"
+#include "engine/particles/particle_kind.h"
 #include "engine/scene.h"
 
 /* A path is at most this long before its label is cut (deeper paths than
@@ -107,6 +108,21 @@ void cli_input_pick(const scene *s, const accel *a, vec3 origin, vec3 dir, input
         /* spheres are one geometry: hiding one hides the set (per-sphere hiding is not there yet) */
         snprintf(out->what, sizeof out->what, "sphere %u", h.prim_id);
         snprintf(out->part.label, sizeof out->part.label, "the sphere set (%u spheres)", s->spheres.count);
+    } else if (g->ops == &particle_kind_ops) {
+        /* a particle's attributes are what people pick it for: "particle 12 of 'melt.dump': id 4512,
+         * c_ke 3.21, ..." (as many as fit the status line) */
+        const particle_set *set = particle_kind_set(g->data);
+        int used = snprintf(out->what, sizeof out->what, "particle %u of '%s'", h.prim_id, g->name);
+        for (uint32_t k = 0; k < set->attribute_count && used > 0; k++) {
+            char one[64];
+            int n = snprintf(one, sizeof one, "%s %s %.4g", k ? "," : ":", set->attributes[k].name,
+                             (double)set->attributes[k].values[h.prim_id]);
+            if (n < 0 || (size_t)n >= sizeof one || (size_t)(used + n) >= sizeof out->what)
+                break; /* whole attributes only */
+            memcpy(out->what + used, one, (size_t)n + 1);
+            used += n;
+        }
+        snprintf(out->part.label, sizeof out->part.label, "the particles '%s' (%u)", g->name, set->count);
     } else {
         snprintf(out->what, sizeof out->what, "%s %u '%s' primitive %u", g->ops->name, h.geom_id, g->name, h.prim_id);
         snprintf(out->part.label, sizeof out->part.label, "%s %u '%s'", g->ops->name, h.geom_id, g->name);
