@@ -431,3 +431,37 @@ uint64_t accel_occluded_packet(const accel *a, packet_range r)
     const wbvh *sole = sole_geometry(a);
     return a->kernels->intersect_packet(sole ? sole : &a->top, 0, r.packet, mask, true);
 }
+
+bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
+{
+    accel *a = mutable_accel(ca);
+    const scene *s = a->scene;
+    bool ok = true;
+    pthread_mutex_lock(&a->refit_lock);
+    for (uint32_t g = 0; g < a->geom_count; g++) {
+        const scene_geometry *sg = &s->geometries[g];
+        if (!sg->ops->set_step)
+            continue;
+        if (!sg->ops->set_step(sg->data, step, ok ? err : NULL)) {
+            ok = false;
+            continue;
+        }
+        if (sg->ops->leaf == GEOMETRY_LEAF_POINTS) { /* its tree changed with its points */
+            const wbvh *t = sg->ops->tree(sg->data, 1, ok ? err : NULL);
+            if (!t) {
+                ok = false;
+                continue;
+            }
+            a->geoms[g] = *t;
+            a->geoms[g].borrowed = true;
+        }
+        for (uint32_t i = 0; i < a->instance_count; i++)
+            if (s->instances[i].geometry == g) {
+                a->instance_bounds[i] = instance_box(&a->placements[i], &a->geoms[g]);
+                wbvh_mark_instances(&a->top, i, 1);
+            }
+    }
+    wbvh_refit_stale(&a->top, a->instance_bounds);
+    pthread_mutex_unlock(&a->refit_lock);
+    return ok;
+}

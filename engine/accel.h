@@ -117,6 +117,14 @@ void accel_set_placement(const accel *a, uint32_t first, uint32_t count, const a
  * crop are ignored. Same callers as accel_set_hidden. */
 void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop);
 
+/* Show time step `step` of every geometry that has steps
+ * (geometry_ops.set_step; each takes it modulo its own count), take the
+ * new trees of GEOMETRY_LEAF_POINTS kinds and refit the instance level.
+ * Waits for a step that is not loaded yet. False, with the first error,
+ * when a step could not be had (those geometries keep theirs). Same callers
+ * as accel_set_hidden. */
+bool accel_set_time_step(const accel *a, uint32_t step, tess_error *err);
+
 /* Bytes of acceleration data (nodes, primitive blocks), not counting the scene. */
 size_t accel_bytes(const accel *a);
 

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "accel.h"
+#include "log.h"
 
 static size_t words(uint32_t count) { return ((size_t)count + 63) / 64; }
 static bool bit(const uint64_t *set, uint32_t id) { return set && (set[id / 64] >> (id % 64) & 1u); }
@@ -362,6 +363,16 @@ bool frame_state_set_crop(frame_state *st, uint32_t first, uint32_t count, geome
     return true;
 }
 
+void frame_state_set_time_step(frame_state *st, uint32_t step)
+{
+    if (step != st->time_step) {
+        st->time_step = step;
+        st->time_step_dirty = true;
+        st->picture_serial++;
+    }
+    st->version++;
+}
+
 bool frame_state_crop(const frame_state *st, uint32_t id, geometry_crop *out)
 {
     if (id >= st->geometry_count || !bit(st->cropped, id))
@@ -451,6 +462,13 @@ uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
             calls++;
         }
     st->crop_first = st->crop_end = 0;
+    if (st->time_step_dirty) {
+        tess_error err = {{0}};
+        if (!accel_set_time_step(a, st->time_step, &err))
+            log_warn("time step %u: %s (the step shown stays)", st->time_step, err.msg);
+        st->time_step_dirty = false;
+        calls++;
+    }
     /* what was hidden leaves the instance level's boxes (one refit) */
     accel_commit(a);
     return calls;

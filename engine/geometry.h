@@ -120,6 +120,16 @@ typedef struct geometry_ops {
     /* Kinds that crop (geometry_points.crop_value): set the range. Only
      * where nothing traces (a serial section). NULL: the kind has no crop. */
     void (*set_crop)(void *data, geometry_crop crop);
+    /* TIME STEPS (a series of files; NULL: one state only). step_count:
+     * how many. step_ready: whether `step` can be shown without waiting
+     * (else it is loaded in the background); any thread. set_step: show
+     * `step`, only where nothing traces; false with err when its data
+     * cannot be had (the step shown stays). A GEOMETRY_LEAF_POINTS kind's
+     * tree changes with the step: the accel takes it again
+     * (accel_set_time_step). */
+    uint32_t (*step_count)(const void *data);
+    bool (*step_ready)(void *data, uint32_t step);
+    bool (*set_step)(void *data, uint32_t step, tess_error *err);
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */

@@ -575,26 +575,51 @@ static bool load_sphere(loader *L, json_object *v)
 static bool load_particles(loader *L, json_object *v)
 {
     jr_ctx *c = &L->ctx;
-    const char *file = NULL;
+    const char *file = NULL, *files = NULL;
     bool optional = false;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
     uint32_t material_id = 0;
-    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, particle_json_fields) ||
-        !jr_require_member(c, v, "file") || !jr_opt_string(c, v, "file", &file) ||
-        !jr_opt_bool(c, v, "optional", &optional) || !material_ref(L, v, &material_id) ||
-        !mesh_xform(c, v, xform) || !resolve_path(L, file, resolved, sizeof resolved))
+    json_object *ignored;
+    bool has_file = jr_get_member(v, "file", &ignored), has_files = jr_get_member(v, "files", &ignored);
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, particle_json_fields))
         return false;
+    if (has_file == has_files)
+        return jr_field_fail(c, "give either 'file' or 'files' (a time series)");
+    if (!jr_opt_string(c, v, "file", &file) || !jr_opt_string(c, v, "files", &files) ||
+        !jr_opt_bool(c, v, "optional", &optional) || !material_ref(L, v, &material_id) ||
+        !mesh_xform(c, v, xform) || !resolve_path(L, file ? file : files, resolved, sizeof resolved))
+        return false;
+    const char *key = file ? "file" : "files";
+    particle_paths series = {0};
+    if (files) {
+        tess_error why = {{0}};
+        if (!particle_paths_glob(resolved, &series, &why)) {
+            if (optional && !series.failed) {
+                log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, resolved);
+                return true;
+            }
+            return jr_member_fail(c, "files", why.msg);
+        }
+    }
     struct stat st;
-    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
+    if (file && optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
         log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
         return true;
     }
     tess_error why = {{0}};
-    particle_set *set = particles_load(resolved, &why);
-    if (!set)
-        return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the particles");
+    particle_set *set = particles_load(files ? series.paths[0] : resolved, &why);
+    if (!set) {
+        particle_paths_free(&series);
+        return jr_member_fail(c, key, why.msg[0] ? why.msg : "cannot load the particles");
+    }
     particle_kind *k = particle_json_kind(c, v, set, material_id);
+    if (k && files && !particle_kind_attach_series(k, (const char *const *)series.paths, series.count, &why)) {
+        particle_kind_destroy(k);
+        k = NULL;
+        jr_member_fail(c, key, why.msg);
+    }
+    particle_paths_free(&series);
     if (!k)
         return false;
     int g = scene_add_geometry(L->s, &particle_kind_ops, k, base_name(resolved));

@@ -26,7 +26,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_SHADOWS] = "shadows",       [TXN_RENDERER] = "renderer",
     [TXN_THREADS] = "threads",       [TXN_CHANNEL_ACTIVE] = "channel-active", [TXN_MOVE] = "move",
     [TXN_OPACITY] = "opacity",       [TXN_CLIP_PLANE] = "clip-plane",
-    [TXN_CROP] = "crop",
+    [TXN_CROP] = "crop",             [TXN_TIME_STEP] = "time-step",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -163,6 +163,13 @@ txn_record txn_crop(uint32_t first, uint32_t count, bool on, float lo, float hi)
     r.args.crop.on = on;
     r.args.crop.lo = lo;
     r.args.crop.hi = hi;
+    return r;
+}
+
+txn_record txn_time_step(uint32_t step)
+{
+    txn_record r = blank(TXN_TIME_STEP);
+    r.args.time_step.step = step;
     return r;
 }
 
@@ -321,6 +328,8 @@ bool txn_validate(const txn_record *r, tess_error *err)
             return tess_error_set(err, "crop: lo %g is above hi %g", (double)lo, (double)hi);
         return true;
     }
+    case TXN_TIME_STEP:
+        return true;
     case TXN_SHOW_ALL:
     case TXN_TOUR:
     case TXN_QUIT:
@@ -461,6 +470,9 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
                                   (geometry_crop){r->args.crop.on, r->args.crop.lo, r->args.crop.hi}))
             return out_of_memory(name, err);
         return true;
+    case TXN_TIME_STEP:
+        frame_state_set_time_step(st, r->args.time_step.step);
+        return true;
     case TXN_TOUR:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -589,6 +601,9 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
     case TXN_CROP:
         put_geoms(&o, &r->args.crop.geoms);
         put(&o, " %d %a %a", r->args.crop.on ? 1 : 0, (double)r->args.crop.lo, (double)r->args.crop.hi);
+        break;
+    case TXN_TIME_STEP:
+        put(&o, " %u", (unsigned)r->args.time_step.step);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
@@ -876,6 +891,11 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
     case TXN_CROP:
         return geoms_text(r, name, &t->args.crop.geoms) && flag(r, &t->args.crop.on, "crop on/off") &&
                float_value(r, &t->args.crop.lo, "crop lo") && float_value(r, &t->args.crop.hi, "crop hi");
+    case TXN_TIME_STEP:
+        if (!whole(r, 0.0, UINT32_MAX, &v, "time-step step", "time-step: the step must be a whole number in 0..4294967295"))
+            return false;
+        t->args.time_step.step = (uint32_t)v;
+        return true;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -1056,6 +1076,9 @@ static void layout(txn_record *t, unsigned char *b, bool write)
         U8(12, t->args.crop.on);
         F32(16, t->args.crop.lo);
         F32(20, t->args.crop.hi);
+        break;
+    case TXN_TIME_STEP:
+        U32(4, t->args.time_step.step);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:

@@ -44,6 +44,9 @@
  *                    (finite, lo <= hi)            seen only where their crop attribute lies in
  *                                                  [lo, hi] (on), or all of them (off); kinds
  *                                                  without a crop ignore it
+ *   time-step        step                          every time series shows that step (modulo its
+ *                                                  own count); waits at the barrier for a step
+ *                                                  not loaded yet (input asks only for ready ones)
  *   shadows          on                            shadow rays traced or not
  *   renderer         name                          the renderer (renderer_by_name)
  *   threads          count (1..TXN_MAX_THREADS)    render threads
@@ -71,7 +74,7 @@
  *   move FIRST COUNT M0 .. M11
  *   opacity all A | opacity FIRST COUNT A
  *   clip-plane I ON PX PY PZ NX NY NZ
- *   crop FIRST COUNT ON LO HI
+ *   crop FIRST COUNT ON LO HI                        time-step N
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -95,6 +98,7 @@
  *     opacity         u8 all, 3 zero bytes, u32 first, u32 count, f32 a (all: first and count 0)
  *     clip-plane      i32 index, u8 on, 3 zero bytes, f32 point xyz, f32 normal xyz
  *     crop            u32 first, u32 count, u8 on, 3 zero bytes, f32 lo, f32 hi
+ *     time-step       u32 step
  *     show-all, quit  nothing
  * Decoding checks the kind, the zero bytes and then txn_validate. */
 #ifndef TESSERA_TXN_H
@@ -142,6 +146,7 @@ typedef enum txn_kind {
     TXN_OPACITY,
     TXN_CLIP_PLANE,
     TXN_CROP,
+    TXN_TIME_STEP,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -201,6 +206,9 @@ typedef struct txn_record {
             float lo, hi;       /* finite, lo <= hi */
         } crop;
         struct {
+            uint32_t step;
+        } time_step;
+        struct {
             int32_t count;
         } threads;
         struct {
@@ -236,6 +244,7 @@ txn_record txn_opacity_all(float a);
 txn_record txn_opacity(uint32_t first, uint32_t count, float a);
 txn_record txn_clip_plane(int index, bool on, const float point[3], const float normal[3]);
 txn_record txn_crop(uint32_t first, uint32_t count, bool on, float lo, float hi);
+txn_record txn_time_step(uint32_t step);
 txn_record txn_renderer(const char *name);
 txn_record txn_threads(int count);
 txn_record txn_channel_active(int channel, bool on);

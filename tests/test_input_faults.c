@@ -223,6 +223,7 @@ static input_txn sample_record(int i)
         return txn_clip_plane(i % TXN_CLIP_PLANES, i % 2 == 0, point, normal);
     }
     case TXN_CROP: return txn_crop(2, 1, i % 2 == 0, -0.5f * (float)i, 1.f);
+    case TXN_TIME_STEP: return txn_time_step((uint32_t)i % 9);
     case TXN_KIND_COUNT: break;
     }
     return txn_simple(TXN_QUIT);

@@ -8,6 +8,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "engine/accel.h"
 #include "engine/frame_state.h"
@@ -15,6 +17,7 @@
 #include "engine/render.h"
 #include "engine/scene.h"
 #include "engine/txn.h"
+#include "tests/support.h"
 #include "tools/cli/input_pick.h"
 
 /* A scene holding only `set` as particles (options as given), and its accel. */
@@ -313,4 +316,99 @@ Test(particles, a_pick_reports_the_particle_s_attributes)
     cr_assert_str_eq(out.part.label, "the particles 'particles' (100)");
     accel_destroy(a);
     scene_destroy(s);
+}
+
+/* An ascii PLY of vertices only: one particle at (x, 0, 0). */
+static void write_step(const char *dir, int step, float x)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/step_%04d.ply", dir, step);
+    FILE *f = fopen(path, "w");
+    cr_assert(f);
+    fprintf(f, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+               "end_header\n%g 0 0\n%g 0 0\n", (double)x, (double)x + 100.0);
+    fclose(f);
+}
+
+/* Where a ray down the x axis from x = -50 meets the series now. */
+static float first_x(const accel *a)
+{
+    ray r = {v3(-50.f, 0.f, 0.f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+    hit h;
+    cr_assert(accel_intersect(a, &r, &h));
+    return -50.f + h.t + 0.5f; /* radius 0.5 */
+}
+
+/* A series of files as time steps: a time-step record swaps the step in at
+ * the sync, the next one is loaded in the background, a step whose file is
+ * gone leaves the shown one, and the scene file's "files" pattern sorts the
+ * steps by name. */
+Test(particles, time_steps_swap_at_the_sync_and_load_ahead, .timeout = 60)
+{
+    char dir[256], scene_path[512];
+    support_make_tmp_dir(dir, sizeof dir, "steps");
+    for (int i = 0; i < 3; i++)
+        write_step(dir, i, 10.f * (float)i);
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    FILE *f = fopen(scene_path, "w");
+    cr_assert(f);
+    fprintf(f, "{\"particles\": [{\"files\": \"step_*.ply\", \"radius\": 0.5}]}\n");
+    fclose(f);
+    tess_error err = {{0}};
+    scene *s = scene_load(scene_path, &err);
+    cr_assert(s, "%s", err.msg);
+    accel *a = accel_build(s, 2, &err);
+    cr_assert(a, "%s", err.msg);
+    particle_kind *k = kind_of(s);
+    cr_assert_eq(particle_kind_step_count(k), 3u);
+    cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
+
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+    txn_record r = txn_time_step(2);
+    cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
+    cr_assert_float_eq(first_x(a), 0.f, 1e-4f, "applied, not yet synced");
+    frame_state_sync_accel(&st, a);
+    cr_assert_eq(particle_kind_step(k), 2u);
+    cr_assert_float_eq(first_x(a), 20.f, 1e-4f);
+    /* after a step the next one (0, wrapping) is loaded in the background */
+    while (!particle_kind_step_ready(k, 0))
+        nanosleep(&(struct timespec){0, 1000000}, NULL); /* the event: the loader's state; the timeout bounds it */
+    r = txn_time_step(3); /* = step 0 of 3 */
+    cr_assert(txn_apply(&r, &st, &err));
+    frame_state_sync_accel(&st, a);
+    cr_assert_eq(particle_kind_step(k), 0u);
+    cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
+
+    /* a step whose file went away: an error naming it; the step shown stays */
+    char gone[512];
+    snprintf(gone, sizeof gone, "%s/step_0001.ply", dir);
+    cr_assert_eq(unlink(gone), 0);
+    err.msg[0] = '\0';
+    cr_assert_not(accel_set_time_step(a, 1, &err));
+    cr_assert(strstr(err.msg, "step_0001.ply"), "%s", err.msg);
+    cr_assert_eq(particle_kind_step(k), 0u);
+    cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
+
+    frame_state_finish(&st);
+    accel_destroy(a);
+    scene_destroy(s);
+    support_remove_tmp_dir(dir);
+}
+
+Test(particles, a_series_pattern_that_matches_nothing_is_named)
+{
+    char dir[256], scene_path[512];
+    support_make_tmp_dir(dir, sizeof dir, "steps-none");
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    FILE *f = fopen(scene_path, "w");
+    cr_assert(f);
+    fprintf(f, "{\"particles\": [{\"files\": \"nothing_*.dump\"}]}\n");
+    fclose(f);
+    tess_error err = {{0}};
+    cr_assert_null(scene_load(scene_path, &err));
+    char want[1024];
+    snprintf(want, sizeof want, "%s: field 'particles[0].files': no file matches '%s/nothing_*.dump'", scene_path, dir);
+    cr_assert_str_eq(err.msg, want);
+    support_remove_tmp_dir(dir);
 }

@@ -22,8 +22,45 @@
 /* Particles per parallel chunk of box computation. */
 #define PARTICLE_BOX_GRAIN 16384
 
+/* A time step being loaded on the loader thread, or loaded. */
+typedef enum step_state { STEP_EMPTY, STEP_LOADING, STEP_READY, STEP_FAILED } step_state;
+
+/* Where a set keeps the attributes the kind reads (found by name in each
+ * step's set: files of a series may order their columns differently). */
+typedef struct step_layout {
+    int radius, crop, colour, rgb[3]; /* indices in the set, -1 when unused */
+} step_layout;
+
+/* THE SERIES (time steps). The kind shows one step (set, tree); the loader
+ * thread loads the next one asked for (want) into `pending` and builds its
+ * tree there, so at most two steps are in memory. lock guards want,
+ * pending, quit and loader_started; cond signals every change of them. The
+ * current step (set, tree, step) changes only in particle_kind_set_step,
+ * which runs where nothing traces (a serial section). */
+typedef struct particle_series {
+    char **paths;            /* step_count file names, in step order */
+    uint32_t step_count;
+    uint32_t step;           /* the step shown */
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    pthread_t loader;
+    bool loader_started, quit;
+    uint32_t want;           /* the step the loader should have in pending; UINT32_MAX: none */
+    struct {
+        uint32_t step;
+        step_state state;
+        particle_set *set;
+        step_layout lay;
+        wbvh tree;
+        char error[TESS_ERROR_MSG_BYTES];
+    } pending;
+} particle_series;
+
 struct particle_kind {
     particle_set *set;     /* owned; capacity >= count + GEOMETRY_POINTS_PAD (kernels read past) */
+    /* the attributes by name (resolved in every step's set: step_layout) */
+    char radius_name[PARTICLE_NAME_BYTES], crop_name[PARTICLE_NAME_BYTES], colour_name[PARTICLE_NAME_BYTES];
+    particle_series *series; /* NULL: one set, no time steps */
     int radius_attribute;  /* index in set, or -1: radius_all */
     float radius_all;
     int crop_attribute;    /* index in set, or -1 */
@@ -70,33 +107,53 @@ float particle_kind_default_radius(const particle_set *set)
     return diag > 0.f ? DEFAULT_RADIUS_OF_DIAGONAL * diag : 1.f;
 }
 
-static bool set_colouring(particle_kind *k, const particle_kind_options *opt, const char *source, tess_error *err)
+/* The attributes the kind reads, found by name in `set`, checked: a per-
+ * particle radius must be > 0 everywhere. */
+static bool resolve_layout(const particle_kind *k, const particle_set *set, step_layout *lay, const char *source,
+                           tess_error *err)
 {
-    k->colouring = opt->colouring;
-    if (opt->colouring == PARTICLE_COLOUR_RGB) {
+    *lay = (step_layout){-1, -1, -1, {-1, -1, -1}};
+    if (k->radius_name[0]) {
+        if ((lay->radius = particle_set_find_attribute(set, k->radius_name)) < 0)
+            return tess_error_set(err, "%s: no attribute '%s' for the radius", source, k->radius_name);
+        const float *r = set->attributes[lay->radius].values;
+        for (uint32_t i = 0; i < set->count; i++)
+            if (!(r[i] > 0.f))
+                return tess_error_set(err, "%s: particle %u: radius attribute '%s' is %g (must be > 0)", source, i,
+                                      k->radius_name, (double)r[i]);
+    }
+    if (k->crop_name[0] && (lay->crop = particle_set_find_attribute(set, k->crop_name)) < 0)
+        return tess_error_set(err, "%s: no attribute '%s' to crop by", source, k->crop_name);
+    if (k->colouring == PARTICLE_COLOUR_MAP && (lay->colour = particle_set_find_attribute(set, k->colour_name)) < 0)
+        return tess_error_set(err, "%s: no attribute '%s' to colour by", source, k->colour_name);
+    if (k->colouring == PARTICLE_COLOUR_RGB) {
         static const char *const names[3] = {"red", "green", "blue"};
         for (int c = 0; c < 3; c++)
-            if ((k->rgb_attribute[c] = particle_set_find_attribute(k->set, names[c])) < 0)
+            if ((lay->rgb[c] = particle_set_find_attribute(set, names[c])) < 0)
                 return tess_error_set(err, "%s: colour by rgb needs the attributes red, green and blue (no '%s')",
                                       source, names[c]);
-        for (int v = 0; v < 256; v++)
-            k->srgb_decode[v] = (float)srgb_curve_decode(v / 255.0);
-        return true;
     }
-    if (opt->colouring != PARTICLE_COLOUR_MAP)
+    /* the kernels read GEOMETRY_POINTS_PAD floats past the last particle */
+    return particle_set_fit((particle_set *)set, GEOMETRY_POINTS_PAD) ||
+           tess_error_set(err, "%s: out of memory for %u particles", source, set->count);
+}
+
+static void apply_layout(particle_kind *k, const step_layout *lay)
+{
+    k->radius_attribute = lay->radius;
+    k->crop_attribute = lay->crop;
+    k->colour_attribute = lay->colour;
+    memcpy(k->rgb_attribute, lay->rgb, sizeof k->rgb_attribute);
+}
+
+static bool copy_name(char *out, const char *name, const char *what, const char *source, tess_error *err)
+{
+    if (!name)
         return true;
-    if (!opt->colour_attribute || (k->colour_attribute = particle_set_find_attribute(k->set, opt->colour_attribute)) < 0)
-        return tess_error_set(err, "%s: no attribute '%s' to colour by", source,
-                              opt->colour_attribute ? opt->colour_attribute : "");
-    if (opt->map)
-        k->map = *opt->map;
-    else
-        colormap_preset("viridis", &k->map);
-    const particle_attribute *a = &k->set->attributes[k->colour_attribute];
-    colormap_fit_range(&k->map, a->min, a->max);
-    if (!(k->table = malloc(sizeof *k->table)))
-        return tess_error_set(err, "%s: out of memory for the colour map", source);
-    colormap_bake(&k->map, k->table);
+    size_t len = strlen(name);
+    if (len == 0 || len >= PARTICLE_NAME_BYTES)
+        return tess_error_set(err, "%s: no attribute '%s' %s", source, name, what);
+    memcpy(out, name, len + 1);
     return true;
 }
 
@@ -111,42 +168,41 @@ particle_kind *particle_kind_create(particle_set *set, const particle_kind_optio
         return NULL;
     }
     k->set = set;
-    k->radius_attribute = -1;
-    k->crop_attribute = -1;
     k->material_id = opt->material_id;
     k->radius_all = opt->radius;
+    k->colouring = opt->colouring;
     atomic_init(&k->tree_ready, false);
-    if (opt->radius_attribute) {
-        k->radius_attribute = particle_set_find_attribute(set, opt->radius_attribute);
-        if (k->radius_attribute < 0) {
-            tess_error_set(err, "%s: no attribute '%s' for the radius", source, opt->radius_attribute);
-            goto fail;
-        }
-        const float *r = set->attributes[k->radius_attribute].values;
-        for (uint32_t i = 0; i < set->count; i++)
-            if (!(r[i] > 0.f)) {
-                tess_error_set(err, "%s: particle %u: radius attribute '%s' is %g (must be > 0)", source, i,
-                               opt->radius_attribute, (double)r[i]);
-                goto fail;
-            }
-    } else if (!(opt->radius > 0.f) || !isfinite(opt->radius)) {
+    step_layout lay;
+    if (!copy_name(k->radius_name, opt->radius_attribute, "for the radius", source, err) ||
+        !copy_name(k->crop_name, opt->crop_attribute, "to crop by", source, err) ||
+        !copy_name(k->colour_name, opt->colouring == PARTICLE_COLOUR_MAP ? (opt->colour_attribute ? opt->colour_attribute : "") : NULL,
+                   "to colour by", source, err))
+        goto fail;
+    if (!opt->radius_attribute && (!(opt->radius > 0.f) || !isfinite(opt->radius))) {
         tess_error_set(err, "%s: the radius must be a finite number > 0", source);
         goto fail;
     }
-    if (!set_colouring(k, opt, source, err))
+    if (!resolve_layout(k, set, &lay, source, err))
         goto fail;
-    if (opt->crop_attribute) {
-        k->crop_attribute = particle_set_find_attribute(set, opt->crop_attribute);
-        if (k->crop_attribute < 0) {
-            tess_error_set(err, "%s: no attribute '%s' to crop by", source, opt->crop_attribute);
+    apply_layout(k, &lay);
+    if (k->crop_attribute >= 0)
+        k->crop = opt->crop;
+    if (k->colouring == PARTICLE_COLOUR_RGB)
+        for (int v = 0; v < 256; v++)
+            k->srgb_decode[v] = (float)srgb_curve_decode(v / 255.0);
+    if (k->colouring == PARTICLE_COLOUR_MAP) {
+        /* the range is fitted to this set (a series' first step: every step keeps its colours) */
+        if (opt->map)
+            k->map = *opt->map;
+        else
+            colormap_preset("viridis", &k->map);
+        const particle_attribute *a = &set->attributes[k->colour_attribute];
+        colormap_fit_range(&k->map, a->min, a->max);
+        if (!(k->table = malloc(sizeof *k->table))) {
+            tess_error_set(err, "%s: out of memory for the colour map", source);
             goto fail;
         }
-        k->crop = opt->crop;
-    }
-    /* the kernels read GEOMETRY_POINTS_PAD floats past the last particle */
-    if (!particle_set_fit(set, GEOMETRY_POINTS_PAD)) {
-        tess_error_set(err, "%s: out of memory for %u particles", source, set->count);
-        goto fail;
+        colormap_bake(&k->map, k->table);
     }
     return k;
 fail:
@@ -154,10 +210,13 @@ fail:
     return NULL;
 }
 
+static void series_destroy(particle_series *S);
+
 void particle_kind_destroy(particle_kind *k)
 {
     if (!k)
         return;
+    series_destroy(k->series);
     wbvh_finish(&k->tree);
     free(k->table);
     pthread_mutex_destroy(&k->tree_lock);
@@ -177,6 +236,183 @@ void particle_kind_set_crop(particle_kind *k, geometry_crop crop)
 {
     if (k->crop_attribute >= 0)
         k->crop = crop;
+}
+
+/* ---- time steps (particle_series) -------------------------------------- */
+
+static bool build_tree(const particle_kind *k, particle_set *set, const step_layout *lay, wbvh *tree, int threads,
+                       tess_error *err);
+
+static void pending_clear(particle_series *S)
+{
+    particle_set_destroy(S->pending.set);
+    wbvh_finish(&S->pending.tree);
+    S->pending.set = NULL;
+    S->pending.state = STEP_EMPTY;
+}
+
+/* The loader thread: loads the step asked for (want) into pending and
+ * builds its tree there, one thread's work, while frames render. */
+static void *series_loader(void *arg)
+{
+    particle_kind *k = arg;
+    particle_series *S = k->series;
+    pthread_mutex_lock(&S->lock);
+    for (;;) {
+        while (!S->quit && (S->want == UINT32_MAX || (S->pending.step == S->want && S->pending.state != STEP_EMPTY)))
+            pthread_cond_wait(&S->cond, &S->lock);
+        if (S->quit)
+            break;
+        uint32_t step = S->want;
+        pending_clear(S);
+        S->pending.step = step;
+        S->pending.state = STEP_LOADING;
+        const char *path = S->paths[step];
+        pthread_mutex_unlock(&S->lock);
+
+        tess_error why = {{0}};
+        step_layout lay;
+        wbvh tree;
+        memset(&tree, 0, sizeof tree);
+        particle_set *set = particles_load(path, &why);
+        bool ok = set && resolve_layout(k, set, &lay, path, &why) && build_tree(k, set, &lay, &tree, 1, &why);
+
+        pthread_mutex_lock(&S->lock);
+        if (ok) {
+            S->pending.set = set;
+            S->pending.lay = lay;
+            S->pending.tree = tree;
+            S->pending.state = STEP_READY;
+        } else {
+            particle_set_destroy(set);
+            wbvh_finish(&tree);
+            snprintf(S->pending.error, sizeof S->pending.error, "%s", why.msg[0] ? why.msg : "cannot load the step");
+            S->pending.state = STEP_FAILED;
+        }
+        pthread_cond_broadcast(&S->cond);
+    }
+    pthread_mutex_unlock(&S->lock);
+    return NULL;
+}
+
+/* Ask the loader for `step` (S->lock held). */
+static void series_request(particle_kind *k, uint32_t step)
+{
+    particle_series *S = k->series;
+    if (S->want == step)
+        return;
+    S->want = step;
+    if (!S->loader_started)
+        S->loader_started = pthread_create(&S->loader, NULL, series_loader, k) == 0;
+    pthread_cond_broadcast(&S->cond);
+}
+
+static void series_destroy(particle_series *S)
+{
+    if (!S)
+        return;
+    if (S->loader_started) {
+        pthread_mutex_lock(&S->lock);
+        S->quit = true;
+        pthread_cond_broadcast(&S->cond);
+        pthread_mutex_unlock(&S->lock);
+        pthread_join(S->loader, NULL);
+    }
+    pending_clear(S);
+    for (uint32_t i = 0; i < S->step_count; i++)
+        free(S->paths[i]);
+    free(S->paths);
+    pthread_cond_destroy(&S->cond);
+    pthread_mutex_destroy(&S->lock);
+    free(S);
+}
+
+bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, tess_error *err)
+{
+    particle_series *S = calloc(1, sizeof *S);
+    if (!S || !(S->paths = calloc(count ? count : 1, sizeof *S->paths))) {
+        free(S);
+        return tess_error_set(err, "particles: out of memory for a series of %u steps", count);
+    }
+    S->step_count = count;
+    for (uint32_t i = 0; i < count; i++)
+        if (!(S->paths[i] = strdup(paths[i]))) {
+            S->step_count = i;
+            goto oom;
+        }
+    if (pthread_mutex_init(&S->lock, NULL) != 0)
+        goto oom;
+    if (pthread_cond_init(&S->cond, NULL) != 0) {
+        pthread_mutex_destroy(&S->lock);
+        goto oom;
+    }
+    S->want = UINT32_MAX;
+    S->pending.step = UINT32_MAX;
+    k->series = S;
+    return true;
+oom:
+    for (uint32_t i = 0; i < S->step_count; i++)
+        free(S->paths[i]);
+    free(S->paths);
+    free(S);
+    return tess_error_set(err, "particles: out of memory for a series of %u steps", count);
+}
+
+uint32_t particle_kind_step_count(const particle_kind *k) { return k->series ? k->series->step_count : 1; }
+uint32_t particle_kind_step(const particle_kind *k) { return k->series ? k->series->step : 0; }
+
+bool particle_kind_step_ready(particle_kind *k, uint32_t step)
+{
+    particle_series *S = k->series;
+    if (!S)
+        return step == 0;
+    step %= S->step_count;
+    pthread_mutex_lock(&S->lock);
+    bool ready = step == S->step || (S->pending.step == step && S->pending.state == STEP_READY);
+    if (!ready && !(S->pending.step == step && S->pending.state == STEP_FAILED))
+        series_request(k, step);
+    pthread_mutex_unlock(&S->lock);
+    return ready;
+}
+
+bool particle_kind_set_step(particle_kind *k, uint32_t step, tess_error *err)
+{
+    particle_series *S = k->series;
+    if (!S)
+        return true; /* one set: every step is it */
+    step %= S->step_count;
+    pthread_mutex_lock(&S->lock);
+    if (step == S->step) {
+        pthread_mutex_unlock(&S->lock);
+        return true;
+    }
+    if (S->pending.step == step && S->pending.state == STEP_FAILED)
+        pending_clear(S); /* ask again: the file may be there now */
+    series_request(k, step);
+    while (!(S->pending.step == step && (S->pending.state == STEP_READY || S->pending.state == STEP_FAILED)))
+        pthread_cond_wait(&S->cond, &S->lock);
+    if (S->pending.state == STEP_FAILED) {
+        tess_error_set(err, "%s", S->pending.error);
+        S->want = UINT32_MAX;
+        pthread_mutex_unlock(&S->lock);
+        return false;
+    }
+    particle_set *old_set = k->set;
+    wbvh old_tree = k->tree;
+    k->set = S->pending.set;
+    k->tree = S->pending.tree;
+    apply_layout(k, &S->pending.lay);
+    atomic_store_explicit(&k->tree_ready, true, memory_order_release);
+    S->pending.set = NULL;
+    memset(&S->pending.tree, 0, sizeof S->pending.tree);
+    S->pending.state = STEP_EMPTY;
+    S->pending.step = UINT32_MAX;
+    S->step = step;
+    series_request(k, (step + 1) % S->step_count); /* playing forward: the next one in the background */
+    pthread_mutex_unlock(&S->lock);
+    particle_set_destroy(old_set);
+    wbvh_finish(&old_tree);
+    return true;
 }
 
 /* ---- geometry ops ------------------------------------------------------ */
@@ -240,24 +476,36 @@ static bool kind_closed(const void *data)
     return true;
 }
 
-static void kind_points(const void *data, geometry_points *out)
+/* The arrays the kernels read for `set` under layout `lay`. */
+static void points_of(const particle_kind *k, const particle_set *s, const step_layout *lay, geometry_points *out)
 {
-    const particle_kind *k = data;
-    const particle_set *s = k->set;
     *out = (geometry_points){
         .count = s->count,
         .x = s->x,
         .y = s->y,
         .z = s->z,
-        .radius = k->radius_attribute >= 0 ? s->attributes[k->radius_attribute].values : NULL,
+        .radius = lay->radius >= 0 ? s->attributes[lay->radius].values : NULL,
         .radius_all = k->radius_all,
-        .crop_value = k->crop_attribute >= 0 ? s->attributes[k->crop_attribute].values : NULL,
+        .crop_value = lay->crop >= 0 ? s->attributes[lay->crop].values : NULL,
         .crop = &k->crop,
     };
 }
 
+static step_layout current_layout(const particle_kind *k)
+{
+    return (step_layout){k->radius_attribute, k->crop_attribute, k->colour_attribute,
+                         {k->rgb_attribute[0], k->rgb_attribute[1], k->rgb_attribute[2]}};
+}
+
+static void kind_points(const void *data, geometry_points *out)
+{
+    const particle_kind *k = data;
+    step_layout lay = current_layout(k);
+    points_of(k, k->set, &lay, out);
+}
+
 typedef struct box_job {
-    const particle_kind *k;
+    geometry_points points;
     aabb *boxes;
 } box_job;
 
@@ -265,32 +513,38 @@ static void particle_boxes(void *ctx, size_t begin, size_t end, int worker)
 {
     (void)worker;
     box_job *job = ctx;
-    for (size_t i = begin; i < end; i++)
-        kind_prim_bounds(job->k, (uint32_t)i, &job->boxes[i]);
+    const geometry_points *p = &job->points;
+    for (size_t i = begin; i < end; i++) {
+        float r = p->radius ? p->radius[i] : p->radius_all;
+        vec3 c = v3(p->x[i], p->y[i], p->z[i]);
+        job->boxes[i] = (aabb){v3_sub(c, v3(r, r, r)), v3_add(c, v3(r, r, r))};
+    }
 }
 
-/* The binary SAH tree over the particles' boxes, the set put in its order
- * (so leaf [first, first + count) of prim_order is particles first..), then
- * collapsed into the wide tree the kernels read in place. */
-static bool build_tree(particle_kind *k, int threads, tess_error *err)
+/* The binary SAH tree over the boxes of `set`'s particles, the set put in
+ * its order (so leaf [first, first + count) of prim_order is particles
+ * first..), then collapsed into the wide tree the kernels read in place. */
+static bool build_tree(const particle_kind *k, particle_set *set, const step_layout *lay, wbvh *tree, int threads,
+                       tess_error *err)
 {
-    uint32_t n = k->set->count;
+    uint32_t n = set->count;
     aabb *boxes = malloc(((size_t)n + 1) * sizeof *boxes);
     if (!boxes)
         return tess_error_set(err, "particles: out of memory for the boxes of %u particles", n);
-    box_job job = {k, boxes};
+    box_job job = {.boxes = boxes};
+    points_of(k, set, lay, &job.points);
     parallel_for(threads, n, PARTICLE_BOX_GRAIN, particle_boxes, &job);
     bvh binary;
     bool ok = bvh_build_blocks(&binary, boxes, n, threads, PARTICLE_LEAF_MAX, PARTICLE_LEAF_BLOCK_LOG2, err);
     free(boxes);
     if (!ok)
         return false;
-    ok = particle_set_permute(k->set, binary.prim_order) ||
+    ok = particle_set_permute(set, binary.prim_order) ||
          tess_error_set(err, "particles: out of memory reordering %u particles", n);
     if (ok) {
         geometry_points points;
-        kind_points(k, &points);
-        ok = wbvh_build_points(&k->tree, &binary, &points, err);
+        points_of(k, set, lay, &points);
+        ok = wbvh_build_points(tree, &binary, &points, err);
     }
     bvh_finish(&binary);
     return ok;
@@ -302,7 +556,8 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
     if (atomic_load_explicit(&k->tree_ready, memory_order_acquire))
         return &k->tree;
     pthread_mutex_lock(&k->tree_lock);
-    bool ok = atomic_load_explicit(&k->tree_ready, memory_order_relaxed) || build_tree(k, threads, err);
+    step_layout lay = current_layout(k);
+    bool ok = atomic_load_explicit(&k->tree_ready, memory_order_relaxed) || build_tree(k, k->set, &lay, &k->tree, threads, err);
     if (ok)
         atomic_store_explicit(&k->tree_ready, true, memory_order_release);
     pthread_mutex_unlock(&k->tree_lock);
@@ -310,6 +565,9 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
 }
 
 static void kind_set_crop(void *data, geometry_crop crop) { particle_kind_set_crop(data, crop); }
+static uint32_t kind_step_count(const void *data) { return particle_kind_step_count(data); }
+static bool kind_step_ready(void *data, uint32_t step) { return particle_kind_step_ready(data, step); }
+static bool kind_set_step(void *data, uint32_t step, tess_error *err) { return particle_kind_set_step(data, step, err); }
 
 const geometry_ops particle_kind_ops = {
     .name = "particles",
@@ -326,4 +584,7 @@ const geometry_ops particle_kind_ops = {
     .points = kind_points,
     .tree = kind_tree,
     .set_crop = kind_set_crop,
+    .step_count = kind_step_count,
+    .step_ready = kind_step_ready,
+    .set_step = kind_set_step,
 };

@@ -68,6 +68,26 @@ void particle_kind_set_crop(particle_kind *k, geometry_crop crop);
 /* The colour map in use (PARTICLE_COLOUR_MAP), its range fitted; NULL otherwise. */
 const colormap *particle_kind_colormap(const particle_kind *k);
 
+/* TIME STEPS. A kind may show a series of particle files, one step at a
+ * time: it shows step 0 (the set it was made with, loaded from paths[0])
+ * until particle_kind_set_step swaps another in. A loader thread loads the
+ * step asked for next and builds its tree while frames render, so at most
+ * two steps are in memory; setting a step that is ready swaps at once,
+ * one that is not waits for its load. Every step must have the attributes
+ * the kind reads (radius, crop, colour); a colour map keeps step 0's range.
+ * attach: paths copied; false on no memory. */
+bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, tess_error *err);
+uint32_t particle_kind_step_count(const particle_kind *k); /* 1 without a series */
+uint32_t particle_kind_step(const particle_kind *k);       /* the step shown */
+/* Whether `step` (mod the count) can be shown without waiting: it is shown
+ * or loaded. When not, the loader is asked for it (prefetch). Any thread. */
+bool particle_kind_step_ready(particle_kind *k, uint32_t step);
+/* Show `step` (mod the count): only where nothing traces (a serial section;
+ * an accel's copy of the tree must follow: accel_set_time_step). False,
+ * with the file's error, when its file cannot be loaded (the step shown
+ * stays). */
+bool particle_kind_set_step(particle_kind *k, uint32_t step, tess_error *err);
+
 /* The kind's ops; data is a particle_kind. */
 extern const geometry_ops particle_kind_ops;
 
