@@ -13,7 +13,8 @@
 extern "C" {
 #endif
 
-#define TESS_ERROR_MSG_BYTES 512 /* long enough for a path, a field name and a reason */
+#define TESS_ERROR_MSG_BYTES 1024 /* long enough for a path, a field name and a reason (a list of
+                                     the choices: the bindings' actions) */
 
 typedef struct tess_error {
     char msg[TESS_ERROR_MSG_BYTES]; /* one line, no trailing newline; "" when unset */

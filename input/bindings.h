@@ -70,6 +70,12 @@ typedef enum input_action {
     INPUT_ACTION_CROP_DOWN,         /* the particles' crop window one step down its attribute's range */
     INPUT_ACTION_CROP_UP,           /* ... up */
     INPUT_ACTION_CROP_OFF,          /* every particle seen again */
+    /* time steps (controller.h, TIME STEPS) */
+    INPUT_ACTION_TIME_PLAY,         /* play / pause the time series */
+    INPUT_ACTION_TIME_BACK,         /* one step back (wrapping) */
+    INPUT_ACTION_TIME_FORWARD,      /* one step forward (wrapping) */
+    INPUT_ACTION_TIME_SLOWER,       /* playing rate / 1.5 */
+    INPUT_ACTION_TIME_FASTER,       /* playing rate x 1.5 */
     INPUT_ACTION_COUNT
 } input_action;
 

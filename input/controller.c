@@ -101,6 +101,11 @@ struct input_controller {
     char configured[TXN_NAME_BYTES]; /* the cycle's first renderer (controller.h, AMBIENT OCCLUSION) */
     bool plane_dirty;          /* plane_sel moved since the last emitted record (plane-push) */
     geometry_crop crops[INPUT_CROP_MAX]; /* as the records said, per cfg.crops entry */
+    /* time steps (controller.h, TIME STEPS) */
+    uint32_t time_step;        /* the step asked for last */
+    bool playing;
+    double time_rate;          /* steps per second */
+    uint64_t next_step_us;     /* playing: when the next step is due */
 
     /* touchpad gestures */
     vec3 gesture_point;
@@ -145,6 +150,7 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
     snprintf(c->renderer, sizeof c->renderer, "%s", c->cfg.renderer[0] ? c->cfg.renderer : "raytracer");
     bool ao_renderer = !strcmp(c->renderer, "ao") || !strcmp(c->renderer, "raytracer-ao");
     snprintf(c->configured, sizeof c->configured, "%s", ao_renderer ? "raytracer" : c->renderer);
+    c->time_rate = c->cfg.time_rate > 0.0 && isfinite(c->cfg.time_rate) ? c->cfg.time_rate : INPUT_TIME_RATE;
     if (c->cfg.crop_count < 0 || c->cfg.crop_count > INPUT_CROP_MAX)
         c->cfg.crop_count = 0;
     for (int i = 0; i < c->cfg.crop_count; i++)
@@ -613,6 +619,54 @@ static void crop_command(input_controller *c, input_action action)
     emit_status(c, "%s", text);
 }
 
+/* Ask for time step `step` and say so. */
+static void emit_time_step(input_controller *c, uint32_t step)
+{
+    c->time_step = step;
+    input_txn t = txn_time_step(step);
+    emit(c, &t);
+    emit_status(c, "time step %u/%u%s", step + 1, c->cfg.time_steps, c->playing ? " (playing)" : "");
+}
+
+/* time-play, -back, -forward, -slower, -faster (controller.h, TIME STEPS). */
+static void time_command(input_controller *c, input_action action, uint64_t now_us)
+{
+    uint32_t n = c->cfg.time_steps;
+    if (n < 2) {
+        emit_status(c, "no time steps in this scene");
+        return;
+    }
+    switch (action) {
+    case INPUT_ACTION_TIME_PLAY:
+        c->playing = !c->playing;
+        c->next_step_us = now_us + (uint64_t)(1e6 / c->time_rate);
+        emit_status(c, "time step %u/%u (%s, %.3g steps/s)", c->time_step + 1, n, c->playing ? "playing" : "paused",
+                    c->time_rate);
+        break;
+    case INPUT_ACTION_TIME_BACK: emit_time_step(c, (c->time_step + n - 1) % n); break;
+    case INPUT_ACTION_TIME_FORWARD: emit_time_step(c, (c->time_step + 1) % n); break;
+    default: /* slower, faster */
+        c->time_rate *= action == INPUT_ACTION_TIME_FASTER ? 1.5 : 1.0 / 1.5;
+        c->time_rate = c->time_rate < 0.05 ? 0.05 : c->time_rate > 120.0 ? 120.0 : c->time_rate;
+        emit_status(c, "time: %.3g steps/s", c->time_rate);
+        break;
+    }
+}
+
+/* Playing: the next step when it is due and loaded (else look again next tick). */
+static void play_if_due(input_controller *c, uint64_t now_us)
+{
+    if (!c->playing || now_us < c->next_step_us)
+        return;
+    uint32_t next = (c->time_step + 1) % c->cfg.time_steps;
+    if (c->hooks.step_ready && !c->hooks.step_ready(c->hooks.ctx, next))
+        return;
+    emit_time_step(c, next);
+    c->next_step_us += (uint64_t)(1e6 / c->time_rate);
+    if (c->next_step_us < now_us) /* loading was slower than the rate: no catching up */
+        c->next_step_us = now_us + (uint64_t)(1e6 / c->time_rate);
+}
+
 /* The next plane that is on after `after` (wrapping, `after` itself last), or -1. */
 static int next_plane_on(const input_controller *c, int after)
 {
@@ -744,6 +798,13 @@ static void command(input_controller *c, input_action action, double sx, double 
     case INPUT_ACTION_CROP_UP:
     case INPUT_ACTION_CROP_OFF:
         crop_command(c, action);
+        break;
+    case INPUT_ACTION_TIME_PLAY:
+    case INPUT_ACTION_TIME_BACK:
+    case INPUT_ACTION_TIME_FORWARD:
+    case INPUT_ACTION_TIME_SLOWER:
+    case INPUT_ACTION_TIME_FASTER:
+        time_command(c, action, now_us);
         break;
     case INPUT_ACTION_GOVERNOR_STATUS: {
         c->governor_status_shown = !c->governor_status_shown;
@@ -1239,6 +1300,7 @@ void input_controller_tick(input_controller *c, uint64_t now_us)
             start_tour(c);
         return;
     }
+    play_if_due(c, now_us); /* the tour plays on too */
     if (c->touring)
         return;
     long_press_if_due(c, now_us);
@@ -1279,7 +1341,7 @@ static uint64_t deadline_us(const input_controller *c, uint64_t now_us)
 {
     if (!c->started)
         return now_us;
-    if (c->animating || (!c->touring && flight_held(c))) {
+    if (c->animating || (!c->touring && flight_held(c)) || c->playing) {
         /* the next tick of the animation clock; a new flight or animation starts with one now */
         uint64_t next = c->last_tick_us + INPUT_TICK_US;
         return next > now_us ? next : now_us;

@@ -79,6 +79,13 @@
  *    from an inactive crop starts at the bottom (up) or the top (down) of the
  *    range. crop-off [/] shows every particle. "crop FIRST COUNT ON LO HI"
  *    records, one per set, and the window in the status line;
+ *  - TIME STEPS. With a time series (config time_steps > 1): time-play
+ *    [Space] plays or pauses, advancing one step every 1 / time_rate
+ *    seconds (default INPUT_TIME_RATE steps/s), but only to a step the
+ *    step_ready callback says is loaded: playing waits for the loader and
+ *    never stalls a frame; time-back [9] and time-forward [0] step at once
+ *    (wrapping); time-slower [7] and time-faster [8] divide or multiply the
+ *    rate by 1.5. "time-step N" records, the step in the status line;
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -173,6 +180,8 @@ typedef struct input_controller_config {
     char renderer[TXN_NAME_BYTES]; /* the renderer the pipeline starts with; "" (default): raytracer */
     input_crop_target crops[INPUT_CROP_MAX]; /* particle sets with a crop attribute (CROP); crop_count of them */
     int crop_count;
+    uint32_t time_steps;         /* steps of the longest time series (TIME STEPS); 0 or 1: none */
+    double time_rate;            /* steps per second while playing; 0: INPUT_TIME_RATE */
 } input_controller_config;
 
 /* Defaults for the fields a caller need not set (bindings = the defaults). */
@@ -186,6 +195,9 @@ typedef struct input_controller_hooks {
     void (*emit)(void *ctx, const input_txn *t);
     /* The camera the wall shows now (asked when the tour hands over). */
     camera_desc (*current_camera)(void *ctx);
+    /* Whether time step `step` can be shown without waiting (loaded); NULL:
+     * always. Asking may start its load. */
+    bool (*step_ready)(void *ctx, uint32_t step);
 } input_controller_hooks;
 
 typedef struct input_controller input_controller;
@@ -211,6 +223,9 @@ uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us
 camera_desc input_controller_camera(const input_controller *c);
 double input_controller_fly_speed(const input_controller *c);
 bool input_controller_touring(const input_controller *c);
+
+/* Time steps played per second unless the config says (TIME STEPS). */
+#define INPUT_TIME_RATE 4.0
 
 /* Interval between animation ticks (about 60 Hz). */
 #define INPUT_TICK_US 16000

@@ -25,6 +25,7 @@ struct input_runner {
     input_controller *controller;
     input_sink *sink;
     input_pick_fn pick;
+    input_step_ready_fn step_ready;
     void *pick_ctx;
     int wake_fd;
     atomic_bool stop;
@@ -36,6 +37,12 @@ static void hook_pick(void *ctx, vec3 origin, vec3 dir, input_hit *out)
 {
     input_runner *r = ctx;
     r->pick(r->pick_ctx, origin, dir, out);
+}
+
+static bool hook_step_ready(void *ctx, uint32_t step)
+{
+    input_runner *r = ctx;
+    return !r->step_ready || r->step_ready(r->pick_ctx, step);
 }
 
 static void hook_emit(void *ctx, const input_txn *t)
@@ -107,8 +114,8 @@ static void *input_main(void *arg)
 }
 
 input_runner *input_runner_start(const input_source_config *source, const input_controller_config *controller,
-                                 input_pick_fn pick, void *pick_ctx, input_sink *sink, struct session *sn,
-                                 tess_error *err)
+                                 input_pick_fn pick, input_step_ready_fn step_ready, void *pick_ctx,
+                                 input_sink *sink, struct session *sn, tess_error *err)
 {
     input_runner *r = calloc(1, sizeof *r);
     if (!r) {
@@ -117,11 +124,13 @@ input_runner *input_runner_start(const input_source_config *source, const input_
     }
     r->sink = sink;
     r->pick = pick;
+    r->step_ready = step_ready;
     r->pick_ctx = pick_ctx;
     r->wake_fd = -1;
     atomic_init(&r->stop, false);
     input_controller_hooks hooks = {
-        .ctx = r, .pick = hook_pick, .emit = hook_emit, .current_camera = hook_current_camera};
+        .ctx = r, .pick = hook_pick, .emit = hook_emit, .current_camera = hook_current_camera,
+        .step_ready = hook_step_ready};
     r->controller = input_controller_create(controller, &hooks);
     r->wake_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
     if (!r->controller || r->wake_fd < 0) {

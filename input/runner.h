@@ -21,10 +21,14 @@ typedef struct input_runner input_runner;
 /* Pick callback as in controller.h (called on the input thread). */
 typedef void (*input_pick_fn)(void *ctx, vec3 origin, vec3 dir, input_hit *out);
 
-/* Open the devices and start the thread. NULL with err. */
+/* Time-step readiness as in controller.h (called on the input thread). */
+typedef bool (*input_step_ready_fn)(void *ctx, uint32_t step);
+
+/* Open the devices and start the thread. pick and step_ready (NULL: every
+ * step is ready) take pick_ctx. NULL with err. */
 input_runner *input_runner_start(const input_source_config *source, const input_controller_config *controller,
-                                 input_pick_fn pick, void *pick_ctx, input_sink *sink, struct session *sn,
-                                 tess_error *err);
+                                 input_pick_fn pick, input_step_ready_fn step_ready, void *pick_ctx,
+                                 input_sink *sink, struct session *sn, tess_error *err);
 
 /* Stop the thread and close the devices (before the sink goes). NULL is fine. */
 void input_runner_stop(input_runner *r);

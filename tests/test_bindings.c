@@ -124,6 +124,9 @@ Test(bindings, defaults_are_as_documented)
         {KEY_END, INPUT_ACTION_PLANE_REMOVE_ALL}, {KEY_O, INPUT_ACTION_AMBIENT_OCCLUSION},
         {KEY_COMMA, INPUT_ACTION_CROP_DOWN},  {KEY_DOT, INPUT_ACTION_CROP_UP},
         {KEY_SLASH, INPUT_ACTION_CROP_OFF},
+        {KEY_SPACE, INPUT_ACTION_TIME_PLAY},  {KEY_9, INPUT_ACTION_TIME_BACK},
+        {KEY_0, INPUT_ACTION_TIME_FORWARD},   {KEY_7, INPUT_ACTION_TIME_SLOWER},
+        {KEY_8, INPUT_ACTION_TIME_FASTER},
         {BTN_LEFT, INPUT_ACTION_ORBIT},
         {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
     };
@@ -363,7 +366,7 @@ Test(bindings, bad_actions)
                            "hide-object, show-all, fly-to, governor-status, isolate, select-parent, highlight, show, "
                            "opacity-down, opacity-up, part-opacity-down, part-opacity-up, plane-place, plane-next, "
                            "plane-flip, plane-remove, plane-remove-all, plane-push, ambient-occlusion, crop-down, crop-up, "
-                           "crop-off)");
+                           "crop-off, time-play, time-back, time-forward, time-slower, time-faster)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -383,7 +386,7 @@ Test(bindings, drag_actions_need_motion)
                            "motion (it takes speed-up, speed-down, home, pick, hide-object, show-all, fly-to, governor-status, isolate, "
                            "select-parent, highlight, show, opacity-down, opacity-up, part-opacity-down, part-opacity-up, "
                            "plane-place, plane-next, plane-flip, plane-remove, plane-remove-all, ambient-occlusion, crop-down, "
-                           "crop-up, crop-off or none)");
+                           "crop-up, crop-off, time-play, time-back, time-forward, time-slower, time-faster or none)");
     expect_members_failure(", \"gestures\": {\"click\": \"pan\"}", "gestures.click", "'pan' is a drag action");
     expect_members_failure(", \"gestures\": {\"double-tap\": \"dolly\"}", "gestures.double-tap",
                            "'dolly' is a drag action");

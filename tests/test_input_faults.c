@@ -28,7 +28,7 @@
 
 typedef struct garbage_sink {
     long cameras, cursors, others;
-    char problem[1024]; /* the first bad transaction, "" while all are fine */
+    char problem[TESS_ERROR_MSG_BYTES + 128]; /* the first bad transaction, "" while all are fine */
     camera_desc shown;
 } garbage_sink;
 
@@ -134,7 +134,7 @@ static void run_garbage(uint64_t seed, int events, bool tour)
     cfg.have_tour = tour;
     garbage_sink g = {0};
     g.shown = cfg.home;
-    input_controller_hooks hooks = {&g, pick, emit, current};
+    input_controller_hooks hooks = {&g, pick, emit, current, NULL};
     input_controller *c = input_controller_create(&cfg, &hooks);
     cr_assert_not_null(c);
 

@@ -75,6 +75,17 @@ static camera_desc rig_current(void *ctx)
     return home();
 }
 
+/* What the rig's step_ready callback answers (TIME STEPS tests). */
+static bool steps_loaded = true;
+static uint32_t steps_asked = UINT32_MAX;
+
+static bool rig_step_ready(void *ctx, uint32_t step)
+{
+    (void)ctx;
+    steps_asked = step;
+    return steps_loaded;
+}
+
 static rig *rig_make_with(const input_controller_config *base)
 {
     rig *r = calloc(1, sizeof *r);
@@ -87,7 +98,8 @@ static rig *rig_make_with(const input_controller_config *base)
     cfg.plane_aspect = ASPECT;
     cfg.home = home();
     cfg.scene_size = SCENE_SIZE;
-    input_controller_hooks hooks = {.ctx = r, .pick = fake_pick, .emit = rig_emit, .current_camera = rig_current};
+    input_controller_hooks hooks = {.ctx = r, .pick = fake_pick, .emit = rig_emit, .current_camera = rig_current,
+                                    .step_ready = rig_step_ready};
     r->c = input_controller_create(&cfg, &hooks);
     cr_assert(r->c);
     r->now_us = 1000000;
@@ -506,5 +518,60 @@ Test(input_inspect, crop_keys_without_particles_say_so)
     rig *r = rig_make();
     int at = press(r, KEY_DOT);
     cr_expect_str_eq(made_since(r, at), "status \"nothing to crop (no particles with a crop attribute)\"");
+    rig_free(r);
+}
+
+/* Advance the rig's clock by `ms` in animation ticks. */
+static void run_ms(rig *r, int ms)
+{
+    for (int t = 0; t < ms * 1000; t += INPUT_TICK_US) {
+        r->now_us += INPUT_TICK_US;
+        input_controller_tick(r->c, r->now_us);
+    }
+}
+
+/* Stepping wraps; playing advances at the rate but only to loaded steps. */
+Test(input_inspect, time_keys_step_and_play_only_loaded_steps)
+{
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.time_steps = 3;
+    cfg.time_rate = 4.0;
+    steps_loaded = true;
+    rig *r = rig_make_with(&cfg);
+    cr_expect_str_eq(text_of(only(r, press(r, KEY_0), TXN_TIME_STEP)), "time-step 1");
+    cr_expect_str_eq(text_of(only(r, press(r, KEY_9), TXN_TIME_STEP)), "time-step 0");
+    int at = press(r, KEY_9);
+    cr_expect_str_eq(text_of(only(r, at, TXN_TIME_STEP)), "time-step 2", "back from 0 wraps");
+    cr_expect_str_eq(text_of(only(r, at, TXN_STATUS)), "status \"time step 3/3\"");
+    at = press(r, KEY_SPACE);
+    cr_expect_str_eq(made_since(r, at), "status \"time step 3/3 (playing, 4 steps/s)\"");
+    at = r->count;
+    run_ms(r, 300); /* one step due after 250 ms */
+    cr_expect_str_eq(text_of(only(r, at, TXN_TIME_STEP)), "time-step 0");
+    /* the next one is not loaded: nothing while it loads, then it comes at once */
+    steps_loaded = false;
+    at = r->count;
+    run_ms(r, 1000);
+    cr_expect_eq(r->count, at, "no step while the next one loads: %s", made_since(r, at));
+    cr_expect_eq(steps_asked, 1u, "asked for step 1");
+    steps_loaded = true;
+    run_ms(r, 20);
+    cr_expect_str_eq(text_of(only(r, at, TXN_TIME_STEP)), "time-step 1");
+    at = press(r, KEY_SPACE);
+    cr_expect_str_eq(made_since(r, at), "status \"time step 2/3 (paused, 4 steps/s)\"");
+    at = r->count;
+    run_ms(r, 1000);
+    cr_expect_eq(r->count, at, "paused: %s", made_since(r, at));
+    at = press(r, KEY_8);
+    cr_expect_str_eq(made_since(r, at), "status \"time: 6 steps/s\"");
+    rig_free(r);
+}
+
+Test(input_inspect, time_keys_without_a_series_say_so)
+{
+    rig *r = rig_make();
+    int at = press(r, KEY_SPACE);
+    cr_expect_str_eq(made_since(r, at), "status \"no time steps in this scene\"");
     rig_free(r);
 }

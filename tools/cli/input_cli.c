@@ -340,6 +340,31 @@ static void crop_targets(const scene *s, input_controller_config *cc)
     }
 }
 
+/* The steps of the longest time series in the scene (1: none). */
+static uint32_t time_steps(const scene *s)
+{
+    uint32_t most = 1;
+    for (uint32_t g = 0; g < s->geometry_count; g++)
+        if (s->geometries[g].ops->step_count) {
+            uint32_t n = s->geometries[g].ops->step_count(s->geometries[g].data);
+            most = n > most ? n : most;
+        }
+    return most;
+}
+
+/* Whether every time series can show `step` without waiting (input thread;
+ * the series' own locks make the question safe while frames render). */
+static bool step_ready(void *ctx, uint32_t step)
+{
+    const cli_scene *cs = ctx;
+    const scene *s = cs->scene;
+    bool ready = true;
+    for (uint32_t g = 0; g < s->geometry_count; g++)
+        if (s->geometries[g].ops->step_ready)
+            ready &= s->geometries[g].ops->step_ready(s->geometries[g].data, step); /* asks every one to load */
+    return ready;
+}
+
 static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs,
                           const cli_input_files *files)
 {
@@ -373,7 +398,8 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
         cc.scene_size = v3_length(v3_sub(hi, lo));
     cc.idle_timeout_s = s->idle_timeout_s;
     cc.have_tour = in->tour.count > 0;
-    in->runner = input_runner_start(&sc, &cc, pick, (void *)cs, in->sink, cli_pipeline_session(), &err);
+    cc.time_steps = time_steps(cs->scene);
+    in->runner = input_runner_start(&sc, &cc, pick, step_ready, (void *)cs, in->sink, cli_pipeline_session(), &err);
     if (!in->runner) {
         cli_error("%s", err.msg);
         return false;
