@@ -447,18 +447,30 @@ static bool lammps_columns_parse(lammps_loader *ld, char *words, lammps_columns 
     }
     if (c->count == 0)
         return lammps_fail(ld, "ITEM: ATOMS names no columns");
-    int kind = 0;
-    while (kind < 4 && find_column(c, position_columns[kind][0]) < 0 && find_column(c, position_columns[kind][1]) < 0 &&
-           find_column(c, position_columns[kind][2]) < 0)
-        kind++;
-    if (kind == 4)
+    /* the first complete set of x y z, xu yu zu, xs ys zs, xsu ysu zsu; the
+     * columns of any other set present are attributes */
+    int kind = 0, partial = -1;
+    for (; kind < 4; kind++) {
+        int found = 0;
+        for (int k = 0; k < 3; k++)
+            found += find_column(c, position_columns[kind][k]) >= 0;
+        if (found == 3)
+            break;
+        if (found > 0 && partial < 0)
+            partial = kind;
+    }
+    if (kind == 4 && partial < 0)
         return lammps_fail(ld, "ITEM: ATOMS has no position columns (x y z, xu yu zu, or xs ys zs)");
+    if (kind == 4) {
+        const char *const *axes = position_columns[partial];
+        int k = 0;
+        while (find_column(c, axes[k]) >= 0)
+            k++;
+        return lammps_fail(ld, "ITEM: ATOMS has no '%s' column (positions need all of '%s %s %s')", axes[k], axes[0],
+                           axes[1], axes[2]);
+    }
     c->kind = (enum position_kind)kind;
     const char *const *axes = position_columns[kind];
-    for (int k = 0; k < 3; k++)
-        if (find_column(c, axes[k]) < 0)
-            return lammps_fail(ld, "ITEM: ATOMS has '%s %s %s' but no '%s' column", axes[0], axes[1], axes[2],
-                               axes[k]);
     for (size_t i = 0; i < c->count; i++) {
         c->axis[i] = -1;
         for (int k = 0; k < 3; k++)
