@@ -656,6 +656,11 @@ static bool read_header(ply_file *f, ply_property_hook hook, void *ctx)
 bool ply_open(ply_file *f, const char *path, tess_error *err, ply_property_hook hook, void *ctx)
 {
     *f = (ply_file){.path = path, .err = err};
+    /* a FIFO or device would block fopen or fread: refuse it before opening
+     * (a failed stat is left to fopen, whose errno the message gives) */
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode))
+        return ply_fail(f, "cannot open: not a regular file");
     f->file = fopen(path, "rb");
     if (!f->file) {
         char text[128];

@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "engine/particles/particles.h"
 #include "support.h"
@@ -690,4 +691,23 @@ Test(particle_load, lammps_errors)
     /* a control character in a quoted token stays out of the one-line message */
     write_dump(path, "control.dump", "1", "pp pp pp", "x y z", "0 0 \0335\n");
     expect_error(particles_load_lammps, path, "column 'z': expected a number, got '?5'");
+}
+
+/* A FIFO would block fopen until a writer came: refused before opening. */
+Test(particle_load, special_files_are_refused_without_blocking, .timeout = 10)
+{
+    char path[PATH_BYTES];
+    particle_set *(*const loads[])(const char *, tess_error *) = {particles_load, particles_load_ply,
+                                                                  particles_load_lammps};
+    snprintf(path, PATH_BYTES, "%s/pipe.dump", scratch_dir);
+    cr_assert_eq(mkfifo(path, 0600), 0, "mkfifo %s", path);
+    for (size_t i = 0; i < sizeof loads / sizeof loads[0]; i++)
+        expect_error(loads[i], path, "cannot open: not a regular file");
+    snprintf(path, PATH_BYTES, "%s/pipe", scratch_dir); /* no extension: particles_load looks inside */
+    cr_assert_eq(mkfifo(path, 0600), 0, "mkfifo %s", path);
+    expect_error(particles_load, path, "cannot open: not a regular file");
+    snprintf(path, PATH_BYTES, "%s/folder.ply", scratch_dir);
+    cr_assert_eq(mkdir(path, 0700), 0);
+    for (size_t i = 0; i < sizeof loads / sizeof loads[0]; i++)
+        expect_error(loads[i], path, "cannot open: not a regular file");
 }

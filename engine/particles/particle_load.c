@@ -55,6 +55,16 @@ static const char *errno_text(int code, char *buf, size_t size)
     return buf;
 }
 
+/* A FIFO or device would block fopen or fread: refuse one before opening it
+ * (a missing file is left to fopen, whose errno the message then gives). */
+static bool is_regular_or_absent(const char *path, tess_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode))
+        return tess_error_set(err, "%s: cannot open: not a regular file", path);
+    return true;
+}
+
 /* Grow every array of p to hold more particles, up to `limit` (the file's own
  * count): storage was reserved for what the file's size allows, so only a
  * file that grew while read gets here. */
@@ -640,6 +650,8 @@ static bool lammps_read(lammps_loader *ld)
 particle_set *particles_load_lammps(const char *path, tess_error *err)
 {
     lammps_loader ld = {.path = path, .err = err, .timestep = -1};
+    if (!is_regular_or_absent(path, err))
+        return NULL;
     FILE *file = fopen(path, "rb");
     if (!file) {
         char text[128];
@@ -685,6 +697,8 @@ enum particle_format { FORMAT_UNKNOWN, FORMAT_PLY, FORMAT_LAMMPS };
  * cannot be opened (the error is set). */
 static bool sniff(const char *path, enum particle_format *format, tess_error *err)
 {
+    if (!is_regular_or_absent(path, err))
+        return false;
     FILE *file = fopen(path, "rb");
     if (!file) {
         char text[128];
