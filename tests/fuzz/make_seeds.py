@@ -52,6 +52,40 @@ put("ply", "bad_nan.ply", TRI_HEADER.format(fmt="ascii", extra="") + "0 nan 0\n1
 put("ply", "bad_header.ply", "ply\nformat ascii 2.0\nelement vertex x\nend_header\n")
 put("ply", "bad_truncated.ply", TRI_HEADER.format(fmt="binary_little_endian", extra="").encode() + b"\0\0\x80")
 
+# ---- particles: PLY point sets and LAMMPS dumps --------------------------------
+POINTS_HEADER = ("ply\nformat {fmt} 1.0\nelement vertex 3\nproperty float x\nproperty double y\nproperty float z\n"
+                 "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty list uchar int near\n"
+                 "property short intensity\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n")
+put("particles", "points_ascii.ply", POINTS_HEADER.format(fmt="ascii")
+    + "0 0 0 255 0 0 0 -5\n1 0.5 -1 0 255 0 2 0 1 7\n0 1 1e3 0 0 255 1 2 32767\n3 0 1 2\n")
+for fmt, end in (("binary_little_endian", "<"), ("binary_big_endian", ">")):
+    body = b"".join(struct.pack(end + "fdf3BB", x, y, 0.5, 10, 20, 30, 1) + struct.pack(end + "ih", 2, -x)
+                    for x, y in ((0, 0), (1, 2), (3, 4)))
+    put("particles", fmt + ".ply", POINTS_HEADER.format(fmt=fmt).encode() + body + struct.pack(end + "B3i", 3, 0, 1, 2))
+    fixed = "ply\nformat " + fmt + " 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n" \
+            "property ushort id\nend_header\n"
+    put("particles", fmt + "_fixed.ply", fixed.encode() + b"".join(struct.pack(end + "3fH", i, -i, 0.25 * i, i)
+                                                                 for i in range(4)))
+LAMMPS = ("ITEM: TIMESTEP\n{step}\nITEM: NUMBER OF ATOMS\n{n}\nITEM: BOX BOUNDS {box}\n{bounds}"
+          "ITEM: ATOMS {cols}\n{atoms}")
+ORTHO = "0 10\n-1 1\n0.0000000000000000e+00 5.0387885741475216e+01\n"
+put("particles", "melt.dump", LAMMPS.format(step=0, n=3, box="pp pp pp", bounds=ORTHO, cols="id type x y z vx vy vz c_ke",
+                                            atoms="1 1 0 0 0 -0.214306 -0.982589 -2.92294 4.7775\n"
+                                                  "2 1 0.839798 0.839798 0 -1.81848 2.09402 2.27378 6.43094\n"
+                                                  "3 1 0.839798 0 0.839798 -1.82652 -0.970185 1.58592 3.39628\n"))
+put("particles", "scaled.dump", LAMMPS.format(step=50, n=2, box="pp ff pp", bounds=ORTHO, cols="id xs ys zs",
+                                              atoms="1 0.5 0.25 0\n2 1 1 1\n"))
+put("particles", "series.lammpstrj",
+    "ITEM: UNITS\nlj\nITEM: TIME\n0.5\n"
+    + LAMMPS.format(step=100, n=2, box="xy xz yz pp pp pp", bounds="0 4 0.5\n0 4 0\n0 4 0\n", cols="id xu yu zu",
+                    atoms="1 0 1 2\n2 3 4 5\n")
+    + LAMMPS.format(step=200, n=1, box="pp pp pp", bounds=ORTHO, cols="x y z", atoms="1 2 3\n"))
+put("particles", "bad_count.dump", LAMMPS.format(step=0, n=4000000, box="pp pp pp", bounds=ORTHO, cols="x y z",
+                                                 atoms="1 2 3\n"))
+put("particles", "bad_columns.dump", LAMMPS.format(step=0, n=2, box="pp pp pp", bounds=ORTHO, cols="x y vx vx",
+                                                   atoms="1 2 3 4\n5 nan 6\n"))
+put("particles", "bad_truncated.ply", POINTS_HEADER.format(fmt="binary_little_endian").encode() + b"\0\0\x80")
+
 # ---- OBJ (+ MTL after a "#--mtl--" line) -----------------------------------
 put("obj", "quad.obj", config("configs/scenes/data/quad.obj"))
 put("obj", "materials.obj",
