@@ -78,7 +78,7 @@ static volume *load(const char *name, tess_error *err)
 }
 
 /* Loading `name` fails with one line that starts with the scratch path of
- * `blamed` (the header or the data file) and contains `expect`. */
+ * `blamed` (the header named) and contains `expect`. */
 static void expect_refused(const char *name, const char *blamed, const char *expect)
 {
     tess_error err = {{0}};
@@ -267,11 +267,11 @@ Test(volume, txt_errors)
     expect_refused("a.txt", "a.txt", "data file");
     /* dims x type size against the data file: too short, too long */
     write_text("a.txt", "file: v.raw\ndims: 3 x 2 x 3\ntype: uint8\n");
-    expect_refused("a.txt", "v.raw", "truncated: 12 bytes");
+    expect_refused("a.txt", "a.txt", "v.raw: truncated: 12 bytes, the header says 3*2*3 uint8 = 18");
     write_text("a.txt", "file: v.raw\ndims: 3 x 2 x 1\ntype: uint8\n");
-    expect_refused("a.txt", "v.raw", "12 bytes, ");
+    expect_refused("a.txt", "a.txt", "v.raw: 12 bytes, the header says 3*2*1 uint8 = 6");
     write_text("a.txt", "file: v.raw\ndims: 3 x 2 x 2\ntype: uint16\n");
-    expect_refused("a.txt", "v.raw", "3*2*2 uint16 = 24");
+    expect_refused("a.txt", "a.txt", "3*2*2 uint16 = 24");
     write_text("b.raw", "x");
     expect_refused("b.raw", "b.raw", "needs its header");
     write_text("a.dat", "x");
@@ -285,7 +285,7 @@ Test(volume, float_data_must_be_finite)
     put_f32(raw + 4, NAN, false);
     write_bytes("n.raw", raw, sizeof raw);
     write_text("n.txt", "file: n.raw\ndims: 2 x 1 x 1\ntype: float32\n");
-    expect_refused("n.txt", "n.raw", "sample (1, 0, 0) is NaN");
+    expect_refused("n.txt", "n.txt", "n.raw: sample (1, 0, 0) is NaN");
 }
 
 /* ---- NRRD ------------------------------------------------------------------ */
@@ -466,7 +466,7 @@ Test(volume, nrrd_errors)
     write_nhdr_with("e.nhdr", "sizes", "sizes: 2000000 2000000 2000000");
     expect_refused("e.nhdr", "e.nhdr", "not in 1..");
     write_nhdr_with("e.nhdr", "sizes", "sizes: 3 2 3");
-    expect_refused("e.nhdr", "d.raw", "truncated: 12 bytes");
+    expect_refused("e.nhdr", "e.nhdr", "d.raw: truncated: 12 bytes");
     write_nhdr_with("e.nhdr", "x", "spacings: 1 nan 1");
     expect_refused("e.nhdr", "e.nhdr", "field 'spacings': expected three positive numbers");
     write_nhdr_with("e.nhdr", "x", "spacings: 1 0 1");
@@ -502,7 +502,7 @@ Test(volume, nrrd_errors)
 
     /* attached data cut short */
     write_text("t.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 2 2\nencoding: raw\n\n0123456789");
-    expect_refused("t.nrrd", "t.nrrd", "truncated: ");
+    expect_refused("t.nrrd", "t.nrrd", "attached data: truncated: ");
     /* attached data with a byte too many */
     write_text("t.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 3 2 2\nencoding: raw\n\n0123456789abc");
     expect_refused("t.nrrd", "t.nrrd", "header bytes + 3*2*2 uint8");

@@ -198,27 +198,34 @@ typedef struct data_layout {
 } data_layout;
 
 /* Map or read v's samples as `lay` says, every size checked against the file
- * before anything is mapped or allocated, then compute the range. */
+ * before anything is mapped or allocated, then compute the range. Messages
+ * start with the header's path (the name the caller gave), then the data
+ * file's. */
 static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
 {
+    char who[2 * PATH_BYTES + 32];
+    if (strcmp(lay->header, lay->data) == 0)
+        snprintf(who, sizeof who, "%s: attached data", lay->header);
+    else
+        snprintf(who, sizeof who, "%s: data file %s", lay->header, lay->data);
     size_t width = volume_type_size(v->type);
     uint64_t need = (uint64_t)volume_count(v) * width; /* <= 2^38: no overflow */
     int fd = open(lay->data, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
-        return tess_error_set(err, "%s: data file %s: %s", lay->header, lay->data, strerror(errno));
+        return tess_error_set(err, "%s: %s", who, strerror(errno));
     struct stat st;
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         close(fd);
-        return tess_error_set(err, "%s: data file %s is not a regular file", lay->header, lay->data);
+        return tess_error_set(err, "%s: not a regular file", who);
     }
     uint64_t size = (uint64_t)st.st_size;
     uint64_t offset;
     if (lay->offset < 0) {
         if (size < need) {
             close(fd);
-            return tess_error_set(err, "%s: truncated: %llu bytes, %s needs %u*%u*%u %s = %llu", lay->data,
-                                  (unsigned long long)size, lay->header, v->nx, v->ny, v->nz,
-                                  volume_type_name(v->type), (unsigned long long)need);
+            return tess_error_set(err, "%s: truncated: %llu bytes, the header needs %u*%u*%u %s = %llu", who,
+                                  (unsigned long long)size, v->nx, v->ny, v->nz, volume_type_name(v->type),
+                                  (unsigned long long)need);
         }
         offset = size - need;
     } else {
@@ -227,18 +234,17 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
             close(fd);
             const char *what = offset > size || size - offset < need ? "truncated: " : "";
             if (offset != 0)
-                return tess_error_set(err, "%s: %s%llu bytes, %s says %llu header bytes + %u*%u*%u %s = %llu",
-                                      lay->data, what, (unsigned long long)size, lay->header,
-                                      (unsigned long long)offset, v->nx, v->ny, v->nz, volume_type_name(v->type),
-                                      (unsigned long long)(offset + need));
-            return tess_error_set(err, "%s: %s%llu bytes, %s says %u*%u*%u %s = %llu", lay->data, what,
-                                  (unsigned long long)size, lay->header, v->nx, v->ny, v->nz,
-                                  volume_type_name(v->type), (unsigned long long)need);
+                return tess_error_set(err, "%s: %s%llu bytes, the header says %llu header bytes + %u*%u*%u %s = %llu",
+                                      who, what, (unsigned long long)size, (unsigned long long)offset, v->nx, v->ny,
+                                      v->nz, volume_type_name(v->type), (unsigned long long)(offset + need));
+            return tess_error_set(err, "%s: %s%llu bytes, the header says %u*%u*%u %s = %llu", who, what,
+                                  (unsigned long long)size, v->nx, v->ny, v->nz, volume_type_name(v->type),
+                                  (unsigned long long)need);
         }
     }
     if (size > SIZE_MAX) {
         close(fd);
-        return tess_error_set(err, "%s: %llu bytes do not fit this process's address space", lay->data,
+        return tess_error_set(err, "%s: %llu bytes do not fit this process's address space", who,
                               (unsigned long long)size);
     }
     bool swap = width > 1 && lay->big_endian == host_little_endian();
@@ -247,7 +253,7 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
         void *map = mmap(NULL, (size_t)size, PROT_READ, MAP_PRIVATE, fd, 0);
         close(fd);
         if (map == MAP_FAILED)
-            return tess_error_set(err, "%s: cannot map %llu bytes: %s", lay->data, (unsigned long long)size,
+            return tess_error_set(err, "%s: cannot map %llu bytes: %s", who, (unsigned long long)size,
                                   strerror(errno));
         v->map = map;
         v->map_bytes = (size_t)size;
@@ -256,7 +262,7 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
         v->buffer = malloc((size_t)need);
         if (!v->buffer) {
             close(fd);
-            return tess_error_set(err, "%s: no memory for %llu bytes of samples", lay->data, (unsigned long long)need);
+            return tess_error_set(err, "%s: no memory for %llu bytes of samples", who, (unsigned long long)need);
         }
         unsigned char *dst = v->buffer;
         uint64_t done = 0;
@@ -268,7 +274,7 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
             if (got <= 0) {
                 int e = got < 0 ? errno : 0;
                 close(fd);
-                return tess_error_set(err, "%s: read failed after %llu of %llu bytes: %s", lay->data,
+                return tess_error_set(err, "%s: read failed after %llu of %llu bytes: %s", who,
                                       (unsigned long long)done, (unsigned long long)need,
                                       e ? strerror(e) : "file shrank while read");
             }
@@ -279,7 +285,7 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
             swap_bytes(v->buffer, volume_count(v), width);
         v->data = v->buffer;
     }
-    return volume_update_range(v, lay->data, err);
+    return volume_update_range(v, who, err);
 }
 
 /* ---- header text ---------------------------------------------------------- */

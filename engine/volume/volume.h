@@ -113,7 +113,8 @@ void volume_cell_corners(const volume *v, uint32_t i, uint32_t j, uint32_t k, fl
 
 /* Load by name (see LOADING above). Errors are one line:
  *   "PATH:LINE: field 'dims': expected 'NX x NY x NZ', got '301 x 370'"
- *   "DATA: is 1000 bytes, the header PATH says 301*370*316 uint8 = 35192920"
+ *   "PATH: data file DATA: truncated: 1000 bytes, the header says 301*370*316 uint8 = 35192920"
+ * (always starting with the path given, then the data file's when it is to blame).
  * The returned volume has its range computed. */
 volume *volume_load(const char *path, tess_error *err);
 
