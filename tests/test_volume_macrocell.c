@@ -279,3 +279,38 @@ Test(volume_macrocell, walks_match_brute_force)
     }
     cr_assert_gt(spans_checked, rays_checked, "the rays cross the grids");
 }
+
+/* rays that go nowhere or are not numbers cross nothing (and never reach an
+ * integer conversion of a NaN: UBSan builds would say so) */
+Test(volume_macrocell, degenerate_rays)
+{
+    rng_state = 9;
+    volume *v = random_volume(9, 9, 9);
+    tess_error err = {{0}};
+    macrocell_grid *g = macrocell_grid_create(v, 4, &err);
+    cr_assert_not_null(g, "%s", err.msg);
+    const double inside[3] = {4.0, 4.0, 4.0}, zero[3] = {0.0, 0.0, 0.0}, nan_dir[3] = {NAN, 1.0, 0.0},
+                 nan_org[3] = {NAN, 4.0, 4.0}, along[3] = {0.0, 1.0, 0.0};
+    macrocell_walk w;
+    macrocell_span span;
+    cr_assert_not(macrocell_walk_begin(&w, g, inside, zero, -INFINITY, INFINITY));
+    cr_assert_not(macrocell_walk_next(&w, &span));
+    cr_assert_not(macrocell_walk_begin(&w, g, inside, nan_dir, 0.0, INFINITY));
+    cr_assert_not(macrocell_walk_begin(&w, g, nan_org, along, 0.0, INFINITY));
+    cr_assert_not(macrocell_walk_begin(&w, g, inside, along, NAN, INFINITY));
+    /* an axis-parallel ray over an infinite t range: clipped to the box, both macrocells along y */
+    cr_assert(macrocell_walk_begin(&w, g, inside, along, -INFINITY, INFINITY));
+    int count = 0;
+    double last = -INFINITY;
+    while (macrocell_walk_next(&w, &span)) {
+        cr_assert(isfinite(span.t_enter) && isfinite(span.t_exit) && span.t_enter >= last);
+        cr_assert_eq(span.m[0], 1);
+        cr_assert_eq(span.m[1], (uint32_t)count);
+        last = span.t_exit;
+        count++;
+    }
+    cr_assert_eq(count, 2);
+    cr_assert_eq(last, 4.0, "the box's far face: y = 8, from y = 4");
+    macrocell_grid_destroy(g);
+    volume_destroy(v);
+}

@@ -129,11 +129,12 @@ void volume_dda_begin(volume_dda *w, const double org[3], const double dir[3], d
         /* the cell holding the point at t0; on a plane, the one the ray goes
          * into. Rounding may pick a neighbour: clamping keeps it in range and
          * a wrong pick only yields a zero-length span, which is skipped */
-        double p = (org[a] + t0 * dir[a]) / cell_size;
+        double p = (w->step[a] == 0 ? org[a] : org[a] + t0 * dir[a]) / cell_size;
         double c = floor(p);
         if (w->step[a] < 0 && c == p)
             c -= 1.0;
-        c = c < lo[a] ? lo[a] : c > hi[a] ? hi[a] : c;
+        /* written so a NaN (a NaN ray) lands on lo, never in an int conversion */
+        c = !(c >= lo[a]) ? lo[a] : c > hi[a] ? hi[a] : c;
         w->cell[a] = (int32_t)c;
     }
 }
@@ -181,6 +182,15 @@ bool macrocell_walk_begin(macrocell_walk *w, const macrocell_grid *g, const doub
 {
     w->grid = g;
     volume_ray_to_voxel(g->origin, g->spacing, org, dir, w->org, w->dir);
+    bool moves = false, finite = true;
+    for (int a = 0; a < 3; a++) {
+        moves |= w->dir[a] != 0.0;
+        finite &= isfinite(w->org[a]) && isfinite(w->dir[a]);
+    }
+    if (!moves || !finite || isnan(t_min) || isnan(t_max)) {
+        w->dda.done = true; /* a ray that goes nowhere (or a NaN) crosses nothing */
+        return false;
+    }
     const double lo[3] = {0.0, 0.0, 0.0};
     const double hi[3] = {g->cells[0], g->cells[1], g->cells[2]};
     double t0 = t_min, t1 = t_max;

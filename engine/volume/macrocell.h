@@ -128,7 +128,8 @@ typedef struct macrocell_walk {
 } macrocell_walk;
 
 /* Start the walk of the world ray org + t dir, t in [t_min, t_max], clipped
- * to the field's box; false when it misses the box (nothing to walk). */
+ * to the field's box; false when it misses the box, or dir is zero, or the
+ * ray is not finite (nothing to walk; macrocell_walk_next then says so). */
 bool macrocell_walk_begin(macrocell_walk *w, const macrocell_grid *g, const double org[3], const double dir[3],
                           double t_min, double t_max);
 bool macrocell_walk_next(macrocell_walk *w, macrocell_span *span);
