@@ -393,6 +393,13 @@ Test(volume, nrrd_little_endian_mapped_and_byte_skip)
     cr_assert_eq(volume_sample(v, 1, 1, 0), 4.0f);
     volume_destroy(v);
 
+    /* no extension: a NRRD by its magic */
+    write_bytes("noext", file, len);
+    v = load("noext", &err);
+    cr_assert_not_null(v, "%s", err.msg);
+    cr_assert_eq(volume_sample(v, 1, 1, 0), 3007.0f);
+    volume_destroy(v);
+
     /* byte skip 3 */
     write_text("s.nhdr", "NRRD0004\ntype: uint16\ndimension: 3\nsizes: 2 2 1\nendian: little\nencoding: raw\n"
                          "byte skip: 3\ndata file: s.raw\n");
