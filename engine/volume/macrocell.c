@@ -44,28 +44,47 @@ macrocell_grid *macrocell_grid_create(const volume *v, uint32_t k, tess_error *e
         g->min[m] = INFINITY;
         g->max[m] = -INFINITY;
     }
-    /* Sample by sample in memory order: sample s along an axis lies in the
-     * macrocells a with a k <= s <= (a + 1) k, i.e. a = s / k, and also
-     * a = s / k - 1 when s sits on a block boundary (s % k == 0): the shared
-     * face. So each sample updates 1 to 8 macrocells. */
-    size_t index = 0;
+    /* Row by row in memory order. Along an axis, macrocell a spans samples
+     * a k .. min((a + 1) k, n - 1): the sample on a block boundary belongs to
+     * both blocks (the shared face). A row's block ranges are reduced first
+     * (each sample read once, the boundary ones twice), then merged into the
+     * macrocells the row's (y, z) lies in: one, or two on a boundary, per axis. */
+    float *row_lo = malloc(g->m[0] * sizeof *row_lo), *row_hi = malloc(g->m[0] * sizeof *row_hi);
+    if (!row_lo || !row_hi) {
+        free(row_lo);
+        free(row_hi);
+        macrocell_grid_destroy(g);
+        tess_error_set(err, "macrocell grid: no memory");
+        return NULL;
+    }
     for (uint32_t z = 0; z < n[2]; z++) {
         uint32_t cz1 = z / k < g->m[2] ? z / k : g->m[2] - 1, cz0 = z % k == 0 && z > 0 ? z / k - 1 : cz1;
         for (uint32_t y = 0; y < n[1]; y++) {
             uint32_t cy1 = y / k < g->m[1] ? y / k : g->m[1] - 1, cy0 = y % k == 0 && y > 0 ? y / k - 1 : cy1;
-            for (uint32_t x = 0; x < n[0]; x++, index++) {
-                uint32_t cx1 = x / k < g->m[0] ? x / k : g->m[0] - 1, cx0 = x % k == 0 && x > 0 ? x / k - 1 : cx1;
-                float s = volume_sample_at(v, index);
-                for (uint32_t c = cz0; c <= cz1; c++)
-                    for (uint32_t b = cy0; b <= cy1; b++)
-                        for (uint32_t a = cx0; a <= cx1; a++) {
-                            size_t m = macrocell_index(g, a, b, c);
-                            g->min[m] = s < g->min[m] ? s : g->min[m];
-                            g->max[m] = s > g->max[m] ? s : g->max[m];
-                        }
+            size_t row = volume_index(v, 0, y, z);
+            for (uint32_t a = 0; a < g->m[0]; a++) {
+                uint32_t x0 = a * k, x1 = x0 + k < n[0] - 1 ? x0 + k : n[0] - 1;
+                float lo = volume_sample_at(v, row + x0), hi = lo;
+                for (uint32_t x = x0 + 1; x <= x1; x++) {
+                    float smp = volume_sample_at(v, row + x);
+                    lo = smp < lo ? smp : lo;
+                    hi = smp > hi ? smp : hi;
+                }
+                row_lo[a] = lo;
+                row_hi[a] = hi;
             }
+            for (uint32_t c = cz0; c <= cz1; c++)
+                for (uint32_t b = cy0; b <= cy1; b++) {
+                    size_t m0 = macrocell_index(g, 0, b, c);
+                    for (uint32_t a = 0; a < g->m[0]; a++) {
+                        g->min[m0 + a] = row_lo[a] < g->min[m0 + a] ? row_lo[a] : g->min[m0 + a];
+                        g->max[m0 + a] = row_hi[a] > g->max[m0 + a] ? row_hi[a] : g->max[m0 + a];
+                    }
+                }
         }
     }
+    free(row_lo);
+    free(row_hi);
     return g;
 }
 
