@@ -41,6 +41,10 @@
 # cutting plane at the tablet's cursor, a middle-button drag pushes it, [
 # lowers the opacity (two clip-plane records and an opacity record). Each check
 # also asks the heads to equal the native replay of the record, as above.
+# Then a fourth run on a particle time series made here (3 LAMMPS dumps of 2,744
+# particles with a kinetic-energy column, written by this script): 0 steps forward,
+# then . crops by the energy (a time-step record, then a crop record and the status
+# lines); the heads equal the native replay, which loads the same step.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
 # TESSERA_LOG=debug and logs each frame on screen; the host waits for those
@@ -88,6 +92,30 @@ if ! "$GEN" --parts 10000 --triangles 2000000 -o "$W/asm.glb" > "$W/gen.log" 2>&
     echo "vm_input: FAIL: $GEN did not make the 10,000-part assembly"
     exit 1
 fi
+
+# the fourth run's particle series: 3 steps of 14^3 particles on a jittered grid, a
+# kinetic energy c_ke per particle (a LAMMPS text dump each), coloured and croppable by it
+mkdir -p "$W/steps"
+for s in 0 1 2; do
+    awk -v s=$s 'BEGIN {
+        n = 14; printf "ITEM: TIMESTEP\n%d\nITEM: NUMBER OF ATOMS\n%d\n", 100 * s, n * n * n
+        printf "ITEM: BOX BOUNDS pp pp pp\n0 %d\n0 %d\n0 %d\nITEM: ATOMS id type x y z c_ke\n", n, n, n
+        id = 0
+        for (z = 0; z < n; z++) for (y = 0; y < n; y++) for (x = 0; x < n; x++) {
+            id++
+            printf "%d 1 %.4f %.4f %.4f %.4f\n", id, x + 0.3 * sin(id + s), y + 0.3 * cos(2 * id + s), z + 0.1 * s,
+                (x + y + z + 3 * s) % 12
+        }
+    }' > "$W/steps/step_$s.dump"
+done
+cat > "$W/particles.json" <<'EOF'
+{
+  "camera": {"eye": [30, 22, 34], "look_at": [7, 6, 7], "fov_deg": 40},
+  "ambient": [0.3, 0.3, 0.3],
+  "particles": [{"files": "steps/step_*.dump", "radius": 0.4, "color_by": "c_ke",
+                 "color_map": {"map": "viridis", "range": [0, 11]}, "crop": {"attribute": "c_ke"}}]
+}
+EOF
 
 # the guest (busybox sh in the share): the touchscreen, then tessera, then the
 # steps the host drops in (cmd-N.sh, run in order; output cmd-N.log, status cmd-N.done)
@@ -141,9 +169,17 @@ if [ ! -e done ]; then
     tessera run --wall wall.json --scene asm.glb --threads 2 --no-shadows --idle-timeout 0 --record-input rec3.txt \
         --map-input tessera-test-touch3=Virtual-4 > tessera3.log 2>&1 3<&- &
     pid=$!
-    run_steps $pid 3600
+    run_steps $pid 3600 asm-done
     stop_program $pid tessera3.rc
     echo quit > /tmp/touch3.fifo
+fi
+# a particle time series: keys only
+if [ ! -e done ]; then
+    tessera run --wall wall.json --scene particles.json --threads 2 --no-shadows --idle-timeout 0 \
+        --record-input rec4.txt > tessera4.log 2>&1 3<&- &
+    pid=$!
+    run_steps $pid 3600
+    stop_program $pid tessera4.rc
 fi
 alive $tpid && echo quit > /tmp/touch.fifo
 wait $tpid
@@ -358,6 +394,37 @@ assembly_run() {
     fi
 }
 
+# The fourth run: a particle time series. 0 steps forward (the next step is loaded and
+# swapped in at a barrier; the native replay loads the same file), . crops by the energy;
+# each check asks the heads to equal the native replay, and the record holds the
+# time-step and crop records and their status lines.
+particles_run() {
+    if ! log_wait tessera4.log "outputs up" "$(frames_s 30)" || ! wait_frame tessera4.log 2 8; then
+        bad "particles: the kiosk did not come up with the particle series: $(tail -n 3 "$W/tessera4.log" 2>/dev/null)"
+        return
+    fi
+    CHECK_LOG=tessera4.log CHECK_REC=rec4.txt CHECK_SCENE=particles.json CHECK_OPTS=--no-shadows
+    qmp key 0
+    check "particles: 0 (the next time step)"
+    _step=$(rec_last ' time-step ')
+    if [ "$_step" = "time-step 1" ] && [ "$(rec_last ' status ')" = 'status "time step 2/3"' ]; then
+        ok "particles: 0 stepped the series ($_step; the heads show the native replay's step)"
+    else
+        bad "particles: 0: record '$_step', '$(rec_last ' status ')'"
+    fi
+    _k1=$K
+    qmp key dot
+    check "particles: . (crop by the energy)"
+    _crop=$(rec_last ' crop ')
+    _n=$(heads_differ $_k1 $K)
+    if echo "$_crop" | grep -q '^crop 0 1 1 ' && [ "$(rec_last ' status ')" = 'status "crop c_ke [0, 2.75]"' ] &&
+        [ "$_n" -gt 2000 ]; then
+        ok "particles: . cropped by c_ke ($_crop; $_n pixels changed)"
+    else
+        bad "particles: .: record '$_crop', '$(rec_last ' status ')', $_n pixels changed"
+    fi
+}
+
 # the wall comes up (boot, tessera's start and first frames take ~25-40 s here under TCG;
 # a slower CPU model's TCG several times that)
 up=no
@@ -549,6 +616,8 @@ else
     fi
     : > "$W/tour-done"
     assembly_run
+    : > "$W/asm-done"
+    particles_run
 fi
 : > "$W/done"
 wait "$GPID"
