@@ -412,3 +412,46 @@ Test(particles, a_series_pattern_that_matches_nothing_is_named)
     cr_assert_str_eq(err.msg, want);
     support_remove_tmp_dir(dir);
 }
+
+/* A "particles" entry's mistakes name the field. */
+Test(particles, scene_file_mistakes_name_the_field)
+{
+    char dir[256], ply[512];
+    support_make_tmp_dir(dir, sizeof dir, "pjson");
+    snprintf(ply, sizeof ply, "%s/pts.ply", dir);
+    FILE *f = fopen(ply, "w");
+    cr_assert(f);
+    fprintf(f, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+               "property float e\nend_header\n0 0 0 0\n1 0 0 2\n");
+    fclose(f);
+    const struct {
+        const char *entry, *message;
+    } cases[] = {
+        {"{\"file\": \"pts.ply\", \"crop\": {\"attribute\": \"temp\"}}",
+         "field 'particles[0].crop.attribute': no attribute 'temp' (the file has: e)"},
+        {"{\"file\": \"pts.ply\", \"radius\": \"e\"}",
+         "field 'particles[0].radius': attribute 'e' has values down to 0 (a radius must be > 0)"},
+        {"{\"file\": \"pts.ply\", \"color_map\": \"magma\"}",
+         "field 'particles[0].color_map': needs 'color_by' (the attribute it colours)"},
+        {"{\"file\": \"pts.ply\", \"color_by\": \"rgb\"}",
+         "field 'particles[0].color_by': 'rgb' needs the attributes red, green and blue"},
+        {"{\"file\": \"pts.ply\", \"color_by\": \"e\", \"color_map\": \"jet\"}",
+         "field 'particles[0].color_map': unknown"},
+        {"{\"file\": \"pts.ply\", \"crop\": {\"attribute\": \"e\", \"range\": [3, 1]}}",
+         "field 'particles[0].crop.range': the low end 3 is above the high end 1"},
+        {"{\"file\": \"pts.ply\", \"files\": \"p*.ply\"}",
+         "field 'particles[0]': give either 'file' or 'files' (a time series)"},
+        {"{\"file\": \"pts.ply\", \"size\": 2}", "field 'particles[0].size': unknown field"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char path[600], text[512];
+        snprintf(path, sizeof path, "%s/scene.json", dir);
+        snprintf(text, sizeof text, "{\"particles\": [%s]}", cases[i].entry);
+        tess_error err = {{0}};
+        scene *s = scene_parse_json(path, text, strlen(text), &err);
+        cr_expect_null(s, "case %zu loaded", i);
+        scene_destroy(s);
+        cr_expect(strstr(err.msg, cases[i].message), "case %zu: '%s' lacks '%s'", i, err.msg, cases[i].message);
+    }
+    support_remove_tmp_dir(dir);
+}
