@@ -5,6 +5,8 @@
  * brute force in every ISA: tests/test_kernels.c.) */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -453,5 +455,55 @@ Test(particles, scene_file_mistakes_name_the_field)
         scene_destroy(s);
         cr_expect(strstr(err.msg, cases[i].message), "case %zu: '%s' lacks '%s'", i, err.msg, cases[i].message);
     }
+    support_remove_tmp_dir(dir);
+}
+
+typedef struct prefetch_storm {
+    particle_kind *k;
+    atomic_bool stop;
+} prefetch_storm;
+
+/* The input thread asking for other steps to load ahead, all the time. */
+static void *ask_ahead(void *arg)
+{
+    prefetch_storm *ps = arg;
+    for (uint32_t i = 0; !atomic_load(&ps->stop); i++)
+        particle_kind_step_ready(ps->k, i % 5);
+    return NULL;
+}
+
+/* Showing a step is never starved by prefetch requests from another thread
+ * (the step a serial section waits for goes first): no hang, every step
+ * shown as asked. */
+Test(particles, a_step_asked_for_is_not_starved_by_prefetches, .timeout = 120)
+{
+    char dir[256], scene_path[512];
+    support_make_tmp_dir(dir, sizeof dir, "steps-storm");
+    for (int i = 0; i < 5; i++)
+        write_step(dir, i, 10.f * (float)i);
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    FILE *f = fopen(scene_path, "w");
+    cr_assert(f);
+    fprintf(f, "{\"particles\": [{\"files\": \"step_*.ply\", \"radius\": 0.5}]}\n");
+    fclose(f);
+    tess_error err = {{0}};
+    scene *s = scene_load(scene_path, &err);
+    cr_assert(s, "%s", err.msg);
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    prefetch_storm ps = {.k = kind_of(s)};
+    atomic_init(&ps.stop, false);
+    pthread_t t;
+    cr_assert_eq(pthread_create(&t, NULL, ask_ahead, &ps), 0);
+    const uint32_t order[] = {3, 1, 4, 4, 0, 2, 1, 3};
+    for (size_t i = 0; i < sizeof order / sizeof order[0]; i++) {
+        cr_assert(accel_set_time_step(a, order[i], &err), "%s", err.msg);
+        cr_assert_eq(particle_kind_step(kind_of(s)), order[i]);
+        cr_assert_float_eq(first_x(a), 10.f * (float)order[i], 1e-4f, "step %u", order[i]);
+    }
+    atomic_store(&ps.stop, true);
+    pthread_join(t, NULL);
+    accel_destroy(a);
+    scene_destroy(s);
     support_remove_tmp_dir(dir);
 }

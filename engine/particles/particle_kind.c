@@ -33,7 +33,7 @@ typedef struct step_layout {
 
 /* THE SERIES (time steps). The kind shows one step (set, tree); the loader
  * thread loads the next one asked for (want) into `pending` and builds its
- * tree there, so at most two steps are in memory. lock guards want,
+ * tree there, so at most two steps are in memory. lock guards want, needed,
  * pending, quit and loader_started; cond signals every change of them. The
  * current step (set, tree, step) changes only in particle_kind_set_step,
  * which runs where nothing traces (a serial section). */
@@ -45,7 +45,9 @@ typedef struct particle_series {
     pthread_cond_t cond;
     pthread_t loader;
     bool loader_started, quit;
-    uint32_t want;           /* the step the loader should have in pending; UINT32_MAX: none */
+    uint32_t want;           /* the step to load ahead (prefetch); UINT32_MAX: none */
+    uint32_t needed;         /* the step particle_kind_set_step waits for; UINT32_MAX: none. It
+                                goes before want: a prefetch asked meanwhile never takes its place */
     struct {
         uint32_t step;
         step_state state;
@@ -175,7 +177,9 @@ particle_kind *particle_kind_create(particle_set *set, const particle_kind_optio
     step_layout lay;
     if (!copy_name(k->radius_name, opt->radius_attribute, "for the radius", source, err) ||
         !copy_name(k->crop_name, opt->crop_attribute, "to crop by", source, err) ||
-        !copy_name(k->colour_name, opt->colouring == PARTICLE_COLOUR_MAP ? (opt->colour_attribute ? opt->colour_attribute : "") : NULL,
+        !copy_name(k->colour_name, opt->colouring != PARTICLE_COLOUR_MAP ? NULL
+                                   : opt->colour_attribute              ? opt->colour_attribute
+                                                                        : "",
                    "to colour by", source, err))
         goto fail;
     if (!opt->radius_attribute && (!(opt->radius > 0.f) || !isfinite(opt->radius))) {
@@ -251,19 +255,23 @@ static void pending_clear(particle_series *S)
     S->pending.state = STEP_EMPTY;
 }
 
-/* The loader thread: loads the step asked for (want) into pending and
- * builds its tree there, one thread's work, while frames render. */
+/* The step the loader should have in pending (S->lock held). */
+static uint32_t series_target(const particle_series *S) { return S->needed != UINT32_MAX ? S->needed : S->want; }
+
+/* The loader thread: loads the step asked for (series_target) into pending
+ * and builds its tree there, one thread's work, while frames render. */
 static void *series_loader(void *arg)
 {
     particle_kind *k = arg;
     particle_series *S = k->series;
     pthread_mutex_lock(&S->lock);
     for (;;) {
-        while (!S->quit && (S->want == UINT32_MAX || (S->pending.step == S->want && S->pending.state != STEP_EMPTY)))
+        while (!S->quit && (series_target(S) == UINT32_MAX ||
+                            (S->pending.step == series_target(S) && S->pending.state != STEP_EMPTY)))
             pthread_cond_wait(&S->cond, &S->lock);
         if (S->quit)
             break;
-        uint32_t step = S->want;
+        uint32_t step = series_target(S);
         pending_clear(S);
         S->pending.step = step;
         S->pending.state = STEP_LOADING;
@@ -295,16 +303,22 @@ static void *series_loader(void *arg)
     return NULL;
 }
 
-/* Ask the loader for `step` (S->lock held). */
-static void series_request(particle_kind *k, uint32_t step)
+/* The loader runs and has seen the latest request (S->lock held). */
+static void series_wake(particle_kind *k)
 {
     particle_series *S = k->series;
-    if (S->want == step)
-        return;
-    S->want = step;
     if (!S->loader_started)
         S->loader_started = pthread_create(&S->loader, NULL, series_loader, k) == 0;
     pthread_cond_broadcast(&S->cond);
+}
+
+/* Ask the loader to load `step` ahead (S->lock held). */
+static void series_request(particle_kind *k, uint32_t step)
+{
+    if (k->series->want == step)
+        return;
+    k->series->want = step;
+    series_wake(k);
 }
 
 static void series_destroy(particle_series *S)
@@ -346,7 +360,7 @@ bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uin
         pthread_mutex_destroy(&S->lock);
         goto oom;
     }
-    S->want = UINT32_MAX;
+    S->want = S->needed = UINT32_MAX;
     S->pending.step = UINT32_MAX;
     k->series = S;
     return true;
@@ -388,9 +402,11 @@ bool particle_kind_set_step(particle_kind *k, uint32_t step, tess_error *err)
     }
     if (S->pending.step == step && S->pending.state == STEP_FAILED)
         pending_clear(S); /* ask again: the file may be there now */
-    series_request(k, step);
+    S->needed = step;
+    series_wake(k);
     while (!(S->pending.step == step && (S->pending.state == STEP_READY || S->pending.state == STEP_FAILED)))
         pthread_cond_wait(&S->cond, &S->lock);
+    S->needed = UINT32_MAX;
     if (S->pending.state == STEP_FAILED) {
         tess_error_set(err, "%s", S->pending.error);
         S->want = UINT32_MAX;
@@ -557,7 +573,8 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
         return &k->tree;
     pthread_mutex_lock(&k->tree_lock);
     step_layout lay = current_layout(k);
-    bool ok = atomic_load_explicit(&k->tree_ready, memory_order_relaxed) || build_tree(k, k->set, &lay, &k->tree, threads, err);
+    bool ok = atomic_load_explicit(&k->tree_ready, memory_order_relaxed) ||
+              build_tree(k, k->set, &lay, &k->tree, threads, err);
     if (ok)
         atomic_store_explicit(&k->tree_ready, true, memory_order_release);
     pthread_mutex_unlock(&k->tree_lock);
@@ -567,7 +584,10 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
 static void kind_set_crop(void *data, geometry_crop crop) { particle_kind_set_crop(data, crop); }
 static uint32_t kind_step_count(const void *data) { return particle_kind_step_count(data); }
 static bool kind_step_ready(void *data, uint32_t step) { return particle_kind_step_ready(data, step); }
-static bool kind_set_step(void *data, uint32_t step, tess_error *err) { return particle_kind_set_step(data, step, err); }
+static bool kind_set_step(void *data, uint32_t step, tess_error *err)
+{
+    return particle_kind_set_step(data, step, err);
+}
 
 const geometry_ops particle_kind_ops = {
     .name = "particles",
