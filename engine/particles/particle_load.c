@@ -320,6 +320,9 @@ static inline char *token_end(char *s)
     return s;
 }
 
+/* The reader stopped on a failure (reported by lammps_line), not at the end. */
+static bool reader_failed(const ply_reader *r) { return r->read_errno || r->out_of_memory || r->line_too_long; }
+
 /* The next line, counted. False at the end of the file or on a failure,
  * which is then already reported (end of file is the caller's to word). */
 static bool lammps_line(lammps_loader *ld, char **line)
@@ -547,7 +550,7 @@ static bool lammps_atoms(lammps_loader *ld, const lammps_columns *c)
     for (uint32_t a = 0; a < total; a++) {
         char *line;
         if (!lammps_line(ld, &line)) {
-            if (tess_error_is_set(ld->err))
+            if (reader_failed(&ld->in))
                 return false;
             return lammps_fail(ld, "file ends after %" PRIu32 " of %" PRIu32 " atoms", a, total);
         }
@@ -614,7 +617,7 @@ static bool lammps_read(lammps_loader *ld)
     char *line;
     for (;;) {
         if (!lammps_line(ld, &line)) {
-            if (tess_error_is_set(ld->err))
+            if (reader_failed(&ld->in))
                 return false;
             return lammps_fail(ld, ld->line == 1 ? "empty file (expected 'ITEM: TIMESTEP')"
                                                  : "file ends before 'ITEM: ATOMS'");

@@ -23,6 +23,7 @@
 #include "engine/bvh.h"
 #include "engine/camera_path.h"
 #include "engine/mesh.h"
+#include "engine/particles/particles.h"
 #include "engine/pipeline.h"
 #include "engine/scene.h"
 #include "input/bindings.h"
@@ -248,6 +249,70 @@ Test(alloc_sweep, ply_binary)
     write_file(path, "many.ply", buf, ply_binary(buf, sizeof buf));
     fault_sweep_stats st = sweep_mesh("ply binary", path, mesh_load_ply);
     expect_no_fallback("ply_binary", st);
+}
+
+/* ---- particle files ------------------------------------------------------ */
+
+static bool particles_same(const particle_set *a, const particle_set *b)
+{
+    if (a->count != b->count || a->attribute_count != b->attribute_count || a->timestep != b->timestep)
+        return false;
+    size_t n = (size_t)a->count * sizeof(float);
+    if (!same_array(a->x, b->x, n) || !same_array(a->y, b->y, n) || !same_array(a->z, b->z, n))
+        return false;
+    for (uint32_t i = 0; i < a->attribute_count; i++)
+        if (strcmp(a->attributes[i].name, b->attributes[i].name) != 0 ||
+            !same_array(a->attributes[i].values, b->attributes[i].values, n))
+            return false;
+    return true;
+}
+
+typedef struct particles_op {
+    const char *path;
+    particle_set *ref;
+} particles_op;
+
+static bool op_particles(void *ctx, char *msg, size_t msg_bytes, bool *same)
+{
+    particles_op *o = ctx;
+    tess_error err = {{0}};
+    particle_set *p = particles_load(o->path, &err);
+    fault_disarm();
+    if (!p) {
+        copy_msg(msg, msg_bytes, &err);
+        return false;
+    }
+    *same = particles_same(p, o->ref);
+    particle_set_destroy(p);
+    return true;
+}
+
+static void sweep_particles(const char *name, const char *path)
+{
+    tess_error err = {{0}};
+    particles_op o = {path, particles_load(path, &err)};
+    cr_assert_not_null(o.ref, "%s", err.msg);
+    const char *needles[] = {path, NULL};
+    fault_sweep_stats st = fault_sweep(name, op_particles, &o, needles);
+    particle_set_destroy(o.ref);
+    expect_no_fallback(name, st);
+}
+
+Test(alloc_sweep, particles_ply)
+{
+    static unsigned char buf[64 << 10];
+    char path[PATH_BYTES];
+    sweep_particles("particles ply ascii", write_text(path, "points.ply", ply_ascii));
+    sweep_particles("particles ply binary", write_file(path, "cloud.ply", buf, ply_binary(buf, sizeof buf)));
+}
+
+Test(alloc_sweep, particles_lammps)
+{
+    char path[PATH_BYTES];
+    write_text(path, "melt.dump",
+               "ITEM: TIMESTEP\n250\nITEM: NUMBER OF ATOMS\n3\nITEM: BOX BOUNDS pp pp pp\n0 2\n0 2\n0 2\n"
+               "ITEM: ATOMS id type xs ys zs vx c_ke\n1 1 0 0 0 0.5 1\n2 1 0.5 0.5 0 -0.5 2\n3 1 0.5 0 0.5 0 3\n");
+    sweep_particles("particles lammps", path);
 }
 
 Test(alloc_sweep, obj_through_assimp)
