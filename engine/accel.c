@@ -204,6 +204,24 @@ void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop)
         g->ops->set_crop(g->data, crop);
 }
 
+void accel_set_value(const accel *a, uint32_t geom_id, float value)
+{
+    if (geom_id >= a->instance_count)
+        return;
+    const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
+    if (g->ops->set_value)
+        g->ops->set_value(g->data, value);
+}
+
+void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name)
+{
+    if (geom_id >= a->instance_count)
+        return;
+    const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
+    if (g->ops->set_colormap)
+        g->ops->set_colormap(g->data, name);
+}
+
 size_t accel_bytes(const accel *a)
 {
     size_t bytes = sizeof *a + wbvh_bytes(&a->top) + a->geom_count * sizeof *a->geoms +

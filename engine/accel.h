@@ -117,6 +117,13 @@ void accel_set_placement(const accel *a, uint32_t first, uint32_t count, const a
  * crop are ignored. Same callers as accel_set_hidden. */
 void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop);
 
+/* Set the scalar parameter (an iso-value: geometry_ops.set_value) / the
+ * colour map (geometry_ops.set_colormap) of instance geom_id's geometry
+ * (every instance of it follows). Ids out of range and kinds without one
+ * are ignored. Same callers as accel_set_hidden. */
+void accel_set_value(const accel *a, uint32_t geom_id, float value);
+void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name);
+
 /* Show time step `step` of every geometry that has steps
  * (geometry_ops.set_step; each takes it modulo its own count), take the
  * new trees of GEOMETRY_LEAF_POINTS kinds and refit the instance level.

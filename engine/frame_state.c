@@ -1,6 +1,7 @@
 /* frame_state.c - the versioned frame state (frame_state.h). */
 #include "frame_state.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -65,6 +66,13 @@ void frame_state_finish(frame_state *st)
     free(st->part_opacity);
     free(st->crop);
     free(st->cropped);
+    free(st->value);
+    free(st->valued);
+    free(st->colormap);
+    free(st->mapped);
+    st->value = NULL;
+    st->valued = st->mapped = NULL;
+    st->colormap = NULL;
     st->crop = NULL;
     st->cropped = NULL;
     st->moved = NULL;
@@ -363,6 +371,84 @@ bool frame_state_set_crop(frame_state *st, uint32_t first, uint32_t count, geome
     return true;
 }
 
+/* Widen [*first, *end) to hold [first, first + count). */
+static void widen(uint32_t *lo, uint32_t *hi, uint32_t first, uint32_t count)
+{
+    if (count == 0)
+        return;
+    uint32_t end = (uint32_t)((uint64_t)first + count);
+    if (*lo == *hi) {
+        *lo = first, *hi = end;
+        return;
+    }
+    *lo = first < *lo ? first : *lo;
+    *hi = end > *hi ? end : *hi;
+}
+
+bool frame_state_set_value(frame_state *st, uint32_t first, uint32_t count, float v)
+{
+    if (!st->value) {
+        float *a = calloc((size_t)(st->geometry_count ? st->geometry_count : 1), sizeof *a);
+        if (!a || !ensure_bits(st, &st->valued)) {
+            free(a);
+            return false;
+        }
+        st->value = a;
+    }
+    bool changed = false;
+    for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+        changed |= !bit(st->valued, (uint32_t)id) || st->value[id] != v;
+        st->value[id] = v;
+        st->valued[id / 64] |= 1ull << (id % 64);
+    }
+    widen(&st->value_first, &st->value_end, first, count);
+    if (changed)
+        st->picture_serial++;
+    st->version++;
+    return true;
+}
+
+bool frame_state_set_colormap(frame_state *st, uint32_t first, uint32_t count, const char *name)
+{
+    if (!st->colormap) {
+        char(*a)[TXN_NAME_BYTES] = calloc((size_t)(st->geometry_count ? st->geometry_count : 1), sizeof *a);
+        if (!a || !ensure_bits(st, &st->mapped)) {
+            free(a);
+            return false;
+        }
+        st->colormap = a;
+    }
+    bool changed = false;
+    for (uint64_t id = first; id < (uint64_t)first + count; id++) {
+        changed |= !bit(st->mapped, (uint32_t)id) || strcmp(st->colormap[id], name) != 0;
+        snprintf(st->colormap[id], TXN_NAME_BYTES, "%s", name);
+        st->mapped[id / 64] |= 1ull << (id % 64);
+    }
+    widen(&st->map_first, &st->map_end, first, count);
+    if (changed)
+        st->picture_serial++;
+    st->version++;
+    return true;
+}
+
+bool frame_state_value(const frame_state *st, uint32_t id, float *v)
+{
+    if (id >= st->geometry_count || !bit(st->valued, id))
+        return false;
+    if (v)
+        *v = st->value[id];
+    return true;
+}
+
+bool frame_state_colormap(const frame_state *st, uint32_t id, const char **name)
+{
+    if (id >= st->geometry_count || !bit(st->mapped, id))
+        return false;
+    if (name)
+        *name = st->colormap[id];
+    return true;
+}
+
 void frame_state_set_time_step(frame_state *st, uint32_t step)
 {
     if (step != st->time_step) {
@@ -462,6 +548,18 @@ uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
             calls++;
         }
     st->crop_first = st->crop_end = 0;
+    for (uint32_t id = st->value_first; id < st->value_end; id++)
+        if (bit(st->valued, id)) {
+            accel_set_value(a, id, st->value[id]);
+            calls++;
+        }
+    st->value_first = st->value_end = 0;
+    for (uint32_t id = st->map_first; id < st->map_end; id++)
+        if (bit(st->mapped, id)) {
+            accel_set_colormap(a, id, st->colormap[id]);
+            calls++;
+        }
+    st->map_first = st->map_end = 0;
     if (st->time_step_dirty) {
         tess_error err = {{0}};
         if (!accel_set_time_step(a, st->time_step, &err))

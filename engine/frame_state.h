@@ -39,7 +39,8 @@
  *                   the global or a part's opacity changed, a cutting plane
  *                   switched on or off, or one that is on moved or turned
  *                   (a plane that stays off may change unseen: no bump),
- *                   a crop given or changed, a different time step;
+ *                   a crop, value or colour map given or changed, a
+ *                   different time step;
  *   overlay_serial  bumped when the overlay changes: the cursor moved,
  *                   shown or hidden (cursor setter), and by the pipeline when
  *                   the status line as drawn changes (frame_state_bump_overlay);
@@ -121,6 +122,14 @@ typedef struct frame_state {
     uint32_t dirty_first, dirty_end; /* ids [first, end) may differ from the accel's flags */
     uint32_t moved_first, moved_end; /* ids [first, end) moved since the last sync */
     uint32_t crop_first, crop_end;   /* ids [first, end) whose crop may differ from their kind's */
+    float *value;            /* geometry_count scalar parameters (iso-values) given by records, with
+                                `valued`; NULL until the first value record */
+    uint64_t *valued;        /* bit set: value[id] was given */
+    uint32_t value_first, value_end; /* ids [first, end) whose value may differ from their kind's */
+    char (*colormap)[TXN_NAME_BYTES]; /* geometry_count map names given by records, with `mapped`;
+                                NULL until the first colormap record */
+    uint64_t *mapped;        /* bit set: colormap[id] was given */
+    uint32_t map_first, map_end; /* ids [first, end) whose map may differ from their kind's */
     uint32_t time_step;      /* the step every time series shows (0 at start) */
     bool time_step_dirty;    /* time_step may differ from what the geometries show */
 } frame_state;
@@ -168,6 +177,14 @@ bool frame_state_set_opacity(frame_state *st, uint32_t first, uint32_t count, fl
 /* The crop of geometries [first, first + count) (their particle kinds'
  * range, frame_state_sync_accel passes it on); false on no memory. */
 bool frame_state_set_crop(frame_state *st, uint32_t first, uint32_t count, geometry_crop crop);
+/* The scalar parameter (iso-value) / colour map of geometries
+ * [first, first + count) (frame_state_sync_accel passes them on); false on
+ * no memory. */
+bool frame_state_set_value(frame_state *st, uint32_t first, uint32_t count, float v);
+bool frame_state_set_colormap(frame_state *st, uint32_t first, uint32_t count, const char *name);
+/* What a record gave geometry id; false when none did. */
+bool frame_state_value(const frame_state *st, uint32_t id, float *v);
+bool frame_state_colormap(const frame_state *st, uint32_t id, const char **name);
 /* Every time series to step `step` (frame_state_sync_accel passes it on). */
 void frame_state_set_time_step(frame_state *st, uint32_t step);
 /* The crop a record gave geometry id; false when none did. */

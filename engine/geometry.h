@@ -130,6 +130,16 @@ typedef struct geometry_ops {
     uint32_t (*step_count)(const void *data);
     bool (*step_ready)(void *data, uint32_t step);
     bool (*set_step)(void *data, uint32_t step, tess_error *err);
+    /* A kind with one scalar parameter: an iso-value. set_value: set it
+     * (only where nothing traces); value: it now and the range worth
+     * stepping it over. NULL: the kind has none. */
+    bool (*set_value)(void *data, float value);
+    bool (*value)(const void *data, float *value, float *lo, float *hi);
+    /* A kind coloured through a colour map (particles by an attribute, a
+     * volume's transfer function): use the built-in map `name`
+     * (colormap.h), keeping the range it has. False: no such map. Only
+     * where nothing traces. NULL: the kind has none. */
+    bool (*set_colormap)(void *data, const char *name);
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */

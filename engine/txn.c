@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "colormap.h"
 #include "frame_state.h"
 #include "geometry.h"
 #include "render.h"
@@ -27,6 +28,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_THREADS] = "threads",       [TXN_CHANNEL_ACTIVE] = "channel-active", [TXN_MOVE] = "move",
     [TXN_OPACITY] = "opacity",       [TXN_CLIP_PLANE] = "clip-plane",
     [TXN_CROP] = "crop",             [TXN_TIME_STEP] = "time-step",
+    [TXN_VALUE] = "value",           [TXN_COLORMAP] = "colormap",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -170,6 +172,22 @@ txn_record txn_time_step(uint32_t step)
 {
     txn_record r = blank(TXN_TIME_STEP);
     r.args.time_step.step = step;
+    return r;
+}
+
+txn_record txn_value(uint32_t first, uint32_t count, float v)
+{
+    txn_record r = blank(TXN_VALUE);
+    r.args.value.geoms = (txn_geoms){first, count};
+    r.args.value.v = v;
+    return r;
+}
+
+txn_record txn_colormap(uint32_t first, uint32_t count, const char *name)
+{
+    txn_record r = blank(TXN_COLORMAP);
+    r.args.colormap.geoms = (txn_geoms){first, count};
+    snprintf(r.args.colormap.name, sizeof r.args.colormap.name, "%s", name ? name : "");
     return r;
 }
 
@@ -330,6 +348,22 @@ bool txn_validate(const txn_record *r, tess_error *err)
     }
     case TXN_TIME_STEP:
         return true;
+    case TXN_VALUE:
+        if (!geoms_valid(name, &r->args.value.geoms, err))
+            return false;
+        if (!isfinite(r->args.value.v))
+            return tess_error_set(err, "value: v: %g is not finite", (double)r->args.value.v);
+        return true;
+    case TXN_COLORMAP: {
+        if (!geoms_valid(name, &r->args.colormap.geoms, err))
+            return false;
+        if (strnlen(r->args.colormap.name, TXN_NAME_BYTES) == TXN_NAME_BYTES)
+            return tess_error_set(err, "colormap: name: not terminated");
+        colormap probe;
+        if (!colormap_preset(r->args.colormap.name, &probe))
+            return tess_error_set(err, "colormap: name: no built-in map '%s'", r->args.colormap.name);
+        return true;
+    }
     case TXN_SHOW_ALL:
     case TXN_TOUR:
     case TXN_QUIT:
@@ -473,6 +507,19 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
     case TXN_TIME_STEP:
         frame_state_set_time_step(st, r->args.time_step.step);
         return true;
+    case TXN_VALUE:
+        if (!geoms_in(st, name, &r->args.value.geoms, err))
+            return false;
+        if (!frame_state_set_value(st, r->args.value.geoms.first, r->args.value.geoms.count, r->args.value.v))
+            return out_of_memory(name, err);
+        return true;
+    case TXN_COLORMAP:
+        if (!geoms_in(st, name, &r->args.colormap.geoms, err))
+            return false;
+        if (!frame_state_set_colormap(st, r->args.colormap.geoms.first, r->args.colormap.geoms.count,
+                                      r->args.colormap.name))
+            return out_of_memory(name, err);
+        return true;
     case TXN_TOUR:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -604,6 +651,14 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
         break;
     case TXN_TIME_STEP:
         put(&o, " %u", (unsigned)r->args.time_step.step);
+        break;
+    case TXN_VALUE:
+        put_geoms(&o, &r->args.value.geoms);
+        put(&o, " %a", (double)r->args.value.v);
+        break;
+    case TXN_COLORMAP:
+        put_geoms(&o, &r->args.colormap.geoms);
+        put(&o, " %s", r->args.colormap.name);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
@@ -896,6 +951,11 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
             return false;
         t->args.time_step.step = (uint32_t)v;
         return true;
+    case TXN_VALUE:
+        return geoms_text(r, name, &t->args.value.geoms) && float_value(r, &t->args.value.v, "value v");
+    case TXN_COLORMAP:
+        return geoms_text(r, name, &t->args.colormap.geoms) &&
+               word(r, t->args.colormap.name, sizeof t->args.colormap.name, "colormap name");
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -1079,6 +1139,19 @@ static void layout(txn_record *t, unsigned char *b, bool write)
         break;
     case TXN_TIME_STEP:
         U32(4, t->args.time_step.step);
+        break;
+    case TXN_VALUE:
+        U32(4, t->args.value.geoms.first);
+        U32(8, t->args.value.geoms.count);
+        F32(12, t->args.value.v);
+        break;
+    case TXN_COLORMAP:
+        U32(4, t->args.colormap.geoms.first);
+        U32(8, t->args.colormap.geoms.count);
+        if (write)
+            memcpy(b + 12, t->args.colormap.name, strnlen(t->args.colormap.name, TXN_NAME_BYTES));
+        else
+            memcpy(t->args.colormap.name, b + 12, TXN_NAME_BYTES);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:

@@ -44,6 +44,10 @@
  *                    (finite, lo <= hi)            seen only where their crop attribute lies in
  *                                                  [lo, hi] (on), or all of them (off); kinds
  *                                                  without a crop ignore it
+ *   value            first, count, v (finite)      those geometries' scalar parameter (an
+ *                                                  iso-value: geometry_ops.set_value)
+ *   colormap         first, count, name            those geometries' colour map or transfer
+ *                                                  function: a built-in (colormap.h), range kept
  *   time-step        step                          every time series shows that step (modulo its
  *                                                  own count); waits at the barrier for a step
  *                                                  not loaded yet (input asks only for ready ones)
@@ -75,6 +79,7 @@
  *   opacity all A | opacity FIRST COUNT A
  *   clip-plane I ON PX PY PZ NX NY NZ
  *   crop FIRST COUNT ON LO HI                        time-step N
+ *   value FIRST COUNT V                              colormap FIRST COUNT NAME
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -99,6 +104,8 @@
  *     clip-plane      i32 index, u8 on, 3 zero bytes, f32 point xyz, f32 normal xyz
  *     crop            u32 first, u32 count, u8 on, 3 zero bytes, f32 lo, f32 hi
  *     time-step       u32 step
+ *     value           u32 first, u32 count, f32 v
+ *     colormap        u32 first, u32 count, TXN_NAME_BYTES bytes: the name, NUL-padded
  *     show-all, quit  nothing
  * Decoding checks the kind, the zero bytes and then txn_validate. */
 #ifndef TESSERA_TXN_H
@@ -147,6 +154,8 @@ typedef enum txn_kind {
     TXN_CLIP_PLANE,
     TXN_CROP,
     TXN_TIME_STEP,
+    TXN_VALUE,
+    TXN_COLORMAP,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -209,6 +218,14 @@ typedef struct txn_record {
             uint32_t step;
         } time_step;
         struct {
+            txn_geoms geoms;
+            float v;
+        } value;
+        struct {
+            txn_geoms geoms;
+            char name[TXN_NAME_BYTES];
+        } colormap;
+        struct {
             int32_t count;
         } threads;
         struct {
@@ -245,6 +262,8 @@ txn_record txn_opacity(uint32_t first, uint32_t count, float a);
 txn_record txn_clip_plane(int index, bool on, const float point[3], const float normal[3]);
 txn_record txn_crop(uint32_t first, uint32_t count, bool on, float lo, float hi);
 txn_record txn_time_step(uint32_t step);
+txn_record txn_value(uint32_t first, uint32_t count, float v);
+txn_record txn_colormap(uint32_t first, uint32_t count, const char *name); /* cut at TXN_NAME_BYTES - 1 */
 txn_record txn_renderer(const char *name);
 txn_record txn_threads(int count);
 txn_record txn_channel_active(int channel, bool on);

@@ -349,7 +349,7 @@ Test(particles, time_steps_swap_at_the_sync_and_load_ahead, .timeout = 60)
 {
     char dir[256], scene_path[512];
     support_make_tmp_dir(dir, sizeof dir, "steps");
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 4; i++)
         write_step(dir, i, 10.f * (float)i);
     snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
     FILE *f = fopen(scene_path, "w");
@@ -362,7 +362,7 @@ Test(particles, time_steps_swap_at_the_sync_and_load_ahead, .timeout = 60)
     accel *a = accel_build(s, 2, &err);
     cr_assert(a, "%s", err.msg);
     particle_kind *k = kind_of(s);
-    cr_assert_eq(particle_kind_step_count(k), 3u);
+    cr_assert_eq(particle_kind_step_count(k), 4u);
     cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
 
     frame_state st;
@@ -373,22 +373,25 @@ Test(particles, time_steps_swap_at_the_sync_and_load_ahead, .timeout = 60)
     frame_state_sync_accel(&st, a);
     cr_assert_eq(particle_kind_step(k), 2u);
     cr_assert_float_eq(first_x(a), 20.f, 1e-4f);
-    /* after a step the next one (0, wrapping) is loaded in the background */
-    while (!particle_kind_step_ready(k, 0))
+    /* after a step the next one (3) is loaded in the background */
+    while (!particle_kind_step_ready(k, 3))
         nanosleep(&(struct timespec){0, 1000000}, NULL); /* the event: the loader's state; the timeout bounds it */
-    r = txn_time_step(3); /* = step 0 of 3 */
+    r = txn_time_step(4); /* = step 0 of 4 */
     cr_assert(txn_apply(&r, &st, &err));
     frame_state_sync_accel(&st, a);
     cr_assert_eq(particle_kind_step(k), 0u);
     cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
 
-    /* a step whose file went away: an error naming it; the step shown stays */
+    /* a step whose file went away: an error naming it; the step shown stays. (Step 1, next
+     * after 0, is loaded ahead: wait for that, so step 2 must come from the disk.) */
+    while (!particle_kind_step_ready(k, 1))
+        nanosleep(&(struct timespec){0, 1000000}, NULL);
     char gone[512];
-    snprintf(gone, sizeof gone, "%s/step_0001.ply", dir);
+    snprintf(gone, sizeof gone, "%s/step_0002.ply", dir);
     cr_assert_eq(unlink(gone), 0);
     err.msg[0] = '\0';
-    cr_assert_not(accel_set_time_step(a, 1, &err));
-    cr_assert(strstr(err.msg, "step_0001.ply"), "%s", err.msg);
+    cr_assert_not(accel_set_time_step(a, 2, &err));
+    cr_assert(strstr(err.msg, "step_0002.ply"), "%s", err.msg);
     cr_assert_eq(particle_kind_step(k), 0u);
     cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
 
@@ -506,4 +509,33 @@ Test(particles, a_step_asked_for_is_not_starved_by_prefetches, .timeout = 120)
     accel_destroy(a);
     scene_destroy(s);
     support_remove_tmp_dir(dir);
+}
+
+/* A colormap record recolours particles at the sync, over the same range. */
+Test(particles, a_colormap_record_recolours_at_the_sync)
+{
+    accel *a;
+    particle_kind_options opt = {.radius = 0.4f, .colouring = PARTICLE_COLOUR_MAP, .colour_attribute = "energy"};
+    scene *s = particle_scene(particle_line(), opt, &a);
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+    tess_error err = {{0}};
+    txn_record r = txn_colormap(0, 1, "magma");
+    cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
+    frame_state_sync_accel(&st, a);
+    const colormap *cm = particle_kind_colormap(kind_of(s));
+    cr_assert_str_eq(cm->name, "magma");
+    cr_assert_float_eq(cm->lo, 0.f, 0.f);
+    cr_assert_float_eq(cm->hi, 99.f, 0.f, "the range stays the attribute's");
+    const scene_geometry *g = &s->geometries[0];
+    ray down = {v3(99.f, 5.f, 0.f), v3(0.f, -1.f, 0.f), 0.f, INFINITY};
+    hit h;
+    cr_assert(accel_intersect(a, &down, &h));
+    geometry_surface surf;
+    g->ops->describe(g->data, h.prim_id, &down, &h, false, &surf);
+    colormap_rgba top = colormap_eval(cm, 99.f);
+    cr_assert_float_eq(surf.colour.x, top.r, COLORMAP_TABLE_TOLERANCE);
+    frame_state_finish(&st);
+    accel_destroy(a);
+    scene_destroy(s);
 }

@@ -51,6 +51,8 @@ static txn_record sample(txn_kind k)
     }
     case TXN_CROP: return txn_crop(2, 3, true, -3.4028235e38f, 0.1f);
     case TXN_TIME_STEP: return txn_time_step(4294967295u);
+    case TXN_VALUE: return txn_value(1, 2, -1e-7f);
+    case TXN_COLORMAP: return txn_colormap(0, GEOMS, "cool-warm");
     case TXN_KIND_COUNT: break;
     }
     cr_assert_fail("no sample for kind %d", (int)k);
@@ -235,7 +237,10 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_crop(0, 1, true, 0.f, INFINITY), "crop: hi: inf is not finite"},
         {txn_crop(0, 1, true, 2.f, 1.f), "crop: lo 2 is above hi 1"},
         {txn_crop(0, 0, false, 0.f, 1.f), "crop: count: 0 geometries"},
-        {txn_simple(TXN_KIND_COUNT), "kind: 21 is not a transaction kind"},
+        {txn_value(0, 1, NAN), "value: v: nan is not finite"},
+        {txn_colormap(0, 1, "jet"), "colormap: name: no built-in map 'jet'"},
+        {txn_colormap(0, 0, "magma"), "colormap: count: 0 geometries"},
+        {txn_simple(TXN_KIND_COUNT), "kind: 23 is not a transaction kind"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};

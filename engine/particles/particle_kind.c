@@ -236,6 +236,20 @@ const colormap *particle_kind_colormap(const particle_kind *k)
 geometry_crop particle_kind_crop(const particle_kind *k) { return k->crop; }
 int particle_kind_crop_attribute(const particle_kind *k) { return k->crop_attribute; }
 
+bool particle_kind_set_colormap(particle_kind *k, const char *name)
+{
+    colormap next;
+    if (k->colouring != PARTICLE_COLOUR_MAP || !colormap_preset(name, &next))
+        return false;
+    /* the range stays (the scene's, or the fitted one) */
+    next.lo = k->map.lo;
+    next.hi = k->map.hi;
+    next.range_auto = k->map.range_auto;
+    k->map = next;
+    colormap_bake(&k->map, k->table);
+    return true;
+}
+
 void particle_kind_set_crop(particle_kind *k, geometry_crop crop)
 {
     if (k->crop_attribute >= 0)
@@ -582,6 +596,7 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
 }
 
 static void kind_set_crop(void *data, geometry_crop crop) { particle_kind_set_crop(data, crop); }
+static bool kind_set_colormap(void *data, const char *name) { return particle_kind_set_colormap(data, name); }
 static uint32_t kind_step_count(const void *data) { return particle_kind_step_count(data); }
 static bool kind_step_ready(void *data, uint32_t step) { return particle_kind_step_ready(data, step); }
 static bool kind_set_step(void *data, uint32_t step, tess_error *err)
@@ -607,4 +622,5 @@ const geometry_ops particle_kind_ops = {
     .step_count = kind_step_count,
     .step_ready = kind_step_ready,
     .set_step = kind_set_step,
+    .set_colormap = kind_set_colormap,
 };

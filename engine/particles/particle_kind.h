@@ -65,6 +65,11 @@ int particle_kind_crop_attribute(const particle_kind *k);
  * kind without a crop attribute ignores it. */
 void particle_kind_set_crop(particle_kind *k, geometry_crop crop);
 
+/* Colour by the built-in map `name` (colormap.h) over the same range: only
+ * where nothing traces. False when the kind does not colour by a map or no
+ * built-in has that name. */
+bool particle_kind_set_colormap(particle_kind *k, const char *name);
+
 /* The colour map in use (PARTICLE_COLOUR_MAP), its range fitted; NULL otherwise. */
 const colormap *particle_kind_colormap(const particle_kind *k);
 
