@@ -67,6 +67,9 @@ static const char *const action_names[INPUT_ACTION_COUNT + 1] = {
     [INPUT_ACTION_TIME_FORWARD] = "time-forward",
     [INPUT_ACTION_TIME_SLOWER] = "time-slower",
     [INPUT_ACTION_TIME_FASTER] = "time-faster",
+    [INPUT_ACTION_VALUE_DOWN] = "value-down",
+    [INPUT_ACTION_VALUE_UP] = "value-up",
+    [INPUT_ACTION_COLORMAP_NEXT] = "colormap-next",
     [INPUT_ACTION_COUNT] = NULL,
 };
 
@@ -160,6 +163,8 @@ static const code_binding default_codes[] = {
     {KEY_SPACE, INPUT_ACTION_TIME_PLAY},  {KEY_9, INPUT_ACTION_TIME_BACK},
     {KEY_0, INPUT_ACTION_TIME_FORWARD},   {KEY_7, INPUT_ACTION_TIME_SLOWER},
     {KEY_8, INPUT_ACTION_TIME_FASTER},
+    {KEY_T, INPUT_ACTION_VALUE_DOWN},     {KEY_Y, INPUT_ACTION_VALUE_UP},
+    {KEY_M, INPUT_ACTION_COLORMAP_NEXT},
     {BTN_LEFT, INPUT_ACTION_ORBIT},
     {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
 };

@@ -76,6 +76,9 @@ typedef enum input_action {
     INPUT_ACTION_TIME_FORWARD,      /* one step forward (wrapping) */
     INPUT_ACTION_TIME_SLOWER,       /* playing rate / 1.5 */
     INPUT_ACTION_TIME_FASTER,       /* playing rate x 1.5 */
+    INPUT_ACTION_VALUE_DOWN,        /* every iso-value one step (INPUT_VALUE_STEPS of its range) down */
+    INPUT_ACTION_VALUE_UP,          /* ... up */
+    INPUT_ACTION_COLORMAP_NEXT,     /* the next built-in colour map / transfer function */
     INPUT_ACTION_COUNT
 } input_action;
 

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/colormap.h"
 #include "input/navigate.h"
 
 #define TOUCH_SLOTS 20            /* touches tracked at once, over all devices */
@@ -106,6 +107,8 @@ struct input_controller {
     bool playing;
     double time_rate;          /* steps per second */
     uint64_t next_step_us;     /* playing: when the next step is due */
+    float values[INPUT_VALUE_MAX];              /* as the records said, per cfg.values entry */
+    char maps[INPUT_MAP_MAX][TXN_NAME_BYTES];   /* as the records said, per cfg.maps entry */
 
     /* touchpad gestures */
     vec3 gesture_point;
@@ -151,6 +154,14 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
     bool ao_renderer = !strcmp(c->renderer, "ao") || !strcmp(c->renderer, "raytracer-ao");
     snprintf(c->configured, sizeof c->configured, "%s", ao_renderer ? "raytracer" : c->renderer);
     c->time_rate = c->cfg.time_rate > 0.0 && isfinite(c->cfg.time_rate) ? c->cfg.time_rate : INPUT_TIME_RATE;
+    if (c->cfg.value_count < 0 || c->cfg.value_count > INPUT_VALUE_MAX)
+        c->cfg.value_count = 0;
+    if (c->cfg.map_count < 0 || c->cfg.map_count > INPUT_MAP_MAX)
+        c->cfg.map_count = 0;
+    for (int i = 0; i < c->cfg.value_count; i++)
+        c->values[i] = c->cfg.values[i].value;
+    for (int i = 0; i < c->cfg.map_count; i++)
+        snprintf(c->maps[i], sizeof c->maps[i], "%s", c->cfg.maps[i].name);
     if (c->cfg.crop_count < 0 || c->cfg.crop_count > INPUT_CROP_MAX)
         c->cfg.crop_count = 0;
     for (int i = 0; i < c->cfg.crop_count; i++)
@@ -619,6 +630,49 @@ static void crop_command(input_controller *c, input_action action)
     emit_status(c, "%s", text);
 }
 
+/* value-down / value-up (controller.h, VALUES AND MAPS). */
+static void value_command(input_controller *c, int dir)
+{
+    if (c->cfg.value_count == 0) {
+        emit_status(c, "no iso-values to change in this scene");
+        return;
+    }
+    char text[INPUT_TEXT_BYTES] = "";
+    size_t used = 0;
+    for (int i = 0; i < c->cfg.value_count; i++) {
+        const input_value_target *tg = &c->cfg.values[i];
+        float step = (float)((tg->hi - tg->lo) / INPUT_VALUE_STEPS), v = c->values[i] + (float)dir * step;
+        v = v < tg->lo ? tg->lo : v > tg->hi ? tg->hi : v;
+        c->values[i] = v;
+        input_txn t = txn_value(tg->first, tg->count, v);
+        emit(c, &t);
+        int n = snprintf(text + used, sizeof text - used, "%siso-value %.4g", i ? "; " : "", (double)v);
+        if (n > 0 && (size_t)n < sizeof text - used)
+            used += (size_t)n;
+    }
+    emit_status(c, "%s", text);
+}
+
+/* colormap-next (controller.h, VALUES AND MAPS). */
+static void colormap_command(input_controller *c)
+{
+    if (c->cfg.map_count == 0) {
+        emit_status(c, "nothing coloured through a map in this scene");
+        return;
+    }
+    const char *const *names = colormap_names();
+    for (int i = 0; i < c->cfg.map_count; i++) {
+        int k = 0;
+        while (names[k] && strcmp(names[k], c->maps[i]) != 0)
+            k++;
+        const char *next = names[k] && names[k + 1] ? names[k + 1] : names[0]; /* unknown: the first */
+        snprintf(c->maps[i], sizeof c->maps[i], "%s", next);
+        input_txn t = txn_colormap(c->cfg.maps[i].first, c->cfg.maps[i].count, next);
+        emit(c, &t);
+    }
+    emit_status(c, "colour map %s", c->maps[0]);
+}
+
 /* Ask for time step `step` and say so. */
 static void emit_time_step(input_controller *c, uint32_t step)
 {
@@ -798,6 +852,13 @@ static void command(input_controller *c, input_action action, double sx, double 
     case INPUT_ACTION_CROP_UP:
     case INPUT_ACTION_CROP_OFF:
         crop_command(c, action);
+        break;
+    case INPUT_ACTION_VALUE_DOWN:
+    case INPUT_ACTION_VALUE_UP:
+        value_command(c, action == INPUT_ACTION_VALUE_UP ? 1 : -1);
+        break;
+    case INPUT_ACTION_COLORMAP_NEXT:
+        colormap_command(c);
         break;
     case INPUT_ACTION_TIME_PLAY:
     case INPUT_ACTION_TIME_BACK:

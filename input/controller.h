@@ -86,6 +86,12 @@
  *    never stalls a frame; time-back [9] and time-forward [0] step at once
  *    (wrapping); time-slower [7] and time-faster [8] divide or multiply the
  *    rate by 1.5. "time-step N" records, the step in the status line;
+ *  - VALUES AND MAPS. value-down [T] and value-up [Y] step the scalar
+ *    parameter (an iso-value) of every geometry that has one (config
+ *    `values`) by INPUT_VALUE_STEPS of its range, clamped ("value FIRST
+ *    COUNT V"); colormap-next [M] gives every geometry coloured through a
+ *    map (config `maps`) the next built-in map or transfer function
+ *    (colormap_names order, wrapping; "colormap FIRST COUNT NAME");
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -121,7 +127,8 @@
  * file stores (input/record.h). The controller emits camera (always
  * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide, show and
  * isolate (a part's instance range: input_part), show-all, highlight,
- * governor-status, opacity, clip-plane, renderer, crop, and the input-level tour and quit. */
+ * governor-status, opacity, clip-plane, renderer, crop, time-step, value, colormap, and the
+ * input-level tour and quit. */
 typedef txn_record input_txn;
 typedef txn_kind input_txn_kind;
 
@@ -164,6 +171,23 @@ typedef struct input_crop_target {
     geometry_crop crop; /* at start */
 } input_crop_target;
 
+/* A geometry input may step the scalar parameter of (an iso-value): its
+ * instances, the value it starts with and the range to step over. */
+#define INPUT_VALUE_MAX 8
+#define INPUT_VALUE_STEPS 50.0 /* steps over a value's range */
+typedef struct input_value_target {
+    uint32_t first, count;
+    float value, lo, hi;
+} input_value_target;
+
+/* A geometry coloured through a map input may change: its instances and
+ * the map it starts with. */
+#define INPUT_MAP_MAX 8
+typedef struct input_map_target {
+    uint32_t first, count;
+    char name[TXN_NAME_BYTES];
+} input_map_target;
+
 typedef struct input_controller_config {
     input_bindings bindings;
     float plane_aspect;          /* the wall's image plane, width / height */
@@ -181,6 +205,10 @@ typedef struct input_controller_config {
     input_crop_target crops[INPUT_CROP_MAX]; /* particle sets with a crop attribute (CROP); crop_count of them */
     int crop_count;
     uint32_t time_steps;         /* steps of the longest time series (TIME STEPS); 0 or 1: none */
+    input_value_target values[INPUT_VALUE_MAX]; /* VALUES AND MAPS; value_count of them */
+    int value_count;
+    input_map_target maps[INPUT_MAP_MAX];       /* map_count of them */
+    int map_count;
     double time_rate;            /* steps per second while playing; 0: INPUT_TIME_RATE */
 } input_controller_config;
 

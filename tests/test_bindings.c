@@ -127,6 +127,8 @@ Test(bindings, defaults_are_as_documented)
         {KEY_SPACE, INPUT_ACTION_TIME_PLAY},  {KEY_9, INPUT_ACTION_TIME_BACK},
         {KEY_0, INPUT_ACTION_TIME_FORWARD},   {KEY_7, INPUT_ACTION_TIME_SLOWER},
         {KEY_8, INPUT_ACTION_TIME_FASTER},
+        {KEY_T, INPUT_ACTION_VALUE_DOWN},     {KEY_Y, INPUT_ACTION_VALUE_UP},
+        {KEY_M, INPUT_ACTION_COLORMAP_NEXT},
         {BTN_LEFT, INPUT_ACTION_ORBIT},
         {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
     };
@@ -366,7 +368,8 @@ Test(bindings, bad_actions)
                            "hide-object, show-all, fly-to, governor-status, isolate, select-parent, highlight, show, "
                            "opacity-down, opacity-up, part-opacity-down, part-opacity-up, plane-place, plane-next, "
                            "plane-flip, plane-remove, plane-remove-all, plane-push, ambient-occlusion, crop-down, crop-up, "
-                           "crop-off, time-play, time-back, time-forward, time-slower, time-faster)");
+                           "crop-off, time-play, time-back, time-forward, time-slower, time-faster, value-down, value-up, "
+                           "colormap-next)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -386,7 +389,8 @@ Test(bindings, drag_actions_need_motion)
                            "motion (it takes speed-up, speed-down, home, pick, hide-object, show-all, fly-to, governor-status, isolate, "
                            "select-parent, highlight, show, opacity-down, opacity-up, part-opacity-down, part-opacity-up, "
                            "plane-place, plane-next, plane-flip, plane-remove, plane-remove-all, ambient-occlusion, crop-down, "
-                           "crop-up, crop-off, time-play, time-back, time-forward, time-slower, time-faster or none)");
+                           "crop-up, crop-off, time-play, time-back, time-forward, time-slower, time-faster, value-down, "
+                           "value-up, colormap-next or none)");
     expect_members_failure(", \"gestures\": {\"click\": \"pan\"}", "gestures.click", "'pan' is a drag action");
     expect_members_failure(", \"gestures\": {\"double-tap\": \"dolly\"}", "gestures.double-tap",
                            "'dolly' is a drag action");

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/colormap.h"
 #include "engine/frame_state.h"
 #include "engine/render.h"
 #include "input/controller.h"
@@ -573,5 +574,35 @@ Test(input_inspect, time_keys_without_a_series_say_so)
     rig *r = rig_make();
     int at = press(r, KEY_SPACE);
     cr_expect_str_eq(made_since(r, at), "status \"no time steps in this scene\"");
+    rig_free(r);
+}
+
+/* T and Y step every iso-value by 1/50 of its range, clamped; M cycles the
+ * built-in maps (wrapping). */
+Test(input_inspect, value_and_colormap_keys)
+{
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.values[0] = (input_value_target){.first = 2, .count = 1, .value = 10.f, .lo = 0.f, .hi = 100.f};
+    cfg.value_count = 1;
+    cfg.maps[0] = (input_map_target){.first = 5, .count = 1, .name = "greyscale"};
+    cfg.map_count = 1;
+    rig *r = rig_make_with(&cfg);
+    int at = press(r, KEY_Y);
+    cr_expect_str_eq(text_of(only(r, at, TXN_VALUE)), "value 2 1 0x1.8p+3");
+    cr_expect_str_eq(text_of(only(r, at, TXN_STATUS)), "status \"iso-value 12\"");
+    for (int i = 0; i < 10; i++)
+        press(r, KEY_T);
+    at = press(r, KEY_T);
+    cr_expect_str_eq(text_of(only(r, at, TXN_VALUE)), "value 2 1 0x0p+0", "clamped at the bottom of the range");
+    const char *const *names = colormap_names();
+    int k = 0;
+    while (names[k] && strcmp(names[k], "greyscale") != 0)
+        k++;
+    cr_assert(names[k]);
+    at = press(r, KEY_M);
+    char want[64];
+    snprintf(want, sizeof want, "colormap 5 1 %s", names[k + 1] ? names[k + 1] : names[0]);
+    cr_expect_str_eq(text_of(only(r, at, TXN_COLORMAP)), want);
     rig_free(r);
 }

@@ -340,6 +340,29 @@ static void crop_targets(const scene *s, input_controller_config *cc)
     }
 }
 
+/* The geometries input may step the value of, and those coloured through a
+ * map (their first instance each: every instance of a geometry follows). */
+static void value_and_map_targets(const scene *s, input_controller_config *cc)
+{
+    for (uint32_t g = 0; g < s->geometry_count; g++) {
+        const scene_geometry *sg = &s->geometries[g];
+        uint32_t inst = 0;
+        while (inst < s->instance_count && s->instances[inst].geometry != g)
+            inst++;
+        if (inst == s->instance_count)
+            continue;
+        float v, lo, hi;
+        if (sg->ops->value && cc->value_count < INPUT_VALUE_MAX && sg->ops->value(sg->data, &v, &lo, &hi))
+            cc->values[cc->value_count++] = (input_value_target){inst, 1, v, lo, hi};
+        const colormap *cm = sg->ops == &particle_kind_ops ? particle_kind_colormap(sg->data) : NULL;
+        if (cm && cc->map_count < INPUT_MAP_MAX) {
+            input_map_target *t = &cc->maps[cc->map_count++];
+            *t = (input_map_target){.first = inst, .count = 1};
+            snprintf(t->name, sizeof t->name, "%s", cm->name[0] ? cm->name : "custom");
+        }
+    }
+}
+
 /* The steps of the longest time series in the scene (1: none). */
 static uint32_t time_steps(const scene *s)
 {
@@ -399,6 +422,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.idle_timeout_s = s->idle_timeout_s;
     cc.have_tour = in->tour.count > 0;
     cc.time_steps = time_steps(cs->scene);
+    value_and_map_targets(cs->scene, &cc);
     in->runner = input_runner_start(&sc, &cc, pick, step_ready, (void *)cs, in->sink, cli_pipeline_session(), &err);
     if (!in->runner) {
         cli_error("%s", err.msg);
