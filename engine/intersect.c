@@ -270,6 +270,26 @@ bool intersect_sphere(const ray *r, vec3 centre, float radius, float *t_out)
     return false;
 }
 
+bool intersect_box_span(const ray *r, const ray_derived *d, const aabb *b, float *t_entry, float *t_exit)
+{
+    const float org[3] = {r->org.x, r->org.y, r->org.z}, inv[3] = {d->inv_dir.x, d->inv_dir.y, d->inv_dir.z};
+    const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+    float t_in = r->t_near, t_out = r->t_far;
+    for (int a = 0; a < 3; a++) {
+        if (d->zero_axes >> a & 1u) {
+            if (!(lo[a] <= org[a] && org[a] <= hi[a]))
+                return false;
+            continue;
+        }
+        float t0 = (lo[a] - org[a]) * inv[a], t1 = (hi[a] - org[a]) * inv[a];
+        t_in = fmaxf(t_in, fminf(t0, t1));
+        t_out = fminf(t_out, fmaxf(t0, t1));
+    }
+    *t_entry = t_in;
+    *t_exit = t_out;
+    return t_in < t_out;
+}
+
 bool intersect_box(const ray *r, const ray_derived *d, const aabb *b, float *t_entry)
 {
     const float org[3] = {r->org.x, r->org.y, r->org.z}, inv[3] = {d->inv_dir.x, d->inv_dir.y, d->inv_dir.z};

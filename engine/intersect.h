@@ -100,5 +100,9 @@ bool intersect_sphere(const ray *r, vec3 centre, float radius, float *t);
  * 2(2), 2013): the far distance is scaled by 1 + 2 gamma(3) so rounding never
  * rejects a box the exact ray passes through. Writes the entry distance. */
 bool intersect_box(const ray *r, const ray_derived *d, const aabb *b, float *t_entry);
+/* The part of [r->t_near, r->t_far] inside box b, exactly as the slabs give
+ * it (no conservative widening: for integrating along the ray, not for
+ * culling); false when it is empty. */
+bool intersect_box_span(const ray *r, const ray_derived *d, const aabb *b, float *t_entry, float *t_exit);
 
 #endif

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "accel.h"
+#include "intersect.h"
 #include "log.h"
 #include "frame_state.h"
 #include "scene.h"
@@ -644,17 +645,93 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
         ps->colour[i] = lw->sum[i];
 }
 
+/* A number in [0, 1) from a ray's direction bits: where a medium's first
+ * sample lies within its step (render is a pure function of the pixel, so
+ * no frame counter: the same pixel always jitters the same). */
+static float ray_jitter(const ray *r)
+{
+    uint32_t bits[3];
+    memcpy(&bits[0], &r->dir.x, 4);
+    memcpy(&bits[1], &r->dir.y, 4);
+    memcpy(&bits[2], &r->dir.z, 4);
+    uint32_t h = bits[0] * 0x9E3779B1u ^ bits[1] * 0x85EBCA77u ^ bits[2] * 0xC2B2AE3Du;
+    h ^= h >> 15, h *= 0x2C1B3C6Du, h ^= h >> 12;
+    return (float)(h >> 8) * (1.f / 16777216.f);
+}
+
+/* The scene's participating media in front of each ray's first surface
+ * (scene.h, PARTICIPATING MEDIA): colour = medium + transmittance x colour,
+ * nearest medium first. */
+static void composite_media(const render_view *v, const ray_packet *p, const render_first_surfaces *first,
+                            vec3 *colour)
+{
+    const scene *s = v->scene;
+    for (uint32_t i = 0; i < p->count; i++) {
+        if (!(p->active >> i & 1u))
+            continue;
+        ray r = packet_get_ray(p, i);
+        float t_end = first->hits >> i & 1u ? first->t[i] : r.t_far;
+        /* entries of the media along the ray, nearest first (few media: insertion order) */
+        float enter[8], leave[8];
+        uint32_t which[8], n = 0;
+        for (uint32_t m = 0; m < s->medium_count && n < 8; m++) {
+            const scene_medium *md = &s->media[m];
+            aabb box;
+            if (!md->ops->bounds(md->data, &box))
+                continue;
+            ray local = md->identity ? r : affine3_ray(&md->to_object, &r);
+            ray_derived d = ray_derive(&local);
+            float t0, t1;
+            local.t_far = t_end;
+            if (!intersect_box_span(&local, &d, &box, &t0, &t1))
+                continue;
+            uint32_t k = n++;
+            while (k > 0 && enter[k - 1] > t0) {
+                enter[k] = enter[k - 1], leave[k] = leave[k - 1], which[k] = which[k - 1];
+                k--;
+            }
+            enter[k] = t0, leave[k] = t1, which[k] = m;
+        }
+        if (n == 0)
+            continue;
+        vec3 sum = v3(0.f, 0.f, 0.f);
+        float through = 1.f; /* transmittance so far */
+        float jitter = ray_jitter(&r);
+        for (uint32_t k = 0; k < n && through > 0.f; k++) {
+            const scene_medium *md = &s->media[which[k]];
+            ray local = md->identity ? r : affine3_ray(&md->to_object, &r);
+            local.t_near = enter[k];
+            local.t_far = leave[k];
+            vec3 rgb;
+            float trans;
+            md->ops->integrate(md->data, &local, jitter, &rgb, &trans);
+            sum = v3_add(sum, v3_scale(rgb, through));
+            through *= trans;
+        }
+        colour[i] = v3_add(sum, v3_scale(colour[i], through));
+    }
+}
+
+/* Per thread: the first surfaces of a packet when the scene has media and
+ * the caller asked for none (render_first_surfaces is 3.6 KB). */
+static _Thread_local render_first_surfaces media_first;
+
 /* Trace and shade primary packet p into ps->colour, by the walk the frame
- * needs; `first` (may be NULL) receives each ray's first surface. */
+ * needs; `first` (may be NULL) receives each ray's first surface. Media
+ * (scene.h) go in front of the first surfaces. */
 static void trace_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
                          packet_shading *ps, layer_walk *lw, render_first_surfaces *first, render_counts *counts)
 {
+    if (v->scene->medium_count > 0 && !first)
+        first = &media_first;
     if (first)
         first->hits = 0;
     if (needs_layers(x))
         render_layers(v, x, p, shadows, ps, lw, first, counts);
     else
         shade_packet(v, x, p, shadows, ps, first, counts);
+    if (v->scene->medium_count > 0)
+        composite_media(v, p, first, ps->colour);
 }
 
 /* Per thread: two packets and the shading state, ~65 KB: too big for a

@@ -54,6 +54,10 @@ void scene_destroy(scene *s)
     for (uint32_t g = 0; g < s->geometry_count; g++)
         if (s->geometries[g].ops->destroy)
             s->geometries[g].ops->destroy(s->geometries[g].data);
+    for (uint32_t m = 0; m < s->medium_count; m++)
+        if (s->media[m].ops->destroy)
+            s->media[m].ops->destroy(s->media[m].data);
+    free(s->media);
     for (uint32_t i = 0; i < s->mesh_count; i++) {
         mesh_destroy(s->meshes[i]->mesh);
         free(s->meshes[i]->mesh_material_ids);
@@ -426,6 +430,11 @@ bool scene_bounds(const scene *s, vec3 *lo, vec3 *hi)
         if (scene_instance_bounds(s, i, &b))
             all = aabb_grow(all, b);
     }
+    for (uint32_t m = 0; m < s->medium_count; m++) {
+        aabb b;
+        if (s->media[m].ops->bounds(s->media[m].data, &b))
+            all = aabb_grow(all, s->media[m].identity ? b : affine3_box(&s->media[m].to_world, b));
+    }
     if (aabb_is_empty(all))
         return false;
     *lo = all.lo;
@@ -610,4 +619,25 @@ size_t scene_point_bytes(const scene *s)
         if (s->geometries[g].ops->leaf == GEOMETRY_LEAF_POINTS && s->geometries[g].ops->bytes)
             bytes += s->geometries[g].ops->bytes(s->geometries[g].data);
     return bytes;
+}
+
+int scene_add_medium(scene *s, const medium_ops *ops, void *data, const affine3 *to_world, const char *name)
+{
+    affine3 world = to_world ? *to_world : affine3_identity(), object;
+    bool ok = ops && ops->bounds && ops->integrate && affine3_invert(&world, &object) &&
+              reserve_one((void **)&s->media, s->medium_count, &s->medium_capacity, sizeof *s->media);
+    if (!ok) {
+        if (ops && ops->destroy)
+            ops->destroy(data);
+        return -1;
+    }
+    scene_medium *m = &s->media[s->medium_count];
+    memset(m, 0, sizeof *m);
+    m->ops = ops;
+    m->data = data;
+    m->to_world = world;
+    m->to_object = object;
+    m->identity = affine3_is_identity(&world);
+    snprintf(m->name, sizeof m->name, "%s", name ? name : "");
+    return (int)s->medium_count++;
 }

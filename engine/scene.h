@@ -73,6 +73,38 @@ typedef struct sphere_set {
     uint32_t *material_id;                  /* per sphere */
 } sphere_set;
 
+/* PARTICIPATING MEDIA: what is integrated along rays rather than hit (a
+ * volume rendered directly). A medium lies in its own box (object space),
+ * placed by to_world; along a primary ray it is integrated from the ray's
+ * start to its first surface (or to the end of the box) and composited in
+ * front of that surface: colour = medium + transmittance x surface. Media
+ * are assumed not to overlap (each is integrated alone, nearest first).
+ * A scene without media pays nothing (medium_count 0). */
+typedef struct medium_ops {
+    const char *name; /* the kind, for logs ("dvr") */
+    /* The medium's box in object space; false when it is empty. */
+    bool (*bounds)(const void *data, aabb *out);
+    /* Integrate along r (object space; r->t_near .. r->t_far are already
+     * clipped to the box and to the first surface): emitted colour (linear
+     * RGB, associated: already weighted by opacity) and the transmittance
+     * left, in [0, 1]. jitter in [0, 1): where within its first step the
+     * first sample lies. Any thread. */
+    void (*integrate)(const void *data, const ray *r, float jitter, vec3 *rgb, float *transmittance);
+    /* Free data with the scene (NULL: the caller owns it). */
+    void (*destroy)(void *data);
+    /* Use the built-in transfer function `name` (colormap.h); false: no
+     * such map. Only where nothing traces. NULL: not changeable. */
+    bool (*set_colormap)(void *data, const char *name);
+} medium_ops;
+
+typedef struct scene_medium {
+    const medium_ops *ops;
+    void *data;
+    affine3 to_world, to_object;
+    bool identity;
+    char name[SCENE_NAME_BYTES];
+} scene_medium;
+
 /* A geometry: a kind and its data (ops->destroy frees data with the scene). */
 typedef struct scene_geometry {
     const geometry_ops *ops;
@@ -107,6 +139,8 @@ typedef struct scene {
     uint32_t geometry_count, geometry_capacity;
     scene_instance *instances;
     uint32_t instance_count, instance_capacity;
+    scene_medium *media;     /* participating media (above); NULL while there are none */
+    uint32_t medium_count, medium_capacity;
     /* PARTS. The part tree of an assembly (part_tree.h), or NULL when the
      * scene has none (then it costs nothing). Instances with a part come in
      * preorder of their parts (part ids never decrease along the instances
@@ -164,6 +198,11 @@ int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char
  * scene does not have, a transform that is singular or not finite, or no
  * memory. */
 int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uint32_t part);
+
+/* Add a participating medium placed by to_world (NULL: identity); the
+ * scene owns data from now on when ops->destroy is set (also on failure).
+ * Returns its index, or -1 (no memory, a singular transform, bad ops). */
+int scene_add_medium(scene *s, const medium_ops *ops, void *data, const affine3 *to_world, const char *name);
 
 /* A geometry of the triangles kind without an instance (an assembly places
  * it by scene_add_instance). Takes ownership of `m` (also on failure).

@@ -635,6 +635,8 @@ static bool load_particles(loader *L, json_object *v)
 /* Whether anything in the scene can be hit. */
 static bool scene_has_geometry(const scene *s)
 {
+    if (s->medium_count > 0)
+        return true;
     for (uint32_t i = 0; i < s->instance_count; i++) {
         const scene_geometry *g = scene_instance_geometry(s, i);
         if (g->ops->prim_count(g->data) > 0)

@@ -1,0 +1,120 @@
+/* test_media.c - participating media (scene.h, PARTICIPATING MEDIA): a
+ * medium defined here (constant extinction in a unit box: transmittance
+ * exp(-sigma L), colour c (1 - exp(-sigma L)) over a segment of length L)
+ * is composited in front of each ray's first surface, and stops there. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "engine/accel.h"
+#include "engine/render.h"
+#include "engine/scene.h"
+
+#define SIGMA 0.7f
+
+static bool fog_bounds(const void *data, aabb *out)
+{
+    (void)data;
+    *out = (aabb){v3(-1.f, -1.f, -1.f), v3(1.f, 1.f, 1.f)};
+    return true;
+}
+
+static void fog_integrate(const void *data, const ray *r, float jitter, vec3 *rgb, float *transmittance)
+{
+    (void)data;
+    (void)jitter;
+    float length = (r->t_far - r->t_near) * v3_length(r->dir);
+    float t = expf(-SIGMA * length);
+    *transmittance = t;
+    *rgb = v3_scale(v3(0.2f, 0.4f, 0.8f), 1.f - t);
+}
+
+static const medium_ops fog_ops = {.name = "fog", .bounds = fog_bounds, .integrate = fog_integrate};
+
+/* A white floor at z = -3 facing +z, lit head on; the fog box scaled by `scale` in x. */
+static scene *fog_scene(bool with_fog, float scale)
+{
+    scene *s = scene_create();
+    material m = material_default();
+    m.diffuse = v3(1.f, 1.f, 1.f);
+    int mat = scene_add_material(s, &m);
+    mesh *q = mesh_create();
+    cr_assert(mesh_add_vertex(q, -10.f, -10.f, -3.f) && mesh_add_vertex(q, 10.f, -10.f, -3.f) &&
+              mesh_add_vertex(q, 10.f, 10.f, -3.f) && mesh_add_vertex(q, -10.f, 10.f, -3.f));
+    cr_assert(mesh_add_triangle(q, 0, 1, 2) && mesh_add_triangle(q, 0, 2, 3));
+    cr_assert_geq(scene_add_mesh(s, q, (uint32_t)mat, "floor"), 0);
+    light l = light_default_directional();
+    l.direction = v3(0.f, 0.f, 1.f);
+    l.casts_shadows = false;
+    cr_assert_geq(scene_add_light(s, &l), 0);
+    s->ambient = v3(0.f, 0.f, 0.f);
+    if (with_fog) {
+        affine3 stretch = {{scale, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f}};
+        cr_assert_geq(scene_add_medium(s, &fog_ops, NULL, &stretch, "fog"), 0);
+    }
+    return s;
+}
+
+/* The centre pixel looking down -z from z = 5 (through 2 units of fog, then the floor). */
+static vec3 centre_pixel(scene *s)
+{
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
+    render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33), .shading = RENDER_SHADE_PHONG};
+    float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
+    render_image(&v, 2, rgb, NULL);
+    vec3 px = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
+    free(rgb);
+    accel_destroy(a);
+    return px;
+}
+
+Test(media, a_medium_is_composited_in_front_of_the_first_surface)
+{
+    scene *clear = fog_scene(false, 1.f), *foggy = fog_scene(true, 1.f);
+    vec3 floor = centre_pixel(clear), seen = centre_pixel(foggy);
+    float t = expf(-SIGMA * 2.f); /* the centre ray crosses the box's 2 units of depth */
+    vec3 want = v3_add(v3_scale(v3(0.2f, 0.4f, 0.8f), 1.f - t), v3_scale(floor, t));
+    cr_assert_gt(floor.x, 0.5f, "the floor is lit");
+    cr_assert_float_eq(seen.x, want.x, 1e-5f);
+    cr_assert_float_eq(seen.y, want.y, 1e-5f);
+    cr_assert_float_eq(seen.z, want.z, 1e-5f);
+    scene_destroy(clear);
+    scene_destroy(foggy);
+}
+
+/* A surface inside the medium ends the integration there. */
+Test(media, integration_stops_at_the_first_surface)
+{
+    scene *s = fog_scene(true, 1.f);
+    /* a second floor inside the fog at z = 0.5: 0.5 units of fog in front of it */
+    mesh *q = mesh_create();
+    cr_assert(mesh_add_vertex(q, -10.f, -10.f, 0.5f) && mesh_add_vertex(q, 10.f, -10.f, 0.5f) &&
+              mesh_add_vertex(q, 10.f, 10.f, 0.5f) && mesh_add_vertex(q, -10.f, 10.f, 0.5f));
+    cr_assert(mesh_add_triangle(q, 0, 1, 2) && mesh_add_triangle(q, 0, 2, 3));
+    cr_assert_geq(scene_add_mesh(s, q, 0, "inner"), 0);
+    scene *bare = fog_scene(false, 1.f);
+    vec3 floor = centre_pixel(bare), seen = centre_pixel(s);
+    float t = expf(-SIGMA * 0.5f);
+    cr_assert_float_eq(seen.z, 0.8f * (1.f - t) + floor.z * t, 1e-5f);
+    scene_destroy(s);
+    scene_destroy(bare);
+}
+
+/* A medium placed by a transform is integrated in its own space (a box
+ * stretched along x is as deep along z as before), and frames the camera. */
+Test(media, placed_media_bound_the_scene)
+{
+    scene *s = scene_create();
+    affine3 far = {{1.f, 0.f, 0.f, 10.f, 0.f, 1.f, 0.f, 0.f, 0.f, 0.f, 1.f, 0.f}};
+    cr_assert_geq(scene_add_medium(s, &fog_ops, NULL, &far, "fog"), 0);
+    vec3 lo, hi;
+    cr_assert(scene_bounds(s, &lo, &hi));
+    cr_assert_float_eq(lo.x, 9.f, 1e-4f, "affine3_box widens by a few ulps at most");
+    cr_assert_float_eq(hi.x, 11.f, 1e-4f);
+    affine3 singular = {{0}};
+    cr_assert_eq(scene_add_medium(s, &fog_ops, NULL, &singular, "bad"), -1);
+    scene_destroy(s);
+}
