@@ -512,3 +512,58 @@ Test(iso_kind, borrowed_volumes_stay_the_callers)
     macrocell_grid_destroy(g);
     volume_destroy(v);
 }
+
+Test(iso_kind, bounds_are_the_macrocells_that_vary)
+{
+    tess_error err = {{0}};
+    /* zero everywhere but a bump at samples 20..22 on each axis */
+    volume *v = volume_create(N, N, N, VOLUME_FLOAT32, &err);
+    cr_assert_not_null(v, "%s", err.msg);
+    float *s = volume_voxels(v);
+    for (uint32_t k = 20; k <= 22; k++)
+        for (uint32_t j = 20; j <= 22; j++)
+            for (uint32_t i = 20; i <= 22; i++)
+                s[volume_index(v, i, j, k)] = 10.f;
+    cr_assert(volume_update_range(v, "bump", &err));
+    v->origin[0] = -3.0;
+    iso_volume *shared = iso_volume_create(v, NULL, &err); /* k = 8: samples 20..22 lie in macrocell 2 */
+    cr_assert_not_null(shared, "%s", err.msg);
+    iso_kind *k = iso_kind_create_shared(shared, 5.f, v3(1.f, 1.f, 1.f), 0, ISO_METHOD_EXACT, &err);
+    cr_assert_not_null(k);
+    aabb box;
+    cr_assert(iso_kind_ops.prim_bounds(k, 0, &box));
+    cr_assert_float_eq(box.lo.x, -3.f + 16.f, 1e-5f);
+    cr_assert_float_eq(box.hi.x, -3.f + 24.f, 1e-5f);
+    cr_assert_float_eq(box.lo.z, 16.f, 1e-5f);
+    cr_assert_float_eq(box.hi.z, 24.f, 1e-5f);
+    /* the bump is found from outside its box */
+    ray r = {v3(-50.f, 21.f, 21.f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+    float t, u, w;
+    cr_assert(iso_kind_ops.intersect(k, 0, &r, &t, &u, &w));
+    cr_assert_float_eq(t, 50.f - 3.f + 19.5f, 1e-4f);
+    cr_assert(iso_kind_ops.closed(k), "the bump stays off the boundary");
+    iso_volume_release(shared);
+    iso_kind_destroy(k);
+
+    /* a constant field: nothing to bound, nothing to hit, at any value */
+    volume *flat = volume_create(8, 8, 8, VOLUME_UINT8, &err);
+    cr_assert_not_null(flat);
+    memset(volume_voxels(flat), 7, 512);
+    cr_assert(volume_update_range(flat, "flat", &err));
+    shared = iso_volume_create(flat, NULL, &err);
+    cr_assert_not_null(shared);
+    k = iso_kind_create_shared(shared, 7.f, v3(1.f, 1.f, 1.f), 0, ISO_METHOD_EXACT, &err);
+    iso_volume_release(shared);
+    cr_assert(!iso_kind_ops.prim_bounds(k, 0, &box));
+    cr_assert(!iso_kind_ops.bounds(k, &box));
+    scene *sc = scene_create();
+    cr_assert_geq(scene_add_geometry(sc, &iso_kind_ops, k, "flat"), 0);
+    cr_assert_geq(scene_add_instance(sc, 0, NULL, SCENE_NO_PART), 0);
+    accel *a = accel_build(sc, 1, &err);
+    cr_assert_not_null(a, "%s", err.msg);
+    hit h;
+    ray through = {v3(-5.f, 3.5f, 3.5f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+    cr_assert(!accel_intersect(a, &through, &h));
+    accel_destroy(a);
+    scene_destroy(sc);
+}

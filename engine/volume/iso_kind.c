@@ -23,6 +23,14 @@ struct iso_volume {
     volume *owned_v;             /* freed with the last reference; NULL when borrowed */
     macrocell_grid *owned_grid;  /* likewise */
     float boundary_min, boundary_max; /* over the samples on the six faces of the box */
+    /* ACTIVE BOX: the world box of the macrocells whose samples are not all
+     * equal, rounded outwards to float. A cell whose 8 corners are equal
+     * holds a constant field, so no crossing of any iso-value (no sign
+     * change); every crossing lies in a non-constant macrocell. The box is
+     * the primitive's bounds whatever the value: the BVH culls the rays that
+     * miss it (the zero background around a scan) before any walk. */
+    bool active;                      /* some macrocell is not constant */
+    vec3 active_lo, active_hi;
 };
 
 struct iso_kind {
@@ -65,6 +73,38 @@ static void boundary_range(const volume *v, float *lo, float *hi)
         }
 }
 
+static void active_box(iso_volume *s)
+{
+    const macrocell_grid *g = s->grid;
+    uint32_t lo[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi[3] = {0, 0, 0};
+    s->active = false;
+    for (uint32_t c = 0; c < g->m[2]; c++)
+        for (uint32_t b = 0; b < g->m[1]; b++)
+            for (uint32_t a = 0; a < g->m[0]; a++) {
+                size_t i = macrocell_index(g, a, b, c);
+                if (!(g->min[i] < g->max[i]))
+                    continue;
+                const uint32_t m[3] = {a, b, c};
+                for (int x = 0; x < 3; x++) {
+                    lo[x] = m[x] < lo[x] ? m[x] : lo[x];
+                    hi[x] = m[x] > hi[x] ? m[x] : hi[x];
+                }
+                s->active = true;
+            }
+    if (!s->active)
+        return;
+    float wlo[3], whi[3];
+    for (int x = 0; x < 3; x++) {
+        /* macrocell m spans cells m k .. min((m + 1) k, cells) */
+        uint32_t c0 = lo[x] * g->k, c1 = (hi[x] + 1) * g->k;
+        c1 = c1 < g->cells[x] ? c1 : g->cells[x];
+        wlo[x] = nextafterf((float)(g->origin[x] + c0 * g->spacing[x]), -INFINITY);
+        whi[x] = nextafterf((float)(g->origin[x] + c1 * g->spacing[x]), INFINITY);
+    }
+    s->active_lo = v3(wlo[0], wlo[1], wlo[2]);
+    s->active_hi = v3(whi[0], whi[1], whi[2]);
+}
+
 static iso_volume *shared_make(const volume *v, const macrocell_grid *grid, tess_error *err)
 {
     iso_volume *s = calloc(1, sizeof *s);
@@ -76,6 +116,7 @@ static iso_volume *shared_make(const volume *v, const macrocell_grid *grid, tess
     s->v = v;
     s->grid = grid;
     boundary_range(v, &s->boundary_min, &s->boundary_max);
+    active_box(s);
     return s;
 }
 
@@ -195,18 +236,13 @@ static uint32_t kind_count(const void *data)
     return 1u;
 }
 
-/* The field's box, rounded outwards to float (every hit lies inside it). */
+/* The active box (iso_volume ACTIVE BOX): every crossing lies inside it;
+ * false when the field is constant everywhere (no surface at any value). */
 static bool kind_bounds(const void *data, aabb *out)
 {
-    const macrocell_grid *g = ((const iso_kind *)data)->shared->grid;
-    float lo[3], hi[3];
-    for (int a = 0; a < 3; a++) {
-        double l = g->origin[a], h = g->origin[a] + g->cells[a] * g->spacing[a];
-        lo[a] = nextafterf((float)l, -INFINITY);
-        hi[a] = nextafterf((float)h, INFINITY);
-    }
-    *out = (aabb){v3(lo[0], lo[1], lo[2]), v3(hi[0], hi[1], hi[2])};
-    return true;
+    const iso_volume *s = ((const iso_kind *)data)->shared;
+    *out = (aabb){s->active_lo, s->active_hi};
+    return s->active;
 }
 
 static bool kind_prim_bounds(const void *data, uint32_t prim, aabb *out)

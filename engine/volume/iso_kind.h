@@ -3,8 +3,11 @@
  * trilinear field (volume.h, iso_cell.h) equals the iso-value.
  *
  * PRIMITIVES. The whole volume is one primitive (prim 0) whose bounds are
- * the field's box [origin, origin + (n - 1) spacing] rounded outwards to
- * float. Its `intersect` is iso_volume_first_hit over (t_near, box exit):
+ * the box of the macrocells that are not constant (a constant cell holds
+ * no crossing of any value; the zero background around a scan is culled
+ * by the BVH), rounded outwards to float, the same for every value; no
+ * bounds (never hit) when the whole field is constant. Its `intersect` is
+ * iso_volume_first_hit over (t_near, the field box's exit):
  * the macrocell walk skips every block that cannot reach the iso-value, so
  * the empty-space skipping follows the value and changing the value needs
  * no rebuild of any accel (the BVH sees one box whatever the value). A
