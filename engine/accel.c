@@ -209,8 +209,10 @@ void accel_set_value(const accel *a, uint32_t geom_id, float value)
     if (geom_id >= a->instance_count)
         return;
     const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
-    if (g->ops->set_value)
-        g->ops->set_value(g->data, value);
+    /* the kind's `closed` answer may follow its value: drop the cached one (a serial section's
+     * change, like the value itself) */
+    if (g->ops->set_value && g->ops->set_value(g->data, value))
+        scene_forget_closed((scene *)(uintptr_t)a->scene, a->scene->instances[geom_id].geometry);
 }
 
 void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name)

@@ -130,9 +130,15 @@ typedef struct geometry_ops {
     uint32_t (*step_count)(const void *data);
     bool (*step_ready)(void *data, uint32_t step);
     bool (*set_step)(void *data, uint32_t step, tess_error *err);
-    /* A kind with one scalar parameter: an iso-value. set_value: set it
-     * (only where nothing traces); value: it now and the range worth
-     * stepping it over. NULL: the kind has none. */
+    /* ONE SCALAR PARAMETER (an iso-surface's iso-value; NULL: the kind has
+     * none), so the engine can step it without knowing the kind. value:
+     * the parameter now and the range it is useful over (lo <= hi, the
+     * data's min and max; any thread); false when there is none. set_value:
+     * only where nothing traces (a serial section); false, and nothing
+     * changes, for a value the kind refuses (not finite). The kind's
+     * primitives and bounds must not depend on the value (an accel built
+     * before stays valid, no rebuild), but its `closed` answer may: the
+     * caller drops the scene's cached answer (scene_geometry_closed). */
     bool (*set_value)(void *data, float value);
     bool (*value)(const void *data, float *value, float *lo, float *hi);
     /* A kind coloured through a colour map (particles by an attribute, a

@@ -380,6 +380,13 @@ bool scene_geometry_closed(const scene *s, uint32_t geometry)
     return state == CLOSED_YES;
 }
 
+void scene_forget_closed(scene *s, uint32_t geometry)
+{
+    struct scene_closed_cache *c = atomic_load_explicit(&s->closed, memory_order_acquire);
+    if (c && geometry < c->count)
+        atomic_store_explicit(&c->state[geometry], CLOSED_UNKNOWN, memory_order_relaxed);
+}
+
 static void prepare_closed_chunk(void *ctx, size_t begin, size_t end, int worker)
 {
     (void)worker;

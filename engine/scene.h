@@ -239,6 +239,10 @@ static inline const scene_geometry *scene_instance_geometry(const scene *s, uint
  * the first call for that geometry and cached (the scene's `closed`); any
  * thread, at any time the scene is not being changed. */
 bool scene_geometry_closed(const scene *s, uint32_t geometry);
+/* Forget the cached answer for geometry `geometry` (its kind's answer
+ * changed: an iso-surface's value was set, geometry.h set_value); the next
+ * question asks the kind again. Only where nothing renders. */
+void scene_forget_closed(scene *s, uint32_t geometry);
 /* Answer scene_geometry_closed for every geometry now, over `threads`
  * threads (the caller counted): for the serial section where cutting planes
  * turn on, so no render thread stalls on a first question. */

@@ -1,0 +1,393 @@
+/* iso_kind.c - direct iso-surfaces as a geometry kind (iso_kind.h).
+ *
+ * Why one primitive rather than one per block of macrocells: the macrocell
+ * walk already skips every block that cannot reach the value, at the cost
+ * of a DDA step per block, and it carries the field's sign from block to
+ * block (iso_cell.h HALF-OPEN SEGMENTS), so no crossing on a block face is
+ * lost or found twice. Blocks as primitives would need boxes that follow
+ * the value (a rebuild, or a refit, per value) to cull anything more, and
+ * each block's walk would start afresh at its face, where the sign of a
+ * value ~0 is whatever that block's cubic rounds it to. */
+#include "engine/volume/iso_kind.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+
+#include "engine/ray.h"
+
+struct iso_volume {
+    atomic_uint refs;            /* kinds + the creator's reference until released */
+    const volume *v;             /* the samples (owned_v or the caller's) */
+    const macrocell_grid *grid;  /* built over v (owned_grid or the caller's) */
+    volume *owned_v;             /* freed with the last reference; NULL when borrowed */
+    macrocell_grid *owned_grid;  /* likewise */
+    float boundary_min, boundary_max; /* over the samples on the six faces of the box */
+    /* ACTIVE BOX: the world box of the macrocells whose samples are not all
+     * equal, rounded outwards to float. A cell whose 8 corners are equal
+     * holds a constant field, so no crossing of any iso-value (no sign
+     * change); every crossing lies in a non-constant macrocell. The box is
+     * the primitive's bounds whatever the value: the BVH culls the rays that
+     * miss it (the zero background around a scan) before any walk. */
+    bool active;                      /* some macrocell is not constant */
+    vec3 active_lo, active_hi;
+};
+
+struct iso_kind {
+    iso_volume *shared;   /* one reference held */
+    float iso;            /* the value; written only where nothing traces */
+    vec3 colour;          /* linear RGB of every hit */
+    uint32_t material_id; /* scene material */
+    iso_method method;    /* how a cell's root is found (iso_cell.h) */
+};
+
+/* ---- the shared volume ------------------------------------------------- */
+
+static void note_range(const volume *v, uint32_t i, uint32_t j, uint32_t k, float *lo, float *hi)
+{
+    float s = volume_sample(v, i, j, k);
+    *lo = s < *lo ? s : *lo;
+    *hi = s > *hi ? s : *hi;
+}
+
+/* min and max over the samples of the box's faces (each face sample once or
+ * twice: a few n^2 reads) */
+static void boundary_range(const volume *v, float *lo, float *hi)
+{
+    *lo = INFINITY;
+    *hi = -INFINITY;
+    for (uint32_t k = 0; k < v->nz; k++)
+        for (uint32_t j = 0; j < v->ny; j++) {
+            note_range(v, 0, j, k, lo, hi);
+            note_range(v, v->nx - 1, j, k, lo, hi);
+        }
+    for (uint32_t k = 0; k < v->nz; k++)
+        for (uint32_t i = 0; i < v->nx; i++) {
+            note_range(v, i, 0, k, lo, hi);
+            note_range(v, i, v->ny - 1, k, lo, hi);
+        }
+    for (uint32_t j = 0; j < v->ny; j++)
+        for (uint32_t i = 0; i < v->nx; i++) {
+            note_range(v, i, j, 0, lo, hi);
+            note_range(v, i, j, v->nz - 1, lo, hi);
+        }
+}
+
+static void active_box(iso_volume *s)
+{
+    const macrocell_grid *g = s->grid;
+    uint32_t lo[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi[3] = {0, 0, 0};
+    s->active = false;
+    for (uint32_t c = 0; c < g->m[2]; c++)
+        for (uint32_t b = 0; b < g->m[1]; b++)
+            for (uint32_t a = 0; a < g->m[0]; a++) {
+                size_t i = macrocell_index(g, a, b, c);
+                if (!(g->min[i] < g->max[i]))
+                    continue;
+                const uint32_t m[3] = {a, b, c};
+                for (int x = 0; x < 3; x++) {
+                    lo[x] = m[x] < lo[x] ? m[x] : lo[x];
+                    hi[x] = m[x] > hi[x] ? m[x] : hi[x];
+                }
+                s->active = true;
+            }
+    if (!s->active)
+        return;
+    float wlo[3], whi[3];
+    for (int x = 0; x < 3; x++) {
+        /* macrocell m spans cells m k .. min((m + 1) k, cells) */
+        uint32_t c0 = lo[x] * g->k, c1 = (hi[x] + 1) * g->k;
+        c1 = c1 < g->cells[x] ? c1 : g->cells[x];
+        wlo[x] = nextafterf((float)(g->origin[x] + c0 * g->spacing[x]), -INFINITY);
+        whi[x] = nextafterf((float)(g->origin[x] + c1 * g->spacing[x]), INFINITY);
+    }
+    s->active_lo = v3(wlo[0], wlo[1], wlo[2]);
+    s->active_hi = v3(whi[0], whi[1], whi[2]);
+}
+
+static iso_volume *shared_make(const volume *v, const macrocell_grid *grid, tess_error *err)
+{
+    iso_volume *s = calloc(1, sizeof *s);
+    if (!s) {
+        tess_error_set(err, "iso surface: out of memory");
+        return NULL;
+    }
+    atomic_init(&s->refs, 1u);
+    s->v = v;
+    s->grid = grid;
+    boundary_range(v, &s->boundary_min, &s->boundary_max);
+    active_box(s);
+    return s;
+}
+
+iso_volume *iso_volume_create(volume *v, macrocell_grid *grid, tess_error *err)
+{
+    if (!v) {
+        macrocell_grid_destroy(grid);
+        tess_error_set(err, "iso surface: no volume");
+        return NULL;
+    }
+    if (!grid)
+        grid = macrocell_grid_create(v, MACROCELL_DEFAULT_K, err);
+    iso_volume *s = grid ? shared_make(v, grid, err) : NULL;
+    if (!s) {
+        macrocell_grid_destroy(grid);
+        volume_destroy(v);
+        return NULL;
+    }
+    s->owned_v = v;
+    s->owned_grid = grid;
+    return s;
+}
+
+iso_volume *iso_volume_borrow(const volume *v, const macrocell_grid *grid, tess_error *err)
+{
+    if (!v || !grid) {
+        tess_error_set(err, "iso surface: no volume or no macrocell grid");
+        return NULL;
+    }
+    return shared_make(v, grid, err);
+}
+
+void iso_volume_retain(iso_volume *shared) { atomic_fetch_add_explicit(&shared->refs, 1u, memory_order_relaxed); }
+
+void iso_volume_release(iso_volume *shared)
+{
+    if (!shared)
+        return;
+    /* acq_rel: the last releaser sees every other holder's reads finished */
+    if (atomic_fetch_sub_explicit(&shared->refs, 1u, memory_order_acq_rel) != 1u)
+        return;
+    macrocell_grid_destroy(shared->owned_grid);
+    volume_destroy(shared->owned_v);
+    free(shared);
+}
+
+const volume *iso_volume_data(const iso_volume *shared) { return shared->v; }
+const macrocell_grid *iso_volume_grid(const iso_volume *shared) { return shared->grid; }
+
+/* ---- the kind ------------------------------------------------------------ */
+
+iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colour, uint32_t material_id,
+                                 iso_method method, tess_error *err)
+{
+    if (!shared) {
+        tess_error_set(err, "iso surface: no volume");
+        return NULL;
+    }
+    if (!isfinite(iso_value)) {
+        tess_error_set(err, "iso surface: the iso-value %g is not finite", (double)iso_value);
+        return NULL;
+    }
+    iso_kind *k = calloc(1, sizeof *k);
+    if (!k) {
+        tess_error_set(err, "iso surface: out of memory");
+        return NULL;
+    }
+    iso_volume_retain(shared);
+    k->shared = shared;
+    k->iso = iso_value;
+    k->colour = colour;
+    k->material_id = material_id;
+    k->method = method;
+    return k;
+}
+
+iso_kind *iso_kind_create(const volume *v, const macrocell_grid *grid, float iso_value, vec3 colour,
+                          uint32_t material_id, iso_method method, tess_error *err)
+{
+    iso_volume *shared = iso_volume_borrow(v, grid, err);
+    if (!shared)
+        return NULL;
+    iso_kind *k = iso_kind_create_shared(shared, iso_value, colour, material_id, method, err);
+    iso_volume_release(shared); /* the kind's own reference keeps it */
+    return k;
+}
+
+void iso_kind_destroy(iso_kind *k)
+{
+    if (!k)
+        return;
+    iso_volume_release(k->shared);
+    free(k);
+}
+
+bool iso_kind_set_value(iso_kind *k, float iso_value)
+{
+    if (!isfinite(iso_value))
+        return false;
+    k->iso = iso_value;
+    return true;
+}
+
+float iso_kind_value(const iso_kind *k) { return k->iso; }
+
+void iso_kind_range(const iso_kind *k, float *lo, float *hi)
+{
+    *lo = k->shared->v->min;
+    *hi = k->shared->v->max;
+}
+
+/* ---- geometry ops -------------------------------------------------------- */
+
+static uint32_t kind_count(const void *data)
+{
+    (void)data;
+    return 1u;
+}
+
+/* The active box (iso_volume ACTIVE BOX): every crossing lies inside it;
+ * false when the field is constant everywhere (no surface at any value). */
+static bool kind_bounds(const void *data, aabb *out)
+{
+    const iso_volume *s = ((const iso_kind *)data)->shared;
+    *out = (aabb){s->active_lo, s->active_hi};
+    return s->active;
+}
+
+static bool kind_prim_bounds(const void *data, uint32_t prim, aabb *out)
+{
+    (void)prim;
+    return kind_bounds(data, out);
+}
+
+/* The first crossing whose float t is in (t_near, t_far]. The walk always
+ * runs to the box's exit (t_far only accepts or refuses what it found),
+ * so the t found never depends on how far the ray has been shortened by
+ * other hits: single rays and packets agree bit for bit. */
+static bool kind_intersect(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v)
+{
+    (void)prim;
+    const iso_kind *k = data;
+    const iso_volume *s = k->shared;
+    const double org[3] = {r->org.x, r->org.y, r->org.z}, dir[3] = {r->dir.x, r->dir.y, r->dir.z};
+    double t_min = r->t_near;
+    *u = *v = 0.f;
+    /* at most three walks: a crossing that rounds onto t_near is the one a
+     * next-hit query starts from (or lies within half an ulp of it: the
+     * same float t, one hit); the walk then restarts half an ulp above
+     * t_near, where every crossing rounds above it, and once more from the
+     * next float should a crossing land exactly on that midpoint */
+    for (int walk = 0; walk < 3; walk++) {
+        iso_hit h;
+        if (!iso_volume_first_hit(s->v, s->grid, org, dir, t_min, INFINITY, k->iso, k->method, &h))
+            return false;
+        float found = (float)h.t;
+        if (found > r->t_near) {
+            if (!(found <= r->t_far))
+                return false;
+            *t = found;
+            return true;
+        }
+        double above = nextafterf(r->t_near, INFINITY);
+        t_min = walk == 0 ? 0.5 * ((double)r->t_near + above) : above;
+    }
+    return false;
+}
+
+/* u = 2^-24; gamma(n) = n u / (1 - n u) (pbrt-v4 6.8.1) */
+static float gamma_ulps(int n) { return (float)n * 0x1p-24f / (1.f - (float)n * 0x1p-24f); }
+
+static void kind_describe(const void *data, uint32_t prim, const ray *r, const hit *h, bool need_position,
+                          geometry_surface *out)
+{
+    (void)prim;
+    (void)need_position; /* the normal needs the point anyway */
+    const iso_kind *k = data;
+    const volume *vol = k->shared->v;
+    const macrocell_grid *g = k->shared->grid;
+    const double org[3] = {r->org.x, r->org.y, r->org.z}, dir[3] = {r->dir.x, r->dir.y, r->dir.z};
+    double p[3], local[3], grad[3];
+    uint32_t cell[3];
+    const uint32_t n[3] = {vol->nx, vol->ny, vol->nz};
+    float err[3];
+    /* ERROR BOUND, per axis a. The point is org + t dir with t the float
+     * rounding of the root t* (|t - t*| <= u |t|: |dir_a| u |t| on axis a),
+     * computed in double and rounded once (u |p_a| <= u (|org_a| + |t
+     * dir_a|)); gamma(SURFACE_ERROR_ULPS) of |org_a| + |t dir_a| covers both
+     * many times, as it covers the double-precision test of a ray leaving
+     * the point (1e-16 relative). The exact root is within ISO_CELL_TOL
+     * cell widths along the ray of the crossing, at most ISO_CELL_TOL
+     * spacing_a on axis a (doubled for the voxel mapping's rounding). The
+     * cheap methods' roots are the linear or regula-falsi surface's, not the
+     * trilinear one's: they may be anywhere in the cell, so one spacing per
+     * axis (a heuristic: it keeps rays leaving the point off the cell's
+     * crossing in practice, with no proof). */
+    const float gam = gamma_ulps(SURFACE_ERROR_ULPS);
+    for (int a = 0; a < 3; a++) {
+        p[a] = org[a] + (double)h->t * dir[a];
+        double root_tol = k->method == ISO_METHOD_EXACT ? 2.0 * ISO_CELL_TOL * g->spacing[a] : g->spacing[a];
+        err[a] = gam * (fabsf((float)org[a]) + fabsf(h->t * (float)dir[a])) + (float)root_tol;
+        /* the cell holding the point (the last one on the far faces) and the point in it */
+        double vox = (p[a] - g->origin[a]) / g->spacing[a];
+        double c = floor(vox);
+        c = c < 0.0 ? 0.0 : (c > (double)(n[a] - 2) ? (double)(n[a] - 2) : c);
+        cell[a] = (uint32_t)c;
+        local[a] = vox - c;
+    }
+    float corner[8];
+    volume_cell_corners(vol, cell[0], cell[1], cell[2], corner);
+    iso_cell_gradient(corner, local, grad);
+    double len2 = 0.0;
+    for (int a = 0; a < 3; a++) {
+        grad[a] /= g->spacing[a];
+        len2 += grad[a] * grad[a];
+    }
+    vec3 normal;
+    if (len2 > 0.0 && isfinite(len2)) {
+        double inv = 1.0 / sqrt(len2);
+        normal = v3((float)(grad[0] * inv), (float)(grad[1] * inv), (float)(grad[2] * inv));
+    } else {
+        /* a crossing where the gradient vanishes (a saddle exactly on the
+         * surface): face the ray */
+        normal = v3_normalize(v3_scale(r->dir, -1.f));
+    }
+    out->position = v3((float)p[0], (float)p[1], (float)p[2]);
+    out->position_error = v3(err[0], err[1], err[2]);
+    out->geometric_n = normal;
+    out->shading_n = normal;
+    out->has_colour = true;
+    out->colour = k->colour;
+    out->material_id = k->material_id;
+}
+
+static size_t kind_bytes(const void *data)
+{
+    (void)data;
+    /* the volume and grid are shared (and may be borrowed): counted by
+     * whoever loaded them, not once per iso-value */
+    return sizeof(iso_kind);
+}
+
+static void kind_destroy(void *data) { iso_kind_destroy(data); }
+
+static bool kind_closed(const void *data)
+{
+    const iso_kind *k = data;
+    return k->iso < k->shared->boundary_min || k->iso > k->shared->boundary_max;
+}
+
+static bool kind_set_value(void *data, float value) { return iso_kind_set_value(data, value); }
+
+static bool kind_value(const void *data, float *value, float *lo, float *hi)
+{
+    const iso_kind *k = data;
+    *value = k->iso;
+    iso_kind_range(k, lo, hi);
+    return true;
+}
+
+const geometry_ops iso_kind_ops = {
+    .name = "iso-surface",
+    .leaf = GEOMETRY_LEAF_PRIMS,
+    .prim_count = kind_count,
+    .bounds = kind_bounds,
+    .prim_bounds = kind_prim_bounds,
+    .intersect = kind_intersect,
+    .describe = kind_describe,
+    .bytes = kind_bytes,
+    .destroy = kind_destroy,
+    .closed = kind_closed,
+    .set_value = kind_set_value,
+    .value = kind_value,
+};
