@@ -1,0 +1,588 @@
+/* dvr.c - the emission-absorption integrator (dvr.h).
+ *
+ * PRE-INTEGRATION. After Engel, Kraus and Ertl, "High-Quality
+ * Pre-Integrated Volume Rendering Using Hardware-Accelerated Pixel
+ * Shading" (Graphics Hardware 2001): a slab of one step d whose value runs
+ * linearly from sf (front) to sb (back) has optical depth
+ *     tau = d / (sb - sf) * integral_sf^sb sigma(s) ds   (d sigma(sf) when sf = sb)
+ * and opacity alpha = 1 - exp(-tau). Its colour is taken as the
+ * extinction-weighted mean colour over [sf, sb],
+ *     cbar = integral c sigma ds / integral sigma ds,
+ * times alpha. Engel et al. take the colour as d / (sb - sf) integral c
+ * sigma ds, which ignores the attenuation inside the slab and may exceed
+ * alpha; the weighted mean keeps colour <= alpha, is exact for a constant
+ * colour (so a constant colour gives c (1 - T) exactly, as the classic path
+ * does) and still ignores the order of colours inside the slab: the one
+ * approximation left, whose error grows with alpha times the colour's
+ * change across the slab. Both integrals come from running sums (the
+ * integral-table trick), so the SIZE^2 table costs O(SIZE^2): with sigma
+ * and c linear between the SIZE entries, each integral between two entries
+ * is exact.
+ *   The table's error: sf and sb are rounded to the nearest of SIZE entries
+ * over the transfer function's range, so each is off by up to 1/(2 (SIZE -
+ * 1)) of the range (1/510 at 256); a slab's tau is then off by at most the
+ * step times the extinction's steepest slope times that value error
+ * (sigma's slope per unit of range over 510, at 256), and the transfer
+ * function between entries is its linear interpolation. For the built-in
+ * ct-bone (opacity rising 0.3 per 0.1 of the range) that is under 0.6% of
+ * a slab's opacity; tests/test_dvr.c measures the whole-ray error. Between
+ * the table's linear model and a field that bends inside a slab the step
+ * size still matters, but far less than for point samples: a transfer
+ * function narrower than a step is no longer missed. */
+#include "dvr.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* opacities at or above this count as this much in the pre-integration
+ * table, so that sigma = -ln(1 - a) stays finite: 27.6 per voxel, which
+ * leaves a transmittance under 1e-12 after one voxel (the classic path,
+ * which uses powers, needs no such cap) */
+#define PREINT_MAX_OPACITY (1.0 - 1e-12)
+/* levels of the range-maximum tables: 2^11 = 2048 >= COLORMAP_TABLE_SIZE */
+#define RANGE_LEVELS 11
+
+/* the range-maximum tables of both binnings, side by side */
+#define RANGE_SCRATCH_FLOATS ((size_t)RANGE_LEVELS * (COLORMAP_TABLE_SIZE + DVR_PREINT_SIZE))
+
+_Static_assert((1 << RANGE_LEVELS) >= COLORMAP_TABLE_SIZE && (1 << RANGE_LEVELS) >= DVR_PREINT_SIZE,
+               "range-maximum tables cover every table");
+
+dvr_settings dvr_settings_default(void)
+{
+    return (dvr_settings){
+        .step_vox = 0.5, .min_transmittance = 1.0f / 255.0f, .preintegrate = false, .skip_empty = true};
+}
+
+static bool settings_valid(const dvr_settings *s, tess_error *err)
+{
+    if (!(s->step_vox >= DVR_STEP_MIN_VOX && s->step_vox <= DVR_STEP_MAX_VOX))
+        return tess_error_set(err, "volume rendering: step %g voxels is not in [%g, %g]", s->step_vox,
+                              DVR_STEP_MIN_VOX, DVR_STEP_MAX_VOX);
+    if (!(s->min_transmittance >= 0.0f && s->min_transmittance < 1.0f))
+        return tess_error_set(err, "volume rendering: early termination threshold %g is not in [0, 1)",
+                              (double)s->min_transmittance);
+    return true;
+}
+
+/* ---- table indices --------------------------------------------------------- */
+
+/* The entry colormap_lookup reads for `value` (the same arithmetic, so the
+ * macrocells' opacities and the samples agree on every entry). */
+static inline int classic_index(const colormap_table *t, float value)
+{
+    double u = ((double)value - t->lo) * t->scale;
+    if (!(u > 0.0))
+        u = 0.0;
+    if (u > (double)(COLORMAP_TABLE_SIZE - 1))
+        u = (double)(COLORMAP_TABLE_SIZE - 1);
+    return (int)(u + 0.5);
+}
+
+/* The pre-integration table's coordinate of `value`: in [0, SIZE - 1],
+ * entry k at k; the table is read bilinearly at (front, back). */
+static inline double preint_coord(const dvr_volume *d, float value)
+{
+    double u = ((double)value - d->preint_lo) * d->preint_scale;
+    if (!(u > 0.0))
+        u = 0.0;
+    if (u > (double)(DVR_PREINT_SIZE - 1))
+        u = (double)(DVR_PREINT_SIZE - 1);
+    return u;
+}
+
+/* the lower of the two entries a bilinear read at coordinate u blends */
+static inline int preint_cell(double u)
+{
+    int i = (int)u;
+    return i > DVR_PREINT_SIZE - 2 ? DVR_PREINT_SIZE - 2 : i;
+}
+
+/* The slab of front value vf and back value vb: the table read bilinearly
+ * (colour and opacity each), so a slab's value span is not rounded to whole
+ * entries: rounding each end would make a span of 4 entries read as 3 or 5,
+ * a quarter of its optical depth off. */
+static inline dvr_rgba preint_lookup(const dvr_volume *d, float vf, float vb)
+{
+    enum { N = DVR_PREINT_SIZE };
+    double uf = preint_coord(d, vf), ub = preint_coord(d, vb);
+    int f = preint_cell(uf), b = preint_cell(ub);
+    float xf = (float)(uf - f), xb = (float)(ub - b);
+    const dvr_rgba *p = d->preint + (size_t)f * N + (size_t)b;
+    const dvr_rgba e00 = p[0], e01 = p[1], e10 = p[N], e11 = p[N + 1];
+    float w00 = (1.0f - xf) * (1.0f - xb), w01 = (1.0f - xf) * xb, w10 = xf * (1.0f - xb), w11 = xf * xb;
+    return (dvr_rgba){w00 * e00.r + w01 * e01.r + w10 * e10.r + w11 * e11.r,
+                      w00 * e00.g + w01 * e01.g + w10 * e10.g + w11 * e11.g,
+                      w00 * e00.b + w01 * e01.b + w10 * e10.b + w11 * e11.b,
+                      w00 * e00.a + w01 * e01.a + w10 * e10.a + w11 * e11.a};
+}
+
+/* ---- range maximum ------------------------------------------------------------ */
+
+/* A sparse table: level l holds the maximum of entries i .. i + 2^l - 1, so
+ * any range is the maximum of two overlapping power-of-two blocks: O(1) a
+ * query after O(n log n) to build. `v` is RANGE_LEVELS * n floats. */
+typedef struct range_max {
+    int n;
+    float *v; /* level l, entry i at v[l * n + i] */
+} range_max;
+
+static void range_max_build(range_max *r, const float *values)
+{
+    int n = r->n;
+    memcpy(r->v, values, (size_t)n * sizeof *values);
+    for (int l = 1; l < RANGE_LEVELS && (1 << l) <= n; l++) {
+        const float *below = r->v + (size_t)(l - 1) * n;
+        float *level = r->v + (size_t)l * n;
+        for (int i = 0; i + (1 << l) <= n; i++) {
+            float a = below[i], b = below[i + (1 << (l - 1))];
+            level[i] = a > b ? a : b;
+        }
+    }
+}
+
+/* the maximum of entries lo..hi (lo <= hi < n) */
+static float range_max_query(const range_max *r, int lo, int hi)
+{
+    int l = 0;
+    while ((2 << l) <= hi - lo + 1)
+        l++;
+    const float *level = r->v + (size_t)l * r->n;
+    float a = level[lo], b = level[hi - (1 << l) + 1];
+    return a > b ? a : b;
+}
+
+/* ---- tables ------------------------------------------------------------------- */
+
+/* per classic entry: colour, and opacity over one full step */
+static void build_step_table(dvr_volume *d)
+{
+    double steps = d->settings.step_vox; /* one step in voxels: the exponent of (1 - a) */
+    for (int i = 0; i < COLORMAP_TABLE_SIZE; i++) {
+        colormap_rgba e = d->table.entry[i];
+        double a = e.a <= 0.0f ? 0.0 : e.a >= 1.0f ? 1.0 : 1.0 - pow(1.0 - (double)e.a, steps);
+        d->step_rgba[i] = (dvr_rgba){e.r, e.g, e.b, (float)a};
+    }
+}
+
+/* The transfer function on the fine grid the pre-integration table is
+ * built from: PREINT_SUB pieces per half entry, 2 (SIZE - 1) half entries
+ * over the range (8160 pieces at 256: finer than COLORMAP_TABLE_SIZE, so a
+ * feature a few entries wide keeps its area). Running integrals are kept at
+ * every half entry: half entry j is at normalised position j / (2 (SIZE - 1)),
+ * entry k at half entry 2k; sigma and the colour are linear on each piece.
+ * bin_max[k] is the largest opacity on the pieces within half an entry of
+ * entry k: the pre-integrated path sees nothing else, so the macrocells'
+ * opacities built from it are conservative for it. */
+#define PREINT_SUB 16
+#define PREINT_HALVES (2 * (DVR_PREINT_SIZE - 1))
+
+typedef struct preint_sums {
+    double sigma[PREINT_HALVES + 1];     /* integral of sigma (per voxel) over [0, j], in entries */
+    double col[PREINT_HALVES + 1][3];    /* integral of c sigma over the same */
+    float bin_max[DVR_PREINT_SIZE];      /* largest opacity within half an entry of entry k */
+} preint_sums;
+
+static void piece_value(const colormap *tf, int piece, double *sigma, double col[3], float *opacity)
+{
+    colormap_rgba e = colormap_eval_unit(tf, (double)piece / (PREINT_HALVES * PREINT_SUB));
+    double a = e.a < 0.0f ? 0.0 : e.a > PREINT_MAX_OPACITY ? PREINT_MAX_OPACITY : (double)e.a;
+    *sigma = -log1p(-a);
+    col[0] = e.r;
+    col[1] = e.g;
+    col[2] = e.b;
+    *opacity = e.a;
+}
+
+static void preint_integrate(const colormap *tf, preint_sums *p)
+{
+    const double width = 0.5 / PREINT_SUB; /* one piece, in entries */
+    double s0, c0[3], s1, c1[3];
+    float a0, a1;
+    piece_value(tf, 0, &s0, c0, &a0);
+    p->sigma[0] = 0.0;
+    p->col[0][0] = p->col[0][1] = p->col[0][2] = 0.0;
+    for (int k = 0; k < DVR_PREINT_SIZE; k++)
+        p->bin_max[k] = 0.0f;
+    p->bin_max[0] = a0;
+    double run_sigma = 0.0, run_col[3] = {0.0, 0.0, 0.0};
+    for (int piece = 0; piece < PREINT_HALVES * PREINT_SUB; piece++) {
+        piece_value(tf, piece + 1, &s1, c1, &a1);
+        /* c and sigma linear on the piece: the integral of their product is
+         * exactly width (2 c0 s0 + c0 s1 + c1 s0 + 2 c1 s1) / 6 */
+        run_sigma += width * 0.5 * (s0 + s1);
+        for (int c = 0; c < 3; c++)
+            run_col[c] += width * (2.0 * c0[c] * s0 + c0[c] * s1 + c1[c] * s0 + 2.0 * c1[c] * s1) / 6.0;
+        int half = piece / PREINT_SUB; /* the half entry the piece lies in */
+        int bin = (half + 1) / 2;      /* the entry within half an entry of it */
+        float piece_max = a0 > a1 ? a0 : a1;
+        if (piece_max > p->bin_max[bin])
+            p->bin_max[bin] = piece_max;
+        if ((piece + 1) % PREINT_SUB == 0) {
+            int j = (piece + 1) / PREINT_SUB;
+            p->sigma[j] = run_sigma;
+            for (int c = 0; c < 3; c++)
+                p->col[j][c] = run_col[c];
+        }
+        s0 = s1;
+        a0 = a1;
+        for (int c = 0; c < 3; c++)
+            c0[c] = c1[c];
+    }
+}
+
+/* The SIZE^2 pre-integration table for the current step (see
+ * PRE-INTEGRATION). Entry (f, b), f != b, integrates between entries f and
+ * b; entry (f, f), a value that stays within one entry, averages over the
+ * half entry either side (the values that round to f). */
+static void build_preint_table(dvr_volume *d)
+{
+    enum { N = DVR_PREINT_SIZE };
+    preint_sums p; /* 17 KiB of stack: this runs on the thread that sets the transfer function */
+    preint_integrate(&d->tf, &p);
+    double steps = d->settings.step_vox;
+    for (int f = 0; f < N; f++)
+        for (int b = 0; b < N; b++) {
+            int j0 = f < b ? 2 * f : 2 * b, j1 = f < b ? 2 * b : 2 * f;
+            if (f == b) {
+                j0 = f > 0 ? 2 * f - 1 : 0;
+                j1 = f < N - 1 ? 2 * f + 1 : 2 * f;
+            }
+            double ds = p.sigma[j1] - p.sigma[j0];
+            double mean_sigma = ds / (0.5 * (j1 - j0));
+            double cbar[3];
+            for (int c = 0; c < 3; c++) {
+                /* a nearly transparent slab's ratio is rounding noise; its
+                 * colour then hardly counts, but keep it in [0, 1] */
+                double m = ds > 0.0 ? (p.col[j1][c] - p.col[j0][c]) / ds : 0.0;
+                cbar[c] = m < 0.0 ? 0.0 : m > 1.0 ? 1.0 : m;
+            }
+            double alpha = -expm1(-steps * mean_sigma);
+            d->preint[(size_t)f * N + b] = (dvr_rgba){(float)cbar[0], (float)cbar[1], (float)cbar[2], (float)alpha};
+        }
+}
+
+/* Per macrocell, the largest opacity over the entries its [min, max]
+ * reaches, in the classic binning and in the pre-integration binning (the
+ * larger of the two: 0 proves both paths see nothing there). */
+static void build_cell_opacity(dvr_volume *d)
+{
+    float classic[COLORMAP_TABLE_SIZE];
+    for (int i = 0; i < COLORMAP_TABLE_SIZE; i++)
+        classic[i] = d->table.entry[i].a;
+    preint_sums p;
+    preint_integrate(&d->tf, &p);
+    range_max rm_classic = {COLORMAP_TABLE_SIZE, d->range_scratch};
+    range_max rm_pre = {DVR_PREINT_SIZE, d->range_scratch + (size_t)RANGE_LEVELS * COLORMAP_TABLE_SIZE};
+    range_max_build(&rm_classic, classic);
+    range_max_build(&rm_pre, p.bin_max);
+    const macrocell_grid *g = d->grid;
+    size_t count = macrocell_count(g);
+    for (size_t m = 0; m < count; m++) {
+        float lo = g->min[m], hi = g->max[m];
+        float a = range_max_query(&rm_classic, classic_index(&d->table, lo), classic_index(&d->table, hi));
+        /* a bilinear read blends the entries on both sides of its coordinate */
+        float b = range_max_query(&rm_pre, preint_cell(preint_coord(d, lo)), preint_cell(preint_coord(d, hi)) + 1);
+        d->cell_opacity[m] = a > b ? a : b;
+    }
+}
+
+void dvr_set_transfer(dvr_volume *d, const colormap *tf)
+{
+    d->tf = *tf;
+    colormap_fit_range(&d->tf, d->vol->min, d->vol->max);
+    colormap_bake(&d->tf, &d->table);
+    d->preint_lo = d->tf.lo;
+    d->preint_scale = d->tf.hi > d->tf.lo ? (DVR_PREINT_SIZE - 1) / ((double)d->tf.hi - d->tf.lo) : 0.0;
+    build_step_table(d);
+    if (d->preint)
+        build_preint_table(d);
+    build_cell_opacity(d);
+}
+
+bool dvr_set_settings(dvr_volume *d, const dvr_settings *settings, tess_error *err)
+{
+    if (!settings_valid(settings, err))
+        return false;
+    if (settings->preintegrate && !d->preint) {
+        d->preint = malloc((size_t)DVR_PREINT_SIZE * DVR_PREINT_SIZE * sizeof *d->preint);
+        if (!d->preint)
+            return tess_error_set(err, "volume rendering: no memory for the pre-integration table");
+    }
+    bool step_changed = settings->step_vox != d->settings.step_vox;
+    bool preint_new = settings->preintegrate && !d->settings.preintegrate;
+    d->settings = *settings;
+    if (step_changed)
+        build_step_table(d);
+    if (d->preint && (step_changed || preint_new))
+        build_preint_table(d);
+    return true;
+}
+
+dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colormap *tf,
+                       const dvr_settings *settings, tess_error *err)
+{
+    dvr_settings s = settings ? *settings : dvr_settings_default();
+    if (!settings_valid(&s, err))
+        return NULL;
+    dvr_volume *d = calloc(1, sizeof *d);
+    if (!d) {
+        tess_error_set(err, "volume rendering: no memory");
+        return NULL;
+    }
+    d->vol = vol;
+    d->settings = s;
+    d->voxel_world = fmin(vol->spacing[0], fmin(vol->spacing[1], vol->spacing[2]));
+    if (grid)
+        d->grid = grid;
+    else {
+        d->grid = macrocell_grid_create(vol, MACROCELL_DEFAULT_K, err);
+        if (!d->grid)
+            goto fail;
+        d->own_grid = true;
+    }
+    d->cell_opacity = malloc(macrocell_count(d->grid) * sizeof *d->cell_opacity);
+    if (!d->cell_opacity) {
+        tess_error_set(err, "volume rendering: no memory for %zu macrocells", macrocell_count(d->grid));
+        goto fail;
+    }
+    d->range_scratch = malloc(RANGE_SCRATCH_FLOATS * sizeof *d->range_scratch);
+    if (!d->range_scratch) {
+        tess_error_set(err, "volume rendering: no memory");
+        goto fail;
+    }
+    if (s.preintegrate) {
+        d->preint = malloc((size_t)DVR_PREINT_SIZE * DVR_PREINT_SIZE * sizeof *d->preint);
+        if (!d->preint) {
+            tess_error_set(err, "volume rendering: no memory for the pre-integration table");
+            goto fail;
+        }
+    }
+    dvr_set_transfer(d, tf);
+    return d;
+fail:
+    dvr_destroy(d);
+    return NULL;
+}
+
+void dvr_destroy(dvr_volume *d)
+{
+    if (!d)
+        return;
+    if (d->own_grid)
+        macrocell_grid_destroy((macrocell_grid *)d->grid);
+    free(d->preint);
+    free(d->cell_opacity);
+    free(d->range_scratch);
+    free(d);
+}
+
+/* ---- sampling ------------------------------------------------------------------- */
+
+/* The trilinear field at voxel position p, clamped to the field's box (a
+ * slab end may round a hair outside it). */
+static inline float field_sample(const volume *v, const double p[3])
+{
+    const uint32_t n[3] = {v->nx, v->ny, v->nz};
+    uint32_t c[3];
+    float f[3];
+    for (int a = 0; a < 3; a++) {
+        double x = p[a] > 0.0 ? p[a] : 0.0; /* NaN goes to 0 too */
+        double top = (double)(n[a] - 1);
+        x = x < top ? x : top;
+        uint32_t i = (uint32_t)x;
+        if (i > n[a] - 2)
+            i = n[a] - 2;
+        c[a] = i;
+        f[a] = (float)(x - (double)i);
+    }
+    size_t sy = v->nx, sz = (size_t)v->nx * v->ny, base = volume_index(v, c[0], c[1], c[2]);
+    float s[8];
+#define DVR_LOAD(T)                                                                                                  \
+    do {                                                                                                             \
+        const T *q = (const T *)v->data + base;                                                                      \
+        s[0] = (float)q[0], s[1] = (float)q[1], s[2] = (float)q[sy], s[3] = (float)q[sy + 1];                        \
+        s[4] = (float)q[sz], s[5] = (float)q[sz + 1], s[6] = (float)q[sz + sy], s[7] = (float)q[sz + sy + 1];        \
+    } while (0)
+    switch (v->type) {
+    case VOLUME_UINT8: DVR_LOAD(uint8_t); break;
+    case VOLUME_INT16: DVR_LOAD(int16_t); break;
+    case VOLUME_UINT16: DVR_LOAD(uint16_t); break;
+    case VOLUME_FLOAT32: DVR_LOAD(float); break;
+    default: return 0.0f;
+    }
+#undef DVR_LOAD
+    float x00 = s[0] + f[0] * (s[1] - s[0]), x10 = s[2] + f[0] * (s[3] - s[2]);
+    float x01 = s[4] + f[0] * (s[5] - s[4]), x11 = s[6] + f[0] * (s[7] - s[6]);
+    float y0 = x00 + f[1] * (x10 - x00), y1 = x01 + f[1] * (x11 - x01);
+    return y0 + f[2] * (y1 - y0);
+}
+
+/* ---- integration ------------------------------------------------------------------ */
+
+/* One ray's state. Slab k spans [max(ta, tv + k dt), min(tb, tv + (k + 1) dt)],
+ * k in [0, slab_count); tv = ta - (1 - jitter) dt, so slab 0 is the jitter
+ * fraction of a step and every slab but the first and last is a full step.
+ * Slabs are composited in increasing k, each at most once (next_slab). */
+typedef struct ray_state {
+    const dvr_volume *d;
+    double org[3], dir[3];  /* the ray in voxel coordinates (same t as the world ray) */
+    double ta, tb;          /* the clipped segment */
+    double tv, dt;          /* the slab grid: origin and step, in t */
+    int64_t slab_count;
+    int64_t next_slab;      /* first slab not yet composited */
+    int64_t front_slab;     /* the slab whose front value front_value holds; -1 for none */
+    float front_value;
+    double rgb[3], T;       /* associated colour so far; transmittance */
+    bool done;              /* T fell below the threshold */
+    uint64_t samples, slabs;
+} ray_state;
+
+static inline int64_t slab_of(const ray_state *r, double t)
+{
+    double k = floor((t - r->tv) / r->dt);
+    if (!(k > 0.0))
+        return 0;
+    return k >= (double)(r->slab_count - 1) ? r->slab_count - 1 : (int64_t)k;
+}
+
+static inline float sample_at(ray_state *r, double t)
+{
+    const double p[3] = {r->org[0] + t * r->dir[0], r->org[1] + t * r->dir[1], r->org[2] + t * r->dir[2]};
+    r->samples++;
+    return field_sample(r->d->vol, p);
+}
+
+/* opacity `a` of a full step over `fraction` of a step */
+static inline double part_step(double a, double fraction)
+{
+    if (a <= 0.0)
+        return 0.0;
+    if (a >= 1.0)
+        return 1.0;
+    return -expm1(fraction * log1p(-a));
+}
+
+/* Composite the slabs that meet [run0, run1] and were not composited yet. */
+static void composite_run(ray_state *r, double run0, double run1)
+{
+    const dvr_volume *d = r->d;
+    int64_t k0 = slab_of(r, run0), k1 = slab_of(r, run1);
+    if (k0 < r->next_slab)
+        k0 = r->next_slab;
+    const double threshold = d->settings.min_transmittance;
+    const bool pre = d->settings.preintegrate;
+    int64_t k = k0;
+    for (; k <= k1; k++) {
+        double a = k == 0 ? r->ta : r->tv + (double)k * r->dt;
+        double b = r->tv + (double)(k + 1) * r->dt;
+        bool full = k > 0;
+        if (b >= r->tb) {
+            b = r->tb;
+            full = false;
+        }
+        if (!(b > a))
+            continue;
+        dvr_rgba e;
+        if (pre) {
+            float vf = r->front_slab == k ? r->front_value : sample_at(r, a);
+            float vb = sample_at(r, b);
+            r->front_slab = k + 1;
+            r->front_value = vb;
+            e = preint_lookup(d, vf, vb);
+        } else
+            e = d->step_rgba[classic_index(&d->table, sample_at(r, 0.5 * (a + b)))];
+        double alpha = full ? e.a : part_step(e.a, (b - a) / r->dt);
+        r->slabs++;
+        if (alpha <= 0.0)
+            continue;
+        double w = r->T * alpha;
+        r->rgb[0] += w * e.r;
+        r->rgb[1] += w * e.g;
+        r->rgb[2] += w * e.b;
+        r->T *= 1.0 - alpha;
+        if (r->T < threshold) {
+            r->done = true;
+            k++;
+            break;
+        }
+    }
+    if (k > r->next_slab)
+        r->next_slab = k;
+}
+
+bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double dir[3], double t0, double t1,
+                         double jitter, float rgb_out[3], float *transmittance_out, dvr_stats *stats)
+{
+    rgb_out[0] = rgb_out[1] = rgb_out[2] = 0.0f;
+    *transmittance_out = 1.0f;
+    const macrocell_grid *g = d->grid;
+    ray_state r = {.d = d, .front_slab = -1, .T = 1.0};
+    volume_ray_to_voxel(g->origin, g->spacing, org, dir, r.org, r.dir);
+    double len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    bool finite = isfinite(len) && isfinite(t0) && !isnan(t1);
+    for (int a = 0; a < 3; a++)
+        finite &= isfinite(r.org[a]) && isfinite(r.dir[a]);
+    if (!finite || !(len > 0.0))
+        return false;
+    const double lo[3] = {0.0, 0.0, 0.0};
+    const double hi[3] = {g->cells[0], g->cells[1], g->cells[2]};
+    r.ta = t0;
+    r.tb = t1;
+    if (!volume_clip_box(r.org, r.dir, lo, hi, &r.ta, &r.tb) || !(r.ta < r.tb))
+        return false;
+    if (!(jitter >= 0.0 && jitter < 1.0))
+        jitter = 0.0;
+    r.dt = d->settings.step_vox * d->voxel_world / len;
+    r.tv = r.ta - (1.0 - jitter) * r.dt;
+    double count = ceil((r.tb - r.tv) / r.dt);
+    r.slab_count = count >= 1.0 ? (int64_t)count : 1;
+
+    uint64_t skipped = 0;
+    if (!d->settings.skip_empty)
+        composite_run(&r, r.ta, r.tb);
+    else {
+        /* runs of non-empty spans, each composited when an empty span (or
+         * the end) closes it */
+        macrocell_walk w;
+        macrocell_span span;
+        bool in_run = false;
+        double run0 = 0.0, run1 = 0.0;
+        macrocell_walk_begin(&w, g, org, dir, r.ta, r.tb);
+        while (!r.done && macrocell_walk_next(&w, &span)) {
+            if (d->cell_opacity[span.index] > 0.0f) {
+                if (!in_run)
+                    run0 = span.t_enter;
+                run1 = span.t_exit;
+                in_run = true;
+                continue;
+            }
+            skipped++;
+            if (in_run) {
+                composite_run(&r, run0, run1);
+                in_run = false;
+            }
+        }
+        if (in_run && !r.done)
+            composite_run(&r, run0, run1);
+    }
+
+    rgb_out[0] = (float)r.rgb[0];
+    rgb_out[1] = (float)r.rgb[1];
+    rgb_out[2] = (float)r.rgb[2];
+    *transmittance_out = (float)r.T;
+    if (stats) {
+        stats->samples += r.samples;
+        stats->slabs += r.slabs;
+        stats->spans_skipped += skipped;
+        stats->terminated += r.done;
+    }
+    return true;
+}
+
+bool dvr_integrate(const dvr_volume *d, const double org[3], const double dir[3], double t0, double t1,
+                   double jitter, float rgb_out[3], float *transmittance_out)
+{
+    return dvr_integrate_stats(d, org, dir, t0, t1, jitter, rgb_out, transmittance_out, NULL);
+}
