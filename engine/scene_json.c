@@ -92,6 +92,7 @@
 #include "json_read.h"
 #include "log.h"
 #include "particles/particle_json.h"
+#include "volume/volume_json.h"
 
 /* Scene files describe; the geometry lives in mesh files. Refusing anything
  * larger keeps a mistaken path (a mesh, /dev/zero) from eating memory. */
@@ -632,6 +633,41 @@ static bool load_particles(loader *L, json_object *v)
            out_of_memory(L);
 }
 
+static int material_by_name(void *ctx, const char *name) { return find_material(ctx, name); }
+
+/* A "volumes" entry: the file and where it goes here, the rest in
+ * volume/volume_json.c. */
+static bool load_volume(loader *L, json_object *v)
+{
+    jr_ctx *c = &L->ctx;
+    const char *file = NULL;
+    bool optional = false;
+    float xform[12];
+    char resolved[MESH_PATH_BYTES];
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, volume_json_fields) || !jr_require_member(c, v, "file") ||
+        !jr_opt_string(c, v, "file", &file) || !jr_opt_bool(c, v, "optional", &optional) ||
+        !mesh_xform(c, v, xform) || !resolve_path(L, file, resolved, sizeof resolved))
+        return false;
+    struct stat st;
+    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
+        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+        return true;
+    }
+    tess_error why = {{0}};
+    volume *vol = volume_load(resolved, &why);
+    if (!vol)
+        return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the volume");
+    int mat = default_material_id(L);
+    if (mat < 0) {
+        volume_destroy(vol);
+        return out_of_memory(L);
+    }
+    affine3 placement;
+    memcpy(placement.m, xform, sizeof placement.m);
+    return volume_json_add(c, v, vol, affine3_is_identity(&placement) ? NULL : &placement, L->s, (uint32_t)mat,
+                           material_by_name, L);
+}
+
 /* Whether anything in the scene can be hit. */
 static bool scene_has_geometry(const scene *s)
 {
@@ -648,7 +684,7 @@ static bool scene_has_geometry(const scene *s)
 static bool load_scene(loader *L, json_object *root)
 {
     static const char *const fields[] = {"camera", "background", "ambient",    "materials", "lights",
-                                         "meshes", "spheres",    "assemblies", "particles", NULL};
+                                         "meshes", "spheres",    "assemblies", "particles", "volumes", NULL};
     jr_ctx *c = &L->ctx;
     if (!json_object_is_type(root, json_type_object))
         return tess_error_set(c->err, "%s: expected a JSON object at the top level, got %s", c->path,
@@ -657,7 +693,7 @@ static bool load_scene(loader *L, json_object *root)
         !jr_opt_vec3(c, root, "ambient", jr_range_nonneg, &L->s->ambient) || !load_materials(L, root) ||
         !load_lights(L, root) || !load_camera(L, root) || !load_each(L, root, "meshes", load_mesh) ||
         !load_each(L, root, "spheres", load_sphere) || !load_each(L, root, "assemblies", load_assembly) ||
-        !load_each(L, root, "particles", load_particles))
+        !load_each(L, root, "particles", load_particles) || !load_each(L, root, "volumes", load_volume))
         return false;
     if (!scene_has_geometry(L->s))
         return tess_error_set(c->err, "%s: scene has no geometry", c->path);
