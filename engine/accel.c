@@ -224,6 +224,14 @@ void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name)
         g->ops->set_colormap(g->data, name);
 }
 
+void accel_set_transfer(const accel *a, const char *name)
+{
+    const scene *s = a->scene;
+    for (uint32_t m = 0; m < s->medium_count; m++)
+        if (s->media[m].ops->set_colormap)
+            s->media[m].ops->set_colormap(s->media[m].data, name);
+}
+
 size_t accel_bytes(const accel *a)
 {
     size_t bytes = sizeof *a + wbvh_bytes(&a->top) + a->geom_count * sizeof *a->geoms +

@@ -123,6 +123,9 @@ void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop);
  * are ignored. Same callers as accel_set_hidden. */
 void accel_set_value(const accel *a, uint32_t geom_id, float value);
 void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name);
+/* Every medium of the scene (scene.h, PARTICIPATING MEDIA) that can change
+ * it takes the built-in transfer function `name`. Same callers. */
+void accel_set_transfer(const accel *a, const char *name);
 
 /* Show time step `step` of every geometry that has steps
  * (geometry_ops.set_step; each takes it modulo its own count), take the

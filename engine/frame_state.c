@@ -449,6 +449,16 @@ bool frame_state_colormap(const frame_state *st, uint32_t id, const char **name)
     return true;
 }
 
+void frame_state_set_transfer(frame_state *st, const char *name)
+{
+    if (strcmp(st->transfer, name) != 0) {
+        snprintf(st->transfer, sizeof st->transfer, "%s", name);
+        st->picture_serial++;
+    }
+    st->transfer_dirty = true;
+    st->version++;
+}
+
 void frame_state_set_time_step(frame_state *st, uint32_t step)
 {
     if (step != st->time_step) {
@@ -560,6 +570,11 @@ uint32_t frame_state_sync_accel(frame_state *st, const struct accel *a)
             calls++;
         }
     st->map_first = st->map_end = 0;
+    if (st->transfer_dirty) {
+        accel_set_transfer(a, st->transfer);
+        st->transfer_dirty = false;
+        calls++;
+    }
     if (st->time_step_dirty) {
         tess_error err = {{0}};
         if (!accel_set_time_step(a, st->time_step, &err))

@@ -130,6 +130,8 @@ typedef struct frame_state {
                                 NULL until the first colormap record */
     uint64_t *mapped;        /* bit set: colormap[id] was given */
     uint32_t map_first, map_end; /* ids [first, end) whose map may differ from their kind's */
+    char transfer[TXN_NAME_BYTES]; /* the transfer function every medium should use; "" until a record */
+    bool transfer_dirty;     /* `transfer` may differ from what the media use */
     uint32_t time_step;      /* the step every time series shows (0 at start) */
     bool time_step_dirty;    /* time_step may differ from what the geometries show */
 } frame_state;
@@ -185,6 +187,8 @@ bool frame_state_set_colormap(frame_state *st, uint32_t first, uint32_t count, c
 /* What a record gave geometry id; false when none did. */
 bool frame_state_value(const frame_state *st, uint32_t id, float *v);
 bool frame_state_colormap(const frame_state *st, uint32_t id, const char **name);
+/* Every medium's transfer function (frame_state_sync_accel passes it on). */
+void frame_state_set_transfer(frame_state *st, const char *name);
 /* Every time series to step `step` (frame_state_sync_accel passes it on). */
 void frame_state_set_time_step(frame_state *st, uint32_t step);
 /* The crop a record gave geometry id; false when none did. */

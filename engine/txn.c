@@ -29,6 +29,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_OPACITY] = "opacity",       [TXN_CLIP_PLANE] = "clip-plane",
     [TXN_CROP] = "crop",             [TXN_TIME_STEP] = "time-step",
     [TXN_VALUE] = "value",           [TXN_COLORMAP] = "colormap",
+    [TXN_TRANSFER] = "transfer",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -188,6 +189,13 @@ txn_record txn_colormap(uint32_t first, uint32_t count, const char *name)
     txn_record r = blank(TXN_COLORMAP);
     r.args.colormap.geoms = (txn_geoms){first, count};
     snprintf(r.args.colormap.name, sizeof r.args.colormap.name, "%s", name ? name : "");
+    return r;
+}
+
+txn_record txn_transfer(const char *name)
+{
+    txn_record r = blank(TXN_TRANSFER);
+    snprintf(r.args.renderer.name, sizeof r.args.renderer.name, "%s", name ? name : "");
     return r;
 }
 
@@ -364,6 +372,15 @@ bool txn_validate(const txn_record *r, tess_error *err)
             return tess_error_set(err, "colormap: name: no built-in map '%s'", r->args.colormap.name);
         return true;
     }
+    case TXN_TRANSFER: {
+        if (strnlen(r->args.renderer.name, TXN_NAME_BYTES) == TXN_NAME_BYTES)
+            return tess_error_set(err, "transfer: name: not terminated");
+        colormap probe;
+        if (!colormap_preset(r->args.renderer.name, &probe) || probe.opacity_count == 0)
+            return tess_error_set(err, "transfer: name: no built-in transfer function '%s' (one with opacity)",
+                                  r->args.renderer.name);
+        return true;
+    }
     case TXN_SHOW_ALL:
     case TXN_TOUR:
     case TXN_QUIT:
@@ -513,6 +530,9 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
         if (!frame_state_set_value(st, r->args.value.geoms.first, r->args.value.geoms.count, r->args.value.v))
             return out_of_memory(name, err);
         return true;
+    case TXN_TRANSFER:
+        frame_state_set_transfer(st, r->args.renderer.name);
+        return true;
     case TXN_COLORMAP:
         if (!geoms_in(st, name, &r->args.colormap.geoms, err))
             return false;
@@ -659,6 +679,9 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
     case TXN_COLORMAP:
         put_geoms(&o, &r->args.colormap.geoms);
         put(&o, " %s", r->args.colormap.name);
+        break;
+    case TXN_TRANSFER:
+        put(&o, " %s", r->args.renderer.name);
         break;
     case TXN_SHOW_ALL:
     case TXN_QUIT:
@@ -956,6 +979,8 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
     case TXN_COLORMAP:
         return geoms_text(r, name, &t->args.colormap.geoms) &&
                word(r, t->args.colormap.name, sizeof t->args.colormap.name, "colormap name");
+    case TXN_TRANSFER:
+        return word(r, t->args.renderer.name, sizeof t->args.renderer.name, "transfer name");
     case TXN_SHOW_ALL:
     case TXN_QUIT:
     case TXN_KIND_COUNT:
@@ -1075,6 +1100,7 @@ static void layout(txn_record *t, unsigned char *b, bool write)
             memcpy(t->args.status.text, b + 4, TXN_TEXT_BYTES);
         break;
     case TXN_RENDERER:
+    case TXN_TRANSFER:
         if (write)
             memcpy(b + 4, t->args.renderer.name, strnlen(t->args.renderer.name, TXN_NAME_BYTES));
         else

@@ -48,6 +48,9 @@
  *                                                  iso-value: geometry_ops.set_value)
  *   colormap         first, count, name            those geometries' colour map or transfer
  *                                                  function: a built-in (colormap.h), range kept
+ *   transfer         name                          every volume rendered directly (scene media)
+ *                                                  takes the built-in transfer function `name`
+ *                                                  (colormap.h, one with opacity points)
  *   time-step        step                          every time series shows that step (modulo its
  *                                                  own count); waits at the barrier for a step
  *                                                  not loaded yet (input asks only for ready ones)
@@ -80,6 +83,7 @@
  *   clip-plane I ON PX PY PZ NX NY NZ
  *   crop FIRST COUNT ON LO HI                        time-step N
  *   value FIRST COUNT V                              colormap FIRST COUNT NAME
+ *   transfer NAME
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -106,6 +110,7 @@
  *     time-step       u32 step
  *     value           u32 first, u32 count, f32 v
  *     colormap        u32 first, u32 count, TXN_NAME_BYTES bytes: the name, NUL-padded
+ *     transfer        TXN_NAME_BYTES bytes: the name, NUL-padded
  *     show-all, quit  nothing
  * Decoding checks the kind, the zero bytes and then txn_validate. */
 #ifndef TESSERA_TXN_H
@@ -156,6 +161,7 @@ typedef enum txn_kind {
     TXN_TIME_STEP,
     TXN_VALUE,
     TXN_COLORMAP,
+    TXN_TRANSFER,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -193,7 +199,7 @@ typedef struct txn_record {
         } colour;
         struct {
             char name[TXN_NAME_BYTES];
-        } renderer;
+        } renderer;                 /* renderer, transfer */
         struct {
             txn_geoms geoms;
             float m[12];        /* row-major 3x4 affine, applied after each instance's placement */
@@ -265,6 +271,7 @@ txn_record txn_time_step(uint32_t step);
 txn_record txn_value(uint32_t first, uint32_t count, float v);
 txn_record txn_colormap(uint32_t first, uint32_t count, const char *name); /* cut at TXN_NAME_BYTES - 1 */
 txn_record txn_renderer(const char *name);
+txn_record txn_transfer(const char *name); /* cut at TXN_NAME_BYTES - 1 */
 txn_record txn_threads(int count);
 txn_record txn_channel_active(int channel, bool on);
 txn_record txn_simple(txn_kind kind); /* show-all, quit */

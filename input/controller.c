@@ -109,6 +109,7 @@ struct input_controller {
     uint64_t next_step_us;     /* playing: when the next step is due */
     float values[INPUT_VALUE_MAX];              /* as the records said, per cfg.values entry */
     char maps[INPUT_MAP_MAX][TXN_NAME_BYTES];   /* as the records said, per cfg.maps entry */
+    char transfer[TXN_NAME_BYTES];              /* as the last transfer record said (cfg.media) */
 
     /* touchpad gestures */
     vec3 gesture_point;
@@ -162,6 +163,7 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
         c->values[i] = c->cfg.values[i].value;
     for (int i = 0; i < c->cfg.map_count; i++)
         snprintf(c->maps[i], sizeof c->maps[i], "%s", c->cfg.maps[i].name);
+    snprintf(c->transfer, sizeof c->transfer, "%s", c->cfg.transfer);
     if (c->cfg.crop_count < 0 || c->cfg.crop_count > INPUT_CROP_MAX)
         c->cfg.crop_count = 0;
     for (int i = 0; i < c->cfg.crop_count; i++)
@@ -656,11 +658,32 @@ static void value_command(input_controller *c, int dir)
 /* colormap-next (controller.h, VALUES AND MAPS). */
 static void colormap_command(input_controller *c)
 {
-    if (c->cfg.map_count == 0) {
+    if (c->cfg.map_count == 0 && !c->cfg.media) {
         emit_status(c, "nothing coloured through a map in this scene");
         return;
     }
     const char *const *names = colormap_names();
+    if (c->cfg.media) { /* the next built-in with opacity after the one in use */
+        int k = 0, count = 0;
+        while (names[count])
+            count++;
+        while (k < count && strcmp(names[k], c->transfer) != 0)
+            k++;
+        for (int step = 1; step <= count; step++) {
+            colormap probe;
+            const char *next = names[(k + step) % count];
+            if (colormap_preset(next, &probe) && probe.opacity_count > 0) {
+                snprintf(c->transfer, sizeof c->transfer, "%s", next);
+                break;
+            }
+        }
+        input_txn t = txn_transfer(c->transfer);
+        emit(c, &t);
+        if (c->cfg.map_count == 0) {
+            emit_status(c, "transfer function %s", c->transfer);
+            return;
+        }
+    }
     for (int i = 0; i < c->cfg.map_count; i++) {
         int k = 0;
         while (names[k] && strcmp(names[k], c->maps[i]) != 0)

@@ -91,7 +91,9 @@
  *    `values`) by INPUT_VALUE_STEPS of its range, clamped ("value FIRST
  *    COUNT V"); colormap-next [M] gives every geometry coloured through a
  *    map (config `maps`) the next built-in map or transfer function
- *    (colormap_names order, wrapping; "colormap FIRST COUNT NAME");
+ *    (colormap_names order, wrapping; "colormap FIRST COUNT NAME") and
+ *    volumes rendered directly (config `media`) the next built-in transfer
+ *    function, a built-in with opacity ("transfer NAME");
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -209,6 +211,9 @@ typedef struct input_controller_config {
     int value_count;
     input_map_target maps[INPUT_MAP_MAX];       /* map_count of them */
     int map_count;
+    bool media;                  /* the scene renders volumes directly: colormap-next steps their transfer
+                                    function too (the built-ins with opacity) */
+    char transfer[TXN_NAME_BYTES]; /* the one they start with ("" or custom: the first built-in) */
     double time_rate;            /* steps per second while playing; 0: INPUT_TIME_RATE */
 } input_controller_config;
 

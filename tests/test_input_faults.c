@@ -226,6 +226,7 @@ static input_txn sample_record(int i)
     case TXN_TIME_STEP: return txn_time_step((uint32_t)i % 9);
     case TXN_VALUE: return txn_value(2, 1, 0.5f * (float)i);
     case TXN_COLORMAP: return txn_colormap(2, 1, i % 2 ? "magma" : "viridis");
+    case TXN_TRANSFER: return txn_transfer(i % 2 ? "ct-bone" : "mri-soft");
     case TXN_KIND_COUNT: break;
     }
     return txn_simple(TXN_QUIT);

@@ -606,3 +606,23 @@ Test(input_inspect, value_and_colormap_keys)
     cr_expect_str_eq(text_of(only(r, at, TXN_COLORMAP)), want);
     rig_free(r);
 }
+
+/* With volumes rendered directly, M steps their transfer function through
+ * the built-ins that have opacity. */
+Test(input_inspect, colormap_next_steps_the_transfer_function_of_volumes)
+{
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.media = true;
+    snprintf(cfg.transfer, sizeof cfg.transfer, "ct-bone");
+    rig *r = rig_make_with(&cfg);
+    int at = press(r, KEY_M);
+    input_txn t = only(r, at, TXN_TRANSFER);
+    colormap probe;
+    cr_assert(colormap_preset(t.args.renderer.name, &probe));
+    cr_expect_gt(probe.opacity_count, 0u, "%s has opacity", t.args.renderer.name);
+    cr_expect_str_neq(t.args.renderer.name, "ct-bone");
+    for (int i = 0; i < 8; i++)
+        press(r, KEY_M);
+    rig_free(r);
+}

@@ -53,6 +53,7 @@ static txn_record sample(txn_kind k)
     case TXN_TIME_STEP: return txn_time_step(4294967295u);
     case TXN_VALUE: return txn_value(1, 2, -1e-7f);
     case TXN_COLORMAP: return txn_colormap(0, GEOMS, "cool-warm");
+    case TXN_TRANSFER: return txn_transfer("ct-bone");
     case TXN_KIND_COUNT: break;
     }
     cr_assert_fail("no sample for kind %d", (int)k);
@@ -240,7 +241,8 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_value(0, 1, NAN), "value: v: nan is not finite"},
         {txn_colormap(0, 1, "jet"), "colormap: name: no built-in map 'jet'"},
         {txn_colormap(0, 0, "magma"), "colormap: count: 0 geometries"},
-        {txn_simple(TXN_KIND_COUNT), "kind: 23 is not a transaction kind"},
+        {txn_transfer("viridis"), "transfer: name: no built-in transfer function 'viridis' (one with opacity)"},
+        {txn_simple(TXN_KIND_COUNT), "kind: 24 is not a transaction kind"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};

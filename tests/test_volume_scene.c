@@ -145,3 +145,28 @@ Test(volume_scene, mistakes_name_the_field)
     }
     support_remove_tmp_dir(dir);
 }
+
+/* A transfer record changes every directly rendered volume at the sync. */
+Test(volume_scene, a_transfer_record_changes_the_volume_rendering)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "volscene-tf");
+    write_ball(dir);
+    tess_error err = {{0}};
+    scene *s = load(dir, "{\"file\": \"ball.txt\", \"dvr\": {\"transfer\": \"mri-soft\"}}", &err);
+    cr_assert(s, "%s", err.msg);
+    accel *a = accel_build(s, 2, &err);
+    cr_assert(a, "%s", err.msg);
+    vec3 before = pixel_at(s, a, 32, 32);
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+    txn_record rec = txn_transfer("ct-bone");
+    cr_assert(txn_apply(&rec, &st, &err), "%s", err.msg);
+    frame_state_sync_accel(&st, a);
+    vec3 after = pixel_at(s, a, 32, 32);
+    cr_assert(before.x != after.x || before.y != after.y || before.z != after.z, "the picture did not change");
+    frame_state_finish(&st);
+    accel_destroy(a);
+    scene_destroy(s);
+    support_remove_tmp_dir(dir);
+}

@@ -11,6 +11,7 @@
 #include "engine/frame_state.h"
 #include "engine/log.h"
 #include "engine/particles/particle_kind.h"
+#include "engine/volume/dvr_medium.h"
 #include "engine/scene.h"
 #include "input/bindings.h"
 #include "input/controller.h"
@@ -423,6 +424,9 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.have_tour = in->tour.count > 0;
     cc.time_steps = time_steps(cs->scene);
     value_and_map_targets(cs->scene, &cc);
+    cc.media = cs->scene->medium_count > 0;
+    if (cc.media && cs->scene->media[0].ops == &dvr_medium_ops)
+        snprintf(cc.transfer, sizeof cc.transfer, "%s", dvr_medium_volume(cs->scene->media[0].data)->tf.name);
     in->runner = input_runner_start(&sc, &cc, pick, step_ready, (void *)cs, in->sink, cli_pipeline_session(), &err);
     if (!in->runner) {
         cli_error("%s", err.msg);
