@@ -56,7 +56,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts bench-pipeline bench-wall clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall clean check-headers unrobust \
         gen-assembly
 
 all: tessera
@@ -241,6 +241,11 @@ bench-ao:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera
 	sh tools/bench_ao.sh
+
+# volumes' speed against error (tools/report_volumes.sh): the "## Volumes" section of REPORT.md
+report-volumes:
+	$(MAKE) tessera
+	sh tools/report_volumes.sh
 
 # particles against Embree's sphere points alone (tools/bench_particles.sh): the "## Particles"
 # section of BENCHMARKS.md
