@@ -33,8 +33,8 @@
  *   a full step). The midpoint rule makes the optical depth second order in
  *   the step for a smooth field and transfer function.
  *   Pre-integrated (on): one sample per slab boundary; the slab's colour
- *   and opacity come from a DVR_PREINT_SIZE^2 table indexed by its front
- *   and back values, assuming the value varies linearly between them
+ *   and opacity come from a DVR_PREINT_SIZE^2 table read bilinearly at its
+ *   front and back values, assuming the value varies linearly between them
  *   (dvr.c, PRE-INTEGRATION, has the model and its error).
  *
  * EMPTY SPACE. Per macrocell, the largest transfer-function opacity over the
@@ -65,10 +65,8 @@
 #include "engine/volume/volume.h"
 
 /* entries per axis of the pre-integration table (4 floats each: 1 MiB at
- * 256, built in about a millisecond). Front and back values are rounded to
- * the nearest of these entries over the transfer function's range: an error
- * of at most 1/(2 (SIZE - 1)) of the range in each value (dvr.c has what
- * that does to a slab) */
+ * 256), over the transfer function's range; read bilinearly, built from
+ * running integrals in O(SIZE^2) (dvr.c, PRE-INTEGRATION, has its error) */
 #define DVR_PREINT_SIZE 256
 /* the step accepted, in voxels: finer gains nothing at float precision, and
  * coarser than a few voxels misses whole cells */
