@@ -436,8 +436,21 @@ Test(dvr, misses_and_bad_rays)
     cr_assert_not(dvr_integrate(d, org, zero, 0.0, 1e9, 0.0, rgb, &T));
     cr_assert_not(dvr_integrate(d, org, nan_dir, 0.0, 1e9, 0.0, rgb, &T));
     cr_assert(T == 1.0f && rgb[0] == 0.0f && rgb[1] == 0.0f && rgb[2] == 0.0f);
+    /* infinite ends are clipped to the box */
+    const double inside[3] = {4.0, 4.0, 4.0};
+    cr_assert(dvr_integrate(d, inside, along, -INFINITY, INFINITY, 0.0, rgb, &T));
+    cr_assert(fabs(T - pow(0.8, 8.0)) < 1e-6, "T %g", (double)T);
     dvr_settings s = dvr_settings_default();
     tess_error err = {{0}};
+    /* a grid of another volume is refused */
+    volume *other = make_volume(9, 9, 10, NULL, constant_5);
+    macrocell_grid *g = macrocell_grid_create(other, 4, &err);
+    cr_assert_not_null(g, "%s", err.msg);
+    cr_assert_null(dvr_create(v, g, &tf, NULL, &err));
+    cr_assert(strstr(err.msg, "another volume") != NULL, "%s", err.msg);
+    macrocell_grid_destroy(g);
+    volume_destroy(other);
+    err = (tess_error){{0}};
     s.step_vox = 0.0;
     cr_assert_not(dvr_set_settings(d, &s, &err));
     cr_assert(strstr(err.msg, "step") != NULL, "%s", err.msg);

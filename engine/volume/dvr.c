@@ -340,9 +340,16 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
     d->vol = vol;
     d->settings = s;
     d->voxel_world = fmin(vol->spacing[0], fmin(vol->spacing[1], vol->spacing[2]));
-    if (grid)
+    if (grid) {
+        const uint32_t n[3] = {vol->nx, vol->ny, vol->nz};
+        for (int a = 0; a < 3; a++)
+            if (grid->cells[a] != n[a] - 1 || grid->spacing[a] != vol->spacing[a] ||
+                grid->origin[a] != vol->origin[a]) {
+                tess_error_set(err, "volume rendering: the macrocell grid was built for another volume");
+                goto fail;
+            }
         d->grid = grid;
-    else {
+    } else {
         d->grid = macrocell_grid_create(vol, MACROCELL_DEFAULT_K, err);
         if (!d->grid)
             goto fail;
@@ -527,7 +534,8 @@ bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double 
     ray_state r = {.d = d, .front_slab = -1, .T = 1.0};
     volume_ray_to_voxel(g->origin, g->spacing, org, dir, r.org, r.dir);
     double len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    bool finite = isfinite(len) && isfinite(t0) && !isnan(t1);
+    /* t0 and t1 may be infinite (the box clip makes them finite), not NaN */
+    bool finite = isfinite(len) && !isnan(t0) && !isnan(t1);
     for (int a = 0; a < 3; a++)
         finite &= isfinite(r.org[a]) && isfinite(r.dir[a]);
     if (!finite || !(len > 0.0))

@@ -119,7 +119,8 @@ dvr_settings dvr_settings_default(void);
  * (copied; an automatic range is fitted to the volume's min and max) and
  * `settings` (NULL: the defaults). `grid` is vol's macrocell grid, kept by
  * pointer, or NULL to build one (MACROCELL_DEFAULT_K). NULL (err set) on a
- * volume without cells, settings out of range, or no memory. */
+ * volume without cells, a grid of another shape, spacing or origin,
+ * settings out of range, or no memory. */
 dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colormap *tf,
                        const dvr_settings *settings, tess_error *err);
 void dvr_destroy(dvr_volume *d); /* NULL is fine */
@@ -134,7 +135,7 @@ void dvr_set_transfer(dvr_volume *d, const colormap *tf);
 bool dvr_set_settings(dvr_volume *d, const dvr_settings *settings, tess_error *err);
 
 /* Integrate the ray org + t dir (world space, dir of any nonzero length)
- * over t in [t0, t1] clipped to the volume's box; t1 is where the caller's
+ * over t in [t0, t1] (either may be infinite) clipped to the volume's box; t1 is where the caller's
  * ray stops (an opaque surface in front of the volume's back). jitter in
  * [0, 1) offsets the slab grid by that fraction of a step (out of range or
  * NaN reads as 0). Writes the associated colour (linear RGB, premultiplied:
