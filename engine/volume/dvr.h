@@ -24,8 +24,8 @@
  * voxel length over |dir|): a first slab of jitter * step (none for jitter
  * 0), full slabs of one step, and a last slab cut at tb. Each slab counts
  * with its true length, so [ta, tb] is covered exactly, with no gap and no
- * overlap: the total optical depth of a constant field is exact for any
- * step and jitter.
+ * overlap: a constant field's result is the closed form for any step and
+ * jitter (with the opacity its value has in the tables).
  *   Classic (pre-integration off): one sample per slab, at its midpoint
  *   (trilinear), through the baked table (colormap_table, nearest of
  *   COLORMAP_TABLE_SIZE entries), with the opacity corrected to the slab's
