@@ -436,11 +436,64 @@ Test(dvr, misses_and_bad_rays)
     cr_assert_not(dvr_integrate(d, org, zero, 0.0, 1e9, 0.0, rgb, &T));
     cr_assert_not(dvr_integrate(d, org, nan_dir, 0.0, 1e9, 0.0, rgb, &T));
     cr_assert(T == 1.0f && rgb[0] == 0.0f && rgb[1] == 0.0f && rgb[2] == 0.0f);
+    /* infinite ends are clipped to the box */
+    const double inside[3] = {4.0, 4.0, 4.0};
+    cr_assert(dvr_integrate(d, inside, along, -INFINITY, INFINITY, 0.0, rgb, &T));
+    cr_assert(fabs(T - pow(0.8, 8.0)) < 1e-6, "T %g", (double)T);
     dvr_settings s = dvr_settings_default();
     tess_error err = {{0}};
+    /* a grid of another volume is refused */
+    volume *other = make_volume(9, 9, 10, NULL, constant_5);
+    macrocell_grid *g = macrocell_grid_create(other, 4, &err);
+    cr_assert_not_null(g, "%s", err.msg);
+    cr_assert_null(dvr_create(v, g, &tf, NULL, &err));
+    cr_assert(strstr(err.msg, "another volume") != NULL, "%s", err.msg);
+    macrocell_grid_destroy(g);
+    volume_destroy(other);
+    err = (tess_error){{0}};
     s.step_vox = 0.0;
     cr_assert_not(dvr_set_settings(d, &s, &err));
     cr_assert(strstr(err.msg, "step") != NULL, "%s", err.msg);
     dvr_destroy(d);
+    volume_destroy(v);
+}
+
+/* changing the settings or the transfer function afterwards gives what a
+ * renderer made with them gives (the tables follow) */
+Test(dvr, later_settings_and_transfer_match_fresh_ones)
+{
+    volume *v = make_volume(64, 64, 64, NULL, balls);
+    const float opacity_a[][2] = {{0.0f, 0.0f}, {0.3f, 0.0f}, {0.6f, 0.2f}, {1.0f, 0.5f}};
+    const float opacity_b[][2] = {{0.0f, 0.0f}, {0.45f, 0.0f}, {0.55f, 0.9f}, {1.0f, 0.9f}};
+    colormap tf_a = make_tf(blue, red, 4, opacity_a, 0.0f, 100.0f);
+    colormap tf_b = make_tf(red, blue, 4, opacity_b, 0.0f, 100.0f);
+    dvr_volume *changed = make_dvr(v, &tf_a, 0.5, false, true, 1.0f / 255.0f);
+    const struct {
+        double step;
+        bool pre;
+        const colormap *tf;
+    } cases[] = {
+        {1.0, false, &tf_a}, {1.0, true, &tf_a}, {0.25, true, &tf_b}, {0.25, false, &tf_b}, {0.7, true, &tf_a},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        dvr_settings s = changed->settings;
+        s.step_vox = cases[c].step;
+        s.preintegrate = cases[c].pre;
+        tess_error err = {{0}};
+        cr_assert(dvr_set_settings(changed, &s, &err), "%s", err.msg);
+        dvr_set_transfer(changed, cases[c].tf);
+        dvr_volume *fresh = make_dvr(v, cases[c].tf, cases[c].step, cases[c].pre, true, 1.0f / 255.0f);
+        for (int i = 0; i < 100; i++) {
+            double org[3], dir[3];
+            test_ray(i, org, dir);
+            float a_rgb[3], a_T, b_rgb[3], b_T;
+            dvr_integrate(changed, org, dir, 0.0, 1e9, 0.25, a_rgb, &a_T);
+            dvr_integrate(fresh, org, dir, 0.0, 1e9, 0.25, b_rgb, &b_T);
+            cr_assert(a_T == b_T && a_rgb[0] == b_rgb[0] && a_rgb[1] == b_rgb[1] && a_rgb[2] == b_rgb[2],
+                      "case %zu ray %d: T %g vs %g", c, i, (double)a_T, (double)b_T);
+        }
+        dvr_destroy(fresh);
+    }
+    dvr_destroy(changed);
     volume_destroy(v);
 }

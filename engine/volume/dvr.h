@@ -24,8 +24,8 @@
  * voxel length over |dir|): a first slab of jitter * step (none for jitter
  * 0), full slabs of one step, and a last slab cut at tb. Each slab counts
  * with its true length, so [ta, tb] is covered exactly, with no gap and no
- * overlap: the total optical depth of a constant field is exact for any
- * step and jitter.
+ * overlap: a constant field's result is the closed form for any step and
+ * jitter (with the opacity its value has in the tables).
  *   Classic (pre-integration off): one sample per slab, at its midpoint
  *   (trilinear), through the baked table (colormap_table, nearest of
  *   COLORMAP_TABLE_SIZE entries), with the opacity corrected to the slab's
@@ -33,8 +33,8 @@
  *   a full step). The midpoint rule makes the optical depth second order in
  *   the step for a smooth field and transfer function.
  *   Pre-integrated (on): one sample per slab boundary; the slab's colour
- *   and opacity come from a DVR_PREINT_SIZE^2 table indexed by its front
- *   and back values, assuming the value varies linearly between them
+ *   and opacity come from a DVR_PREINT_SIZE^2 table read bilinearly at its
+ *   front and back values, assuming the value varies linearly between them
  *   (dvr.c, PRE-INTEGRATION, has the model and its error).
  *
  * EMPTY SPACE. Per macrocell, the largest transfer-function opacity over the
@@ -65,10 +65,8 @@
 #include "engine/volume/volume.h"
 
 /* entries per axis of the pre-integration table (4 floats each: 1 MiB at
- * 256, built in about a millisecond). Front and back values are rounded to
- * the nearest of these entries over the transfer function's range: an error
- * of at most 1/(2 (SIZE - 1)) of the range in each value (dvr.c has what
- * that does to a slab) */
+ * 256), over the transfer function's range; read bilinearly, built from
+ * running integrals in O(SIZE^2) (dvr.c, PRE-INTEGRATION, has its error) */
 #define DVR_PREINT_SIZE 256
 /* the step accepted, in voxels: finer gains nothing at float precision, and
  * coarser than a few voxels misses whole cells */
@@ -121,7 +119,8 @@ dvr_settings dvr_settings_default(void);
  * (copied; an automatic range is fitted to the volume's min and max) and
  * `settings` (NULL: the defaults). `grid` is vol's macrocell grid, kept by
  * pointer, or NULL to build one (MACROCELL_DEFAULT_K). NULL (err set) on a
- * volume without cells, settings out of range, or no memory. */
+ * volume without cells, a grid of another shape, spacing or origin,
+ * settings out of range, or no memory. */
 dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colormap *tf,
                        const dvr_settings *settings, tess_error *err);
 void dvr_destroy(dvr_volume *d); /* NULL is fine */
@@ -136,7 +135,7 @@ void dvr_set_transfer(dvr_volume *d, const colormap *tf);
 bool dvr_set_settings(dvr_volume *d, const dvr_settings *settings, tess_error *err);
 
 /* Integrate the ray org + t dir (world space, dir of any nonzero length)
- * over t in [t0, t1] clipped to the volume's box; t1 is where the caller's
+ * over t in [t0, t1] (either may be infinite) clipped to the volume's box; t1 is where the caller's
  * ray stops (an opaque surface in front of the volume's back). jitter in
  * [0, 1) offsets the slab grid by that fraction of a step (out of range or
  * NaN reads as 0). Writes the associated colour (linear RGB, premultiplied:
