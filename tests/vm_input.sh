@@ -42,9 +42,10 @@
 # lowers the opacity (two clip-plane records and an opacity record). Each check
 # also asks the heads to equal the native replay of the record, as above.
 # Then a fourth run on a particle time series made here (3 LAMMPS dumps of 2,744
-# particles with a kinetic-energy column, written by this script): 0 steps forward,
-# then . crops by the energy (a time-step record, then a crop record and the status
-# lines); the heads equal the native replay, which loads the same step.
+# particles with a kinetic-energy column, written by this script) beside a small
+# volume's iso-surface: 0 steps forward, . crops by the energy, Y raises the
+# iso-value (a time-step, a crop and a value record, and the status lines); the
+# heads equal the native replay, which loads the same step.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
 # TESSERA_LOG=debug and logs each frame on screen; the host waits for those
@@ -108,12 +109,20 @@ for s in 0 1 2; do
         }
     }' > "$W/steps/step_$s.dump"
 done
+# and beside it a 16^3 8-bit volume of a ball (value 200 at the centre falling to 0), its
+# iso-surface ray traced directly
+python3 -c '
+import math, sys
+sys.stdout.buffer.write(bytes(max(0, min(200, int(200 - 25 * math.sqrt((x - 7.5) ** 2 + (y - 7.5) ** 2 + (z - 7.5) ** 2))))
+                              for z in range(16) for y in range(16) for x in range(16)))' > "$W/ball.raw"
+printf 'file: ball.raw\ndims: 16 x 16 x 16\ntype: uint8\nspacing: 0.5 0.5 0.5\norigin: 17 3 3\n' > "$W/ball.txt"
 cat > "$W/particles.json" <<'EOF'
 {
-  "camera": {"eye": [30, 22, 34], "look_at": [7, 6, 7], "fov_deg": 40},
+  "camera": {"eye": [32, 22, 40], "look_at": [10, 6, 7], "fov_deg": 45},
   "ambient": [0.3, 0.3, 0.3],
   "particles": [{"files": "steps/step_*.dump", "radius": 0.4, "color_by": "c_ke",
-                 "color_map": {"map": "viridis", "range": [0, 11]}, "crop": {"attribute": "c_ke"}}]
+                 "color_map": {"map": "viridis", "range": [0, 11]}, "crop": {"attribute": "c_ke"}}],
+  "volumes": [{"file": "ball.txt", "iso": [{"value": 100, "color": [0.9, 0.3, 0.2]}]}]
 }
 EOF
 
@@ -422,6 +431,16 @@ particles_run() {
         ok "particles: . cropped by c_ke ($_crop; $_n pixels changed)"
     else
         bad "particles: .: record '$_crop', '$(rec_last ' status ')', $_n pixels changed"
+    fi
+    _k2=$K
+    qmp key y
+    check "volume: Y (the iso-value up)"
+    _value=$(rec_last ' value ')
+    _n=$(heads_differ $_k2 $K)
+    if echo "$_value" | grep -q '^value 1 1 ' && [ "$(rec_last ' status ')" = 'status "iso-value 104"' ] && [ "$_n" -gt 50 ]; then
+        ok "volume: Y raised the iso-value ($_value; $_n pixels changed)"
+    else
+        bad "volume: Y: record '$_value', '$(rec_last ' status ')', $_n pixels changed"
     fi
 }
 
