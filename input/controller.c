@@ -161,9 +161,14 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
         c->cfg.map_count = 0;
     for (int i = 0; i < c->cfg.value_count; i++)
         c->values[i] = c->cfg.values[i].value;
-    for (int i = 0; i < c->cfg.map_count; i++)
-        snprintf(c->maps[i], sizeof c->maps[i], "%s", c->cfg.maps[i].name);
-    snprintf(c->transfer, sizeof c->transfer, "%s", c->cfg.transfer);
+    /* (memcpy of equal-sized arrays, NUL forced: snprintf between two members of *c reads to
+     * -Wrestrict at -O1 as a possible overlap) */
+    for (int i = 0; i < c->cfg.map_count; i++) {
+        memcpy(c->maps[i], c->cfg.maps[i].name, sizeof c->maps[i]);
+        c->maps[i][sizeof c->maps[i] - 1] = '\0';
+    }
+    memcpy(c->transfer, c->cfg.transfer, sizeof c->transfer);
+    c->transfer[sizeof c->transfer - 1] = '\0';
     if (c->cfg.crop_count < 0 || c->cfg.crop_count > INPUT_CROP_MAX)
         c->cfg.crop_count = 0;
     for (int i = 0; i < c->cfg.crop_count; i++)
