@@ -567,3 +567,65 @@ Test(iso_kind, bounds_are_the_macrocells_that_vary)
     accel_destroy(a);
     scene_destroy(sc);
 }
+
+/* Count the surfaces along r by next-hit queries. */
+static int surfaces_along(const accel *a, const ray *r, float *first_t)
+{
+    hit h, prev;
+    int n = 0;
+    if (!accel_intersect(a, r, &h))
+        return 0;
+    *first_t = h.t;
+    do {
+        n++;
+        prev = h;
+    } while (n < 16 && accel_intersect_after(a, r, &prev, &h));
+    return n;
+}
+
+Test(iso_kind, a_sheet_at_exactly_the_value_keeps_parity)
+{
+    /* uint8: 100 everywhere but the plane i = 4, which is exactly 60. At
+     * iso 60 the field only touches the value on that plane: traced as the
+     * float above 60, the plane becomes a sheet ~1e-7 thin whose two
+     * crossings share one float t and cancel; at 60.5 the sheet is thick
+     * and has its two crossings; both keep parity (an even count) */
+    tess_error err = {{0}};
+    volume *v = volume_create(9, 6, 6, VOLUME_UINT8, &err);
+    cr_assert_not_null(v, "%s", err.msg);
+    uint8_t *s = volume_voxels(v);
+    for (uint32_t k = 0; k < 6; k++)
+        for (uint32_t j = 0; j < 6; j++)
+            for (uint32_t i = 0; i < 9; i++)
+                s[volume_index(v, i, j, k)] = i == 4 ? 60 : 100;
+    cr_assert(volume_update_range(v, "sheet", &err));
+    iso_volume *shared = iso_volume_create(v, NULL, &err);
+    cr_assert_not_null(shared, "%s", err.msg);
+    static const iso_method methods[3] = {ISO_METHOD_EXACT, ISO_METHOD_LINEAR, ISO_METHOD_REGULA_FALSI};
+    for (int m = 0; m < 3; m++) {
+        iso_kind *k = iso_kind_create_shared(shared, 60.f, v3(1.f, 1.f, 1.f), 0, methods[m], &err);
+        cr_assert_not_null(k);
+        scene *sc = scene_create();
+        cr_assert_geq(scene_add_geometry(sc, &iso_kind_ops, k, "sheet"), 0);
+        cr_assert_geq(scene_add_instance(sc, 0, NULL, SCENE_NO_PART), 0);
+        accel *a = accel_build(sc, 1, &err);
+        cr_assert_not_null(a, "%s", err.msg);
+        rng_state = 31u;
+        for (int n = 0; n < 200; n++) {
+            /* from far away (a coarse float t) through the sheet at a slant */
+            ray r = {v3(-1000.f, 2.5f + rnd(), 2.5f + rnd()), v3_normalize(v3(1.f, 1e-3f * (rnd() - 0.5f), 1e-3f * (rnd() - 0.5f))),
+                     0.f, INFINITY};
+            float t0 = 0.f;
+            int count = surfaces_along(a, &r, &t0);
+            cr_assert_eq(count % 2, 0, "method %d, ray %d: %d surfaces through a sheet", m, n, count);
+        }
+        cr_assert(iso_kind_set_value(k, 60.5f));
+        ray r = {v3(-1000.f, 2.5f, 2.5f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+        float t0 = 0.f;
+        cr_assert_eq(surfaces_along(a, &r, &t0), 2, "method %d: a thick sheet has two sides", m);
+        cr_assert_float_eq(t0, 1000.f + 3.f + 39.5f / 40.f, 1e-3f);
+        accel_destroy(a);
+        scene_destroy(sc);
+    }
+    iso_volume_release(shared);
+}
