@@ -324,12 +324,21 @@ static bool first_crossing(const iso_kind *k, const double org[3], const double 
     const float iso = k->iso_traced;
     /* the exact method's roots are the field's: a walk may start anywhere,
      * at t_near. The cheap methods' roots depend on where a cell's segment
-     * starts (they interpolate between its ends), so a walk from t_near would
-     * put the crossing a next-hit query starts from somewhere else and find
-     * it again; they always walk from the box's entry, so every query of a
-     * ray sees the same crossings (a next-hit query walks the ray again up
-     * to its bound: layers^2 cells for transparency, the price of it) */
-    double t_start = k->method == ISO_METHOD_EXACT ? (double)t_near : -INFINITY;
+     * starts (they interpolate between its ends): a walk from t_near would
+     * move the crossing a next-hit query starts from and find it again. They
+     * start two cell diagonals before t_near instead, in an earlier cell, so
+     * the cell holding t_near is entered at its face, the same segment
+     * (boundary t's are computed from their planes) as every query of the
+     * ray sees */
+    double t_start = t_near;
+    if (k->method != ISO_METHOD_EXACT) {
+        double diag2 = 0.0, dir2 = 0.0;
+        for (int a = 0; a < 3; a++) {
+            diag2 += g->spacing[a] * g->spacing[a];
+            dir2 += dir[a] * dir[a];
+        }
+        t_start -= 2.0 * sqrt(diag2 / dir2);
+    }
     macrocell_walk walk;
     if (!macrocell_walk_begin(&walk, g, org, dir, t_start, INFINITY))
         return false;

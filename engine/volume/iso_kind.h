@@ -24,8 +24,8 @@
  * HITS. `intersect` gives the first float t in (t_near, t_far] where the
  * ray changes side of the surface. One walk through the macrocells and
  * their cells (iso_cell.h; every root of a cell, the sign carried from
- * cell to cell) runs from t_near (the cheap methods: from the box's entry,
- * as their roots move with where a segment starts) to the box's exit
+ * cell to cell) runs from t_near (the cheap methods: from two cells
+ * before it, as their roots move with where a segment starts) to the box's exit
  * whatever t_far is, and t_far only accepts what it found: a ray finds the
  * same t alone, in a packet and under any traversal order, bit for bit.
  * Crossings that round to one float t are one group: an odd number is one
