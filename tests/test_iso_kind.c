@@ -143,7 +143,7 @@ Test(iso_kind, hits_are_the_trilinear_roots_on_the_sphere_facing_out)
     macrocell_grid *g = macrocell_grid_create(v, MACROCELL_DEFAULT_K, &err);
     cr_assert_not_null(g, "%s", err.msg);
     int hits = 0;
-    double worst_root = 0.0, worst_sphere = 0.0, worst_cos = 1.0;
+    double worst_root = 0.0, worst_sphere = 0.0, worst_cos = 1.0, worst_shading = 1.0;
     for (int n = 0; n < 2000; n++) {
         ray r = random_ray(14.f);
         hit h;
@@ -174,6 +174,9 @@ Test(iso_kind, hits_are_the_trilinear_roots_on_the_sphere_facing_out)
             double c = v3_dot(radial, sf.geometric_n);
             worst_cos = c < worst_cos ? c : worst_cos;
             cr_assert_gt(c, 0.995, "ray %d: normal %g degrees off radial", n, acos(c) * 57.29578);
+            double cs = v3_dot(radial, sf.shading_n);
+            worst_shading = cs < worst_shading ? cs : worst_shading;
+            cr_assert_gt(cs, c - 1e-6, "ray %d: the smooth shading normal is no better than the cell's", n);
             cr_assert(sf.has_colour);
             cr_assert_float_eq(sf.colour.x, 0.8f, 0.f);
             /* the position is on the ray at t, and its error is small and positive */
@@ -187,8 +190,9 @@ Test(iso_kind, hits_are_the_trilinear_roots_on_the_sphere_facing_out)
     }
     macrocell_grid_destroy(g);
     volume_destroy(v);
-    cr_log_info("%d hits of 2000; worst |t - root| %.3g cell, |t - sphere| %.3g cell, normal %.3g deg", hits,
-                worst_root, worst_sphere, acos(worst_cos) * 57.29578);
+    cr_log_info("%d hits of 2000; worst |t - root| %.3g cell, |t - sphere| %.3g cell, normal %.3g deg, shading normal "
+                "%.3g deg", hits, worst_root, worst_sphere, acos(worst_cos) * 57.29578, acos(worst_shading) * 57.29578);
+    cr_assert_gt(worst_shading, 0.99999, "the smooth normal is within 0.26 degrees of radial");
     cr_assert_gt(hits, 1000);
     accel_destroy(a);
     scene_destroy(s);

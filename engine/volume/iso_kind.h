@@ -39,8 +39,11 @@
  * the value set).
  * `describe`: the point org + t dir (computed in double, rounded once),
  * its error bound (iso_kind.c: the float t's rounding, the point's, and
- * the root's tolerance; for the cheap methods one cell), the unit gradient
- * (towards higher values) as the normal, and the kind's colour.
+ * the root's tolerance; for the cheap methods one cell), the unit analytic
+ * gradient (towards higher values) as the geometric normal, the
+ * central-difference gradients of the cell's samples interpolated at the
+ * hit as the shading normal (continuous across cells: no facets), and the
+ * kind's colour.
  *
  * CLOSED. The surface bounds a solid (parity works) exactly when it does
  * not meet the volume's boundary: the field on the six faces is continuous
