@@ -143,7 +143,7 @@ Test(iso_kind, hits_are_the_trilinear_roots_on_the_sphere_facing_out)
     macrocell_grid *g = macrocell_grid_create(v, MACROCELL_DEFAULT_K, &err);
     cr_assert_not_null(g, "%s", err.msg);
     int hits = 0;
-    double worst_root = 0.0, worst_sphere = 0.0, worst_cos = 1.0;
+    double worst_root = 0.0, worst_sphere = 0.0, worst_cos = 1.0, worst_shading = 1.0;
     for (int n = 0; n < 2000; n++) {
         ray r = random_ray(14.f);
         hit h;
@@ -174,6 +174,9 @@ Test(iso_kind, hits_are_the_trilinear_roots_on_the_sphere_facing_out)
             double c = v3_dot(radial, sf.geometric_n);
             worst_cos = c < worst_cos ? c : worst_cos;
             cr_assert_gt(c, 0.995, "ray %d: normal %g degrees off radial", n, acos(c) * 57.29578);
+            double cs = v3_dot(radial, sf.shading_n);
+            worst_shading = cs < worst_shading ? cs : worst_shading;
+            cr_assert_gt(cs, c - 1e-6, "ray %d: the smooth shading normal is no better than the cell's", n);
             cr_assert(sf.has_colour);
             cr_assert_float_eq(sf.colour.x, 0.8f, 0.f);
             /* the position is on the ray at t, and its error is small and positive */
@@ -187,8 +190,9 @@ Test(iso_kind, hits_are_the_trilinear_roots_on_the_sphere_facing_out)
     }
     macrocell_grid_destroy(g);
     volume_destroy(v);
-    cr_log_info("%d hits of 2000; worst |t - root| %.3g cell, |t - sphere| %.3g cell, normal %.3g deg", hits,
-                worst_root, worst_sphere, acos(worst_cos) * 57.29578);
+    cr_log_info("%d hits of 2000; worst |t - root| %.3g cell, |t - sphere| %.3g cell, normal %.3g deg, shading normal "
+                "%.3g deg", hits, worst_root, worst_sphere, acos(worst_cos) * 57.29578, acos(worst_shading) * 57.29578);
+    cr_assert_gt(worst_shading, 0.99999, "the smooth normal is within 0.26 degrees of radial");
     cr_assert_gt(hits, 1000);
     accel_destroy(a);
     scene_destroy(s);
@@ -566,4 +570,66 @@ Test(iso_kind, bounds_are_the_macrocells_that_vary)
     cr_assert(!accel_intersect(a, &through, &h));
     accel_destroy(a);
     scene_destroy(sc);
+}
+
+/* Count the surfaces along r by next-hit queries. */
+static int surfaces_along(const accel *a, const ray *r, float *first_t)
+{
+    hit h, prev;
+    int n = 0;
+    if (!accel_intersect(a, r, &h))
+        return 0;
+    *first_t = h.t;
+    do {
+        n++;
+        prev = h;
+    } while (n < 16 && accel_intersect_after(a, r, &prev, &h));
+    return n;
+}
+
+Test(iso_kind, a_sheet_at_exactly_the_value_keeps_parity)
+{
+    /* uint8: 100 everywhere but the plane i = 4, which is exactly 60. At
+     * iso 60 the field only touches the value on that plane: traced as the
+     * float above 60, the plane becomes a sheet ~1e-7 thin whose two
+     * crossings share one float t and cancel; at 60.5 the sheet is thick
+     * and has its two crossings; both keep parity (an even count) */
+    tess_error err = {{0}};
+    volume *v = volume_create(9, 6, 6, VOLUME_UINT8, &err);
+    cr_assert_not_null(v, "%s", err.msg);
+    uint8_t *s = volume_voxels(v);
+    for (uint32_t k = 0; k < 6; k++)
+        for (uint32_t j = 0; j < 6; j++)
+            for (uint32_t i = 0; i < 9; i++)
+                s[volume_index(v, i, j, k)] = i == 4 ? 60 : 100;
+    cr_assert(volume_update_range(v, "sheet", &err));
+    iso_volume *shared = iso_volume_create(v, NULL, &err);
+    cr_assert_not_null(shared, "%s", err.msg);
+    static const iso_method methods[3] = {ISO_METHOD_EXACT, ISO_METHOD_LINEAR, ISO_METHOD_REGULA_FALSI};
+    for (int m = 0; m < 3; m++) {
+        iso_kind *k = iso_kind_create_shared(shared, 60.f, v3(1.f, 1.f, 1.f), 0, methods[m], &err);
+        cr_assert_not_null(k);
+        scene *sc = scene_create();
+        cr_assert_geq(scene_add_geometry(sc, &iso_kind_ops, k, "sheet"), 0);
+        cr_assert_geq(scene_add_instance(sc, 0, NULL, SCENE_NO_PART), 0);
+        accel *a = accel_build(sc, 1, &err);
+        cr_assert_not_null(a, "%s", err.msg);
+        rng_state = 31u;
+        for (int n = 0; n < 200; n++) {
+            /* from far away (a coarse float t) through the sheet at a slant */
+            ray r = {v3(-1000.f, 2.5f + rnd(), 2.5f + rnd()), v3_normalize(v3(1.f, 1e-3f * (rnd() - 0.5f), 1e-3f * (rnd() - 0.5f))),
+                     0.f, INFINITY};
+            float t0 = 0.f;
+            int count = surfaces_along(a, &r, &t0);
+            cr_assert_eq(count % 2, 0, "method %d, ray %d: %d surfaces through a sheet", m, n, count);
+        }
+        cr_assert(iso_kind_set_value(k, 60.5f));
+        ray r = {v3(-1000.f, 2.5f, 2.5f), v3(1.f, 0.f, 0.f), 0.f, INFINITY};
+        float t0 = 0.f;
+        cr_assert_eq(surfaces_along(a, &r, &t0), 2, "method %d: a thick sheet has two sides", m);
+        cr_assert_float_eq(t0, 1000.f + 3.f + 39.5f / 40.f, 1e-3f);
+        accel_destroy(a);
+        scene_destroy(sc);
+    }
+    iso_volume_release(shared);
 }

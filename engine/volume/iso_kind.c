@@ -10,6 +10,7 @@
  * value ~0 is whatever that block's cubic rounds it to. */
 #include "engine/volume/iso_kind.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -35,7 +36,8 @@ struct iso_volume {
 
 struct iso_kind {
     iso_volume *shared;   /* one reference held */
-    float iso;            /* the value; written only where nothing traces */
+    float iso;            /* the value as set; written only where nothing traces */
+    float iso_traced;     /* the value the walks use (traced_value): iso, or just above it */
     vec3 colour;          /* linear RGB of every hit */
     uint32_t material_id; /* scene material */
     iso_method method;    /* how a cell's root is found (iso_cell.h) */
@@ -168,6 +170,23 @@ const macrocell_grid *iso_volume_grid(const iso_volume *shared) { return shared-
 
 /* ---- the kind ------------------------------------------------------------ */
 
+/* The value the walks look for. Integer samples (uint8, int16, uint16)
+ * equal to an integer iso-value make f exactly 0 at those samples, and a
+ * face or edge whose corners all equal it is a sheet where f == 0: a ray
+ * through it touches the surface without crossing, the walk reports the
+ * touch as a root, and parity (caps) breaks (the MRI at iso 60 shows it on
+ * a few rays in 10^4). Tracing the next float above such a value instead
+ * makes every sample differ from it (simulation of simplicity): samples
+ * equal to the value count as below it, and the surface moves by one ulp
+ * of the value over the gradient, far below anything a pixel shows. Float
+ * data keeps the value as given. */
+static float traced_value(const volume *v, float iso)
+{
+    if (v->type != VOLUME_FLOAT32 && iso == floorf(iso))
+        return nextafterf(iso, INFINITY);
+    return iso;
+}
+
 iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colour, uint32_t material_id,
                                  iso_method method, tess_error *err)
 {
@@ -187,6 +206,7 @@ iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colou
     iso_volume_retain(shared);
     k->shared = shared;
     k->iso = iso_value;
+    k->iso_traced = traced_value(shared->v, iso_value);
     k->colour = colour;
     k->material_id = material_id;
     k->method = method;
@@ -217,6 +237,7 @@ bool iso_kind_set_value(iso_kind *k, float iso_value)
     if (!isfinite(iso_value))
         return false;
     k->iso = iso_value;
+    k->iso_traced = traced_value(k->shared->v, iso_value);
     return true;
 }
 
@@ -251,38 +272,198 @@ static bool kind_prim_bounds(const void *data, uint32_t prim, aabb *out)
     return kind_bounds(data, out);
 }
 
+/* The roots of one cell's cubic in (0, s1] by the kind's method, in order
+ * (f0: the value at 0 as the walk knows it, iso_cell.h HALF-OPEN SEGMENTS). */
+static int cell_roots(iso_method method, const iso_cubic *f, double f0, double s1, double tol_s, double roots[3])
+{
+    switch (method) {
+    case ISO_METHOD_EXACT: return iso_cell_roots(f, 0.0, f0, s1, tol_s, roots);
+    case ISO_METHOD_LINEAR: return iso_cell_root_linear(f, 0.0, f0, s1, roots) ? 1 : 0;
+    case ISO_METHOD_REGULA_FALSI:
+        return iso_cell_root_regula_falsi(f, 0.0, f0, s1, ISO_CELL_RF_STEPS, roots) ? 1 : 0;
+    }
+    return 0;
+}
+
+/* What the field minus iso is everywhere in a block whose samples lie in
+ * [lo, hi], iso outside it: the sign carried past a block with no crossing. */
+static double outside_value(float lo, float hi, float iso) { return lo > iso ? (double)lo - iso : (double)hi - iso; }
+
+/* A group of crossings that round to one float t. */
+typedef struct crossing_group {
+    float t;   /* their float t */
+    int count; /* how many so far; 0: no group open */
+} crossing_group;
+
+/* Close the group when the walk has passed its float t (everything later
+ * rounds above it): true with *t when it holds an odd number of crossings
+ * (the ray changes side there: one hit); an even number cancels (a sheet
+ * thinner than the float t's resolution: the ray leaves on the side it
+ * came from, and reporting one crossing would break parity). */
+static bool close_group(crossing_group *g, double t_now, bool at_end, float *t)
+{
+    if (g->count == 0 || (!at_end && !((float)t_now > g->t)))
+        return false;
+    bool odd = g->count & 1;
+    g->count = 0;
+    if (odd)
+        *t = g->t;
+    return odd;
+}
+
+/* The first float t in (t_near, box exit) where the ray changes side of
+ * the surface. One walk through the macrocells and their cells from t_near
+ * (the shape of iso_volume_first_hit, with every root of a cell taken and
+ * the sign carried from cell to cell so no crossing is lost or found twice
+ * at a shared face); crossings whose float t is not above t_near were
+ * reported before (or are a next-hit query's bound). */
+static bool first_crossing(const iso_kind *k, const double org[3], const double dir[3], float t_near, float *t)
+{
+    const macrocell_grid *g = k->shared->grid;
+    const volume *vol = k->shared->v;
+    const float iso = k->iso_traced;
+    /* the exact method's roots are the field's: a walk may start anywhere,
+     * at t_near. The cheap methods' roots depend on where a cell's segment
+     * starts (they interpolate between its ends): a walk from t_near would
+     * move the crossing a next-hit query starts from and find it again. They
+     * start two cell diagonals before t_near instead, in an earlier cell, so
+     * the cell holding t_near is entered at its face, the same segment
+     * (boundary t's are computed from their planes) as every query of the
+     * ray sees */
+    double t_start = t_near;
+    if (k->method != ISO_METHOD_EXACT) {
+        double diag2 = 0.0, dir2 = 0.0;
+        for (int a = 0; a < 3; a++) {
+            diag2 += g->spacing[a] * g->spacing[a];
+            dir2 += dir[a] * dir[a];
+        }
+        t_start -= 2.0 * sqrt(diag2 / dir2);
+    }
+    macrocell_walk walk;
+    if (!macrocell_walk_begin(&walk, g, org, dir, t_start, INFINITY))
+        return false;
+    double dir_len = sqrt(walk.dir[0] * walk.dir[0] + walk.dir[1] * walk.dir[1] + walk.dir[2] * walk.dir[2]);
+    double tol_s = ISO_CELL_TOL / dir_len; /* ISO_CELL_TOL cell widths, in t */
+    bool carried = false; /* f_carry holds the field's sign at the last cell's exit */
+    double f_carry = 0.0;
+    crossing_group group = {0.f, 0};
+    macrocell_span span;
+    while (macrocell_walk_next(&walk, &span)) {
+        if (close_group(&group, span.t_enter, false, t))
+            return true;
+        if (!macrocell_may_reach(g, span.index, iso)) {
+            f_carry = outside_value(g->min[span.index], g->max[span.index], iso);
+            carried = true;
+            continue;
+        }
+        volume_dda cells;
+        macrocell_walk_cells(&walk, &span, &cells);
+        int32_t c[3];
+        double te, tx;
+        while (volume_dda_next(&cells, c, &te, &tx)) {
+            if (close_group(&group, te, false, t))
+                return true;
+            float corner[8];
+            volume_cell_corners(vol, (uint32_t)c[0], (uint32_t)c[1], (uint32_t)c[2], corner);
+            float lo = corner[0], hi = corner[0];
+            for (int i = 1; i < 8; i++) {
+                lo = corner[i] < lo ? corner[i] : lo;
+                hi = corner[i] > hi ? corner[i] : hi;
+            }
+            if (iso < lo || iso > hi) {
+                f_carry = outside_value(lo, hi, iso);
+                carried = true;
+                continue;
+            }
+            /* the cell-local ray from the entry point: s = t - te */
+            double o[3];
+            for (int a = 0; a < 3; a++)
+                o[a] = walk.org[a] + te * walk.dir[a] - c[a];
+            iso_cubic f = iso_cell_cubic(corner, iso, o, walk.dir);
+            double f0 = f.d, s1 = tx - te;
+            if (carried) {
+                if (f_carry == 0.0)
+                    f0 = 0.0; /* the last cell's exit was a root, counted there */
+                else if (f0 == 0.0 || (f0 < 0.0) != (f_carry < 0.0))
+                    f0 = copysign(DBL_MIN, f_carry); /* ~0, of the sign the walk saw */
+            }
+            double roots[3];
+            int n = cell_roots(k->method, &f, f0, s1, tol_s, roots);
+            for (int i = 0; i < n; i++) {
+                float ft = (float)(te + roots[i]);
+                if (!(ft > t_near))
+                    continue;
+                if (group.count > 0 && ft != group.t && close_group(&group, te + roots[i], true, t))
+                    return true;
+                group.t = ft;
+                group.count++;
+            }
+            f_carry = iso_cubic_eval(&f, s1);
+            carried = true;
+        }
+    }
+    return close_group(&group, INFINITY, true, t);
+}
+
 /* The first crossing whose float t is in (t_near, t_far]. The walk always
- * runs to the box's exit (t_far only accepts or refuses what it found),
- * so the t found never depends on how far the ray has been shortened by
- * other hits: single rays and packets agree bit for bit. */
+ * runs on to the box's exit past t_far (t_far only accepts or refuses what
+ * it found), so the t found never depends on how far other hits have
+ * shortened the ray: single rays and packets agree bit for bit. */
 static bool kind_intersect(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v)
 {
     (void)prim;
-    const iso_kind *k = data;
-    const iso_volume *s = k->shared;
     const double org[3] = {r->org.x, r->org.y, r->org.z}, dir[3] = {r->dir.x, r->dir.y, r->dir.z};
-    double t_min = r->t_near;
+    float found;
     *u = *v = 0.f;
-    /* at most three walks: a crossing that rounds onto t_near is the one a
-     * next-hit query starts from (or lies within half an ulp of it: the
-     * same float t, one hit); the walk then restarts half an ulp above
-     * t_near, where every crossing rounds above it, and once more from the
-     * next float should a crossing land exactly on that midpoint */
-    for (int walk = 0; walk < 3; walk++) {
-        iso_hit h;
-        if (!iso_volume_first_hit(s->v, s->grid, org, dir, t_min, INFINITY, k->iso, k->method, &h))
-            return false;
-        float found = (float)h.t;
-        if (found > r->t_near) {
-            if (!(found <= r->t_far))
-                return false;
-            *t = found;
-            return true;
-        }
-        double above = nextafterf(r->t_near, INFINITY);
-        t_min = walk == 0 ? 0.5 * ((double)r->t_near + above) : above;
+    if (!first_crossing(data, org, dir, r->t_near, &found) || !(found <= r->t_far))
+        return false;
+    *t = found;
+    return true;
+}
+
+/* The field's gradient at sample (i, j, k) by central differences (one-sided
+ * on the volume's faces), per world unit. */
+static void sample_gradient(const volume *v, const double spacing[3], uint32_t i, uint32_t j, uint32_t k,
+                            double out[3])
+{
+    const uint32_t at[3] = {i, j, k}, n[3] = {v->nx, v->ny, v->nz};
+    for (int a = 0; a < 3; a++) {
+        uint32_t lo[3] = {i, j, k}, hi[3] = {i, j, k};
+        lo[a] = at[a] > 0 ? at[a] - 1 : at[a];
+        hi[a] = at[a] + 1 < n[a] ? at[a] + 1 : at[a];
+        double span = (double)(hi[a] - lo[a]) * spacing[a];
+        out[a] = ((double)volume_sample(v, hi[0], hi[1], hi[2]) - volume_sample(v, lo[0], lo[1], lo[2])) / span;
     }
-    return false;
+}
+
+/* SHADING NORMAL: the analytic gradient of the trilinear field (the
+ * geometric normal) jumps at every cell face, which shows the cells as
+ * facets, and on 8-bit data as terraces; the central-difference gradients
+ * of the cell's 8 samples, interpolated trilinearly at the hit, are
+ * continuous across faces. False when they cancel (then the geometric
+ * normal shades). */
+static bool smooth_normal(const volume *v, const double spacing[3], const uint32_t cell[3], const double local[3],
+                          vec3 *out)
+{
+    double sum[3] = {0.0, 0.0, 0.0};
+    for (int c = 0; c < 8; c++) {
+        double gc[3], w = 1.0;
+        uint32_t at[3];
+        for (int a = 0; a < 3; a++) {
+            int up = c >> a & 1;
+            at[a] = cell[a] + (uint32_t)up;
+            w *= up ? local[a] : 1.0 - local[a];
+        }
+        sample_gradient(v, spacing, at[0], at[1], at[2], gc);
+        for (int a = 0; a < 3; a++)
+            sum[a] += w * gc[a];
+    }
+    double len2 = sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2];
+    if (!(len2 > 0.0) || !isfinite(len2))
+        return false;
+    double inv = 1.0 / sqrt(len2);
+    *out = v3((float)(sum[0] * inv), (float)(sum[1] * inv), (float)(sum[2] * inv));
+    return true;
 }
 
 /* u = 2^-24; gamma(n) = n u / (1 - n u) (pbrt-v4 6.8.1) */
@@ -345,7 +526,10 @@ static void kind_describe(const void *data, uint32_t prim, const ray *r, const h
     out->position = v3((float)p[0], (float)p[1], (float)p[2]);
     out->position_error = v3(err[0], err[1], err[2]);
     out->geometric_n = normal;
-    out->shading_n = normal;
+    vec3 smooth;
+    /* the shading normal on the geometric normal's side (a shading normal
+     * that disagrees with it would light the back of the surface) */
+    out->shading_n = smooth_normal(vol, g->spacing, cell, local, &smooth) && v3_dot(smooth, normal) > 0.f ? smooth : normal;
     out->has_colour = true;
     out->colour = k->colour;
     out->material_id = k->material_id;
@@ -364,7 +548,7 @@ static void kind_destroy(void *data) { iso_kind_destroy(data); }
 static bool kind_closed(const void *data)
 {
     const iso_kind *k = data;
-    return k->iso < k->shared->boundary_min || k->iso > k->shared->boundary_max;
+    return k->iso_traced < k->shared->boundary_min || k->iso_traced > k->shared->boundary_max;
 }
 
 static bool kind_set_value(void *data, float value) { return iso_kind_set_value(data, value); }

@@ -6,31 +6,44 @@
  * the box of the macrocells that are not constant (a constant cell holds
  * no crossing of any value; the zero background around a scan is culled
  * by the BVH), rounded outwards to float, the same for every value; no
- * bounds (never hit) when the whole field is constant. Its `intersect` is
- * iso_volume_first_hit over (t_near, the field box's exit):
- * the macrocell walk skips every block that cannot reach the iso-value, so
+ * bounds (never hit) when the whole field is constant. Its `intersect`
+ * walks the macrocells as iso_volume_first_hit does (HITS below): the walk
+ * skips every block that cannot reach the iso-value, so
  * the empty-space skipping follows the value and changing the value needs
  * no rebuild of any accel (the BVH sees one box whatever the value). A
  * finer split (one primitive per block of macrocells) lets the BVH cull
  * blocks too, but each block's own walk then restarts its DDA and loses
  * the sign carried across block faces (iso_cell.h HALF-OPEN SEGMENTS) and
  * the boxes would have to follow the value to cull anything the macrocells
- * do not already skip; one primitive keeps both (see iso_kind.c).
+ * do not already skip, and a group of crossings (HITS) could straddle two
+ * primitives; one primitive keeps all three (see iso_kind.c).
  *
  * SPACE. The kind's object space is the volume's world space (sample (i,
  * j, k) at origin + (i, j, k) spacing); an instance's transform places it.
  *
- * HITS. `intersect` gives the first crossing whose t, rounded to float, is
- * in (t_near, t_far]. The root is found in double whatever t_far is (the
- * walk runs to the box exit and t_far is applied after), so a ray finds
- * the same t by itself, in a packet and under any traversal order, bit for
- * bit. Next-hit queries (t_near raised to the previous hit) find the next
- * crossing: crossings that round to the same float t as the previous one
- * are one hit (one primitive can report only one hit at a given t).
+ * HITS. `intersect` gives the first float t in (t_near, t_far] where the
+ * ray changes side of the surface. One walk through the macrocells and
+ * their cells (iso_cell.h; every root of a cell, the sign carried from
+ * cell to cell) runs from t_near (the cheap methods: from two cells
+ * before it, as their roots move with where a segment starts) to the box's exit
+ * whatever t_far is, and t_far only accepts what it found: a ray finds the
+ * same t alone, in a packet and under any traversal order, bit for bit.
+ * Crossings that round to one float t are one group: an odd number is one
+ * hit, an even number (a sheet thinner than the float t can resolve)
+ * cancels, so counting hits by next-hit queries (t_near raised to the
+ * previous hit) keeps parity: what caps and transparency need.
+ * Integer samples (uint8, int16, uint16) equal to an integer value would
+ * make f exactly 0 on whole faces (a ray touching the value without
+ * crossing it); such a value is traced as the next float above it, so
+ * samples equal to the value count as below it (iso_kind_value still gives
+ * the value set).
  * `describe`: the point org + t dir (computed in double, rounded once),
  * its error bound (iso_kind.c: the float t's rounding, the point's, and
- * the root's tolerance; for the cheap methods one cell), the unit gradient
- * as the normal, and the kind's colour.
+ * the root's tolerance; for the cheap methods one cell), the unit analytic
+ * gradient (towards higher values) as the geometric normal, the
+ * central-difference gradients of the cell's samples interpolated at the
+ * hit as the shading normal (continuous across cells: no facets), and the
+ * kind's colour.
  *
  * CLOSED. The surface bounds a solid (parity works) exactly when it does
  * not meet the volume's boundary: the field on the six faces is continuous
