@@ -109,7 +109,7 @@ run() {
             build=$(kv "$line" build_s)
             peak=$(sed -n 's/.*(peak \([0-9.]*\) MiB).*/\1/p' "$WORK/run.out" | head -n 1)
             count=$(kv "$line" spheres)
-            bytes=$(awk -v p="${peak:-0}" -v n="$count" 'BEGIN { printf "%.2f", n > 0 ? p * 1048576 / n : 0 }')
+            bytes=$(awk -v p="${peak:-0}" -v n="$count" 'BEGIN { printf "%.2f", (n > 0 ? p * 1048576 / n : 0) }')
             hits=$(sed -n 's/^checksum *hits \([0-9]*\) .*/\1/p' "$WORK/run.out")
             other=$(kv "$line" cpu_other)
         fi
@@ -183,8 +183,9 @@ END {
     printf "box diagonal in both programs, the same camera (hits checked equal); %d rounds of A B A B runs (tessera,\n", rounds
     printf "Embree p8, p16, single rays), %d timed frames each; Mrays/s of the median frame, medians over the rounds;\n", frames
     printf "ratio = tessera / Embree (> 1: tessera faster). Build: tessera'"'"'s tree (with putting the particles in its\n"
-    printf "order) against rtcCommitScene at high quality. Bytes a particle: tessera'"'"'s positions + tree (bench'"'"'s\n"
-    printf "bytes_per_point), Embree'"'"'s memory monitor peak / particles. %d of %d kept runs were noisy; the whole run took %d s.\n\n", noisy + 0, runs + 0, total_s
+    printf "order) against rtcCommitScene at high quality. Bytes a particle: tessera'"'"'s positions, attributes (the\n"
+    printf "lion'"'"'s red, green, blue: 12 bytes) and tree (bench'"'"'s bytes_per_point), Embree'"'"'s memory monitor peak /\n"
+    printf "particles (its copy of the points as float4 and its tree). %d of %d kept runs were noisy; the whole run took %d s.\n\n", noisy + 0, runs + 0, total_s
     printf "| points | threads | tessera Mrays/s | Embree p8 | Embree p16 | Embree single | tessera / best Embree | build s: tessera | Embree | bytes a particle: tessera | Embree |\n"
     printf "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     for (i = 1; i <= ns; i++) for (j = 1; j <= nt; j++) {
