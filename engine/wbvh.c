@@ -159,6 +159,10 @@ static bool build(wbvh *out, wbvh_kind kind, const bvh *binary, size_t block_byt
 {
     memset(out, 0, sizeof *out);
     out->kind = kind;
+    /* blocks (points) never outnumber primitives: the bound keeps every leaf reference exact */
+    if (binary->prim_count >= WBVH_MAX_LEAF_FIRST)
+        return tess_error_set(err, "wbvh: %u primitives in one geometry (fewer than %u fit its tree; split it)",
+                              binary->prim_count, WBVH_MAX_LEAF_FIRST);
     collapse c = {binary, out, block_bytes, fill, source, prim_ids};
     if (!run_collapse(&c, err)) {
         wbvh_finish(out);

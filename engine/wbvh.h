@@ -79,6 +79,10 @@ typedef enum wbvh_kind {
 
 /* Most points in one leaf of a WBVH_POINTS tree (one AVX-512 test). */
 #define WBVH_POINTS_LEAF_MAX 16
+/* Traversal packs a leaf's first block (or first point) and its count into
+ * one 32-bit reference (isa/traverse.c: 1 flag bit, 27 bits of first, 4 of
+ * count - 1): a tree holds fewer primitives than this (134 M). */
+#define WBVH_MAX_LEAF_FIRST (1u << 27)
 
 struct wbvh;
 

@@ -53,14 +53,16 @@
 #define PACKET_SINGLE_RAY_MAX_ANY 4
 #define LEAF_SINGLE_RAY_MAX_ANY (3 * RAY_LANES / 4)
 
-/* Stack references: inner node index, or leaf = LEAF bit | first << 5 | count, where
- * first and count are blocks, or for WBVH_POINTS points (count <= 16). */
+/* Stack references: inner node index, or leaf = LEAF bit | first << 4 | (count - 1),
+ * where first and count are blocks, or for WBVH_POINTS points (count 1..16). */
 #define REF_LEAF 0x80000000u
-#define REF_BLOCKS_BITS 5u
+#define REF_BLOCKS_BITS 4u
+_Static_assert(WBVH_MAX_LEAF_FIRST <= (REF_LEAF >> REF_BLOCKS_BITS), "a leaf's first block fits its reference");
+_Static_assert(BVH_LEAF_MAX <= (1u << REF_BLOCKS_BITS), "a leaf's count - 1 fits its reference");
 
 static inline uint32_t child_ref(const wbvh_node *n, int i)
 {
-    return n->leaf_blocks[i] ? REF_LEAF | (n->child[i] << REF_BLOCKS_BITS) | n->leaf_blocks[i] : n->child[i];
+    return n->leaf_blocks[i] ? REF_LEAF | (n->child[i] << REF_BLOCKS_BITS) | (n->leaf_blocks[i] - 1u) : n->child[i];
 }
 
 static inline float lane_float(uint32_t bits)
@@ -434,7 +436,7 @@ static bool instance_block1(const wbvh *w, const wbvh_prim_block *b, ray *r, con
 /* The one switch on the kind of leaf in the single-ray loop. */
 static bool leaf1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
 {
-    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
     if (w->kind == WBVH_POINTS)
         return points_leaf1(w, first, count, geom_id, r, d, h, any);
     bool found = false;
@@ -1012,7 +1014,7 @@ static uint64_t instance_packet(const wbvh_instance *inst, uint32_t id, ray_pack
 static void instances_leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
 {
     const wbvh *w = c->w;
-    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
     for (uint32_t k = first; k < first + count; k++) {
         const wbvh_prim_block *b = (const wbvh_prim_block *)w->blocks + k;
         for (int lane = 0; lane < WBVH_BLOCK; lane++) {
@@ -1046,7 +1048,7 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         return;
     }
     ensure_shear(c);
-    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = ref & ((1u << REF_BLOCKS_BITS) - 1u);
+    uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
     for (uint32_t k = first; k < first + count; k++) {
         const wbvh_tri_block *b = (const wbvh_tri_block *)w->blocks + k;
         for (int lane = 0; lane < WBVH_BLOCK; lane++) {
