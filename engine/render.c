@@ -662,14 +662,14 @@ static float ray_jitter(const ray *r)
 /* The scene's participating media in front of each ray's first surface
  * (scene.h, PARTICIPATING MEDIA): colour = medium + transmittance x colour,
  * nearest medium first. */
-static void composite_media(const render_view *v, const ray_packet *p, const render_first_surfaces *first,
-                            vec3 *colour)
+static void composite_media(const render_view *v, uint32_t count, uint64_t active, const ray *rays,
+                            const render_first_surfaces *first, vec3 *colour)
 {
     const scene *s = v->scene;
-    for (uint32_t i = 0; i < p->count; i++) {
-        if (!(p->active >> i & 1u))
+    for (uint32_t i = 0; i < count; i++) {
+        if (!(active >> i & 1u))
             continue;
-        ray r = packet_get_ray(p, i);
+        ray r = rays[i];
         float t_end = first->hits >> i & 1u ? first->t[i] : r.t_far;
         /* entries of the media along the ray, nearest first (few media: insertion order) */
         float enter[8], leave[8];
@@ -712,9 +712,12 @@ static void composite_media(const render_view *v, const ray_packet *p, const ren
     }
 }
 
-/* Per thread: the first surfaces of a packet when the scene has media and
- * the caller asked for none (render_first_surfaces is 3.6 KB). */
+/* Per thread, for the media of a packet: its first surfaces when the caller
+ * asked for none (render_first_surfaces is 3.6 KB), and its rays as they
+ * were before tracing (the layer walk of transparency and cutting planes
+ * reuses the packet). */
 static _Thread_local render_first_surfaces media_first;
+static _Thread_local ray media_rays[PACKET_MAX_RAYS];
 
 /* Trace and shade primary packet p into ps->colour, by the walk the frame
  * needs; `first` (may be NULL) receives each ray's first surface. Media
@@ -722,16 +725,23 @@ static _Thread_local render_first_surfaces media_first;
 static void trace_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
                          packet_shading *ps, layer_walk *lw, render_first_surfaces *first, render_counts *counts)
 {
-    if (v->scene->medium_count > 0 && !first)
-        first = &media_first;
+    const bool media = v->scene->medium_count > 0;
+    const uint32_t count = p->count;
+    const uint64_t active = p->active;
+    if (media) {
+        if (!first)
+            first = &media_first;
+        for (uint32_t i = 0; i < count; i++)
+            media_rays[i] = packet_get_ray(p, i);
+    }
     if (first)
         first->hits = 0;
     if (needs_layers(x))
         render_layers(v, x, p, shadows, ps, lw, first, counts);
     else
         shade_packet(v, x, p, shadows, ps, first, counts);
-    if (v->scene->medium_count > 0)
-        composite_media(v, p, first, ps->colour);
+    if (media)
+        composite_media(v, count, active, media_rays, first, ps->colour);
 }
 
 /* Per thread: two packets and the shading state, ~65 KB: too big for a

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 
 #include "engine/accel.h"
+#include "engine/frame_state.h"
 #include "engine/render.h"
 #include "engine/scene.h"
 
@@ -117,4 +118,35 @@ Test(media, placed_media_bound_the_scene)
     affine3 singular = {{0}};
     cr_assert_eq(scene_add_medium(s, &fog_ops, NULL, &singular, "bad"), -1);
     scene_destroy(s);
+}
+
+/* With transparent surfaces (the layer walk reuses the packet) the medium
+ * still goes in front of each ray's first surface: foggy = fog + T x clear. */
+Test(media, media_and_transparency_compose)
+{
+    scene *clear = fog_scene(false, 1.f), *foggy = fog_scene(true, 1.f);
+    vec3 px[2];
+    scene *scenes[2] = {clear, foggy};
+    for (int k = 0; k < 2; k++) {
+        tess_error err = {{0}};
+        accel *a = accel_build(scenes[k], 1, &err);
+        cr_assert(a, "%s", err.msg);
+        frame_state st;
+        frame_state_init(&st, renderer_by_name("raytracer"), false, 1, scenes[k]->instance_count);
+        frame_state_set_global_opacity(&st, 0.5f);
+        camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
+        render_view v = {.scene = scenes[k], .accel = a, .camera = camera_basis_make(&c, 33, 33),
+                         .shading = RENDER_SHADE_PHONG, .state = &st};
+        float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
+        render_image(&v, 2, rgb, NULL);
+        px[k] = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
+        free(rgb);
+        frame_state_finish(&st);
+        accel_destroy(a);
+    }
+    float t = expf(-SIGMA * 2.f);
+    cr_assert_float_eq(px[1].z, 0.8f * (1.f - t) + px[0].z * t, 1e-5f, "%g vs %g", (double)px[1].z,
+                       (double)(0.8f * (1.f - t) + px[0].z * t));
+    scene_destroy(clear);
+    scene_destroy(foggy);
 }
