@@ -449,27 +449,46 @@ static const char *base_name(const char *path)
     return slash ? slash + 1 : path;
 }
 
+/* What every entry placed from a file reads (its fields already checked):
+ * `key` ("file", or "files" for a pattern) resolved against the scene's
+ * directory into resolved, "optional", and the placement ("transform" or
+ * "matrix") into xform. */
+static bool entry_path(loader *L, json_object *v, const char *key, char resolved[MESH_PATH_BYTES], float xform[12],
+                       bool *optional)
+{
+    const char *file = NULL;
+    *optional = false;
+    return jr_opt_string(&L->ctx, v, key, &file) && jr_opt_bool(&L->ctx, v, "optional", optional) &&
+           mesh_xform(&L->ctx, v, xform) && resolve_path(L, file, resolved, MESH_PATH_BYTES);
+}
+
+/* An optional entry whose file does not exist: said with a warning; the
+ * caller skips the entry. */
+static bool skip_missing(const loader *L, const char *resolved, bool optional)
+{
+    struct stat st;
+    if (!optional || stat(resolved, &st) == 0 || (errno != ENOENT && errno != ENOTDIR))
+        return false;
+    log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", L->ctx.path, L->ctx.field, resolved);
+    return true;
+}
+
 static bool load_mesh(loader *L, json_object *v)
 {
     static const char *const fields[] = {"file", "material", "transform", "matrix", "optional", NULL};
     jr_ctx *c = &L->ctx;
-    const char *file = NULL, *material_name = NULL;
-    bool optional = false;
+    const char *material_name = NULL;
+    bool optional;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
     if (!jr_expect_object(c, v) || !jr_check_fields(c, v, fields) || !jr_require_member(c, v, "file") ||
-        !jr_opt_string(c, v, "file", &file) || !jr_opt_bool(c, v, "optional", &optional) ||
-        !jr_opt_string(c, v, "material", &material_name) || !mesh_xform(c, v, xform) ||
-        !resolve_path(L, file, resolved, sizeof resolved))
+        !jr_opt_string(c, v, "material", &material_name) || !entry_path(L, v, "file", resolved, xform, &optional))
         return false;
     int named = material_name ? find_material(L, material_name) : -1;
     if (material_name && named < 0)
         return unknown_material(c, material_name);
-    struct stat st;
-    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
-        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+    if (skip_missing(L, resolved, optional))
         return true;
-    }
     tess_error why = {{0}};
     mesh *m = mesh_load(resolved, &why);
     if (!m)
@@ -534,19 +553,14 @@ static bool load_assembly(loader *L, json_object *v)
 {
     static const char *const fields[] = {"file", "transform", "matrix", "optional", "colours", NULL};
     jr_ctx *c = &L->ctx;
-    const char *file = NULL;
-    bool optional = false;
+    bool optional;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
     if (!jr_expect_object(c, v) || !jr_check_fields(c, v, fields) || !jr_require_member(c, v, "file") ||
-        !jr_opt_string(c, v, "file", &file) || !jr_opt_bool(c, v, "optional", &optional) ||
-        !mesh_xform(c, v, xform) || !resolve_path(L, file, resolved, sizeof resolved))
+        !entry_path(L, v, "file", resolved, xform, &optional))
         return false;
-    struct stat st;
-    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
-        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+    if (skip_missing(L, resolved, optional))
         return true;
-    }
     affine3 placement;
     memcpy(placement.m, xform, sizeof placement.m);
     tess_error why = {{0}};
@@ -576,22 +590,19 @@ static bool load_sphere(loader *L, json_object *v)
 static bool load_particles(loader *L, json_object *v)
 {
     jr_ctx *c = &L->ctx;
-    const char *file = NULL, *files = NULL;
-    bool optional = false;
+    bool optional;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
     uint32_t material_id = 0;
     json_object *ignored;
-    bool has_file = jr_get_member(v, "file", &ignored), has_files = jr_get_member(v, "files", &ignored);
+    bool has_file = jr_get_member(v, "file", &ignored), files = jr_get_member(v, "files", &ignored);
     if (!jr_expect_object(c, v) || !jr_check_fields(c, v, particle_json_fields))
         return false;
-    if (has_file == has_files)
+    if (has_file == files)
         return jr_field_fail(c, "give either 'file' or 'files' (a time series)");
-    if (!jr_opt_string(c, v, "file", &file) || !jr_opt_string(c, v, "files", &files) ||
-        !jr_opt_bool(c, v, "optional", &optional) || !material_ref(L, v, &material_id) ||
-        !mesh_xform(c, v, xform) || !resolve_path(L, file ? file : files, resolved, sizeof resolved))
+    const char *key = files ? "files" : "file";
+    if (!material_ref(L, v, &material_id) || !entry_path(L, v, key, resolved, xform, &optional))
         return false;
-    const char *key = file ? "file" : "files";
     particle_paths series = {0};
     if (files) {
         tess_error why = {{0}};
@@ -603,11 +614,8 @@ static bool load_particles(loader *L, json_object *v)
             return jr_member_fail(c, "files", why.msg);
         }
     }
-    struct stat st;
-    if (file && optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
-        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+    if (!files && skip_missing(L, resolved, optional))
         return true;
-    }
     tess_error why = {{0}};
     particle_set *set = particles_load(files ? series.paths[0] : resolved, &why);
     if (!set) {
@@ -640,19 +648,14 @@ static int material_by_name(void *ctx, const char *name) { return find_material(
 static bool load_volume(loader *L, json_object *v)
 {
     jr_ctx *c = &L->ctx;
-    const char *file = NULL;
-    bool optional = false;
+    bool optional;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
     if (!jr_expect_object(c, v) || !jr_check_fields(c, v, volume_json_fields) || !jr_require_member(c, v, "file") ||
-        !jr_opt_string(c, v, "file", &file) || !jr_opt_bool(c, v, "optional", &optional) ||
-        !mesh_xform(c, v, xform) || !resolve_path(L, file, resolved, sizeof resolved))
+        !entry_path(L, v, "file", resolved, xform, &optional))
         return false;
-    struct stat st;
-    if (optional && stat(resolved, &st) != 0 && (errno == ENOENT || errno == ENOTDIR)) {
-        log_warn("%s: field '%s.file': %s does not exist; skipped (optional)", c->path, c->field, resolved);
+    if (skip_missing(L, resolved, optional))
         return true;
-    }
     tess_error why = {{0}};
     volume *vol = volume_load(resolved, &why);
     if (!vol)
