@@ -332,6 +332,27 @@ static void write_step(const char *dir, int step, float x)
     fclose(f);
 }
 
+/* A scene of `steps` such files (step i at x = 10 i) as one series, in a
+ * fresh temp directory (into dir), and its accel built with `threads`. */
+static scene *series_scene(char *dir, size_t dir_size, const char *name, int steps, int threads, accel **a)
+{
+    char scene_path[512];
+    support_make_tmp_dir(dir, dir_size, name);
+    for (int i = 0; i < steps; i++)
+        write_step(dir, i, 10.f * (float)i);
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    FILE *f = fopen(scene_path, "w");
+    cr_assert(f);
+    fprintf(f, "{\"particles\": [{\"files\": \"step_*.ply\", \"radius\": 0.5}]}\n");
+    fclose(f);
+    tess_error err = {{0}};
+    scene *s = scene_load(scene_path, &err);
+    cr_assert(s, "%s", err.msg);
+    *a = accel_build(s, threads, &err);
+    cr_assert(*a, "%s", err.msg);
+    return s;
+}
+
 /* Where a ray down the x axis from x = -50 meets the series now. */
 static float first_x(const accel *a)
 {
@@ -347,20 +368,10 @@ static float first_x(const accel *a)
  * steps by name. */
 Test(particles, time_steps_swap_at_the_sync_and_load_ahead, .timeout = 60)
 {
-    char dir[256], scene_path[512];
-    support_make_tmp_dir(dir, sizeof dir, "steps");
-    for (int i = 0; i < 4; i++)
-        write_step(dir, i, 10.f * (float)i);
-    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
-    FILE *f = fopen(scene_path, "w");
-    cr_assert(f);
-    fprintf(f, "{\"particles\": [{\"files\": \"step_*.ply\", \"radius\": 0.5}]}\n");
-    fclose(f);
+    char dir[256];
+    accel *a;
+    scene *s = series_scene(dir, sizeof dir, "steps", 4, 2, &a);
     tess_error err = {{0}};
-    scene *s = scene_load(scene_path, &err);
-    cr_assert(s, "%s", err.msg);
-    accel *a = accel_build(s, 2, &err);
-    cr_assert(a, "%s", err.msg);
     particle_kind *k = kind_of(s);
     cr_assert_eq(particle_kind_step_count(k), 4u);
     cr_assert_float_eq(first_x(a), 0.f, 1e-4f);
@@ -480,20 +491,10 @@ static void *ask_ahead(void *arg)
  * shown as asked. */
 Test(particles, a_step_asked_for_is_not_starved_by_prefetches, .timeout = 120)
 {
-    char dir[256], scene_path[512];
-    support_make_tmp_dir(dir, sizeof dir, "steps-storm");
-    for (int i = 0; i < 5; i++)
-        write_step(dir, i, 10.f * (float)i);
-    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
-    FILE *f = fopen(scene_path, "w");
-    cr_assert(f);
-    fprintf(f, "{\"particles\": [{\"files\": \"step_*.ply\", \"radius\": 0.5}]}\n");
-    fclose(f);
+    char dir[256];
+    accel *a;
+    scene *s = series_scene(dir, sizeof dir, "steps-storm", 5, 1, &a);
     tess_error err = {{0}};
-    scene *s = scene_load(scene_path, &err);
-    cr_assert(s, "%s", err.msg);
-    accel *a = accel_build(s, 1, &err);
-    cr_assert(a, "%s", err.msg);
     prefetch_storm ps = {.k = kind_of(s)};
     atomic_init(&ps.stop, false);
     pthread_t t;
