@@ -449,13 +449,21 @@ bool particle_kind_set_step(particle_kind *k, uint32_t step, tess_error *err)
 
 static uint32_t kind_count(const void *data) { return ((const particle_kind *)data)->set->count; }
 
+/* The box of point i of a points view (its centre +- its radius). */
+static aabb point_box(const geometry_points *p, uint32_t i)
+{
+    float r = p->radius ? p->radius[i] : p->radius_all;
+    vec3 c = v3(p->x[i], p->y[i], p->z[i]);
+    return (aabb){v3_sub(c, v3(r, r, r)), v3_add(c, v3(r, r, r))};
+}
+
+static void kind_points(const void *data, geometry_points *out);
+
 static bool kind_prim_bounds(const void *data, uint32_t prim, aabb *out)
 {
-    const particle_kind *k = data;
-    const particle_set *s = k->set;
-    float r = radius_of(k, prim);
-    vec3 c = v3(s->x[prim], s->y[prim], s->z[prim]);
-    *out = (aabb){v3_sub(c, v3(r, r, r)), v3_add(c, v3(r, r, r))};
+    geometry_points p;
+    kind_points(data, &p);
+    *out = point_box(&p, prim);
     return true;
 }
 
@@ -543,12 +551,8 @@ static void particle_boxes(void *ctx, size_t begin, size_t end, int worker)
 {
     (void)worker;
     box_job *job = ctx;
-    const geometry_points *p = &job->points;
-    for (size_t i = begin; i < end; i++) {
-        float r = p->radius ? p->radius[i] : p->radius_all;
-        vec3 c = v3(p->x[i], p->y[i], p->z[i]);
-        job->boxes[i] = (aabb){v3_sub(c, v3(r, r, r)), v3_add(c, v3(r, r, r))};
-    }
+    for (size_t i = begin; i < end; i++)
+        job->boxes[i] = point_box(&job->points, (uint32_t)i);
 }
 
 /* The binary SAH tree over the boxes of `set`'s particles, the set put in
