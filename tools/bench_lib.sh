@@ -45,3 +45,27 @@ build_peer() {
     cp "$2/Makefile" "$2/embree_bench.c" "$1/"
     env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s -C "$1" embree_bench > "$3" 2>&1
 }
+
+# require_whole NAME=VALUE...: every VALUE a whole number, else a message and exit 2
+require_whole() {
+    for rw in "$@"; do
+        case ${rw#*=} in
+        '' | *[!0-9]*)
+            echo "$BENCH_NAME: ${rw%%=*} must be a whole number, got '${rw#*=}'" >&2
+            exit 2
+            ;;
+        esac
+    done
+}
+
+# require_tessera_and_peer PEER_SRC: ./tessera built and the Embree harness's source there, else exit 1
+require_tessera_and_peer() {
+    if [ ! -x ./tessera ]; then
+        echo "$BENCH_NAME: ./tessera not found; build it first (make tessera)" >&2
+        exit 1
+    fi
+    if [ ! -f "$1/embree_bench.c" ]; then
+        echo "$BENCH_NAME: the Embree peer harness is missing ($1/embree_bench.c)" >&2
+        exit 1
+    fi
+}

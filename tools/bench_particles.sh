@@ -51,23 +51,9 @@ WAIT_BUDGET_S=${BENCH_MAX_WAIT:-300}
 THREADS="1 2"
 NOISE_LIMIT=0.05
 
-for v in "BENCH_PARTICLES_ROUNDS=$ROUNDS" "BENCH_PARTICLES_FRAMES=$FRAMES" \
-    "BENCH_PARTICLES_ATTEMPTS=$MAX_ATTEMPTS" "BENCH_MAX_WAIT=$WAIT_BUDGET_S"; do
-    case ${v#*=} in
-    '' | *[!0-9]*)
-        echo "bench_particles: ${v%%=*} must be a whole number, got '${v#*=}'" >&2
-        exit 2
-        ;;
-    esac
-done
-if [ ! -x ./tessera ]; then
-    echo "bench_particles: ./tessera not found; build it first (make tessera)" >&2
-    exit 1
-fi
-if [ ! -f "$PEER_SRC/embree_bench.c" ]; then
-    echo "bench_particles: the Embree peer harness is missing ($PEER_SRC/embree_bench.c)" >&2
-    exit 1
-fi
+require_whole "BENCH_PARTICLES_ROUNDS=$ROUNDS" "BENCH_PARTICLES_FRAMES=$FRAMES" \
+    "BENCH_PARTICLES_ATTEMPTS=$MAX_ATTEMPTS" "BENCH_MAX_WAIT=$WAIT_BUDGET_S"
+require_tessera_and_peer "$PEER_SRC"
 
 WORK=$(mktemp -d "$TMP/tessera-bench-particles.XXXXXX")
 LOG=$WORK/runs.log
