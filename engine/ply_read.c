@@ -681,16 +681,3 @@ void ply_close(ply_file *f)
         fclose(f->file);
     f->file = NULL;
 }
-
-bool ply_is_point_set(const char *path)
-{
-    ply_file f;
-    tess_error ignored = {{0}};
-    bool points = false;
-    if (ply_open(&f, path, &ignored, NULL, NULL)) {
-        const ply_element *v = ply_find_element(&f, PLY_ELEMENT_VERTEX), *faces = ply_find_element(&f, PLY_ELEMENT_FACE);
-        points = v && v->count > 0 && (!faces || faces->count == 0);
-    }
-    ply_close(&f);
-    return points;
-}

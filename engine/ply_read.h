@@ -138,11 +138,6 @@ typedef bool (*ply_property_hook)(ply_file *f, const ply_element *e, ply_propert
 bool ply_open(ply_file *f, const char *path, tess_error *err, ply_property_hook hook, void *ctx);
 void ply_close(ply_file *f);
 
-/* Whether the PLY at `path` is a point set: its header declares vertices
- * and no faces (only the header is read). False also when the header
- * cannot be read (the loader that reads the file says why). */
-bool ply_is_point_set(const char *path);
-
 /* The element of `kind` (vertex or face), or NULL. */
 ply_element *ply_find_element(ply_file *f, enum ply_element_kind kind);
 

@@ -12,7 +12,6 @@
 #include "parallel.h"
 #include "part_tree.h"
 #include "particles/particle_kind.h"
-#include "ply_read.h"
 
 /* First capacity of a growing array; it doubles from there. Small because most
  * scenes hold a handful of materials, lights and meshes. */
@@ -506,12 +505,19 @@ static const char *path_basename(const char *path)
     return slash ? slash + 1 : path;
 }
 
+static scene *scene_load_particle_file(const char *path, tess_error *err);
+
 /* A scene of one mesh file in file coordinates, the default material and light. */
 static scene *scene_load_mesh_file(const char *path, tess_error *err)
 {
     mesh *m = mesh_load(path, err);
     if (!m)
         return NULL;
+    if (m->triangle_count == 0 && m->vertex_count > 0 && has_extension(path, ".ply")) {
+        /* vertices only: a point set, drawn as particles (as the Embree peer does) */
+        mesh_destroy(m);
+        return scene_load_particle_file(path, err);
+    }
     if (m->triangle_count == 0) {
         mesh_destroy(m);
         tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
@@ -599,9 +605,7 @@ scene *scene_load(const char *path, tess_error *err)
         return scene_load_json(path, err);
     if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
         return scene_load_assembly_file(path, err);
-    /* a PLY of vertices only is a point set, drawn as particles (as the Embree peer does) */
-    if (has_extension(path, ".dump") || has_extension(path, ".lammpstrj") ||
-        (has_extension(path, ".ply") && ply_is_point_set(path)))
+    if (has_extension(path, ".dump") || has_extension(path, ".lammpstrj"))
         return scene_load_particle_file(path, err);
     return scene_load_mesh_file(path, err);
 }
