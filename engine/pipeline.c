@@ -440,6 +440,16 @@ bool pipeline_config_validate(const pipeline_config *cfg, tess_error *err)
     return true;
 }
 
+/* The part opacities the scene starts with (scene_instance.opacity); false
+ * on no memory. */
+static bool start_opacities(frame_state *st, const scene *s)
+{
+    for (uint32_t i = 0; s && i < s->instance_count; i++)
+        if (s->instances[i].opacity != 1.f && !frame_state_set_opacity(st, i, 1, s->instances[i].opacity))
+            return false;
+    return true;
+}
+
 pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
 {
     if (!pipeline_config_validate(cfg, err))
@@ -474,6 +484,15 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
     /* where inspection starts: as records, so the planes are normalised as input's are (validated above) */
     if (cfg->opacity != 1.f)
         frame_state_set_global_opacity(&p->state, cfg->opacity);
+    if (!start_opacities(&p->state, cfg->scene)) {
+        frame_state_finish(&p->state);
+        free(p);
+        free(queue);
+        free(oneshots);
+        free(scratch);
+        tess_error_set(err, "pipeline: out of memory");
+        return NULL;
+    }
     for (int i = 0; i < CLIP_MAX_PLANES; i++)
         if (!plane_unused(&cfg->clip[i])) {
             txn_record r = plane_record(i, &cfg->clip[i]);

@@ -202,7 +202,7 @@ int scene_add_instance(scene *s, uint32_t geometry, const affine3 *to_world, uin
     if (geometry >= s->geometry_count)
         return -1;
     scene_instance inst = {.geometry = geometry, .to_world = affine3_identity(), .to_object = affine3_identity(),
-                           .identity = true, .part = part, .material = SCENE_NO_MATERIAL};
+                           .identity = true, .part = part, .material = SCENE_NO_MATERIAL, .opacity = 1.f};
     /* instances with parts come in preorder of their parts (scene.h PARTS) */
     if (part != SCENE_NO_PART && s->parted_count > 0 && s->instances[s->parted[s->parted_count - 1]].part > part)
         return -1;

@@ -128,6 +128,8 @@ typedef struct scene_instance {
     uint32_t part;       /* the part it belongs to (scene.parts), or SCENE_NO_PART */
     uint32_t material;   /* a material replacing the geometry's own everywhere on this instance
                             (a colour given to a part by the scene file), or SCENE_NO_MATERIAL */
+    float opacity;       /* where a view starts: the part opacity the pipeline gives it (frame_state.h
+                            OPACITY), in [0, 1]; 1 (opaque) unless the scene file says otherwise */
 } scene_instance;
 
 typedef struct scene {

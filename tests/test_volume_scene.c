@@ -135,6 +135,7 @@ Test(volume_scene, mistakes_name_the_field)
         {"{\"file\": \"nothing.txt\", \"iso\": [{\"value\": 1}]}", "field 'volumes[0].file': "},
         {"{\"file\": \"ball.txt\", \"iso\": [{\"value\": 1, \"material\": \"gold\"}]}", "field 'volumes[0].iso[0].material': no material of that name"},
         {"{\"file\": \"ball.txt\", \"levels\": 3}", "field 'volumes[0].levels': unknown field"},
+        {"{\"file\": \"ball.txt\", \"iso\": [{\"value\": 1, \"opacity\": 1.5}]}", "field 'volumes[0].iso[0].opacity': "},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};
@@ -168,5 +169,39 @@ Test(volume_scene, a_transfer_record_changes_the_volume_rendering)
     frame_state_finish(&st);
     accel_destroy(a);
     scene_destroy(s);
+    support_remove_tmp_dir(dir);
+}
+
+/* An iso-surface's "opacity" is where the view starts: through a red
+ * surface at r = 10 of opacity 0.4 the green one at r = 6.8 shows; opaque,
+ * it does not (tessera render, the pipeline that starts from the scene). */
+Test(volume_scene, an_iso_surface_starts_with_its_opacity)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "volscene-opacity");
+    write_ball(dir);
+    float green[2];
+    for (int translucent = 0; translucent < 2; translucent++) {
+        char text[2048];
+        snprintf(text, sizeof text,
+                 "{\"camera\": {\"eye\": [0, 0, 60], \"look_at\": [0, 0, 0], \"fov_deg\": 30},"
+                 " \"lights\": [{\"type\": \"directional\", \"direction\": [0, 0, 1]}],"
+                 " \"volumes\": [{\"file\": \"ball.txt\", \"iso\": [{\"value\": 100, \"color\": [1, 0, 0]%s},"
+                 " {\"value\": 180, \"color\": [0, 1, 0]}]}]}",
+                 translucent ? ", \"opacity\": 0.4" : "");
+        support_write_file(dir, "scene.json", text);
+        char out[8192];
+        int code = support_tessera(dir, 120, out, sizeof out,
+                                   "render --scene %s/scene.json --size 65x65 --threads 2 --out %s/iso.exr");
+        cr_assert_eq(code, 0, "%s", out);
+        int w, h;
+        float *rgb = support_read_image(dir, "iso.exr", &w, &h);
+        cr_assert_eq(w, 65);
+        green[translucent] = rgb[3 * (32 * 65 + 32) + 1];
+        cr_assert_gt(rgb[3 * (32 * 65 + 32)], translucent ? 0.1f : 0.5f, "the red surface is in front");
+        free(rgb);
+    }
+    cr_expect_lt(green[0], 0.01f, "opaque: the inner surface is hidden (%g)", (double)green[0]);
+    cr_expect_gt(green[1], 0.2f, "opacity 0.4: the inner surface shows through (%g)", (double)green[1]);
     support_remove_tmp_dir(dir);
 }

@@ -15,20 +15,21 @@
 
 const char *const volume_json_fields[] = {"file", "transform", "matrix", "optional", "macrocell", "iso", "dvr", NULL};
 
-/* One "iso" element: {"value": V, "color": [r, g, b], "material": NAME, "method": M}. */
+/* One "iso" element: {"value": V, "color": [r, g, b], "opacity": A, "material": NAME, "method": M}. */
 static bool add_iso(jr_ctx *c, json_object *e, iso_volume *shared, const affine3 *placement, scene *s,
                     uint32_t default_material, volume_json_material_fn find_material, void *material_ctx)
 {
-    static const char *const fields[] = {"value", "color", "material", "method", NULL};
+    static const char *const fields[] = {"value", "color", "opacity", "material", "method", NULL};
     static const char *const methods[] = {"exact", "linear", "regula-falsi", NULL};
     const iso_method by_index[] = {ISO_METHOD_EXACT, ISO_METHOD_LINEAR, ISO_METHOD_REGULA_FALSI};
     float value = 0.f;
     vec3 colour = v3(0.8f, 0.8f, 0.8f);
+    float opacity = 1.f;
     const char *material_name = NULL;
     int method = 0;
     if (!jr_expect_object(c, e) || !jr_check_fields(c, e, fields) || !jr_require_member(c, e, "value") ||
         !jr_opt_number(c, e, "value", jr_range_float, &value) || !jr_opt_vec3(c, e, "color", jr_range_unit, &colour) ||
-        !jr_opt_string(c, e, "material", &material_name) || !jr_opt_choice(c, e, "method", methods, &method))
+        !jr_opt_number(c, e, "opacity", jr_range_unit, &opacity) || !jr_opt_string(c, e, "material", &material_name) || !jr_opt_choice(c, e, "method", methods, &method))
         return false;
     uint32_t material_id = default_material;
     if (material_name) {
@@ -44,8 +45,10 @@ static bool add_iso(jr_ctx *c, json_object *e, iso_volume *shared, const affine3
     char name[SCENE_NAME_BYTES];
     snprintf(name, sizeof name, "iso %g", (double)value);
     int g = scene_add_geometry(s, &iso_kind_ops, k, name);
-    if (g < 0 || scene_add_instance(s, (uint32_t)g, placement, SCENE_NO_PART) < 0)
+    int inst = g < 0 ? -1 : scene_add_instance(s, (uint32_t)g, placement, SCENE_NO_PART);
+    if (inst < 0)
         return jr_field_fail(c, "out of memory adding the iso-surface");
+    s->instances[inst].opacity = opacity;
     return true;
 }
 
