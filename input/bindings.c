@@ -70,6 +70,7 @@ static const char *const action_names[INPUT_ACTION_COUNT + 1] = {
     [INPUT_ACTION_VALUE_DOWN] = "value-down",
     [INPUT_ACTION_VALUE_UP] = "value-up",
     [INPUT_ACTION_COLORMAP_NEXT] = "colormap-next",
+    [INPUT_ACTION_VALUE_DRAG] = "value-drag",
     [INPUT_ACTION_COUNT] = NULL,
 };
 
@@ -106,7 +107,8 @@ const char *input_gesture_name(input_gesture g)
 
 bool input_action_is_drag(input_action a)
 {
-    return a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY || a == INPUT_ACTION_PLANE_PUSH;
+    return a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY || a == INPUT_ACTION_PLANE_PUSH ||
+           a == INPUT_ACTION_VALUE_DRAG;
 }
 
 /* Flight acts for as long as its key or button is held. */
@@ -167,6 +169,7 @@ static const code_binding default_codes[] = {
     {KEY_M, INPUT_ACTION_COLORMAP_NEXT},
     {BTN_LEFT, INPUT_ACTION_ORBIT},
     {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
+    {BTN_SIDE, INPUT_ACTION_VALUE_DRAG},
 };
 
 static const unsigned char default_gestures[INPUT_GESTURE_COUNT] = {
@@ -288,7 +291,7 @@ static bool check_gesture_action(jr_ctx *c, input_gesture g, input_action a)
         if (input_action_is_drag(a))
             return true;
         return jr_field_fail(c, "'%s' is a command action, but %s is a moving gesture, which takes only "
-                                "drag actions (orbit, pan, dolly, plane-push) or none", action_names[a],
+                                "drag actions (orbit, pan, dolly, plane-push, value-drag) or none", action_names[a],
                              gesture_names[g]);
     }
     if (input_action_is_drag(a))

@@ -79,6 +79,7 @@ typedef enum input_action {
     INPUT_ACTION_VALUE_DOWN,        /* every iso-value one step (INPUT_VALUE_STEPS of its range) down */
     INPUT_ACTION_VALUE_UP,          /* ... up */
     INPUT_ACTION_COLORMAP_NEXT,     /* the next built-in colour map / transfer function */
+    INPUT_ACTION_VALUE_DRAG,        /* drag: every iso-value follows the motion (up: higher) */
     INPUT_ACTION_COUNT
 } input_action;
 

@@ -108,6 +108,7 @@ struct input_controller {
     double time_rate;          /* steps per second */
     uint64_t next_step_us;     /* playing: when the next step is due */
     float values[INPUT_VALUE_MAX];              /* as the records said, per cfg.values entry */
+    bool values_dirty;                          /* values moved by value-drag since the last records */
     char maps[INPUT_MAP_MAX][TXN_NAME_BYTES];   /* as the records said, per cfg.maps entry */
     char transfer[TXN_NAME_BYTES];              /* as the last transfer record said (cfg.media) */
 
@@ -210,9 +211,40 @@ static void emit_plane(input_controller *c, int index)
     emit(c, &t);
 }
 
-/* End of an input frame or tick: at most one camera, one cursor and one plane. */
+/* Every value moved by `fraction` of its range, clamped (c->values; no record). */
+static void move_values(input_controller *c, double fraction)
+{
+    for (int i = 0; i < c->cfg.value_count; i++) {
+        const input_value_target *tg = &c->cfg.values[i];
+        double v = (double)c->values[i] + fraction * ((double)tg->hi - tg->lo);
+        c->values[i] = (float)(v < tg->lo ? tg->lo : v > tg->hi ? tg->hi : v);
+    }
+}
+
+/* One "value" record per target with c->values, and the status line. */
+static void emit_values(input_controller *c)
+{
+    char text[INPUT_TEXT_BYTES] = "";
+    size_t used = 0;
+    for (int i = 0; i < c->cfg.value_count; i++) {
+        const input_value_target *tg = &c->cfg.values[i];
+        input_txn t = txn_value(tg->first, tg->count, c->values[i]);
+        emit(c, &t);
+        int n = snprintf(text + used, sizeof text - used, "%siso-value %.4g", i ? "; " : "", (double)c->values[i]);
+        if (n > 0 && (size_t)n < sizeof text - used)
+            used += (size_t)n;
+    }
+    emit_status(c, "%s", text);
+}
+
+/* End of an input frame or tick: at most one camera, one cursor, one plane
+ * and one value record per value target. */
 static void flush(input_controller *c)
 {
+    if (c->values_dirty) {
+        emit_values(c);
+        c->values_dirty = false;
+    }
     if (c->plane_dirty) {
         if (c->plane_sel >= 0)
             emit_plane(c, c->plane_sel);
@@ -305,6 +337,12 @@ static void drag(input_controller *c, input_action action, vec3 point, double dx
     }
     case INPUT_ACTION_DOLLY:
         set_camera(c, navigate_dolly(&c->cam, point, exp(-dy * DOLLY_PER_UNIT)));
+        break;
+    case INPUT_ACTION_VALUE_DRAG: /* up (dy > 0: plane y points up) raises; the picture's height (2 units) is the range */
+        if (c->cfg.value_count > 0 && dy != 0.0) {
+            move_values(c, dy * INPUT_VALUE_DRAG_PER_UNIT);
+            c->values_dirty = true;
+        }
         break;
     case INPUT_ACTION_PLANE_PUSH: {
         if (c->plane_sel < 0 || dy == 0.0)
@@ -644,20 +682,9 @@ static void value_command(input_controller *c, int dir)
         emit_status(c, "no iso-values to change in this scene");
         return;
     }
-    char text[INPUT_TEXT_BYTES] = "";
-    size_t used = 0;
-    for (int i = 0; i < c->cfg.value_count; i++) {
-        const input_value_target *tg = &c->cfg.values[i];
-        float step = (float)((tg->hi - tg->lo) / INPUT_VALUE_STEPS), v = c->values[i] + (float)dir * step;
-        v = v < tg->lo ? tg->lo : v > tg->hi ? tg->hi : v;
-        c->values[i] = v;
-        input_txn t = txn_value(tg->first, tg->count, v);
-        emit(c, &t);
-        int n = snprintf(text + used, sizeof text - used, "%siso-value %.4g", i ? "; " : "", (double)v);
-        if (n > 0 && (size_t)n < sizeof text - used)
-            used += (size_t)n;
-    }
-    emit_status(c, "%s", text);
+    move_values(c, dir / INPUT_VALUE_STEPS);
+    c->values_dirty = false; /* a drag's move goes out with these records */
+    emit_values(c);
 }
 
 /* colormap-next (controller.h, VALUES AND MAPS). */

@@ -89,7 +89,9 @@
  *  - VALUES AND MAPS. value-down [T] and value-up [Y] step the scalar
  *    parameter (an iso-value) of every geometry that has one (config
  *    `values`) by INPUT_VALUE_STEPS of its range, clamped ("value FIRST
- *    COUNT V"); colormap-next [M] gives every geometry coloured through a
+ *    COUNT V"); value-drag [side button] is a drag: up raises every value,
+ *    INPUT_VALUE_DRAG_PER_UNIT of its range per plane unit, the records
+ *    coalesced to one per target an input frame; colormap-next [M] gives every geometry coloured through a
  *    map (config `maps`) the next built-in map or transfer function
  *    (colormap_names order, wrapping; "colormap FIRST COUNT NAME") and
  *    volumes rendered directly (config `media`) the next built-in transfer
@@ -177,6 +179,9 @@ typedef struct input_crop_target {
  * instances, the value it starts with and the range to step over. */
 #define INPUT_VALUE_MAX 8
 #define INPUT_VALUE_STEPS 50.0 /* steps over a value's range */
+/* value-drag: of a value's range per plane unit dragged; a drag across the
+ * picture's height (2 units) sweeps the whole range. */
+#define INPUT_VALUE_DRAG_PER_UNIT 0.5
 typedef struct input_value_target {
     uint32_t first, count;
     float value, lo, hi;

@@ -131,6 +131,7 @@ Test(bindings, defaults_are_as_documented)
         {KEY_M, INPUT_ACTION_COLORMAP_NEXT},
         {BTN_LEFT, INPUT_ACTION_ORBIT},
         {BTN_RIGHT, INPUT_ACTION_PAN},        {BTN_MIDDLE, INPUT_ACTION_PLANE_PUSH},
+        {BTN_SIDE, INPUT_ACTION_VALUE_DRAG},
     };
     size_t n = sizeof want / sizeof want[0];
     for (size_t i = 0; i < n; i++)
@@ -172,7 +173,7 @@ Test(bindings, every_action_name_round_trips)
         for (int other = 0; other < a; other++)
             cr_expect_str_neq(name, input_action_name((input_action)other), "two actions named %s", name);
         bool drag = a == INPUT_ACTION_ORBIT || a == INPUT_ACTION_PAN || a == INPUT_ACTION_DOLLY ||
-                    a == INPUT_ACTION_PLANE_PUSH;
+                    a == INPUT_ACTION_PLANE_PUSH || a == INPUT_ACTION_VALUE_DRAG;
         cr_expect_eq(input_action_is_drag((input_action)a), drag, "%s", name);
 
         /* a drag action on a button and the wheel; any other on a key and, unless
@@ -369,7 +370,7 @@ Test(bindings, bad_actions)
                            "opacity-down, opacity-up, part-opacity-down, part-opacity-up, plane-place, plane-next, "
                            "plane-flip, plane-remove, plane-remove-all, plane-push, ambient-occlusion, crop-down, crop-up, "
                            "crop-off, time-play, time-back, time-forward, time-slower, time-faster, value-down, value-up, "
-                           "colormap-next)");
+                           "colormap-next, value-drag)");
     expect_members_failure(", \"keys\": {\"KEY_W\": 3}", "keys.KEY_W", "expected an action name (a string), got number");
     expect_members_failure(", \"keys\": {\"KEY_W\": null}", "keys.KEY_W", "expected an action name (a string), got null");
     expect_members_failure(", \"gestures\": {\"tap\": [\"pick\"]}", "gestures.tap",
@@ -400,7 +401,7 @@ Test(bindings, moving_gestures_take_only_drag_actions)
 {
     expect_members_failure(", \"gestures\": {\"wheel\": \"pick\"}", "gestures.wheel",
                            "'pick' is a command action, but wheel is a moving gesture, which takes only drag actions "
-                           "(orbit, pan, dolly, plane-push) or none");
+                           "(orbit, pan, dolly, plane-push, value-drag) or none");
     expect_members_failure(", \"gestures\": {\"two-finger-pinch\": \"speed-up\"}", "gestures.two-finger-pinch",
                            "'speed-up' is a command action");
     expect_members_failure(", \"gestures\": {\"touchpad-swipe\": \"fly-left\"}", "gestures.touchpad-swipe",

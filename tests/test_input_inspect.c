@@ -607,6 +607,44 @@ Test(input_inspect, value_and_colormap_keys)
     rig_free(r);
 }
 
+/* value-drag (the side button): every iso-value follows the drag, half its
+ * range per plane unit up, clamped; the motions of one input frame make one
+ * record per target; without iso-values it does nothing. */
+Test(input_inspect, value_drag_follows_the_pointer)
+{
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.values[0] = (input_value_target){.first = 2, .count = 1, .value = 10.f, .lo = 0.f, .hi = 100.f};
+    cfg.values[1] = (input_value_target){.first = 3, .count = 1, .value = 50.f, .lo = 40.f, .hi = 60.f};
+    cfg.value_count = 2;
+    rig *r = rig_make_with(&cfg);
+    move_to(r, 0.0, 0.0);
+    int at = r->count;
+    key(r, BTN_SIDE, true);
+    send(r, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.0, .y = 0.1});
+    send(r, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.3, .y = 0.2});
+    frame(r);
+    key(r, BTN_SIDE, false);
+    /* up 0.2 units: + 0.1 of each range */
+    cr_expect_str_eq(made_since(r, at), "value 2 1 0x1.4p+4 | value 3 1 0x1.ap+5 | status \"iso-value 20; iso-value 52\"",
+                     "%s", made_since(r, at));
+    at = r->count;
+    key(r, BTN_SIDE, true);
+    move_to(r, 0.3, -1.0);
+    key(r, BTN_SIDE, false);
+    cr_expect_str_eq(made_since(r, at), "value 2 1 0x0p+0 | value 3 1 0x1.4p+5 | status \"iso-value 0; iso-value 40\"",
+                     "down past the bottom: clamped: %s", made_since(r, at));
+    rig_free(r);
+    r = rig_make();
+    move_to(r, 0.0, 0.0);
+    at = r->count;
+    key(r, BTN_SIDE, true);
+    move_to(r, 0.0, 0.5);
+    key(r, BTN_SIDE, false);
+    cr_expect_eq(strstr(made_since(r, at), "value") == NULL, true, "no values: no record: %s", made_since(r, at));
+    rig_free(r);
+}
+
 /* With volumes rendered directly, M steps their transfer function through
  * the built-ins that have opacity. */
 Test(input_inspect, colormap_next_steps_the_transfer_function_of_volumes)
