@@ -13,6 +13,8 @@
 #     and on, frame time (tessera bench, 1920x1080, 2 threads) against mean
 #     FLIP (tessera compare) of a 960x540 picture against the step-1/64
 #     picture without pre-integration.
+# With gnuplot (sh tools/deps.sh --report) both as curves too,
+# report/volumes_iso.png and report/volumes_dvr.png beside REPORT.md.
 # Prints the section, keeps it in $WORK/volumes_section.md and puts it into
 # REPORT.md in place of its old section, else at the end (REPORT_VOLUMES_OUT
 # names another file; "-" for none). Environment: TESSERA_SHARED (../shared),
@@ -31,9 +33,12 @@ DATA_ABS=$(cd "$DATA" 2>/dev/null && pwd) || { echo "report_volumes: $DATA missi
 
 kv() { printf '%s\n' "$1" | tr ' \t' '\n\n' | sed -n "s/^$2=//p" | head -n 1; }
 
-# name|header|iso value|transfer|camera eye|look_at|up|smallest spacing
-VOLUMES="mri|colin27_ch2better_301x370x316_uint8.txt|40|mri-soft|260,-200,150|0,-18,0|0,0,1|0.5
-ct|ctbunny_sub2_256x256x181_uint16.txt|900|ct-bone|-60,-260,160|0,0,78|0,0,1|0.675782"
+# name|header|iso value|transfer (JSON)|camera eye|look_at|up|smallest spacing
+# (the CT's values are Hounsfield units + 1024: ct-bone over the range it was
+# made for, [-1000, 2000] HU; its automatic range, the data's [-2000, 2648],
+# would put the air on the opacity ramp, a haze nothing can skip)
+VOLUMES='mri|colin27_ch2better_301x370x316_uint8.txt|40|"mri-soft"|260,-200,150|0,-18,0|0,0,1|0.5
+ct|ctbunny_sub2_256x256x181_uint16.txt|900|{"map": "ct-bone", "range": [24, 3024]}|-60,-260,160|0,0,78|0,0,1|0.675782'
 
 scene() { # file volume-entry camera-eye look-at up -> a scene JSON
     printf '{"camera": {"eye": [%s], "look_at": [%s], "up": [%s], "fov_deg": 40}, "volumes": [%s]}\n' "$3" "$4" "$5" "$2" > "$1"
@@ -96,21 +101,61 @@ echo "$VOLUMES" | while IFS='|' read -r name header iso tf eye at up spacing; do
         echo "report_volumes: $name iso $iso $method: $(kv "$line" prim_mrays) Mrays/s, error $err" >&2
         set -- $err
         printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$name" "$iso" "$method" "$(kv "$line" prim_mrays)" "$1" "$2" "$3" >> "$ISO_ROWS"
+        printf '%s %s "%s"\n' "$(kv "$line" prim_mrays)" "$1" "$method" >> "$WORK/iso-$name.dat"
     done
-    scene "$WORK/$name-ref.json" "{\"file\": \"$file\", \"dvr\": {\"transfer\": \"$tf\", \"step\": 0.015625}}" "$eye" "$at" "$up"
+    scene "$WORK/$name-ref.json" "{\"file\": \"$file\", \"dvr\": {\"transfer\": $tf, \"step\": 0.015625}}" "$eye" "$at" "$up"
     ./tessera render --scene "$WORK/$name-ref.json" --size 960x540 --threads 2 --out "$WORK/$name-ref.exr" > /dev/null 2>&1
     for pre in false true; do
         for step in 2 1 0.5 0.25; do
             tag=$name-$step-$pre
-            scene "$WORK/$tag.json" "{\"file\": \"$file\", \"dvr\": {\"transfer\": \"$tf\", \"step\": $step, \"preintegrated\": $pre}}" "$eye" "$at" "$up"
+            scene "$WORK/$tag.json" "{\"file\": \"$file\", \"dvr\": {\"transfer\": $tf, \"step\": $step, \"preintegrated\": $pre}}" "$eye" "$at" "$up"
             ./tessera render --scene "$WORK/$tag.json" --size 960x540 --threads 2 --out "$WORK/$tag.exr" > /dev/null 2>&1
             flip=$(kv "$(./tessera compare "$WORK/$name-ref.exr" "$WORK/$tag.exr" 2> /dev/null)" flip_mean)
             line=$(./tessera bench --scene "$WORK/$tag.json" --size 1920x1080 --frames "$FRAMES" --threads 2 2> /dev/null | grep '^BENCH ')
             echo "report_volumes: $name dvr step $step pre-integrated $pre: $(kv "$line" frame_ms_median) ms, FLIP $flip" >&2
             printf '| %s | %s | %s | %s | %s |\n' "$name" "$step" "$([ $pre = true ] && echo on || echo off)" "$(kv "$line" frame_ms_median)" "$flip" >> "$DVR_ROWS"
+            printf '%s %s "%s"\n' "$(kv "$line" frame_ms_median)" "$flip" "$step" >> "$WORK/dvr-$name-$pre.dat"
         done
     done
 done
+
+# The curves (gnuplot, when there is one: sh tools/deps.sh --report): Mrays/s
+# against hit error per root method, frame time against FLIP per step.
+PLOTS=""
+if command -v gnuplot > /dev/null 2>&1; then
+    term=pngcairo
+    gnuplot -e 'set terminal' 2>&1 | grep -q pngcairo || term=png
+    series() { # pattern title-sed -> plot clauses for every .dat matching
+        for f in $WORK/$1; do
+            [ -f "$f" ] || continue
+            t=$(basename "$f" .dat | sed "$2")
+            printf "'%s' using 1:2 with linespoints pointtype 7 title '%s', '%s' using 1:2:3 with labels left offset char 1,0 notitle, " "$f" "$t" "$f"
+        done
+    }
+    {
+        echo "set terminal $term size 900,600"
+        echo "set output '$WORK/volumes_iso.png'"
+        echo "set title 'Iso-surface root methods: speed against hit error'"
+        echo "set xlabel 'Mrays/s (1920x1080, 2 threads, median of $FRAMES frames)'"
+        echo "set ylabel 'mean hit error against the exact method (cells)'"
+        echo "set grid"
+        echo "set offsets graph 0.1, graph 0.2, graph 0.1, graph 0.1"
+        printf 'plot %s\n' "$(series 'iso-*.dat' 's/^iso-//')" | sed 's/, $//'
+        echo "set output '$WORK/volumes_dvr.png'"
+        echo "set title 'Direct volume rendering: frame time against error, points labelled by step (voxels)'"
+        echo "set xlabel 'frame time (ms, 1920x1080, 2 threads, median of $FRAMES frames)'"
+        echo "set ylabel 'mean FLIP against step 1/64 without pre-integration'"
+        echo "set logscale xy"
+        printf 'plot %s\n' "$(series 'dvr-*.dat' 's/^dvr-//; s/-false$/, classic/; s/-true$/, pre-integrated/')" | sed 's/, $//'
+    } > "$WORK/volumes.gp"
+    if gnuplot "$WORK/volumes.gp" 2> "$WORK/gnuplot.err"; then
+        PLOTS="volumes_iso.png volumes_dvr.png"
+    else
+        echo "report_volumes: gnuplot failed (no plots): $(head -n 3 "$WORK/gnuplot.err")" >&2
+    fi
+else
+    echo "report_volumes: no gnuplot (sh tools/deps.sh --report): tables without plots" >&2
+fi
 
 SECTION=$WORK/volumes_section.md
 {
@@ -124,14 +169,20 @@ SECTION=$WORK/volumes_section.md
     echo "|---|---:|---|---:|---:|---:|---:|"
     cat "$ISO_ROWS"
     echo
+    [ -z "$PLOTS" ] || { echo "![Mrays/s against hit error per root method](report/volumes_iso.png)"; echo; }
     echo "**Direct volume rendering** (emission-absorption through the transfer function, midpoint samples or pre-integrated slabs). Frame time: \`tessera bench\`, 1920x1080, 2 threads, median of $FRAMES frames. FLIP: mean LDR-FLIP of a 960x540 picture against the same view at step 1/64 voxel without pre-integration."
     echo
     echo "| volume | step (voxels) | pre-integration | frame ms | mean FLIP |"
     echo "|---|---:|---|---:|---:|"
     cat "$DVR_ROWS"
+    [ -z "$PLOTS" ] || { echo; echo "![frame time against FLIP per step, classic and pre-integrated](report/volumes_dvr.png)"; }
 } > "$SECTION"
 cat "$SECTION"
 [ "$OUT" = "-" ] && exit 0
+if [ -n "$PLOTS" ]; then
+    mkdir -p "$(dirname "$OUT")/report"
+    for p in $PLOTS; do cp "$WORK/$p" "$(dirname "$OUT")/report/$p"; done
+fi
 [ -f "$OUT" ] || : > "$OUT"
 awk -v section="$SECTION" '
 BEGIN { while ((getline l < section) > 0) text = text l "\n" }
