@@ -47,6 +47,14 @@ typedef struct geometry_crop {
     float lo, hi; /* seen: lo <= value <= hi */
 } geometry_crop;
 
+/* What a kind that crops crops by (geometry_ops.crop_attribute). */
+#define GEOMETRY_ATTRIBUTE_NAME_BYTES 32
+typedef struct geometry_crop_attribute {
+    char name[GEOMETRY_ATTRIBUTE_NAME_BYTES]; /* the attribute's name in its file */
+    float min, max;                           /* its values span [min, max] */
+    geometry_crop crop;                       /* the crop now */
+} geometry_crop_attribute;
+
 /* What the kernels read of a GEOMETRY_LEAF_POINTS kind, in place. Every
  * array may be read GEOMETRY_POINTS_PAD floats past its last point (the
  * SIMD lanes beyond a leaf's range are loaded and masked off). */
@@ -120,6 +128,9 @@ typedef struct geometry_ops {
     /* Kinds that crop (geometry_points.crop_value): set the range. Only
      * where nothing traces (a serial section). NULL: the kind has no crop. */
     void (*set_crop)(void *data, geometry_crop crop);
+    /* The attribute it crops by, its range and the crop now; false when
+     * this geometry crops by none (a set without "crop"). NULL: no crop. */
+    bool (*crop_attribute)(const void *data, geometry_crop_attribute *out);
     /* TIME STEPS (a series of files; NULL: one state only). step_count:
      * how many. step_ready: whether `step` can be shown without waiting
      * (else it is loaded in the background); any thread. set_step: show
@@ -146,6 +157,10 @@ typedef struct geometry_ops {
      * (colormap.h), keeping the range it has. False: no such map. Only
      * where nothing traces. NULL: the kind has none. */
     bool (*set_colormap)(void *data, const char *name);
+    /* The map in use (its range fitted), NULL when this geometry is not
+     * coloured through one; NULL op: the kind never is. Where nothing
+     * changes it (the input thread at start, a serial section). */
+    const struct colormap *(*colormap)(const void *data);
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */

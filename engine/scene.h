@@ -95,6 +95,9 @@ typedef struct medium_ops {
     /* Use the built-in transfer function `name` (colormap.h); false: no
      * such map. Only where nothing traces. NULL: not changeable. */
     bool (*set_colormap)(void *data, const char *name);
+    /* The transfer function in use (range fitted); NULL op: not changeable.
+     * Where nothing changes it (as geometry_ops.colormap). */
+    const struct colormap *(*colormap)(const void *data);
 } medium_ops;
 
 typedef struct scene_medium {

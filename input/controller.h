@@ -170,7 +170,7 @@ typedef struct input_hit {
 #define INPUT_CROP_WINDOW 0.25f /* of the attribute's range: the window crop-up/-down start with */
 typedef struct input_crop_target {
     uint32_t first, count;
-    char attribute[32];
+    char attribute[GEOMETRY_ATTRIBUTE_NAME_BYTES];
     float min, max;    /* the attribute's values span [min, max] */
     geometry_crop crop; /* at start */
 } input_crop_target;

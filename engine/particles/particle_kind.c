@@ -601,6 +601,19 @@ static const wbvh *kind_tree(void *data, int threads, tess_error *err)
 
 static void kind_set_crop(void *data, geometry_crop crop) { particle_kind_set_crop(data, crop); }
 static bool kind_set_colormap(void *data, const char *name) { return particle_kind_set_colormap(data, name); }
+static const colormap *kind_colormap(const void *data) { return particle_kind_colormap(data); }
+
+static bool kind_crop_attribute(const void *data, geometry_crop_attribute *out)
+{
+    const particle_kind *k = data;
+    int attr = particle_kind_crop_attribute(k);
+    if (attr < 0)
+        return false;
+    const particle_attribute *a = &particle_kind_set(k)->attributes[attr];
+    *out = (geometry_crop_attribute){.min = a->min, .max = a->max, .crop = particle_kind_crop(k)};
+    snprintf(out->name, sizeof out->name, "%s", a->name);
+    return true;
+}
 static uint32_t kind_step_count(const void *data) { return particle_kind_step_count(data); }
 static bool kind_step_ready(void *data, uint32_t step) { return particle_kind_step_ready(data, step); }
 static bool kind_set_step(void *data, uint32_t step, tess_error *err)
@@ -627,4 +640,6 @@ const geometry_ops particle_kind_ops = {
     .step_ready = kind_step_ready,
     .set_step = kind_set_step,
     .set_colormap = kind_set_colormap,
+    .colormap = kind_colormap,
+    .crop_attribute = kind_crop_attribute,
 };

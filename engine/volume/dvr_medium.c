@@ -75,10 +75,17 @@ static bool medium_set_colormap(void *data, const char *name)
     return true;
 }
 
+static const colormap *medium_colormap(const void *data)
+{
+    const dvr_medium *m = data;
+    return &m->dvr->tf;
+}
+
 const medium_ops dvr_medium_ops = {
     .name = "dvr",
     .bounds = medium_bounds,
     .integrate = medium_integrate,
     .destroy = medium_destroy,
     .set_colormap = medium_set_colormap,
+    .colormap = medium_colormap,
 };

@@ -8,10 +8,9 @@
 
 #include "engine/accel.h"
 #include "engine/camera_path.h"
+#include "engine/colormap.h"
 #include "engine/frame_state.h"
 #include "engine/log.h"
-#include "engine/particles/particle_kind.h"
-#include "engine/volume/dvr_medium.h"
 #include "engine/scene.h"
 #include "input/bindings.h"
 #include "input/controller.h"
@@ -327,17 +326,12 @@ static void crop_targets(const scene *s, input_controller_config *cc)
 {
     for (uint32_t i = 0; i < s->instance_count && cc->crop_count < INPUT_CROP_MAX; i++) {
         const scene_geometry *g = scene_instance_geometry(s, i);
-        if (g->ops != &particle_kind_ops)
+        geometry_crop_attribute a;
+        if (!g->ops->crop_attribute || !g->ops->crop_attribute(g->data, &a))
             continue;
-        const particle_kind *k = g->data;
-        int attr = particle_kind_crop_attribute(k);
-        if (attr < 0)
-            continue;
-        const particle_attribute *a = &particle_kind_set(k)->attributes[attr];
         input_crop_target *t = &cc->crops[cc->crop_count++];
-        *t = (input_crop_target){.first = i, .count = 1, .min = a->min, .max = a->max,
-                                 .crop = particle_kind_crop(k)};
-        snprintf(t->attribute, sizeof t->attribute, "%s", a->name);
+        *t = (input_crop_target){.first = i, .count = 1, .min = a.min, .max = a.max, .crop = a.crop};
+        snprintf(t->attribute, sizeof t->attribute, "%s", a.name);
     }
 }
 
@@ -355,7 +349,7 @@ static void value_and_map_targets(const scene *s, input_controller_config *cc)
         float v, lo, hi;
         if (sg->ops->value && cc->value_count < INPUT_VALUE_MAX && sg->ops->value(sg->data, &v, &lo, &hi))
             cc->values[cc->value_count++] = (input_value_target){inst, 1, v, lo, hi};
-        const colormap *cm = sg->ops == &particle_kind_ops ? particle_kind_colormap(sg->data) : NULL;
+        const colormap *cm = sg->ops->colormap ? sg->ops->colormap(sg->data) : NULL;
         if (cm && cc->map_count < INPUT_MAP_MAX) {
             input_map_target *t = &cc->maps[cc->map_count++];
             *t = (input_map_target){.first = inst, .count = 1};
@@ -425,8 +419,8 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.time_steps = time_steps(cs->scene);
     value_and_map_targets(cs->scene, &cc);
     cc.media = cs->scene->medium_count > 0;
-    if (cc.media && cs->scene->media[0].ops == &dvr_medium_ops)
-        snprintf(cc.transfer, sizeof cc.transfer, "%s", dvr_medium_volume(cs->scene->media[0].data)->tf.name);
+    if (cc.media && cs->scene->media[0].ops->colormap)
+        snprintf(cc.transfer, sizeof cc.transfer, "%s", cs->scene->media[0].ops->colormap(cs->scene->media[0].data)->name);
     in->runner = input_runner_start(&sc, &cc, pick, step_ready, (void *)cs, in->sink, cli_pipeline_session(), &err);
     if (!in->runner) {
         cli_error("%s", err.msg);
