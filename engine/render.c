@@ -662,15 +662,21 @@ static float ray_jitter(const ray *r)
 /* The scene's participating media in front of each ray's first surface
  * (scene.h, PARTICIPATING MEDIA): colour = medium + transmittance x colour,
  * nearest medium first. */
-static void composite_media(const render_view *v, uint32_t count, uint64_t active, const ray *rays,
-                            const render_first_surfaces *first, vec3 *colour)
+static void composite_media(const render_view *v, const clip_set *clip, uint32_t count, uint64_t active,
+                            const ray *rays, const render_first_surfaces *first, vec3 *colour)
 {
     const scene *s = v->scene;
     for (uint32_t i = 0; i < count; i++) {
         if (!(active >> i & 1u))
             continue;
         ray r = rays[i];
-        float t_end = first->hits >> i & 1u ? first->t[i] : r.t_far;
+        if (first->hits >> i & 1u)
+            r.t_far = first->t[i];
+        /* the cutting planes cut media too: what is left of the ray is one
+         * interval (the kept half-spaces are convex) */
+        if (clip->count > 0 && !clip_ray(clip, &r, NULL))
+            continue;
+        float t_end = r.t_far;
         /* entries of the media along the ray, nearest first (few media: insertion order) */
         float enter[8], leave[8];
         uint32_t which[8], n = 0;
@@ -741,7 +747,7 @@ static void trace_packet(const render_view *v, const view_extras *x, ray_packet 
     else
         shade_packet(v, x, p, shadows, ps, first, counts);
     if (media)
-        composite_media(v, count, active, media_rays, first, ps->colour);
+        composite_media(v, &x->clip, count, active, media_rays, first, ps->colour);
 }
 
 /* Per thread: two packets and the shading state, ~65 KB: too big for a

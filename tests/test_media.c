@@ -1,7 +1,8 @@
 /* test_media.c - participating media (scene.h, PARTICIPATING MEDIA): a
  * medium defined here (constant extinction in a unit box: transmittance
  * exp(-sigma L), colour c (1 - exp(-sigma L)) over a segment of length L)
- * is composited in front of each ray's first surface, and stops there. */
+ * is composited in front of each ray's first surface, and stops there;
+ * cutting planes cut it. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -10,6 +11,7 @@
 #include "engine/frame_state.h"
 #include "engine/render.h"
 #include "engine/scene.h"
+#include "engine/txn.h"
 
 #define SIGMA 0.7f
 
@@ -149,4 +151,42 @@ Test(media, media_and_transparency_compose)
                        (double)(0.8f * (1.f - t) + px[0].z * t));
     scene_destroy(clear);
     scene_destroy(foggy);
+}
+
+/* A cutting plane cuts media too: the plane z = 0 removing z > 0 leaves one
+ * unit of the fog (z in [-1, 0]) in front of the floor. */
+Test(media, cutting_planes_cut_media)
+{
+    scene *s = fog_scene(true, 1.f);
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+    vec3 px[2];
+    for (int cut = 0; cut < 2; cut++) {
+        if (cut) {
+            const float point[3] = {0.f, 0.f, 0.f}, normal[3] = {0.f, 0.f, 1.f};
+            txn_record r = txn_clip_plane(0, true, point, normal);
+            cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
+        }
+        camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
+        render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33),
+                         .shading = RENDER_SHADE_PHONG, .state = &st};
+        float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
+        render_image(&v, 2, rgb, NULL);
+        px[cut] = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
+        free(rgb);
+    }
+    scene *clear = fog_scene(false, 1.f);
+    vec3 floor_px = centre_pixel(clear);
+    for (int cut = 0; cut < 2; cut++) {
+        float t = expf(-SIGMA * (cut ? 1.f : 2.f));
+        cr_expect_float_eq(px[cut].z, 0.8f * (1.f - t) + floor_px.z * t, 1e-5f, "cut %d: %g vs %g", cut,
+                           (double)px[cut].z, (double)(0.8f * (1.f - t) + floor_px.z * t));
+    }
+    frame_state_finish(&st);
+    accel_destroy(a);
+    scene_destroy(s);
+    scene_destroy(clear);
 }
