@@ -101,44 +101,33 @@ void volume_destroy(volume *v)
 
 void *volume_voxels(volume *v) { return v->buffer; }
 
+/* The min and max of `count` integer samples of type T at data: one plain
+ * loop per type, a min/max reduction the compiler vectorises. */
+#define INTEGER_RANGE(T, data, count, lo_out, hi_out)                                                                 \
+    do {                                                                                                               \
+        const T *s_ = (data);                                                                                          \
+        T lo_ = s_[0], hi_ = s_[0];                                                                                    \
+        for (size_t i_ = 1; i_ < (count); i_++) {                                                                      \
+            lo_ = s_[i_] < lo_ ? s_[i_] : lo_;                                                                         \
+            hi_ = s_[i_] > hi_ ? s_[i_] : hi_;                                                                         \
+        }                                                                                                              \
+        *(lo_out) = lo_;                                                                                               \
+        *(hi_out) = hi_;                                                                                               \
+    } while (0)
+
 bool volume_update_range(volume *v, const char *source, tess_error *err)
 {
     size_t count = volume_count(v);
-    /* one loop per type, so each is a plain min/max reduction the compiler vectorises */
     switch (v->type) {
-    case VOLUME_UINT8: {
-        const uint8_t *s = v->data;
-        uint8_t lo = s[0], hi = s[0];
-        for (size_t i = 1; i < count; i++) {
-            lo = s[i] < lo ? s[i] : lo;
-            hi = s[i] > hi ? s[i] : hi;
-        }
-        v->min = lo;
-        v->max = hi;
+    case VOLUME_UINT8:
+        INTEGER_RANGE(uint8_t, v->data, count, &v->min, &v->max);
         return true;
-    }
-    case VOLUME_INT16: {
-        const int16_t *s = v->data;
-        int16_t lo = s[0], hi = s[0];
-        for (size_t i = 1; i < count; i++) {
-            lo = s[i] < lo ? s[i] : lo;
-            hi = s[i] > hi ? s[i] : hi;
-        }
-        v->min = lo;
-        v->max = hi;
+    case VOLUME_INT16:
+        INTEGER_RANGE(int16_t, v->data, count, &v->min, &v->max);
         return true;
-    }
-    case VOLUME_UINT16: {
-        const uint16_t *s = v->data;
-        uint16_t lo = s[0], hi = s[0];
-        for (size_t i = 1; i < count; i++) {
-            lo = s[i] < lo ? s[i] : lo;
-            hi = s[i] > hi ? s[i] : hi;
-        }
-        v->min = lo;
-        v->max = hi;
+    case VOLUME_UINT16:
+        INTEGER_RANGE(uint16_t, v->data, count, &v->min, &v->max);
         return true;
-    }
     case VOLUME_FLOAT32: {
         const float *s = v->data;
         float lo = INFINITY, hi = -INFINITY;
