@@ -222,78 +222,35 @@ bool iso_cell_root_regula_falsi(const iso_cubic *f, double s0, double f_s0, doub
 
 /* ---- along a whole volume -------------------------------------------------- */
 
-/* A value of the sign the field has everywhere in a block whose samples
- * lie in [lo, hi] with iso outside it: what is carried past a skipped block. */
-static double sign_value(float lo, float hi, float iso) { return lo > iso ? (double)lo - iso : (double)hi - iso; }
-
 bool iso_volume_first_hit(const volume *v, const macrocell_grid *grid, const double org[3], const double dir[3],
                           double t_min, double t_max, float iso, iso_method method, iso_hit *hit)
 {
-    macrocell_walk walk;
-    if (!macrocell_walk_begin(&walk, grid, org, dir, t_min, t_max))
+    iso_cell_walk w;
+    if (!iso_cell_walk_begin(&w, v, grid, org, dir, t_min, t_max, iso))
         return false;
-    double dir_len = sqrt(walk.dir[0] * walk.dir[0] + walk.dir[1] * walk.dir[1] + walk.dir[2] * walk.dir[2]);
-    double tol_s = ISO_CELL_TOL / dir_len; /* ISO_CELL_TOL cell widths, in t */
-    bool carried = false;  /* f_carry holds the field's sign (and a value) at the last span's exit */
-    double f_carry = 0.0;
-    macrocell_span span;
-    while (macrocell_walk_next(&walk, &span)) {
-        if (!macrocell_may_reach(grid, span.index, iso)) {
-            f_carry = sign_value(grid->min[span.index], grid->max[span.index], iso);
-            carried = true;
-            continue;
+    double tol_s = ISO_CELL_TOL / w.dir_len; /* ISO_CELL_TOL cell widths, in t */
+    iso_cell_candidate cand;
+    while (iso_cell_walk_next(&w, &cand)) {
+        double s1 = cand.tx - cand.te, s = 0.0;
+        bool found = false;
+        switch (method) {
+        case ISO_METHOD_EXACT: found = iso_cell_root(&cand.f, 0.0, cand.f0, s1, tol_s, &s); break;
+        case ISO_METHOD_LINEAR: found = iso_cell_root_linear(&cand.f, 0.0, cand.f0, s1, &s); break;
+        case ISO_METHOD_REGULA_FALSI:
+            found = iso_cell_root_regula_falsi(&cand.f, 0.0, cand.f0, s1, ISO_CELL_RF_STEPS, &s);
+            break;
         }
-        volume_dda cells;
-        macrocell_walk_cells(&walk, &span, &cells);
-        int32_t c[3];
-        double te, tx;
-        while (volume_dda_next(&cells, c, &te, &tx)) {
-            float corner[8];
-            volume_cell_corners(v, (uint32_t)c[0], (uint32_t)c[1], (uint32_t)c[2], corner);
-            float lo = corner[0], hi = corner[0];
-            for (int i = 1; i < 8; i++) {
-                lo = corner[i] < lo ? corner[i] : lo;
-                hi = corner[i] > hi ? corner[i] : hi;
+        if (found) {
+            hit->t = cand.te + s;
+            double g[3];
+            for (int a = 0; a < 3; a++) {
+                hit->cell[a] = (uint32_t)cand.cell[a];
+                hit->local[a] = cand.org[a] + s * w.walk.dir[a];
             }
-            if (iso < lo || iso > hi) {
-                f_carry = sign_value(lo, hi, iso);
-                carried = true;
-                continue;
-            }
-            /* the cell-local ray starts at the entry point: s = t - te */
-            double o[3];
+            iso_cell_gradient(cand.corner, hit->local, g);
             for (int a = 0; a < 3; a++)
-                o[a] = walk.org[a] + te * walk.dir[a] - c[a];
-            iso_cubic f = iso_cell_cubic(corner, iso, o, walk.dir);
-            /* the value at the entry: this cell's own f(0) (its magnitude matters to the
-             * cheap methods' interpolation), but with the sign carried from the cell
-             * before, which rounding at the shared face may have flipped (then the
-             * true value is ~0: the smallest normal of the carried sign) */
-            double f0 = f.d, s1 = tx - te, s = 0.0;
-            if (carried && (f0 == 0.0 || (f0 < 0.0) != (f_carry < 0.0)))
-                f0 = copysign(DBL_MIN, f_carry);
-            bool found = false;
-            switch (method) {
-            case ISO_METHOD_EXACT: found = iso_cell_root(&f, 0.0, f0, s1, tol_s, &s); break;
-            case ISO_METHOD_LINEAR: found = iso_cell_root_linear(&f, 0.0, f0, s1, &s); break;
-            case ISO_METHOD_REGULA_FALSI:
-                found = iso_cell_root_regula_falsi(&f, 0.0, f0, s1, ISO_CELL_RF_STEPS, &s);
-                break;
-            }
-            if (found) {
-                hit->t = te + s;
-                double g[3];
-                for (int a = 0; a < 3; a++) {
-                    hit->cell[a] = (uint32_t)c[a];
-                    hit->local[a] = o[a] + s * walk.dir[a];
-                }
-                iso_cell_gradient(corner, hit->local, g);
-                for (int a = 0; a < 3; a++)
-                    hit->gradient[a] = g[a] / grid->spacing[a];
-                return true;
-            }
-            f_carry = iso_cubic_eval(&f, s1);
-            carried = true;
+                hit->gradient[a] = g[a] / grid->spacing[a];
+            return true;
         }
     }
     return false;

@@ -56,6 +56,8 @@
 #ifndef TESSERA_ISO_CELL_H
 #define TESSERA_ISO_CELL_H
 
+#include <float.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -121,6 +123,145 @@ typedef struct iso_hit {
     double local[3];      /* the hit in the cell's [0,1]^3 */
     double gradient[3];   /* of the field at the hit, world units (per world unit of distance) */
 } iso_hit;
+
+/* THE WALK both the first-hit query below and the iso-surface kind
+ * (iso_kind.c) take: the cells along the world ray org + t dir, t in
+ * [t_min, t_max], that can hold the iso-value (macrocells that cannot reach
+ * it skipped whole, then cells whose 8 samples all lie on one side), in
+ * order, each with its cubic along the ray and the field's value at its
+ * entry, whose sign is carried from where the walk left the cell before
+ * (rounding at a shared face cannot flip it: no root is lost or found
+ * twice between cells). */
+
+typedef struct iso_cell_candidate {
+    int32_t cell[3];  /* its low corner sample */
+    double te, tx;    /* the world ray's t at its entry and exit */
+    float corner[8];  /* its samples (volume_cell_corners) */
+    double org[3];    /* the ray's entry point in the cell's [0,1]^3: cell-local s = t - te */
+    iso_cubic f;      /* field - iso along the ray, in s */
+    double f0;        /* field - iso at s = 0 with the carried sign: f.d, or +-DBL_MIN where rounding
+                         flipped it (the true value is ~0), or 0 where the walk left the cell before
+                         exactly on the surface (that root was the cell before's) */
+} iso_cell_candidate;
+
+typedef struct iso_cell_walk {
+    const volume *v;
+    float iso;
+    macrocell_walk walk;
+    volume_dda cells;     /* the cells of the current span */
+    bool in_span;         /* cells is walking a span */
+    bool carried;         /* f_carry holds the field's sign (and a value) where the walk left */
+    double f_carry;
+    bool have_last;       /* last_f and last_s1: the candidate returned last, whose exit value is
+                             carried when the walk goes on */
+    iso_cubic last_f;
+    double last_s1;
+    double dir_len;       /* |dir| in voxel units: tolerances in cells become tolerances in t */
+    /* the caller's: stop (next returns false, stopped set) after skipping a
+     * span or cell whose entry's float t is above stop_beyond (INFINITY:
+     * never), so a caller waiting for the walk to pass a t does not walk on
+     * through skipped space to the next candidate; next may be called
+     * again to go on */
+    float stop_beyond;
+    bool stopped;
+} iso_cell_walk;
+
+/* A value of the sign the field has everywhere in a block whose samples
+ * lie in [lo, hi] with iso outside it: what is carried past a skipped block. */
+static inline double iso_sign_value(float lo, float hi, float iso)
+{
+    return lo > iso ? (double)lo - iso : (double)hi - iso;
+}
+
+/* iso_cell_walk_begin: start; false when the ray misses the volume (nothing
+ * to walk). iso_cell_walk_next: the next cell that can hold the iso-value;
+ * false when the walk is over (or stopped: stop_beyond). Inline: the walk
+ * is the iso-surface kind's hot loop. */
+static inline bool iso_cell_walk_begin(iso_cell_walk *w, const volume *v, const macrocell_grid *grid, const double org[3],
+                         const double dir[3], double t_min, double t_max, float iso)
+{
+    w->v = v;
+    w->iso = iso;
+    w->in_span = false;
+    w->carried = false;
+    w->f_carry = 0.0;
+    w->have_last = false;
+    w->stop_beyond = INFINITY;
+    w->stopped = false;
+    if (!macrocell_walk_begin(&w->walk, grid, org, dir, t_min, t_max))
+        return false;
+    const double *d = w->walk.dir;
+    w->dir_len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return true;
+}
+
+static inline bool iso_cell_walk_next(iso_cell_walk *w, iso_cell_candidate *out)
+{
+    const macrocell_grid *grid = w->walk.grid;
+    const float iso = w->iso;
+    w->stopped = false;
+    if (w->have_last) { /* the candidate before was passed: carry its exit */
+        w->f_carry = iso_cubic_eval(&w->last_f, w->last_s1);
+        w->carried = true;
+        w->have_last = false;
+    }
+    for (;;) {
+        if (!w->in_span) {
+            macrocell_span span;
+            if (!macrocell_walk_next(&w->walk, &span))
+                return false;
+            if (!macrocell_may_reach(grid, span.index, iso)) {
+                w->f_carry = iso_sign_value(grid->min[span.index], grid->max[span.index], iso);
+                w->carried = true;
+                if ((float)span.t_enter > w->stop_beyond) {
+                    w->stopped = true;
+                    return false;
+                }
+                continue;
+            }
+            macrocell_walk_cells(&w->walk, &span, &w->cells);
+            w->in_span = true;
+        }
+        int32_t *c = out->cell;
+        if (!volume_dda_next(&w->cells, c, &out->te, &out->tx)) {
+            w->in_span = false;
+            continue;
+        }
+        volume_cell_corners(w->v, (uint32_t)c[0], (uint32_t)c[1], (uint32_t)c[2], out->corner);
+        float lo = out->corner[0], hi = out->corner[0];
+        for (int i = 1; i < 8; i++) {
+            lo = out->corner[i] < lo ? out->corner[i] : lo;
+            hi = out->corner[i] > hi ? out->corner[i] : hi;
+        }
+        if (iso < lo || iso > hi) {
+            w->f_carry = iso_sign_value(lo, hi, iso);
+            w->carried = true;
+            if ((float)out->te > w->stop_beyond) {
+                w->stopped = true;
+                return false;
+            }
+            continue;
+        }
+        for (int a = 0; a < 3; a++)
+            out->org[a] = w->walk.org[a] + out->te * w->walk.dir[a] - c[a];
+        out->f = iso_cell_cubic(out->corner, iso, out->org, w->walk.dir);
+        /* the value at the entry: this cell's own f(0) (its magnitude matters to the
+         * cheap methods' interpolation), but with the sign carried from the cell
+         * before, which rounding at the shared face may have flipped */
+        out->f0 = out->f.d;
+        if (w->carried) {
+            if (w->f_carry == 0.0)
+                out->f0 = 0.0; /* the cell before's exit was a root, found there */
+            else if (out->f0 == 0.0 || (out->f0 < 0.0) != (w->f_carry < 0.0))
+                out->f0 = copysign(DBL_MIN, w->f_carry);
+        }
+        w->last_f = out->f;
+        w->last_s1 = out->tx - out->te;
+        w->have_last = true;
+        return true;
+    }
+}
+
 
 /* The first crossing of the iso-surface `iso` by the world ray org + t dir,
  * t in [t_min, t_max]: macrocells that cannot reach iso are skipped, the

@@ -285,10 +285,6 @@ static int cell_roots(iso_method method, const iso_cubic *f, double f0, double s
     return 0;
 }
 
-/* What the field minus iso is everywhere in a block whose samples lie in
- * [lo, hi], iso outside it: the sign carried past a block with no crossing. */
-static double outside_value(float lo, float hi, float iso) { return lo > iso ? (double)lo - iso : (double)hi - iso; }
-
 /* A group of crossings that round to one float t. */
 typedef struct crossing_group {
     float t;   /* their float t */
@@ -312,10 +308,8 @@ static bool close_group(crossing_group *g, double t_now, bool at_end, float *t)
 }
 
 /* The first float t in (t_near, box exit) where the ray changes side of
- * the surface. One walk through the macrocells and their cells from t_near
- * (the shape of iso_volume_first_hit, with every root of a cell taken and
- * the sign carried from cell to cell so no crossing is lost or found twice
- * at a shared face); crossings whose float t is not above t_near were
+ * the surface. The walk iso_volume_first_hit takes (iso_cell.h), with every
+ * root of a cell taken; crossings whose float t is not above t_near were
  * reported before (or are a next-hit query's bound). */
 static bool first_crossing(const iso_kind *k, const double org[3], const double dir[3], float t_near, float *t)
 {
@@ -339,67 +333,35 @@ static bool first_crossing(const iso_kind *k, const double org[3], const double 
         }
         t_start -= 2.0 * sqrt(diag2 / dir2);
     }
-    macrocell_walk walk;
-    if (!macrocell_walk_begin(&walk, g, org, dir, t_start, INFINITY))
+    iso_cell_walk walk;
+    if (!iso_cell_walk_begin(&walk, vol, g, org, dir, t_start, INFINITY, iso))
         return false;
-    double dir_len = sqrt(walk.dir[0] * walk.dir[0] + walk.dir[1] * walk.dir[1] + walk.dir[2] * walk.dir[2]);
-    double tol_s = ISO_CELL_TOL / dir_len; /* ISO_CELL_TOL cell widths, in t */
-    bool carried = false; /* f_carry holds the field's sign at the last cell's exit */
-    double f_carry = 0.0;
+    double tol_s = ISO_CELL_TOL / walk.dir_len; /* ISO_CELL_TOL cell widths, in t */
     crossing_group group = {0.f, 0};
-    macrocell_span span;
-    while (macrocell_walk_next(&walk, &span)) {
-        if (close_group(&group, span.t_enter, false, t))
-            return true;
-        if (!macrocell_may_reach(g, span.index, iso)) {
-            f_carry = outside_value(g->min[span.index], g->max[span.index], iso);
-            carried = true;
-            continue;
-        }
-        volume_dda cells;
-        macrocell_walk_cells(&walk, &span, &cells);
-        int32_t c[3];
-        double te, tx;
-        while (volume_dda_next(&cells, c, &te, &tx)) {
-            if (close_group(&group, te, false, t))
+    iso_cell_candidate cand;
+    /* a group closes where the walk passes its t: at a candidate's entry, or
+     * where the walk stops for it in skipped space (which holds no crossing) */
+    for (;;) {
+        walk.stop_beyond = group.count > 0 ? group.t : INFINITY;
+        if (!iso_cell_walk_next(&walk, &cand)) {
+            if (!walk.stopped)
+                break;
+            if (close_group(&group, INFINITY, true, t))
                 return true;
-            float corner[8];
-            volume_cell_corners(vol, (uint32_t)c[0], (uint32_t)c[1], (uint32_t)c[2], corner);
-            float lo = corner[0], hi = corner[0];
-            for (int i = 1; i < 8; i++) {
-                lo = corner[i] < lo ? corner[i] : lo;
-                hi = corner[i] > hi ? corner[i] : hi;
-            }
-            if (iso < lo || iso > hi) {
-                f_carry = outside_value(lo, hi, iso);
-                carried = true;
+            continue; /* an even group: the ray goes on */
+        }
+        if (close_group(&group, cand.te, false, t))
+            return true;
+        double roots[3];
+        int n = cell_roots(k->method, &cand.f, cand.f0, cand.tx - cand.te, tol_s, roots);
+        for (int i = 0; i < n; i++) {
+            float ft = (float)(cand.te + roots[i]);
+            if (!(ft > t_near))
                 continue;
-            }
-            /* the cell-local ray from the entry point: s = t - te */
-            double o[3];
-            for (int a = 0; a < 3; a++)
-                o[a] = walk.org[a] + te * walk.dir[a] - c[a];
-            iso_cubic f = iso_cell_cubic(corner, iso, o, walk.dir);
-            double f0 = f.d, s1 = tx - te;
-            if (carried) {
-                if (f_carry == 0.0)
-                    f0 = 0.0; /* the last cell's exit was a root, counted there */
-                else if (f0 == 0.0 || (f0 < 0.0) != (f_carry < 0.0))
-                    f0 = copysign(DBL_MIN, f_carry); /* ~0, of the sign the walk saw */
-            }
-            double roots[3];
-            int n = cell_roots(k->method, &f, f0, s1, tol_s, roots);
-            for (int i = 0; i < n; i++) {
-                float ft = (float)(te + roots[i]);
-                if (!(ft > t_near))
-                    continue;
-                if (group.count > 0 && ft != group.t && close_group(&group, te + roots[i], true, t))
-                    return true;
-                group.t = ft;
-                group.count++;
-            }
-            f_carry = iso_cubic_eval(&f, s1);
-            carried = true;
+            if (group.count > 0 && ft != group.t && close_group(&group, cand.te + roots[i], true, t))
+                return true;
+            group.t = ft;
+            group.count++;
         }
     }
     return close_group(&group, INFINITY, true, t);
