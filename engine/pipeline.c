@@ -472,7 +472,8 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
     p->oneshot_scratch = scratch;
     frame_state_init(&p->state, cfg->renderer, cfg->shadows, cfg->threads, accel_geometry_count(cfg->accel));
     p->frame_renderer = cfg->renderer;
-    if (!frame_state_adopt_hidden(&p->state, cfg->accel)) { /* an earlier user's hidden flags */
+    /* an earlier user's hidden flags, and the part opacities the scene starts with */
+    if (!frame_state_adopt_hidden(&p->state, cfg->accel) || !start_opacities(&p->state, cfg->scene)) {
         frame_state_finish(&p->state);
         free(p);
         free(queue);
@@ -484,15 +485,6 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
     /* where inspection starts: as records, so the planes are normalised as input's are (validated above) */
     if (cfg->opacity != 1.f)
         frame_state_set_global_opacity(&p->state, cfg->opacity);
-    if (!start_opacities(&p->state, cfg->scene)) {
-        frame_state_finish(&p->state);
-        free(p);
-        free(queue);
-        free(oneshots);
-        free(scratch);
-        tess_error_set(err, "pipeline: out of memory");
-        return NULL;
-    }
     for (int i = 0; i < CLIP_MAX_PLANES; i++)
         if (!plane_unused(&cfg->clip[i])) {
             txn_record r = plane_record(i, &cfg->clip[i]);
