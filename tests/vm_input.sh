@@ -44,7 +44,8 @@
 # Then a fourth run on a particle time series made here (3 LAMMPS dumps of 2,744
 # particles with a kinetic-energy column, written by this script) beside a small
 # volume's iso-surface: 0 steps forward, . crops by the energy, Y raises the
-# iso-value (a time-step, a crop and a value record, and the status lines); the
+# iso-value and a side-button drag up raises it further (a time-step, a crop
+# and value records, and the status lines); the
 # heads equal the native replay, which loads the same step.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
@@ -405,8 +406,9 @@ assembly_run() {
 
 # The fourth run: a particle time series. 0 steps forward (the next step is loaded and
 # swapped in at a barrier; the native replay loads the same file), . crops by the energy;
+# Y raises the ball's iso-value, a side-button drag up the wall raises it further;
 # each check asks the heads to equal the native replay, and the record holds the
-# time-step and crop records and their status lines.
+# time-step, crop and value records and their status lines.
 particles_run() {
     if ! log_wait tessera4.log "outputs up" "$(frames_s 30)" || ! wait_frame tessera4.log 2 8; then
         bad "particles: the kiosk did not come up with the particle series: $(tail -n 3 "$W/tessera4.log" 2>/dev/null)"
@@ -443,6 +445,23 @@ particles_run() {
         ok "volume: Y raised the iso-value ($_value; $_n pixels changed)"
     else
         bad "volume: Y: record '$_value', '$(rec_last ' status ')', $_n pixels changed"
+    fi
+    # the side button dragged up the wall (value-drag): the iso-value follows the pointer,
+    # half its range per plane unit, so well above the 103.56 Y left it
+    _k3=$K
+    qmp abs 25551 20000
+    qmp click side down
+    for _i in 1 2 3; do qmp abs 25551 $((20000 - _i * 1500)); sleep 0.2; done
+    qmp click side up
+    check "volume: side-button drag up (value-drag)"
+    _value=$(rec_last ' value ')
+    _iso=$(rec_last ' status ' | sed -n 's/^status "iso-value \([0-9.]*\)"$/\1/p')
+    _n=$(heads_differ $_k3 $K)
+    if echo "$_value" | grep -q '^value 1 1 ' && [ -n "$_iso" ] &&
+        awk -v v="$_iso" 'BEGIN { exit !(v > 110) }' && [ "$_n" -gt 50 ]; then
+        ok "volume: the side-button drag raised the iso-value to $_iso ($_value; $_n pixels changed)"
+    else
+        bad "volume: side-button drag: record '$_value', '$(rec_last ' status ')', $_n pixels changed"
     fi
 }
 
