@@ -43,7 +43,25 @@
  * inside a slab is where the blend is weakest). Pre-integration pays where
  * the transfer function is narrower than what a step crosses; for smooth
  * ones on noisy data (both shared volumes) the classic
- * midpoint rule is as good and cheaper. */
+ * midpoint rule is as good and cheaper.
+ *
+ * COST. The time goes per sample: the CT bunny under ct-bone has opacity
+ * in its air noise, so nothing is skipped there and a ray takes ~200
+ * samples. A sample is a position in double (p = org + t dir at the slab's
+ * midpoint, the arithmetic the pictures were made with, kept so they stay
+ * bitwise the same), a cell and fractions (no clamp inside the box), four
+ * x-neighbour pair loads with the x and y lerps lane-wise in SSE2, the table
+ * index in double, and the composite. Per sample type there is one inlined
+ * loop (composite_slabs), so no switch runs per corner. What bounds it is
+ * a sample's chain of dependent operations (conversions, loads, three
+ * lerps, the index, the table load; ~100 cycles) against the out-of-order
+ * window, not the instruction count alone: with the memory reads made
+ * cache-resident it still costs ~14 ns of ~17. Going further would take
+ * several samples a SIMD group (float positions stepped incrementally,
+ * gathers): that changes the pictures' bits, and was not done. The
+ * pre-integrated path did not get faster on the CT bunny (single thread,
+ * 480x270, step 0.5: 0.80 -> 0.97 s in one series, even in another): its
+ * 16 MiB table's reads, not the sampler, look to be its cost; unexplained. */
 #include "dvr.h"
 
 #include <math.h>
