@@ -132,6 +132,15 @@ bool volume_clip_box(const double org[3], const double dir[3], const double lo[3
     return true;
 }
 
+/* the t where the ray leaves the current cell through axis a's far plane */
+static inline double dda_leave(const volume_dda *w, int a)
+{
+    if (w->step[a] == 0)
+        return INFINITY;
+    double plane = (double)(w->step[a] > 0 ? w->cell[a] + 1 : w->cell[a]) * w->cell_size;
+    return (plane - w->org[a]) / w->dir[a];
+}
+
 void volume_dda_begin(volume_dda *w, const double org[3], const double dir[3], double t0, double t1,
                       uint32_t cell_size, const int32_t lo[3], const int32_t hi[3])
 {
@@ -155,6 +164,7 @@ void volume_dda_begin(volume_dda *w, const double org[3], const double dir[3], d
         /* written so a NaN (a NaN ray) lands on lo, never in an int conversion */
         c = !(c >= lo[a]) ? lo[a] : c > hi[a] ? hi[a] : c;
         w->cell[a] = (int32_t)c;
+        w->t_leave[a] = dda_leave(w, a);
     }
 }
 
@@ -164,16 +174,11 @@ bool volume_dda_next(volume_dda *w, int32_t cell[3], double *t_enter, double *t_
         /* the t where the ray leaves the current cell through each axis' far plane */
         int axis = -1;
         double t_leave = INFINITY;
-        for (int a = 0; a < 3; a++) {
-            if (w->step[a] == 0)
-                continue;
-            double plane = (double)(w->step[a] > 0 ? w->cell[a] + 1 : w->cell[a]) * w->cell_size;
-            double t = (plane - w->org[a]) / w->dir[a];
-            if (t < t_leave) {
-                t_leave = t;
+        for (int a = 0; a < 3; a++)
+            if (w->t_leave[a] < t_leave) {
+                t_leave = w->t_leave[a];
                 axis = a;
             }
-        }
         double t0 = w->t, t1 = t_leave < w->t_end ? t_leave : w->t_end;
         if (t1 < t0)
             t1 = t0;
@@ -185,6 +190,7 @@ bool volume_dda_next(volume_dda *w, int32_t cell[3], double *t_enter, double *t_
             w->cell[axis] += w->step[axis];
             if (w->cell[axis] < w->lo[axis] || w->cell[axis] > w->hi[axis])
                 w->done = true;
+            w->t_leave[axis] = dda_leave(w, axis);
         }
         w->t = t1;
         if (t1 > t0) {

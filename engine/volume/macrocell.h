@@ -101,6 +101,8 @@ typedef struct volume_dda {
     int32_t step[3];           /* +1, -1 or 0 (the ray is parallel to that axis' planes) */
     int32_t lo[3], hi[3];      /* the walk stays in cells lo..hi (inclusive) */
     double t, t_end;           /* the current cell's entry t; the walk's last t */
+    double t_leave[3];         /* per axis, the t of the current cell's far plane ((plane - org) / dir;
+                                * INFINITY for step 0): only the axis stepped across is recomputed */
     bool done;
 } volume_dda;
 
