@@ -92,6 +92,7 @@
 #include "json_read.h"
 #include "log.h"
 #include "particles/particle_json.h"
+#include "series.h"
 #include "volume/volume_json.h"
 
 /* Scene files describe; the geometry lives in mesh files. Refusing anything
@@ -603,11 +604,11 @@ static bool load_particles(loader *L, json_object *v)
     const char *key = files ? "files" : "file";
     if (!material_ref(L, v, &material_id) || !entry_path(L, v, key, resolved, xform, &optional))
         return false;
-    particle_paths series = {0};
+    series_paths steps = {0};
     if (files) {
         tess_error why = {{0}};
-        if (!particle_paths_glob(resolved, &series, &why)) {
-            if (optional && !series.failed) {
+        if (!series_paths_glob(resolved, &steps, &why)) {
+            if (optional && !steps.failed) {
                 log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, resolved);
                 return true;
             }
@@ -617,18 +618,18 @@ static bool load_particles(loader *L, json_object *v)
     if (!files && skip_missing(L, resolved, optional))
         return true;
     tess_error why = {{0}};
-    particle_set *set = particles_load(files ? series.paths[0] : resolved, &why);
+    particle_set *set = particles_load(files ? steps.paths[0] : resolved, &why);
     if (!set) {
-        particle_paths_free(&series);
+        series_paths_free(&steps);
         return jr_member_fail(c, key, why.msg[0] ? why.msg : "cannot load the particles");
     }
     particle_kind *k = particle_json_kind(c, v, set, material_id);
-    if (k && files && !particle_kind_attach_series(k, (const char *const *)series.paths, series.count, &why)) {
+    if (k && files && !particle_kind_attach_series(k, (const char *const *)steps.paths, steps.count, &why)) {
         particle_kind_destroy(k);
         k = NULL;
         jr_member_fail(c, key, why.msg);
     }
-    particle_paths_free(&series);
+    series_paths_free(&steps);
     if (!k)
         return false;
     int g = scene_add_geometry(L->s, &particle_kind_ops, k, base_name(resolved));
