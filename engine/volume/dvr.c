@@ -612,3 +612,28 @@ bool dvr_integrate(const dvr_volume *d, const double org[3], const double dir[3]
 {
     return dvr_integrate_stats(d, org, dir, t0, t1, jitter, rgb_out, transmittance_out, NULL);
 }
+
+/* ---- another volume of the same layout (a time step) ---------------------------- */
+
+bool dvr_set_volume(dvr_volume *d, const volume *vol, const macrocell_grid *grid, tess_error *err)
+{
+    const macrocell_grid *old = d->grid;
+    const uint32_t n[3] = {vol->nx, vol->ny, vol->nz};
+    bool same = grid && grid->k == old->k;
+    for (int a = 0; same && a < 3; a++)
+        same = grid->cells[a] == n[a] - 1 && grid->cells[a] == old->cells[a] && grid->spacing[a] == vol->spacing[a] &&
+               grid->spacing[a] == old->spacing[a] && grid->origin[a] == vol->origin[a] &&
+               grid->origin[a] == old->origin[a];
+    if (!same)
+        return tess_error_set(err, "volume rendering: the new volume or its macrocell grid is not laid out as the "
+                                   "old one");
+    if (d->own_grid)
+        macrocell_grid_destroy((macrocell_grid *)d->grid);
+    d->own_grid = false;
+    d->vol = vol;
+    d->grid = grid;
+    /* the tables stay (the transfer function and its range as they were);
+     * what empty space is follows the new values */
+    build_cell_opacity(d);
+    return true;
+}

@@ -1121,3 +1121,24 @@ volume *volume_load(const char *path, tess_error *err)
     tess_error_set(err, "%s: not a volume this reader knows (.nrrd, .nhdr, .txt header with .raw data)", path);
     return NULL;
 }
+
+bool volume_same_layout(const volume *first, const volume *v, const char *path, tess_error *err)
+{
+    if (v->nx != first->nx || v->ny != first->ny || v->nz != first->nz)
+        return tess_error_set(err, "%s: dimensions %u x %u x %u differ from the first step's %u x %u x %u", path,
+                              v->nx, v->ny, v->nz, first->nx, first->ny, first->nz);
+    if (v->type != first->type)
+        return tess_error_set(err, "%s: type %s differs from the first step's %s", path, volume_type_name(v->type),
+                              volume_type_name(first->type));
+    for (int a = 0; a < 3; a++)
+        if (v->spacing[a] != first->spacing[a])
+            return tess_error_set(err, "%s: spacing %g %g %g differs from the first step's %g %g %g", path,
+                                  v->spacing[0], v->spacing[1], v->spacing[2], first->spacing[0], first->spacing[1],
+                                  first->spacing[2]);
+    for (int a = 0; a < 3; a++)
+        if (v->origin[a] != first->origin[a])
+            return tess_error_set(err, "%s: origin %g %g %g differs from the first step's %g %g %g", path,
+                                  v->origin[0], v->origin[1], v->origin[2], first->origin[0], first->origin[1],
+                                  first->origin[2]);
+    return true;
+}
