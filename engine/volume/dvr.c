@@ -324,7 +324,7 @@ bool dvr_set_settings(dvr_volume *d, const dvr_settings *settings, tess_error *e
     if (settings->preintegrate && !d->preint) {
         d->preint = malloc((size_t)DVR_PREINT_SIZE * DVR_PREINT_SIZE * sizeof *d->preint);
         if (!d->preint)
-            return tess_error_set(err, "volume rendering: no memory for the pre-integration table");
+            return tess_error_set(err, "volume rendering: out of memory for the pre-integration table");
     }
     bool step_changed = settings->step_vox != d->settings.step_vox;
     bool preint_new = settings->preintegrate && !d->settings.preintegrate;
@@ -344,7 +344,7 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
         return NULL;
     dvr_volume *d = calloc(1, sizeof *d);
     if (!d) {
-        tess_error_set(err, "volume rendering: no memory");
+        tess_error_set(err, "volume rendering: out of memory");
         return NULL;
     }
     d->vol = vol;
@@ -367,19 +367,19 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
     }
     d->cell_opacity = malloc(macrocell_count(d->grid) * sizeof *d->cell_opacity);
     if (!d->cell_opacity) {
-        tess_error_set(err, "volume rendering: no memory for %zu macrocells", macrocell_count(d->grid));
+        tess_error_set(err, "volume rendering: out of memory for %zu macrocells", macrocell_count(d->grid));
         goto fail;
     }
     d->range_scratch = malloc(RANGE_SCRATCH_FLOATS * sizeof *d->range_scratch);
     d->sums = malloc(sizeof *d->sums);
     if (!d->range_scratch || !d->sums) {
-        tess_error_set(err, "volume rendering: no memory");
+        tess_error_set(err, "volume rendering: out of memory");
         goto fail;
     }
     if (s.preintegrate) {
         d->preint = malloc((size_t)DVR_PREINT_SIZE * DVR_PREINT_SIZE * sizeof *d->preint);
         if (!d->preint) {
-            tess_error_set(err, "volume rendering: no memory for the pre-integration table");
+            tess_error_set(err, "volume rendering: out of memory for the pre-integration table");
             goto fail;
         }
     }

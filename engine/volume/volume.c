@@ -82,7 +82,7 @@ volume *volume_create(uint32_t nx, uint32_t ny, uint32_t nz, volume_type type, t
         v->buffer = calloc(volume_count(v), volume_type_size(type));
     if (!v || !v->buffer) {
         free(v);
-        tess_error_set(err, "volume_create: no memory for %u x %u x %u %s", nx, ny, nz, volume_type_name(type));
+        tess_error_set(err, "volume_create: out of memory for %u x %u x %u %s", nx, ny, nz, volume_type_name(type));
         return NULL;
     }
     v->data = v->buffer;
@@ -262,7 +262,7 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
         v->buffer = malloc((size_t)need);
         if (!v->buffer) {
             close(fd);
-            return tess_error_set(err, "%s: no memory for %llu bytes of samples", who, (unsigned long long)need);
+            return tess_error_set(err, "%s: out of memory for %llu bytes of samples", who, (unsigned long long)need);
         }
         unsigned char *dst = v->buffer;
         uint64_t done = 0;
@@ -320,7 +320,7 @@ static bool read_header(const char *path, bool whole, header_text *h, tess_error
     h->text = malloc(want + 1);
     if (!h->text) {
         close(fd);
-        return tess_error_set(err, "%s: no memory for the header", path);
+        return tess_error_set(err, "%s: out of memory for the header", path);
     }
     size_t done = 0;
     while (done < want) {
@@ -666,7 +666,7 @@ volume *volume_load_raw_txt(const char *header_path, tess_error *err)
 
     v = volume_alloc(n, type);
     if (!v) {
-        tess_error_set(err, "%s: no memory", header_path);
+        tess_error_set(err, "%s: out of memory", header_path);
         goto fail;
     }
     const int triples[2] = {TXT_SPACING, TXT_ORIGIN};
@@ -971,7 +971,7 @@ volume *volume_load_nrrd(const char *path, tess_error *err)
 
     v = volume_alloc(n, (volume_type)type);
     if (!v) {
-        tess_error_set(err, "%s: no memory", path);
+        tess_error_set(err, "%s: out of memory", path);
         goto fail;
     }
     if (f[NRRD_SPACINGS].line && f[NRRD_DIRECTIONS].line) {
