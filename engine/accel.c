@@ -468,7 +468,8 @@ bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
     pthread_mutex_lock(&a->refit_lock);
     for (uint32_t g = 0; g < a->geom_count; g++) {
         const scene_geometry *sg = &s->geometries[g];
-        if (!sg->ops->set_step)
+        /* one state only: nothing changes (no tree to take or rebuild) */
+        if (!sg->ops->set_step || (sg->ops->step_count && sg->ops->step_count(sg->data) <= 1))
             continue;
         if (!sg->ops->set_step(sg->data, step, ok ? err : NULL)) {
             ok = false;
