@@ -16,9 +16,9 @@
 /* The pending slot: a step being loaded, loaded, or failed. */
 typedef enum slot_state { SLOT_EMPTY, SLOT_LOADING, SLOT_READY, SLOT_FAILED } slot_state;
 
-/* lock guards want, needed, pending, quit and loader_started; cond signals
- * every change of them. shown is written under lock (series_take) and read
- * anywhere. */
+/* lock guards want, needed, pending, held, quit and loader_started; cond
+ * signals every change of them. shown is written under lock (series_take)
+ * and read anywhere. */
 struct series {
     char **paths;             /* count file names, in step order; owned */
     uint32_t count;
@@ -32,6 +32,8 @@ struct series {
     bool loader_started, quit;
     uint32_t want;            /* the step to load ahead; NO_STEP: none */
     uint32_t needed;          /* the step series_take waits for; NO_STEP: none. It goes before want */
+    bool held;                /* between a take that gave data and series_done: the owner holds two
+                                 steps, so nothing loads */
     struct {
         uint32_t step;        /* NO_STEP: none */
         slot_state state;
@@ -82,8 +84,8 @@ static void *loader_main(void *arg)
     thread_name_set("tess-series");
     pthread_mutex_lock(&S->lock);
     for (;;) {
-        while (!S->quit &&
-               (target(S) == NO_STEP || (S->pending.step == target(S) && S->pending.state != SLOT_EMPTY)))
+        while (!S->quit && (S->held || target(S) == NO_STEP ||
+                            (S->pending.step == target(S) && S->pending.state != SLOT_EMPTY)))
             pthread_cond_wait(&S->cond, &S->lock);
         if (S->quit)
             break;
@@ -197,6 +199,7 @@ bool series_take(series *S, uint32_t step, void **data, tess_error *err)
     *data = NULL;
     step %= S->count;
     pthread_mutex_lock(&S->lock);
+    S->held = false; /* a take ends any swap before it (series_done forgotten) */
     if (step == series_step(S)) {
         pthread_mutex_unlock(&S->lock);
         return true;
@@ -221,9 +224,17 @@ bool series_take(series *S, uint32_t step, void **data, tess_error *err)
     S->pending.state = SLOT_EMPTY;
     S->pending.step = NO_STEP;
     atomic_store_explicit(&S->shown, step, memory_order_release);
-    request(S, (step + 1) % S->count); /* playing forward: the next one in the background */
+    S->held = true; /* until series_done: the owner frees the old step first */
     pthread_mutex_unlock(&S->lock);
     return true;
+}
+
+void series_done(series *S)
+{
+    pthread_mutex_lock(&S->lock);
+    S->held = false;
+    request(S, (series_step(S) + 1) % S->count); /* playing forward: the next one in the background */
+    pthread_mutex_unlock(&S->lock);
 }
 
 bool series_paths_glob(const char *pattern, series_paths *out, tess_error *err)

@@ -14,7 +14,10 @@
  *    a step asked for ahead (series_request, series_ready: `want`): a
  *    prefetch asked for meanwhile never takes its place, so a storm of
  *    prefetches from another thread cannot starve a take.
- *  - After a take, the step after it is asked for ahead (playing forward).
+ *  - After a take that gave data the owner swaps the step in, frees the
+ *    one it showed and calls series_done; until then nothing loads (a
+ *    prefetch asked meanwhile would be a third step in memory). Then the
+ *    step after the one shown is asked for ahead (playing forward).
  *  - A step that failed to load keeps its error in the pending slot; asking
  *    whether it is ready does not load it again (no retry loop at the
  *    input's rate), taking it does (the file may be there now). The step
@@ -71,8 +74,11 @@ bool series_ready(series *s, uint32_t step);
  * when it is pending). True with *data the step's data, now the caller's
  * (swap it in and free the old step's), or with *data NULL when the step is
  * shown already (nothing to swap). False with the load's error: the shown
- * step stays. */
+ * step stays. After data, call series_done once the old step is freed. */
 bool series_take(series *s, uint32_t step, void **data, tess_error *err);
+/* The owner shows the step it took and freed the one before: loading goes
+ * on, and the next step is asked for ahead. */
+void series_done(series *s);
 
 /* A series' files: the names matching a glob(3) pattern ("melt/step_*.dump"),
  * sorted by name, which is the step order (name steps with leading zeros). */

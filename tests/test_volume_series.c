@@ -7,6 +7,8 @@
  * work neither hangs nor leaks (ASan). */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +18,7 @@
 #include "engine/frame_state.h"
 #include "engine/render.h"
 #include "engine/scene.h"
+#include "engine/series.h"
 #include "engine/txn.h"
 #include "engine/volume/dvr_medium.h"
 #include "engine/volume/iso_kind.h"
@@ -257,4 +260,89 @@ Test(volume_series, destroy_while_the_loader_is_busy, .timeout = 60)
         scene_destroy(s);
         support_remove_tmp_dir(dir);
     }
+}
+
+/* ---- the series itself (engine/series.h) ------------------------------------ */
+
+/* Step data that counts how many exist at once (shown + pending). */
+typedef struct step_count {
+    atomic_int live, most;
+} step_count;
+
+static void *count_load(void *ctx, const char *path, uint32_t step, tess_error *err)
+{
+    step_count *c = ctx;
+    if (strcmp(path, "bad") == 0) {
+        tess_error_set(err, "%s: broken on purpose", path);
+        return NULL;
+    }
+    uint32_t *data = malloc(sizeof *data);
+    cr_assert(data);
+    *data = step;
+    int now = atomic_fetch_add(&c->live, 1) + 1;
+    for (int most = atomic_load(&c->most); now > most && !atomic_compare_exchange_weak(&c->most, &most, now);)
+        ;
+    return data;
+}
+
+static void count_free(void *ctx, void *data)
+{
+    step_count *c = ctx;
+    atomic_fetch_sub(&c->live, 1);
+    free(data);
+}
+
+typedef struct asker {
+    series *s;
+    atomic_bool stop;
+} asker;
+
+static void *ask_all_the_time(void *arg)
+{
+    asker *a = arg;
+    for (uint32_t i = 0; !atomic_load(&a->stop); i++)
+        series_ready(a->s, i % 7);
+    return NULL;
+}
+
+/* At most two steps exist at once (the one shown and one pending) however
+ * another thread asks ahead, each take gives the step asked for, and a
+ * step that cannot be loaded gives its error and leaves the shown one. */
+Test(volume_series, a_series_keeps_two_steps_at_most, .timeout = 60)
+{
+    const char *paths[] = {"s0", "s1", "s2", "bad", "s4", "s5", "s6"};
+    step_count c;
+    atomic_init(&c.live, 1); /* step 0, the owner's */
+    atomic_init(&c.most, 1);
+    tess_error err = {{0}};
+    series *s = series_create(paths, 7, 0, count_load, count_free, &c, &err);
+    cr_assert(s, "%s", err.msg);
+    asker a = {.s = s};
+    atomic_init(&a.stop, false);
+    pthread_t t;
+    cr_assert_eq(pthread_create(&t, NULL, ask_all_the_time, &a), 0);
+    const uint32_t order[] = {2, 5, 6, 1, 4, 4, 0, 9 /* = 2 */};
+    for (size_t i = 0; i < sizeof order / sizeof order[0]; i++) {
+        void *data;
+        cr_assert(series_take(s, order[i], &data, &err), "%s", err.msg);
+        uint32_t want = order[i] % 7;
+        if (i > 0 && order[i] == order[i - 1]) {
+            cr_assert_null(data, "shown already");
+            continue;
+        }
+        cr_assert_not_null(data);
+        cr_assert_eq(*(uint32_t *)data, want);
+        cr_assert_eq(series_step(s), want);
+        count_free(&c, data); /* the owner shows it and frees the old one: model that by one count */
+        series_done(s);
+    }
+    void *data;
+    cr_assert_not(series_take(s, 3, &data, &err));
+    cr_assert(strstr(err.msg, "bad: broken on purpose"), "%s", err.msg);
+    cr_assert_eq(series_step(s), 2u);
+    atomic_store(&a.stop, true);
+    pthread_join(t, NULL);
+    series_destroy(s);
+    cr_assert_leq(atomic_load(&c.most), 2, "%d steps at once", atomic_load(&c.most));
+    cr_assert_eq(atomic_load(&c.live), 1, "only the shown step is left");
 }

@@ -304,6 +304,7 @@ bool particle_kind_set_step(particle_kind *k, uint32_t step, tess_error *err)
     free(st);
     particle_set_destroy(old_set);
     wbvh_finish(&old_tree);
+    series_done(k->series); /* the old step is gone: the next one may load */
     return true;
 }
 

@@ -265,6 +265,7 @@ bool iso_volume_set_step(iso_volume *shared, uint32_t step, tess_error *err)
     for (iso_volume_watcher *w = shared->watchers; w; w = w->next)
         w->swapped(w->ctx, shared->now.v, shared->now.grid);
     field_free(&old); /* after the watchers: nothing points to it now */
+    series_done(shared->series); /* the old step is gone: the next one may load */
     return true;
 }
 
