@@ -346,3 +346,35 @@ Test(volume_series, a_series_keeps_two_steps_at_most, .timeout = 60)
     cr_assert_leq(atomic_load(&c.most), 2, "%d steps at once", atomic_load(&c.most));
     cr_assert_eq(atomic_load(&c.live), 1, "only the shown step is left");
 }
+
+/* A volume rendered directly only (no iso-surface): the scene's steps and
+ * readiness are the medium's, and a time step changes what it renders. */
+Test(volume_series, a_medium_alone_steps_too, .timeout = 60)
+{
+    char dir[256], path[600], text[1024];
+    support_make_tmp_dir(dir, sizeof dir, "vseries-dvr");
+    for (int k = 0; k < STEPS; k++) {
+        char step[32];
+        snprintf(step, sizeof step, "step_%04d", k);
+        write_step_file(dir, step, radius[k], N);
+    }
+    snprintf(path, sizeof path, "%s/scene.json", dir);
+    snprintf(text, sizeof text,
+             "{\"volumes\": [{\"files\": \"step_*.nhdr\", \"dvr\": {\"transfer\": {\"map\": \"viridis\", \"opacity\":"
+             " [[0, 0], [0.5, 0], [0.5005, 0.2], [1, 0.2]], \"range\": [-1, 1]}, \"step\": 0.0625}}]}");
+    tess_error err = {{0}};
+    scene *s = scene_parse_json(path, text, strlen(text), &err);
+    cr_assert(s, "%s", err.msg);
+    cr_assert_eq(s->geometry_count, 0u);
+    cr_assert_eq(scene_time_steps(s), (uint32_t)STEPS);
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    double want0 = pow(1.0 - OPACITY_INSIDE, 2.0 * radius[0]), want2 = pow(1.0 - OPACITY_INSIDE, 2.0 * radius[2]);
+    cr_expect(fabs(transmittance(s) / want0 - 1.0) < 0.03, "step 0: %g, want %g", (double)transmittance(s), want0);
+    wait_ready(s, 2);
+    cr_assert(accel_set_time_step(a, 2, &err), "%s", err.msg);
+    cr_expect(fabs(transmittance(s) / want2 - 1.0) < 0.03, "step 2: %g, want %g", (double)transmittance(s), want2);
+    accel_destroy(a);
+    scene_destroy(s);
+    support_remove_tmp_dir(dir);
+}
