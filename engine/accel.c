@@ -463,17 +463,19 @@ uint64_t accel_occluded_packet(const accel *a, packet_range r)
 bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
 {
     accel *a = mutable_accel(ca);
-    const scene *s = a->scene;
+    scene *s = (scene *)(uintptr_t)a->scene; /* its closed cache follows the step (a serial section) */
     bool ok = true;
     pthread_mutex_lock(&a->refit_lock);
     for (uint32_t g = 0; g < a->geom_count; g++) {
         const scene_geometry *sg = &s->geometries[g];
-        if (!sg->ops->set_step)
+        /* one state only: nothing changes (no tree to take or rebuild) */
+        if (!sg->ops->set_step || (sg->ops->step_count && sg->ops->step_count(sg->data) <= 1))
             continue;
         if (!sg->ops->set_step(sg->data, step, ok ? err : NULL)) {
             ok = false;
             continue;
         }
+        scene_forget_closed(s, g); /* whether it bounds a solid may differ from step to step */
         if (sg->ops->leaf == GEOMETRY_LEAF_POINTS) { /* its tree changed with its points */
             const wbvh *t = sg->ops->tree(sg->data, 1, ok ? err : NULL);
             if (!t) {
@@ -482,12 +484,30 @@ bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
             }
             a->geoms[g] = *t;
             a->geoms[g].borrowed = true;
+        } else {
+            /* its primitives' boxes may have moved with the step (an
+             * iso-surface's active box): its bottom level again, from
+             * prim_bounds (kinds with time steps keep few primitives) */
+            wbvh fresh;
+            if (!build_geometry(&fresh, sg, 1, ok ? err : NULL)) {
+                ok = false;
+                continue;
+            }
+            wbvh_finish(&a->geoms[g]);
+            a->geoms[g] = fresh;
         }
         for (uint32_t i = 0; i < a->instance_count; i++)
             if (s->instances[i].geometry == g) {
                 a->instance_bounds[i] = instance_box(&a->placements[i], &a->geoms[g]);
                 wbvh_mark_instances(&a->top, i, 1);
             }
+    }
+    /* media (a volume rendered directly): their boxes stay; a medium sharing
+     * a series with a geometry above finds the step shown already */
+    for (uint32_t m = 0; m < s->medium_count; m++) {
+        const scene_medium *sm = &s->media[m];
+        if (sm->ops->set_step && !sm->ops->set_step(sm->data, step, ok ? err : NULL))
+            ok = false;
     }
     wbvh_refit_stale(&a->top, a->instance_bounds);
     pthread_mutex_unlock(&a->refit_lock);

@@ -127,9 +127,12 @@ void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name);
  * it takes the built-in transfer function `name`. Same callers. */
 void accel_set_transfer(const accel *a, const char *name);
 
-/* Show time step `step` of every geometry that has steps
- * (geometry_ops.set_step; each takes it modulo its own count), take the
- * new trees of GEOMETRY_LEAF_POINTS kinds and refit the instance level.
+/* Show time step `step` of every geometry and medium that has steps
+ * (geometry_ops.set_step, medium_ops.set_step; each takes it modulo its
+ * own count), take the new trees of GEOMETRY_LEAF_POINTS kinds, rebuild the
+ * bottom level of other stepped kinds (their boxes may move: an
+ * iso-surface's one box), drop their cached `closed` answers and refit the
+ * instance level.
  * Waits for a step that is not loaded yet. False, with the first error,
  * when a step could not be had (those geometries keep theirs). Same callers
  * as accel_set_hidden. */

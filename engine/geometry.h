@@ -136,8 +136,11 @@ typedef struct geometry_ops {
      * (else it is loaded in the background); any thread. set_step: show
      * `step`, only where nothing traces; false with err when its data
      * cannot be had (the step shown stays). A GEOMETRY_LEAF_POINTS kind's
-     * tree changes with the step: the accel takes it again
-     * (accel_set_time_step). */
+     * tree changes with the step: the accel takes it again; any other
+     * kind's bottom level is rebuilt from prim_bounds at every step, so
+     * such a kind should have few primitives (an iso-surface has one)
+     * (accel_set_time_step). Several geometries may share one series
+     * (the iso-surfaces of one volume): each is set, the first swaps. */
     uint32_t (*step_count)(const void *data);
     bool (*step_ready)(void *data, uint32_t step);
     bool (*set_step)(void *data, uint32_t step, tess_error *err);

@@ -98,6 +98,11 @@ typedef struct medium_ops {
     /* The transfer function in use (range fitted); NULL op: not changeable.
      * Where nothing changes it (as geometry_ops.colormap). */
     const struct colormap *(*colormap)(const void *data);
+    /* TIME STEPS, as a geometry's (geometry.h; NULL: one state only). The
+     * medium's bounds must not change with the step. */
+    uint32_t (*step_count)(const void *data);
+    bool (*step_ready)(void *data, uint32_t step);
+    bool (*set_step)(void *data, uint32_t step, tess_error *err);
 } medium_ops;
 
 typedef struct scene_medium {
@@ -260,6 +265,14 @@ bool scene_geometry_bounds(const scene *s, uint32_t geometry, aabb *out);
 
 /* World-space bounds of all instances; false for an empty scene. */
 bool scene_bounds(const scene *s, vec3 *lo, vec3 *hi);
+
+/* TIME STEPS of the scene: the steps of its longest time series over the
+ * geometries and media that have step ops (1: none), and whether every one
+ * of them can show `step` without waiting (each that cannot is asked to
+ * load it: the input's play asks ahead this way). Any thread (the series'
+ * own locks make the question safe while frames render). */
+uint32_t scene_time_steps(const scene *s);
+bool scene_step_ready(const scene *s, uint32_t step);
 
 /* Total triangles over all meshes (each stored once). */
 size_t scene_triangle_count(const scene *s);

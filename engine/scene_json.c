@@ -92,6 +92,7 @@
 #include "json_read.h"
 #include "log.h"
 #include "particles/particle_json.h"
+#include "series.h"
 #include "volume/volume_json.h"
 
 /* Scene files describe; the geometry lives in mesh files. Refusing anything
@@ -603,11 +604,11 @@ static bool load_particles(loader *L, json_object *v)
     const char *key = files ? "files" : "file";
     if (!material_ref(L, v, &material_id) || !entry_path(L, v, key, resolved, xform, &optional))
         return false;
-    particle_paths series = {0};
+    series_paths steps = {0};
     if (files) {
         tess_error why = {{0}};
-        if (!particle_paths_glob(resolved, &series, &why)) {
-            if (optional && !series.failed) {
+        if (!series_paths_glob(resolved, &steps, &why)) {
+            if (optional && !steps.failed) {
                 log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, resolved);
                 return true;
             }
@@ -617,18 +618,18 @@ static bool load_particles(loader *L, json_object *v)
     if (!files && skip_missing(L, resolved, optional))
         return true;
     tess_error why = {{0}};
-    particle_set *set = particles_load(files ? series.paths[0] : resolved, &why);
+    particle_set *set = particles_load(files ? steps.paths[0] : resolved, &why);
     if (!set) {
-        particle_paths_free(&series);
+        series_paths_free(&steps);
         return jr_member_fail(c, key, why.msg[0] ? why.msg : "cannot load the particles");
     }
     particle_kind *k = particle_json_kind(c, v, set, material_id);
-    if (k && files && !particle_kind_attach_series(k, (const char *const *)series.paths, series.count, &why)) {
+    if (k && files && !particle_kind_attach_series(k, (const char *const *)steps.paths, steps.count, &why)) {
         particle_kind_destroy(k);
         k = NULL;
         jr_member_fail(c, key, why.msg);
     }
-    particle_paths_free(&series);
+    series_paths_free(&steps);
     if (!k)
         return false;
     int g = scene_add_geometry(L->s, &particle_kind_ops, k, base_name(resolved));
@@ -643,32 +644,51 @@ static bool load_particles(loader *L, json_object *v)
 
 static int material_by_name(void *ctx, const char *name) { return find_material(ctx, name); }
 
-/* A "volumes" entry: the file and where it goes here, the rest in
- * volume/volume_json.c. */
+/* A "volumes" entry: the file (or a series' files) and where it goes here,
+ * the rest in volume/volume_json.c. */
 static bool load_volume(loader *L, json_object *v)
 {
     jr_ctx *c = &L->ctx;
     bool optional;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
-    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, volume_json_fields) || !jr_require_member(c, v, "file") ||
-        !entry_path(L, v, "file", resolved, xform, &optional))
+    json_object *ignored;
+    bool has_file = jr_get_member(v, "file", &ignored), files = jr_get_member(v, "files", &ignored);
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, volume_json_fields))
         return false;
-    if (skip_missing(L, resolved, optional))
-        return true;
+    if (has_file == files)
+        return jr_field_fail(c, "give either 'file' or 'files' (a time series)");
+    const char *key = files ? "files" : "file";
+    if (!entry_path(L, v, key, resolved, xform, &optional))
+        return false;
+    series_paths steps = {0};
     tess_error why = {{0}};
-    volume *vol = volume_load(resolved, &why);
-    if (!vol)
-        return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the volume");
-    int mat = default_material_id(L);
-    if (mat < 0) {
-        volume_destroy(vol);
-        return out_of_memory(L);
+    if (files && !series_paths_glob(resolved, &steps, &why)) {
+        if (optional && !steps.failed) {
+            log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, resolved);
+            return true;
+        }
+        return jr_member_fail(c, "files", why.msg);
     }
-    affine3 placement;
-    memcpy(placement.m, xform, sizeof placement.m);
-    return volume_json_add(c, v, vol, affine3_is_identity(&placement) ? NULL : &placement, L->s, (uint32_t)mat,
-                           material_by_name, L);
+    if (!files && skip_missing(L, resolved, optional))
+        return true;
+    volume *vol = volume_load(files ? steps.paths[0] : resolved, &why);
+    int mat = vol ? default_material_id(L) : -1;
+    bool ok;
+    if (!vol)
+        ok = jr_member_fail(c, key, why.msg[0] ? why.msg : "cannot load the volume");
+    else if (mat < 0) {
+        volume_destroy(vol);
+        ok = out_of_memory(L);
+    } else {
+        affine3 placement;
+        memcpy(placement.m, xform, sizeof placement.m);
+        ok = volume_json_add(c, v, vol, files ? (const char *const *)steps.paths : NULL, steps.count,
+                             affine3_is_identity(&placement) ? NULL : &placement, L->s, (uint32_t)mat,
+                             material_by_name, L);
+    }
+    series_paths_free(&steps);
+    return ok;
 }
 
 /* Whether anything in the scene can be hit. */

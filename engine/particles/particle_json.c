@@ -1,7 +1,6 @@
 /* particle_json.c - a "particles" entry of a scene file (particle_json.h). */
 #include "particle_json.h"
 
-#include <glob.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -157,51 +156,4 @@ particle_kind *particle_json_kind(jr_ctx *c, json_object *v, particle_set *set, 
     if (!k)
         jr_field_fail(c, "%s", why.msg);
     return k;
-}
-
-bool particle_paths_glob(const char *pattern, particle_paths *out, tess_error *err)
-{
-    memset(out, 0, sizeof *out);
-    glob_t g;
-    int rc = glob(pattern, GLOB_ERR, NULL, &g);
-    if (rc == GLOB_NOMATCH) {
-        globfree(&g);
-        return tess_error_set(err, "no file matches '%s'", pattern);
-    }
-    if (rc != 0) {
-        globfree(&g);
-        out->failed = true;
-        return tess_error_set(err, "cannot list the files of '%s'%s", pattern,
-                              rc == GLOB_NOSPACE ? ": out of memory" : ": a directory cannot be read");
-    }
-    if (g.gl_pathc > PARTICLE_SERIES_MAX) {
-        size_t n = g.gl_pathc;
-        globfree(&g);
-        out->failed = true;
-        return tess_error_set(err, "'%s' matches %zu files (at most %d steps)", pattern, n, PARTICLE_SERIES_MAX);
-    }
-    out->paths = calloc(g.gl_pathc, sizeof *out->paths);
-    for (size_t i = 0; out->paths && i < g.gl_pathc; i++)
-        if (!(out->paths[i] = strdup(g.gl_pathv[i]))) {
-            out->count = (uint32_t)i;
-            particle_paths_free(out);
-            break;
-        }
-    if (!out->paths) {
-        globfree(&g);
-        out->failed = true;
-        return tess_error_set(err, "out of memory listing '%s'", pattern);
-    }
-    out->count = (uint32_t)g.gl_pathc; /* sorted by name (glob's order) */
-    globfree(&g);
-    return true;
-}
-
-void particle_paths_free(particle_paths *p)
-{
-    for (uint32_t i = 0; p->paths && i < p->count; i++)
-        free(p->paths[i]);
-    free(p->paths);
-    p->paths = NULL;
-    p->count = 0;
 }

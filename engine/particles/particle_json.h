@@ -23,17 +23,4 @@ extern const char *const particle_json_fields[];
  * (the file has: id, type, c_ke)". */
 particle_kind *particle_json_kind(jr_ctx *c, json_object *v, particle_set *set, uint32_t material_id);
 
-/* A time series' files: the names matching a glob(3) pattern ("melt/step_*.dump"),
- * sorted by name, which is the step order (name steps with leading zeros). */
-#define PARTICLE_SERIES_MAX 100000
-typedef struct particle_paths {
-    char **paths;
-    uint32_t count;
-    bool failed; /* listing failed (not merely: nothing matched) */
-} particle_paths;
-/* False with err ("no file matches 'P'", too many, a directory that cannot
- * be read); *out is empty then. */
-bool particle_paths_glob(const char *pattern, particle_paths *out, tess_error *err);
-void particle_paths_free(particle_paths *p);
-
 #endif

@@ -11,6 +11,7 @@
 #include "engine/bvh.h"
 #include "engine/intersect.h"
 #include "engine/parallel.h"
+#include "engine/series.h"
 #include "engine/srgb.h"
 #include "engine/wbvh.h"
 
@@ -22,47 +23,27 @@
 /* Particles per parallel chunk of box computation. */
 #define PARTICLE_BOX_GRAIN 16384
 
-/* A time step being loaded on the loader thread, or loaded. */
-typedef enum step_state { STEP_EMPTY, STEP_LOADING, STEP_READY, STEP_FAILED } step_state;
-
 /* Where a set keeps the attributes the kind reads (found by name in each
  * step's set: files of a series may order their columns differently). */
 typedef struct step_layout {
     int radius, crop, colour, rgb[3]; /* indices in the set, -1 when unused */
 } step_layout;
 
-/* THE SERIES (time steps). The kind shows one step (set, tree); the loader
- * thread loads the next one asked for (want) into `pending` and builds its
- * tree there, so at most two steps are in memory. lock guards want, needed,
- * pending, quit and loader_started; cond signals every change of them. The
- * current step (set, tree, step) changes only in particle_kind_set_step,
- * which runs where nothing traces (a serial section). */
-typedef struct particle_series {
-    char **paths;            /* step_count file names, in step order */
-    uint32_t step_count;
-    uint32_t step;           /* the step shown */
-    pthread_mutex_t lock;
-    pthread_cond_t cond;
-    pthread_t loader;
-    bool loader_started, quit;
-    uint32_t want;           /* the step to load ahead (prefetch); UINT32_MAX: none */
-    uint32_t needed;         /* the step particle_kind_set_step waits for; UINT32_MAX: none. It
-                                goes before want: a prefetch asked meanwhile never takes its place */
-    struct {
-        uint32_t step;
-        step_state state;
-        particle_set *set;
-        step_layout lay;
-        wbvh tree;
-        char error[TESS_ERROR_MSG_BYTES];
-    } pending;
-} particle_series;
+/* One time step as the series' loader makes it (series.h): the set, where
+ * its attributes are, and its tree, built off the render threads. */
+typedef struct particle_step {
+    particle_set *set;
+    step_layout lay;
+    wbvh tree;
+} particle_step;
 
 struct particle_kind {
     particle_set *set;     /* owned; capacity >= count + GEOMETRY_POINTS_PAD (kernels read past) */
     /* the attributes by name (resolved in every step's set: step_layout) */
     char radius_name[PARTICLE_NAME_BYTES], crop_name[PARTICLE_NAME_BYTES], colour_name[PARTICLE_NAME_BYTES];
-    particle_series *series; /* NULL: one set, no time steps */
+    series *series;        /* TIME STEPS (series.h): NULL: one set. The shown step's set and tree are
+                              set and tree below; they change only in particle_kind_set_step, which
+                              runs where nothing traces (a serial section) */
     int radius_attribute;  /* index in set, or -1: radius_all */
     float radius_all;
     int crop_attribute;    /* index in set, or -1 */
@@ -214,13 +195,11 @@ fail:
     return NULL;
 }
 
-static void series_destroy(particle_series *S);
-
 void particle_kind_destroy(particle_kind *k)
 {
     if (!k)
         return;
-    series_destroy(k->series);
+    series_destroy(k->series); /* first: its loader reads k */
     wbvh_finish(&k->tree);
     free(k->table);
     pthread_mutex_destroy(&k->tree_lock);
@@ -256,192 +235,76 @@ void particle_kind_set_crop(particle_kind *k, geometry_crop crop)
         k->crop = crop;
 }
 
-/* ---- time steps (particle_series) -------------------------------------- */
+/* ---- time steps (series.h) --------------------------------------------- */
 
 static bool build_tree(const particle_kind *k, particle_set *set, const step_layout *lay, wbvh *tree, int threads,
                        tess_error *err);
 
-static void pending_clear(particle_series *S)
+static void free_step(void *ctx, void *data)
 {
-    particle_set_destroy(S->pending.set);
-    wbvh_finish(&S->pending.tree);
-    S->pending.set = NULL;
-    S->pending.state = STEP_EMPTY;
+    (void)ctx;
+    particle_step *st = data;
+    particle_set_destroy(st->set);
+    wbvh_finish(&st->tree);
+    free(st);
 }
 
-/* The step the loader should have in pending (S->lock held). */
-static uint32_t series_target(const particle_series *S) { return S->needed != UINT32_MAX ? S->needed : S->want; }
-
-/* The loader thread: loads the step asked for (series_target) into pending
- * and builds its tree there, one thread's work, while frames render. */
-static void *series_loader(void *arg)
+/* The loader thread's work: the step's set, checked, and its tree, built
+ * on one thread while frames render. */
+static void *load_step(void *ctx, const char *path, uint32_t step, tess_error *err)
 {
-    particle_kind *k = arg;
-    particle_series *S = k->series;
-    pthread_mutex_lock(&S->lock);
-    for (;;) {
-        while (!S->quit && (series_target(S) == UINT32_MAX ||
-                            (S->pending.step == series_target(S) && S->pending.state != STEP_EMPTY)))
-            pthread_cond_wait(&S->cond, &S->lock);
-        if (S->quit)
-            break;
-        uint32_t step = series_target(S);
-        pending_clear(S);
-        S->pending.step = step;
-        S->pending.state = STEP_LOADING;
-        const char *path = S->paths[step];
-        pthread_mutex_unlock(&S->lock);
-
-        tess_error why = {{0}};
-        step_layout lay;
-        wbvh tree;
-        memset(&tree, 0, sizeof tree);
-        particle_set *set = particles_load(path, &why);
-        bool ok = set && resolve_layout(k, set, &lay, path, &why) && build_tree(k, set, &lay, &tree, 1, &why);
-
-        pthread_mutex_lock(&S->lock);
-        if (ok) {
-            S->pending.set = set;
-            S->pending.lay = lay;
-            S->pending.tree = tree;
-            S->pending.state = STEP_READY;
-        } else {
-            particle_set_destroy(set);
-            wbvh_finish(&tree);
-            snprintf(S->pending.error, sizeof S->pending.error, "%s", why.msg[0] ? why.msg : "cannot load the step");
-            S->pending.state = STEP_FAILED;
-        }
-        pthread_cond_broadcast(&S->cond);
+    (void)step;
+    const particle_kind *k = ctx;
+    particle_step *st = calloc(1, sizeof *st);
+    if (!st) {
+        tess_error_set(err, "%s: out of memory", path);
+        return NULL;
     }
-    pthread_mutex_unlock(&S->lock);
-    return NULL;
-}
-
-/* The loader runs and has seen the latest request (S->lock held). */
-static void series_wake(particle_kind *k)
-{
-    particle_series *S = k->series;
-    if (!S->loader_started)
-        S->loader_started = pthread_create(&S->loader, NULL, series_loader, k) == 0;
-    pthread_cond_broadcast(&S->cond);
-}
-
-/* Ask the loader to load `step` ahead (S->lock held). */
-static void series_request(particle_kind *k, uint32_t step)
-{
-    if (k->series->want == step)
-        return;
-    k->series->want = step;
-    series_wake(k);
-}
-
-static void series_destroy(particle_series *S)
-{
-    if (!S)
-        return;
-    if (S->loader_started) {
-        pthread_mutex_lock(&S->lock);
-        S->quit = true;
-        pthread_cond_broadcast(&S->cond);
-        pthread_mutex_unlock(&S->lock);
-        pthread_join(S->loader, NULL);
+    st->set = particles_load(path, err);
+    if (!st->set || !resolve_layout(k, st->set, &st->lay, path, err) ||
+        !build_tree(k, st->set, &st->lay, &st->tree, 1, err)) {
+        free_step(NULL, st);
+        return NULL;
     }
-    pending_clear(S);
-    for (uint32_t i = 0; i < S->step_count; i++)
-        free(S->paths[i]);
-    free(S->paths);
-    pthread_cond_destroy(&S->cond);
-    pthread_mutex_destroy(&S->lock);
-    free(S);
+    return st;
 }
 
 bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, tess_error *err)
 {
-    particle_series *S = calloc(1, sizeof *S);
-    if (!S || !(S->paths = calloc(count ? count : 1, sizeof *S->paths))) {
-        free(S);
-        return tess_error_set(err, "particles: out of memory for a series of %u steps", count);
-    }
-    S->step_count = count;
-    for (uint32_t i = 0; i < count; i++)
-        if (!(S->paths[i] = strdup(paths[i]))) {
-            S->step_count = i;
-            goto oom;
-        }
-    if (pthread_mutex_init(&S->lock, NULL) != 0)
-        goto oom;
-    if (pthread_cond_init(&S->cond, NULL) != 0) {
-        pthread_mutex_destroy(&S->lock);
-        goto oom;
-    }
-    S->want = S->needed = UINT32_MAX;
-    S->pending.step = UINT32_MAX;
-    k->series = S;
-    return true;
-oom:
-    for (uint32_t i = 0; i < S->step_count; i++)
-        free(S->paths[i]);
-    free(S->paths);
-    free(S);
-    return tess_error_set(err, "particles: out of memory for a series of %u steps", count);
+    k->series = series_create(paths, count, 0, load_step, free_step, k, err);
+    if (!k->series)
+        tess_error_prefix(err, "particles: ");
+    return k->series != NULL;
 }
 
-uint32_t particle_kind_step_count(const particle_kind *k) { return k->series ? k->series->step_count : 1; }
-uint32_t particle_kind_step(const particle_kind *k) { return k->series ? k->series->step : 0; }
+uint32_t particle_kind_step_count(const particle_kind *k) { return k->series ? series_step_count(k->series) : 1; }
+uint32_t particle_kind_step(const particle_kind *k) { return k->series ? series_step(k->series) : 0; }
 
 bool particle_kind_step_ready(particle_kind *k, uint32_t step)
 {
-    particle_series *S = k->series;
-    if (!S)
-        return step == 0;
-    step %= S->step_count;
-    pthread_mutex_lock(&S->lock);
-    bool ready = step == S->step || (S->pending.step == step && S->pending.state == STEP_READY);
-    if (!ready && !(S->pending.step == step && S->pending.state == STEP_FAILED))
-        series_request(k, step);
-    pthread_mutex_unlock(&S->lock);
-    return ready;
+    return k->series ? series_ready(k->series, step) : step == 0;
 }
 
 bool particle_kind_set_step(particle_kind *k, uint32_t step, tess_error *err)
 {
-    particle_series *S = k->series;
-    if (!S)
+    if (!k->series)
         return true; /* one set: every step is it */
-    step %= S->step_count;
-    pthread_mutex_lock(&S->lock);
-    if (step == S->step) {
-        pthread_mutex_unlock(&S->lock);
-        return true;
-    }
-    if (S->pending.step == step && S->pending.state == STEP_FAILED)
-        pending_clear(S); /* ask again: the file may be there now */
-    S->needed = step;
-    series_wake(k);
-    while (!(S->pending.step == step && (S->pending.state == STEP_READY || S->pending.state == STEP_FAILED)))
-        pthread_cond_wait(&S->cond, &S->lock);
-    S->needed = UINT32_MAX;
-    if (S->pending.state == STEP_FAILED) {
-        tess_error_set(err, "%s", S->pending.error);
-        S->want = UINT32_MAX;
-        pthread_mutex_unlock(&S->lock);
+    void *taken;
+    if (!series_take(k->series, step, &taken, err))
         return false;
-    }
+    particle_step *st = taken;
+    if (!st)
+        return true; /* shown already */
     particle_set *old_set = k->set;
     wbvh old_tree = k->tree;
-    k->set = S->pending.set;
-    k->tree = S->pending.tree;
-    apply_layout(k, &S->pending.lay);
+    k->set = st->set;
+    k->tree = st->tree;
+    apply_layout(k, &st->lay);
     atomic_store_explicit(&k->tree_ready, true, memory_order_release);
-    S->pending.set = NULL;
-    memset(&S->pending.tree, 0, sizeof S->pending.tree);
-    S->pending.state = STEP_EMPTY;
-    S->pending.step = UINT32_MAX;
-    S->step = step;
-    series_request(k, (step + 1) % S->step_count); /* playing forward: the next one in the background */
-    pthread_mutex_unlock(&S->lock);
+    free(st);
     particle_set_destroy(old_set);
     wbvh_finish(&old_tree);
+    series_done(k->series); /* the old step is gone: the next one may load */
     return true;
 }
 

@@ -346,7 +346,7 @@ bool dvr_set_settings(dvr_volume *d, const dvr_settings *settings, tess_error *e
     if (settings->preintegrate && !d->preint) {
         d->preint = malloc((size_t)DVR_PREINT_SIZE * DVR_PREINT_SIZE * sizeof *d->preint);
         if (!d->preint)
-            return tess_error_set(err, "volume rendering: no memory for the pre-integration table");
+            return tess_error_set(err, "volume rendering: out of memory for the pre-integration table");
     }
     bool step_changed = settings->step_vox != d->settings.step_vox;
     bool preint_new = settings->preintegrate && !d->settings.preintegrate;
@@ -366,7 +366,7 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
         return NULL;
     dvr_volume *d = calloc(1, sizeof *d);
     if (!d) {
-        tess_error_set(err, "volume rendering: no memory");
+        tess_error_set(err, "volume rendering: out of memory");
         return NULL;
     }
     d->vol = vol;
@@ -389,19 +389,19 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
     }
     d->cell_opacity = malloc(macrocell_count(d->grid) * sizeof *d->cell_opacity);
     if (!d->cell_opacity) {
-        tess_error_set(err, "volume rendering: no memory for %zu macrocells", macrocell_count(d->grid));
+        tess_error_set(err, "volume rendering: out of memory for %zu macrocells", macrocell_count(d->grid));
         goto fail;
     }
     d->range_scratch = malloc(RANGE_SCRATCH_FLOATS * sizeof *d->range_scratch);
     d->sums = malloc(sizeof *d->sums);
     if (!d->range_scratch || !d->sums) {
-        tess_error_set(err, "volume rendering: no memory");
+        tess_error_set(err, "volume rendering: out of memory");
         goto fail;
     }
     if (s.preintegrate) {
         d->preint = malloc((size_t)DVR_PREINT_SIZE * DVR_PREINT_SIZE * sizeof *d->preint);
         if (!d->preint) {
-            tess_error_set(err, "volume rendering: no memory for the pre-integration table");
+            tess_error_set(err, "volume rendering: out of memory for the pre-integration table");
             goto fail;
         }
     }
@@ -766,4 +766,29 @@ bool dvr_integrate(const dvr_volume *d, const double org[3], const double dir[3]
                    double jitter, float rgb_out[3], float *transmittance_out)
 {
     return dvr_integrate_stats(d, org, dir, t0, t1, jitter, rgb_out, transmittance_out, NULL);
+}
+
+/* ---- another volume of the same layout (a time step) ---------------------------- */
+
+bool dvr_set_volume(dvr_volume *d, const volume *vol, const macrocell_grid *grid, tess_error *err)
+{
+    const macrocell_grid *old = d->grid;
+    const uint32_t n[3] = {vol->nx, vol->ny, vol->nz};
+    bool same = grid && grid->k == old->k;
+    for (int a = 0; same && a < 3; a++)
+        same = grid->cells[a] == n[a] - 1 && grid->cells[a] == old->cells[a] && grid->spacing[a] == vol->spacing[a] &&
+               grid->spacing[a] == old->spacing[a] && grid->origin[a] == vol->origin[a] &&
+               grid->origin[a] == old->origin[a];
+    if (!same)
+        return tess_error_set(err, "volume rendering: the new volume or its macrocell grid is not laid out as the "
+                                   "old one");
+    if (d->own_grid)
+        macrocell_grid_destroy((macrocell_grid *)d->grid);
+    d->own_grid = false;
+    d->vol = vol;
+    d->grid = grid;
+    /* the tables stay (the transfer function and its range as they were);
+     * what empty space is follows the new values */
+    build_cell_opacity(d);
+    return true;
 }

@@ -137,6 +137,16 @@ void dvr_set_transfer(dvr_volume *d, const colormap *tf);
  * of memory. Rebuilds what the step size or pre-integration needs. */
 bool dvr_set_settings(dvr_volume *d, const dvr_settings *settings, tess_error *err);
 
+/* Render `vol` with its macrocell grid `grid` from now on (both kept by
+ * pointer, as dvr_create's; a grid d built itself is freed): a time step
+ * of the same layout (the same dimensions, spacing and origin, a grid of
+ * the same block edge). The transfer function keeps its range (fitted to
+ * the first volume when automatic: a value keeps its colour from step to
+ * step) and its tables; the macrocells' opacities are recomputed,
+ * O(macrocells). False (nothing changed, err set) for another layout. Not
+ * during an integration. */
+bool dvr_set_volume(dvr_volume *d, const volume *vol, const macrocell_grid *grid, tess_error *err);
+
 /* Integrate the ray org + t dir (world space, dir of any nonzero length)
  * over t in [t0, t1] (either may be infinite) clipped to the volume's box; t1 is where the caller's
  * ray stops (an opaque surface in front of the volume's back). jitter in

@@ -1,12 +1,24 @@
 /* dvr_medium.c - a volume rendered directly as a scene medium (dvr_medium.h). */
 #include "dvr_medium.h"
 
+#include <assert.h>
 #include <stdlib.h>
 
 struct dvr_medium {
     iso_volume *shared; /* one reference: keeps the volume and grid the dvr_volume points to */
     dvr_volume *dvr;    /* owned */
+    iso_volume_watcher watcher; /* on shared: a time step swapped in is rendered from then on */
 };
+
+/* The shared volume swapped in a time step (a serial section): render its
+ * samples. Its layout is step 0's (iso_volume_set_step checked it). */
+static void volume_swapped(void *ctx, const volume *v, const macrocell_grid *grid)
+{
+    dvr_medium *m = ctx;
+    bool same = dvr_set_volume(m->dvr, v, grid, NULL);
+    assert(same);
+    (void)same;
+}
 
 dvr_medium *dvr_medium_create(iso_volume *shared, const colormap *tf, const dvr_settings *settings,
                               tess_error *err)
@@ -23,6 +35,8 @@ dvr_medium *dvr_medium_create(iso_volume *shared, const colormap *tf, const dvr_
     }
     iso_volume_retain(shared);
     m->shared = shared;
+    m->watcher = (iso_volume_watcher){.swapped = volume_swapped, .ctx = m};
+    iso_volume_watch(shared, &m->watcher);
     return m;
 }
 
@@ -30,6 +44,8 @@ void dvr_medium_destroy(dvr_medium *m)
 {
     if (!m)
         return;
+    if (m->shared)
+        iso_volume_unwatch(m->shared, &m->watcher);
     dvr_destroy(m->dvr);
     iso_volume_release(m->shared);
     free(m);
@@ -65,12 +81,37 @@ static void medium_integrate(const void *data, const ray *r, float jitter, vec3 
 
 static void medium_destroy(void *data) { dvr_medium_destroy(data); }
 
+/* A volume's time steps are the shared volume's: the iso-surfaces of the
+ * same entry step with it, whichever is set first (the watcher above
+ * follows the swap). */
+static uint32_t medium_step_count(const void *data)
+{
+    return iso_volume_step_count(((const dvr_medium *)data)->shared);
+}
+
+static bool medium_step_ready(void *data, uint32_t step)
+{
+    return iso_volume_step_ready(((dvr_medium *)data)->shared, step);
+}
+
+static bool medium_set_step(void *data, uint32_t step, tess_error *err)
+{
+    return iso_volume_set_step(((dvr_medium *)data)->shared, step, err);
+}
+
 static bool medium_set_colormap(void *data, const char *name)
 {
     dvr_medium *m = data;
     colormap tf;
     if (!colormap_preset(name, &tf))
         return false;
+    if (iso_volume_step_count(m->shared) > 1) {
+        /* a time series keeps the range it has (step 0's when automatic), so a value keeps its
+         * colour from step to step; dvr_set_transfer would fit it to the step shown */
+        tf.lo = m->dvr->tf.lo;
+        tf.hi = m->dvr->tf.hi;
+        tf.range_auto = false;
+    }
     dvr_set_transfer(m->dvr, &tf);
     return true;
 }
@@ -88,4 +129,7 @@ const medium_ops dvr_medium_ops = {
     .destroy = medium_destroy,
     .set_colormap = medium_set_colormap,
     .colormap = medium_colormap,
+    .step_count = medium_step_count,
+    .step_ready = medium_step_ready,
+    .set_step = medium_set_step,
 };

@@ -5,8 +5,12 @@
  * Ownership: the medium holds a reference to the shared volume (iso_kind.h,
  * iso_volume: the volume and its macrocell grid, which the volume's
  * iso-surfaces share) and owns its dvr_volume; the scene owns the medium
- * once scene_add_medium took it. Threading: integrate from any thread;
- * set_colormap only where nothing traces. */
+ * once scene_add_medium took it. TIME STEPS are the shared volume's
+ * (iso_kind.h): the medium's step ops step it, and the medium renders
+ * whatever step the shared volume shows (it watches the swap; the transfer
+ * function keeps step 0's range). Threading: integrate from any thread;
+ * step_ready from any thread; set_colormap and set_step only where
+ * nothing traces. */
 #ifndef TESSERA_DVR_MEDIUM_H
 #define TESSERA_DVR_MEDIUM_H
 

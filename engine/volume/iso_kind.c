@@ -16,12 +16,14 @@
 #include <stdlib.h>
 
 #include "engine/ray.h"
+#include "engine/series.h"
 
-struct iso_volume {
-    atomic_uint refs;            /* kinds + the creator's reference until released */
+/* What one step of the field is: the samples, their grid and what the kind
+ * derives from them once. */
+typedef struct iso_field {
     const volume *v;             /* the samples (owned_v or the caller's) */
     const macrocell_grid *grid;  /* built over v (owned_grid or the caller's) */
-    volume *owned_v;             /* freed with the last reference; NULL when borrowed */
+    volume *owned_v;             /* freed with the field; NULL when borrowed */
     macrocell_grid *owned_grid;  /* likewise */
     float boundary_min, boundary_max; /* over the samples on the six faces of the box */
     /* ACTIVE BOX: the world box of the macrocells whose samples are not all
@@ -32,6 +34,18 @@ struct iso_volume {
      * miss it (the zero background around a scan) before any walk. */
     bool active;                      /* some macrocell is not constant */
     vec3 active_lo, active_hi;
+} iso_field;
+
+struct iso_volume {
+    atomic_uint refs;            /* kinds + the creator's reference until released */
+    iso_field now;               /* the step shown; changes only in iso_volume_set_step (a serial
+                                    section), read by every query */
+    /* TIME STEPS: NULL: one field. The loader thread reads only `first` and
+     * macrocell_k, which never change once the series is attached */
+    series *series;
+    volume first;                /* step 0's layout (no samples: data, map, buffer NULL) */
+    uint32_t macrocell_k;        /* every step's grid block edge: step 0's */
+    iso_volume_watcher *watchers; /* told of every swap; changed only where nothing traces */
 };
 
 struct iso_kind {
@@ -75,7 +89,7 @@ static void boundary_range(const volume *v, float *lo, float *hi)
         }
 }
 
-static void active_box(iso_volume *s)
+static void active_box(iso_field *s)
 {
     const macrocell_grid *g = s->grid;
     uint32_t lo[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi[3] = {0, 0, 0};
@@ -107,6 +121,12 @@ static void active_box(iso_volume *s)
     s->active_hi = v3(whi[0], whi[1], whi[2]);
 }
 
+static void field_free(iso_field *f)
+{
+    macrocell_grid_destroy(f->owned_grid);
+    volume_destroy(f->owned_v);
+}
+
 static iso_volume *shared_make(const volume *v, const macrocell_grid *grid, tess_error *err)
 {
     iso_volume *s = calloc(1, sizeof *s);
@@ -115,10 +135,10 @@ static iso_volume *shared_make(const volume *v, const macrocell_grid *grid, tess
         return NULL;
     }
     atomic_init(&s->refs, 1u);
-    s->v = v;
-    s->grid = grid;
-    boundary_range(v, &s->boundary_min, &s->boundary_max);
-    active_box(s);
+    s->now.v = v;
+    s->now.grid = grid;
+    boundary_range(v, &s->now.boundary_min, &s->now.boundary_max);
+    active_box(&s->now);
     return s;
 }
 
@@ -137,8 +157,8 @@ iso_volume *iso_volume_create(volume *v, macrocell_grid *grid, tess_error *err)
         volume_destroy(v);
         return NULL;
     }
-    s->owned_v = v;
-    s->owned_grid = grid;
+    s->now.owned_v = v;
+    s->now.owned_grid = grid;
     return s;
 }
 
@@ -160,13 +180,109 @@ void iso_volume_release(iso_volume *shared)
     /* acq_rel: the last releaser sees every other holder's reads finished */
     if (atomic_fetch_sub_explicit(&shared->refs, 1u, memory_order_acq_rel) != 1u)
         return;
-    macrocell_grid_destroy(shared->owned_grid);
-    volume_destroy(shared->owned_v);
+    series_destroy(shared->series); /* first: its loader may be loading a step */
+    field_free(&shared->now);
     free(shared);
 }
 
-const volume *iso_volume_data(const iso_volume *shared) { return shared->v; }
-const macrocell_grid *iso_volume_grid(const iso_volume *shared) { return shared->grid; }
+const volume *iso_volume_data(const iso_volume *shared) { return shared->now.v; }
+const macrocell_grid *iso_volume_grid(const iso_volume *shared) { return shared->now.grid; }
+
+/* ---- time steps (series.h) ------------------------------------------------ */
+
+static void free_step(void *ctx, void *data)
+{
+    (void)ctx;
+    field_free(data);
+    free(data);
+}
+
+/* The loader thread's work: one step's samples, checked against step 0's
+ * layout, with its grid, boundary range and active box, all off the render
+ * threads. Reads only the series' constant members of the shared volume. */
+static void *load_step(void *ctx, const char *path, uint32_t step, tess_error *err)
+{
+    (void)step;
+    const iso_volume *s = ctx;
+    iso_field *f = calloc(1, sizeof *f);
+    if (!f) {
+        tess_error_set(err, "%s: out of memory", path);
+        return NULL;
+    }
+    f->v = f->owned_v = volume_load(path, err); /* its errors name the path */
+    bool ok = f->v && volume_same_layout(&s->first, f->v, path, err);
+    if (ok && !(f->grid = f->owned_grid = macrocell_grid_create(f->v, s->macrocell_k, err))) {
+        tess_error_prefix(err, "%s: ", path);
+        ok = false;
+    }
+    if (!ok) {
+        free_step(NULL, f);
+        return NULL;
+    }
+    boundary_range(f->v, &f->boundary_min, &f->boundary_max);
+    active_box(f);
+    return f;
+}
+
+bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint32_t count, tess_error *err)
+{
+    if (!shared->now.owned_v)
+        return tess_error_set(err, "iso surface: a borrowed volume cannot have time steps");
+    shared->first = *shared->now.v;
+    shared->first.data = shared->first.map = shared->first.buffer = NULL;
+    shared->first.map_bytes = 0;
+    shared->macrocell_k = shared->now.grid->k;
+    shared->series = series_create(paths, count, 0, load_step, free_step, shared, err);
+    if (!shared->series)
+        tess_error_prefix(err, "volume: ");
+    return shared->series != NULL;
+}
+
+uint32_t iso_volume_step_count(const iso_volume *shared)
+{
+    return shared->series ? series_step_count(shared->series) : 1;
+}
+
+uint32_t iso_volume_step(const iso_volume *shared) { return shared->series ? series_step(shared->series) : 0; }
+
+bool iso_volume_step_ready(iso_volume *shared, uint32_t step)
+{
+    return shared->series ? series_ready(shared->series, step) : step == 0;
+}
+
+bool iso_volume_set_step(iso_volume *shared, uint32_t step, tess_error *err)
+{
+    if (!shared->series)
+        return true; /* one field: every step is it */
+    void *taken;
+    if (!series_take(shared->series, step, &taken, err))
+        return false;
+    if (!taken)
+        return true; /* shown already (another kind of this volume took it) */
+    iso_field old = shared->now;
+    shared->now = *(iso_field *)taken;
+    free(taken);
+    for (iso_volume_watcher *w = shared->watchers; w; w = w->next)
+        w->swapped(w->ctx, shared->now.v, shared->now.grid);
+    field_free(&old); /* after the watchers: nothing points to it now */
+    series_done(shared->series); /* the old step is gone: the next one may load */
+    return true;
+}
+
+void iso_volume_watch(iso_volume *shared, iso_volume_watcher *w)
+{
+    w->next = shared->watchers;
+    shared->watchers = w;
+}
+
+void iso_volume_unwatch(iso_volume *shared, iso_volume_watcher *w)
+{
+    for (iso_volume_watcher **at = &shared->watchers; *at; at = &(*at)->next)
+        if (*at == w) {
+            *at = w->next;
+            return;
+        }
+}
 
 /* ---- the kind ------------------------------------------------------------ */
 
@@ -206,7 +322,7 @@ iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colou
     iso_volume_retain(shared);
     k->shared = shared;
     k->iso = iso_value;
-    k->iso_traced = traced_value(shared->v, iso_value);
+    k->iso_traced = traced_value(shared->now.v, iso_value);
     k->colour = colour;
     k->material_id = material_id;
     k->method = method;
@@ -237,7 +353,7 @@ bool iso_kind_set_value(iso_kind *k, float iso_value)
     if (!isfinite(iso_value))
         return false;
     k->iso = iso_value;
-    k->iso_traced = traced_value(k->shared->v, iso_value);
+    k->iso_traced = traced_value(k->shared->now.v, iso_value);
     return true;
 }
 
@@ -245,8 +361,8 @@ float iso_kind_value(const iso_kind *k) { return k->iso; }
 
 void iso_kind_range(const iso_kind *k, float *lo, float *hi)
 {
-    *lo = k->shared->v->min;
-    *hi = k->shared->v->max;
+    *lo = k->shared->now.v->min;
+    *hi = k->shared->now.v->max;
 }
 
 /* ---- geometry ops -------------------------------------------------------- */
@@ -261,7 +377,7 @@ static uint32_t kind_count(const void *data)
  * false when the field is constant everywhere (no surface at any value). */
 static bool kind_bounds(const void *data, aabb *out)
 {
-    const iso_volume *s = ((const iso_kind *)data)->shared;
+    const iso_field *s = &((const iso_kind *)data)->shared->now;
     *out = (aabb){s->active_lo, s->active_hi};
     return s->active;
 }
@@ -313,8 +429,8 @@ static bool close_group(crossing_group *g, double t_now, bool at_end, float *t)
  * reported before (or are a next-hit query's bound). */
 static bool first_crossing(const iso_kind *k, const double org[3], const double dir[3], float t_near, float *t)
 {
-    const macrocell_grid *g = k->shared->grid;
-    const volume *vol = k->shared->v;
+    const macrocell_grid *g = k->shared->now.grid;
+    const volume *vol = k->shared->now.v;
     const float iso = k->iso_traced;
     /* the exact method's roots are the field's: a walk may start anywhere,
      * at t_near. The cheap methods' roots depend on where a cell's segment
@@ -437,8 +553,8 @@ static void kind_describe(const void *data, uint32_t prim, const ray *r, const h
     (void)prim;
     (void)need_position; /* the normal needs the point anyway */
     const iso_kind *k = data;
-    const volume *vol = k->shared->v;
-    const macrocell_grid *g = k->shared->grid;
+    const volume *vol = k->shared->now.v;
+    const macrocell_grid *g = k->shared->now.grid;
     const double org[3] = {r->org.x, r->org.y, r->org.z}, dir[3] = {r->dir.x, r->dir.y, r->dir.z};
     double p[3], local[3], grad[3];
     uint32_t cell[3];
@@ -510,10 +626,21 @@ static void kind_destroy(void *data) { iso_kind_destroy(data); }
 static bool kind_closed(const void *data)
 {
     const iso_kind *k = data;
-    return k->iso_traced < k->shared->boundary_min || k->iso_traced > k->shared->boundary_max;
+    return k->iso_traced < k->shared->now.boundary_min || k->iso_traced > k->shared->now.boundary_max;
 }
 
 static bool kind_set_value(void *data, float value) { return iso_kind_set_value(data, value); }
+
+static uint32_t kind_step_count(const void *data) { return iso_volume_step_count(((const iso_kind *)data)->shared); }
+
+static bool kind_step_ready(void *data, uint32_t step) { return iso_volume_step_ready(((iso_kind *)data)->shared, step); }
+
+/* Every kind of the volume (and its medium) shows the shared step: the
+ * first to be set swaps it, the others find it shown. */
+static bool kind_set_step(void *data, uint32_t step, tess_error *err)
+{
+    return iso_volume_set_step(((iso_kind *)data)->shared, step, err);
+}
 
 static bool kind_value(const void *data, float *value, float *lo, float *hi)
 {
@@ -534,6 +661,9 @@ const geometry_ops iso_kind_ops = {
     .bytes = kind_bytes,
     .destroy = kind_destroy,
     .closed = kind_closed,
+    .step_count = kind_step_count,
+    .step_ready = kind_step_ready,
+    .set_step = kind_set_step,
     .set_value = kind_set_value,
     .value = kind_value,
 };

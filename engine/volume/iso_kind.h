@@ -96,6 +96,44 @@ void iso_volume_release(iso_volume *shared); /* NULL is fine; the last one frees
 const volume *iso_volume_data(const iso_volume *shared);
 const macrocell_grid *iso_volume_grid(const iso_volume *shared);
 
+/* TIME STEPS. A shared volume made by iso_volume_create may show a series
+ * of volume files (series.h), one step at a time: step 0 is the volume it
+ * was made with (loaded from paths[0]). A loader thread loads the step asked
+ * for next and builds its macrocell grid, boundary range and active box
+ * while frames render; at most two steps are in memory (the one shown and
+ * one pending). Every step must have step 0's layout (volume_same_layout:
+ * dimensions, type, spacing, origin), else its load fails with an error
+ * naming the file and the field, and the step shown stays.
+ * iso_volume_set_step swaps the step in for every kind sharing the volume
+ * (they read it through the shared volume: the first call swaps, the others
+ * find it shown) and tells the watchers (a dvr medium, whose dvr_volume
+ * points at the samples): only where nothing traces. The active box (the
+ * kinds' bounds) and the boundary range (`closed`) follow the step: an
+ * accel rebuilds the kinds' one-primitive trees (accel_set_time_step).
+ * attach: paths copied; false for a borrowed volume or on no memory. */
+bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint32_t count, tess_error *err);
+uint32_t iso_volume_step_count(const iso_volume *shared); /* 1 without a series */
+uint32_t iso_volume_step(const iso_volume *shared);       /* the step shown */
+/* Whether `step` (mod the count) can be shown without waiting; when not,
+ * the loader is asked for it. Any thread. */
+bool iso_volume_step_ready(iso_volume *shared, uint32_t step);
+/* Show `step` (mod the count), waiting for its load if it is not loaded.
+ * False with the file's error (the step shown stays). */
+bool iso_volume_set_step(iso_volume *shared, uint32_t step, tess_error *err);
+
+/* Something that keeps pointers to the shared volume's samples or grid
+ * (a dvr_volume) and must follow a swap: `swapped` runs inside
+ * iso_volume_set_step with the new step's, before the old step is freed.
+ * The watcher struct lives in the watcher's own memory (no allocation);
+ * watch and unwatch only where nothing traces. */
+typedef struct iso_volume_watcher {
+    void (*swapped)(void *ctx, const volume *v, const macrocell_grid *grid);
+    void *ctx;
+    struct iso_volume_watcher *next; /* the shared volume's list */
+} iso_volume_watcher;
+void iso_volume_watch(iso_volume *shared, iso_volume_watcher *w);
+void iso_volume_unwatch(iso_volume *shared, iso_volume_watcher *w);
+
 /* One iso-surface of a volume the caller keeps (borrowed: v and grid must
  * outlive the kind; the kind holds a borrowing iso_volume of its own).
  * colour: linear RGB in [0, 1], every hit's colour; material_id: the

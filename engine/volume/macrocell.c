@@ -22,7 +22,7 @@ macrocell_grid *macrocell_grid_create(const volume *v, uint32_t k, tess_error *e
         }
     macrocell_grid *g = calloc(1, sizeof *g);
     if (!g) {
-        tess_error_set(err, "macrocell grid: no memory");
+        tess_error_set(err, "macrocell grid: out of memory");
         return NULL;
     }
     g->k = k;
@@ -37,7 +37,7 @@ macrocell_grid *macrocell_grid_create(const volume *v, uint32_t k, tess_error *e
     g->max = malloc(count * sizeof *g->max);
     if (!g->min || !g->max) {
         macrocell_grid_destroy(g);
-        tess_error_set(err, "macrocell grid: no memory for %zu macrocells", count);
+        tess_error_set(err, "macrocell grid: out of memory for %zu macrocells", count);
         return NULL;
     }
     for (size_t m = 0; m < count; m++) {
@@ -54,7 +54,7 @@ macrocell_grid *macrocell_grid_create(const volume *v, uint32_t k, tess_error *e
         free(row_lo);
         free(row_hi);
         macrocell_grid_destroy(g);
-        tess_error_set(err, "macrocell grid: no memory");
+        tess_error_set(err, "macrocell grid: out of memory");
         return NULL;
     }
     for (uint32_t z = 0; z < n[2]; z++) {

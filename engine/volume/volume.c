@@ -82,7 +82,7 @@ volume *volume_create(uint32_t nx, uint32_t ny, uint32_t nz, volume_type type, t
         v->buffer = calloc(volume_count(v), volume_type_size(type));
     if (!v || !v->buffer) {
         free(v);
-        tess_error_set(err, "volume_create: no memory for %u x %u x %u %s", nx, ny, nz, volume_type_name(type));
+        tess_error_set(err, "volume_create: out of memory for %u x %u x %u %s", nx, ny, nz, volume_type_name(type));
         return NULL;
     }
     v->data = v->buffer;
@@ -251,7 +251,7 @@ static bool load_samples(volume *v, const data_layout *lay, tess_error *err)
         v->buffer = malloc((size_t)need);
         if (!v->buffer) {
             close(fd);
-            return tess_error_set(err, "%s: no memory for %llu bytes of samples", who, (unsigned long long)need);
+            return tess_error_set(err, "%s: out of memory for %llu bytes of samples", who, (unsigned long long)need);
         }
         unsigned char *dst = v->buffer;
         uint64_t done = 0;
@@ -309,7 +309,7 @@ static bool read_header(const char *path, bool whole, header_text *h, tess_error
     h->text = malloc(want + 1);
     if (!h->text) {
         close(fd);
-        return tess_error_set(err, "%s: no memory for the header", path);
+        return tess_error_set(err, "%s: out of memory for the header", path);
     }
     size_t done = 0;
     while (done < want) {
@@ -655,7 +655,7 @@ volume *volume_load_raw_txt(const char *header_path, tess_error *err)
 
     v = volume_alloc(n, type);
     if (!v) {
-        tess_error_set(err, "%s: no memory", header_path);
+        tess_error_set(err, "%s: out of memory", header_path);
         goto fail;
     }
     const int triples[2] = {TXT_SPACING, TXT_ORIGIN};
@@ -960,7 +960,7 @@ volume *volume_load_nrrd(const char *path, tess_error *err)
 
     v = volume_alloc(n, (volume_type)type);
     if (!v) {
-        tess_error_set(err, "%s: no memory", path);
+        tess_error_set(err, "%s: out of memory", path);
         goto fail;
     }
     if (f[NRRD_SPACINGS].line && f[NRRD_DIRECTIONS].line) {
@@ -1109,4 +1109,25 @@ volume *volume_load(const char *path, tess_error *err)
         return volume_load_nrrd(path, err);
     tess_error_set(err, "%s: not a volume this reader knows (.nrrd, .nhdr, .txt header with .raw data)", path);
     return NULL;
+}
+
+bool volume_same_layout(const volume *first, const volume *v, const char *path, tess_error *err)
+{
+    if (v->nx != first->nx || v->ny != first->ny || v->nz != first->nz)
+        return tess_error_set(err, "%s: dimensions %u x %u x %u differ from the first step's %u x %u x %u", path,
+                              v->nx, v->ny, v->nz, first->nx, first->ny, first->nz);
+    if (v->type != first->type)
+        return tess_error_set(err, "%s: type %s differs from the first step's %s", path, volume_type_name(v->type),
+                              volume_type_name(first->type));
+    for (int a = 0; a < 3; a++)
+        if (v->spacing[a] != first->spacing[a])
+            return tess_error_set(err, "%s: spacing %g %g %g differs from the first step's %g %g %g", path,
+                                  v->spacing[0], v->spacing[1], v->spacing[2], first->spacing[0], first->spacing[1],
+                                  first->spacing[2]);
+    for (int a = 0; a < 3; a++)
+        if (v->origin[a] != first->origin[a])
+            return tess_error_set(err, "%s: origin %g %g %g differs from the first step's %g %g %g", path,
+                                  v->origin[0], v->origin[1], v->origin[2], first->origin[0], first->origin[1],
+                                  first->origin[2]);
+    return true;
 }

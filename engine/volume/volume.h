@@ -118,6 +118,14 @@ void volume_cell_corners(const volume *v, uint32_t i, uint32_t j, uint32_t k, fl
  * The returned volume has its range computed. */
 volume *volume_load(const char *path, tess_error *err);
 
+/* Whether `v` (loaded from `path`) lays its samples out as `first` does:
+ * the same dimensions, type, spacing and origin (what the steps of a time
+ * series must share). False with err naming the path and the first field
+ * that differs: "PATH: dimensions 20 x 16 x 16 differ from the first
+ * step's 16 x 16 x 16". Reads only those fields of `first` (its samples
+ * may be gone). */
+bool volume_same_layout(const volume *first, const volume *v, const char *path, tess_error *err);
+
 /* The raw + text header reader. Fields "name: value", one a line; an
  * indented line continues the field above and is ignored, as is any field
  * not named here and a comment in parentheses after a value:

@@ -13,7 +13,8 @@
 /* most iso-surfaces one entry may show (each is a geometry of its own) */
 #define VOLUME_JSON_MAX_ISO 16
 
-const char *const volume_json_fields[] = {"file", "transform", "matrix", "optional", "macrocell", "iso", "dvr", NULL};
+const char *const volume_json_fields[] = {"file", "files", "transform", "matrix", "optional", "macrocell", "iso", "dvr",
+                                          NULL};
 
 /* One "iso" element: {"value": V, "color": [r, g, b], "opacity": A, "material": NAME, "method": M}. */
 static bool add_iso(jr_ctx *c, json_object *e, iso_volume *shared, const affine3 *placement, scene *s,
@@ -84,8 +85,9 @@ static bool add_dvr(jr_ctx *c, json_object *d, iso_volume *shared, const affine3
     return true;
 }
 
-bool volume_json_add(jr_ctx *c, json_object *obj, volume *v, const affine3 *placement, scene *s,
-                     uint32_t default_material, volume_json_material_fn find_material, void *material_ctx)
+bool volume_json_add(jr_ctx *c, json_object *obj, volume *v, const char *const *steps, uint32_t step_count,
+                     const affine3 *placement, scene *s, uint32_t default_material,
+                     volume_json_material_fn find_material, void *material_ctx)
 {
     json_object *iso = NULL, *dvr = NULL;
     bool has_iso = jr_get_member(obj, "iso", &iso), has_dvr = jr_get_member(obj, "dvr", &dvr);
@@ -109,8 +111,9 @@ bool volume_json_add(jr_ctx *c, json_object *obj, volume *v, const affine3 *plac
     iso_volume *shared = iso_volume_create(v, grid, &why); /* takes both */
     if (!shared)
         return jr_field_fail(c, "%s", why.msg);
-    bool ok = true;
-    if (has_iso) {
+    bool ok = !steps || iso_volume_attach_series(shared, steps, step_count, &why) ||
+              jr_member_fail(c, "files", why.msg);
+    if (ok && has_iso) {
         size_t outer = jr_field_key(c, "iso");
         ok = jr_expect_array(c, iso);
         size_t n = ok ? json_object_array_length(iso) : 0;

@@ -388,6 +388,43 @@ Test(alloc_sweep, scene_json)
     expect_no_fallback("scene_json", st);
 }
 
+/* A 4^3 float NRRD volume (a ramp along x, offset by `step`) as
+ * NAME.nhdr + NAME.raw. */
+static void write_volume_step(const char *name, int step)
+{
+    char path[PATH_BYTES], text[512];
+    float samples[64];
+    for (int i = 0; i < 64; i++)
+        samples[i] = (float)(i % 4 + step);
+    snprintf(text, sizeof text, "%s.raw", name);
+    write_file(path, text, samples, sizeof samples);
+    snprintf(text, sizeof text,
+             "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nendian: little\nencoding: raw\n"
+             "data file: %s.raw\n",
+             name);
+    char header[64];
+    snprintf(header, sizeof header, "%s.nhdr", name);
+    write_text(path, header, text);
+}
+
+/* A volume time series ("files"): the pattern's glob, step 0's volume, the
+ * series attached to the shared volume, two iso-surfaces and the medium
+ * watching it. (A step's own load runs on the loader thread, where the
+ * read-ahead after each step makes the count differ from run to run: not
+ * swept here.) */
+Test(alloc_sweep, scene_volume_series)
+{
+    char path[PATH_BYTES];
+    write_volume_step("vstep_0", 0);
+    write_volume_step("vstep_1", 1);
+    write_text(path, "volumes.json",
+               "{\"volumes\": [{\"files\": \"vstep_*.nhdr\", \"iso\": [{\"value\": 1.5}, {\"value\": 2.5}],\n"
+               "  \"dvr\": {\"transfer\": {\"map\": \"viridis\", \"opacity\": [[0, 0], [1, 0.5]]}}}]}\n");
+    const char *needles[] = {path, NULL};
+    fault_sweep_stats st = sweep_scene("scene volume series", path, needles);
+    expect_no_fallback("scene_volume_series", st);
+}
+
 /* A mesh file given as the scene (scene_load wraps it). */
 Test(alloc_sweep, scene_from_mesh_file)
 {

@@ -358,29 +358,12 @@ static void value_and_map_targets(const scene *s, input_controller_config *cc)
     }
 }
 
-/* The steps of the longest time series in the scene (1: none). */
-static uint32_t time_steps(const scene *s)
-{
-    uint32_t most = 1;
-    for (uint32_t g = 0; g < s->geometry_count; g++)
-        if (s->geometries[g].ops->step_count) {
-            uint32_t n = s->geometries[g].ops->step_count(s->geometries[g].data);
-            most = n > most ? n : most;
-        }
-    return most;
-}
-
-/* Whether every time series can show `step` without waiting (input thread;
- * the series' own locks make the question safe while frames render). */
+/* Whether every time series can show `step` without waiting (input thread:
+ * scene_step_ready is safe while frames render). */
 static bool step_ready(void *ctx, uint32_t step)
 {
     const cli_scene *cs = ctx;
-    const scene *s = cs->scene;
-    bool ready = true;
-    for (uint32_t g = 0; g < s->geometry_count; g++)
-        if (s->geometries[g].ops->step_ready)
-            ready &= s->geometries[g].ops->step_ready(s->geometries[g].data, step); /* asks every one to load */
-    return ready;
+    return scene_step_ready(cs->scene, step);
 }
 
 static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs,
@@ -416,7 +399,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
         cc.scene_size = v3_length(v3_sub(hi, lo));
     cc.idle_timeout_s = s->idle_timeout_s;
     cc.have_tour = in->tour.count > 0;
-    cc.time_steps = time_steps(cs->scene);
+    cc.time_steps = scene_time_steps(cs->scene);
     value_and_map_targets(cs->scene, &cc);
     cc.media = cs->scene->medium_count > 0;
     if (cc.media && cs->scene->media[0].ops->colormap)
