@@ -30,7 +30,8 @@ static bool add_iso(jr_ctx *c, json_object *e, iso_volume *shared, const affine3
     int method = 0;
     if (!jr_expect_object(c, e) || !jr_check_fields(c, e, fields) || !jr_require_member(c, e, "value") ||
         !jr_opt_number(c, e, "value", jr_range_float, &value) || !jr_opt_vec3(c, e, "color", jr_range_unit, &colour) ||
-        !jr_opt_number(c, e, "opacity", jr_range_unit, &opacity) || !jr_opt_string(c, e, "material", &material_name) || !jr_opt_choice(c, e, "method", methods, &method))
+        !jr_opt_number(c, e, "opacity", jr_range_unit, &opacity) ||
+        !jr_opt_string(c, e, "material", &material_name) || !jr_opt_choice(c, e, "method", methods, &method))
         return false;
     uint32_t material_id = default_material;
     if (material_name) {
