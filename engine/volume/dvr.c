@@ -322,7 +322,9 @@ static void build_cell_opacity(dvr_volume *d)
         /* a bilinear read blends the entries on both sides of its coordinate */
         float b = range_max_query(&rm_pre, preint_cell(preint_coord(d, lo)), preint_cell(preint_coord(d, hi)) + 1);
         d->cell_opacity[m] = a > b ? a : b;
+        d->cell_leap[m] = d->cell_opacity[m] > 0.0f ? 0 : 1;
     }
+    macrocell_leap_build(g, d->cell_leap);
 }
 
 void dvr_set_transfer(dvr_volume *d, const colormap *tf)
@@ -388,7 +390,8 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
         d->own_grid = true;
     }
     d->cell_opacity = malloc(macrocell_count(d->grid) * sizeof *d->cell_opacity);
-    if (!d->cell_opacity) {
+    d->cell_leap = malloc(macrocell_count(d->grid) * sizeof *d->cell_leap);
+    if (!d->cell_opacity || !d->cell_leap) {
         tess_error_set(err, "volume rendering: no memory for %zu macrocells", macrocell_count(d->grid));
         goto fail;
     }
@@ -420,6 +423,7 @@ void dvr_destroy(dvr_volume *d)
         macrocell_grid_destroy((macrocell_grid *)d->grid);
     free(d->preint);
     free(d->cell_opacity);
+    free(d->cell_leap);
     free(d->range_scratch);
     free(d->sums);
     free(d);
@@ -725,7 +729,8 @@ bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double 
         composite_run(&r, r.ta, r.tb);
     else {
         /* runs of non-empty spans, each composited when an empty span (or
-         * the end) closes it */
+         * the end) closes it; from an empty span the walk leaps over the
+         * empty macrocells around it (macrocell.h LEAPS) */
         macrocell_walk w;
         macrocell_span span;
         bool in_run = false;
@@ -744,6 +749,7 @@ bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double 
                 composite_run(&r, run0, run1);
                 in_run = false;
             }
+            macrocell_walk_leap(&w, &span, d->cell_leap[span.index]);
         }
         if (in_run && !r.done)
             composite_run(&r, run0, run1);
