@@ -322,7 +322,7 @@ static void build_cell_opacity(dvr_volume *d)
         /* a bilinear read blends the entries on both sides of its coordinate */
         float b = range_max_query(&rm_pre, preint_cell(preint_coord(d, lo)), preint_cell(preint_coord(d, hi)) + 1);
         d->cell_opacity[m] = a > b ? a : b;
-        d->cell_leap[m] = d->cell_opacity[m] > 0.0f ? 0 : 1;
+        d->cell_leap[m] = d->cell_opacity[m] > 0.0f ? 0 : MACROCELL_LEAP_MARK;
     }
     macrocell_leap_build(g, d->cell_leap);
 }
@@ -729,18 +729,24 @@ bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double 
         composite_run(&r, r.ta, r.tb);
     else {
         /* runs of non-empty spans, each composited when an empty span (or
-         * the end) closes it; from an empty span the walk leaps over the
-         * empty macrocells around it (macrocell.h LEAPS) */
+         * the end) closes it; from any span the walk leaps over the
+         * macrocells of its class around it (macrocell.h LEAPS). A leap's
+         * exit is the plane t the full walk would give there; where the
+         * walk ends the run reaches tb, as the full walk's last span may
+         * (slabs past the last non-empty span add exactly 0, so taking
+         * more of them changes no bit) */
         macrocell_walk w;
         macrocell_span span;
         bool in_run = false;
         double run0 = 0.0, run1 = 0.0;
         macrocell_walk_begin(&w, g, org, dir, r.ta, r.tb);
         while (!r.done && macrocell_walk_next(&w, &span)) {
-            if (d->cell_opacity[span.index] > 0.0f) {
+            uint8_t leap = d->cell_leap[span.index];
+            macrocell_walk_leap(&w, &span, macrocell_leap_dist(leap));
+            if (!(leap & MACROCELL_LEAP_MARK)) {
                 if (!in_run)
                     run0 = span.t_enter;
-                run1 = span.t_exit;
+                run1 = w.dda.done ? r.tb : w.dda.t;
                 in_run = true;
                 continue;
             }
@@ -749,7 +755,6 @@ bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double 
                 composite_run(&r, run0, run1);
                 in_run = false;
             }
-            macrocell_walk_leap(&w, &span, d->cell_leap[span.index]);
         }
         if (in_run && !r.done)
             composite_run(&r, run0, run1);
