@@ -41,7 +41,19 @@ struct iso_kind {
     vec3 colour;          /* linear RGB of every hit */
     uint32_t material_id; /* scene material */
     iso_method method;    /* how a cell's root is found (iso_cell.h) */
+    uint8_t *leap;        /* leap field of the grid for iso_traced (marked: cannot reach it); rebuilt with
+                             the value, O(macrocells), where nothing traces */
 };
+
+/* the walks' leap field for the kind's current value (iso_cell.h) */
+static void build_leap(iso_kind *k)
+{
+    const macrocell_grid *g = k->shared->grid;
+    size_t count = macrocell_count(g);
+    for (size_t m = 0; m < count; m++)
+        k->leap[m] = macrocell_may_reach(g, m, k->iso_traced) ? 0 : MACROCELL_LEAP_MARK;
+    macrocell_leap_build(g, k->leap);
+}
 
 /* ---- the shared volume ------------------------------------------------- */
 
@@ -203,6 +215,12 @@ iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colou
         tess_error_set(err, "iso surface: out of memory");
         return NULL;
     }
+    k->leap = malloc(macrocell_count(shared->grid));
+    if (!k->leap) {
+        free(k);
+        tess_error_set(err, "iso surface: out of memory");
+        return NULL;
+    }
     iso_volume_retain(shared);
     k->shared = shared;
     k->iso = iso_value;
@@ -210,6 +228,7 @@ iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colou
     k->colour = colour;
     k->material_id = material_id;
     k->method = method;
+    build_leap(k);
     return k;
 }
 
@@ -229,6 +248,7 @@ void iso_kind_destroy(iso_kind *k)
     if (!k)
         return;
     iso_volume_release(k->shared);
+    free(k->leap);
     free(k);
 }
 
@@ -238,6 +258,7 @@ bool iso_kind_set_value(iso_kind *k, float iso_value)
         return false;
     k->iso = iso_value;
     k->iso_traced = traced_value(k->shared->v, iso_value);
+    build_leap(k);
     return true;
 }
 
@@ -336,6 +357,7 @@ static bool first_crossing(const iso_kind *k, const double org[3], const double 
     iso_cell_walk walk;
     if (!iso_cell_walk_begin(&walk, vol, g, org, dir, t_start, INFINITY, iso))
         return false;
+    walk.leap = k->leap;
     double tol_s = ISO_CELL_TOL / walk.dir_len; /* ISO_CELL_TOL cell widths, in t */
     crossing_group group = {0.f, 0};
     iso_cell_candidate cand;
@@ -499,10 +521,10 @@ static void kind_describe(const void *data, uint32_t prim, const ray *r, const h
 
 static size_t kind_bytes(const void *data)
 {
-    (void)data;
     /* the volume and grid are shared (and may be borrowed): counted by
-     * whoever loaded them, not once per iso-value */
-    return sizeof(iso_kind);
+     * whoever loaded them, not once per iso-value; the leap field is the kind's */
+    const iso_kind *k = data;
+    return sizeof(iso_kind) + macrocell_count(k->shared->grid);
 }
 
 static void kind_destroy(void *data) { iso_kind_destroy(data); }
