@@ -45,6 +45,19 @@
  * ones on noisy data (both shared volumes) the classic
  * midpoint rule is as good and cheaper.
  *
+ * SKIPPING. The macrocell walk (macrocell.h) classes each macrocell as
+ * empty (cell_opacity 0) or not and leaps over whole cubes of one class
+ * (LEAPS: the leap field cell_leap, rebuilt with the transfer function in
+ * O(macrocells)): empty cubes are passed, non-empty ones extend the run
+ * being gathered, and each run is composited when an empty span closes
+ * it. A run's ends are plane t's the cell-by-cell walk gives as well, and
+ * where the walk ends a run reaches tb; the slab grid is global along the
+ * ray, so leaping changes only which slabs are visited, and a slab visited
+ * in empty space adds exactly 0: the pictures are bitwise those without
+ * skipping. Before the leaps the MRI under mri-soft stepped through ~18
+ * empty and ~18 non-empty macrocells a ray one DDA step each, about a
+ * third of its time; leaping made the frame ~1.15x as fast.
+ *
  * COST. The time goes per sample: the CT bunny under ct-bone has opacity
  * in its air noise, so nothing is skipped there and a ray takes ~200
  * samples. A sample is a position in double (p = org + t dir at the slab's

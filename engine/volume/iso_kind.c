@@ -1,8 +1,9 @@
 /* iso_kind.c - direct iso-surfaces as a geometry kind (iso_kind.h).
  *
  * Why one primitive rather than one per block of macrocells: the macrocell
- * walk already skips every block that cannot reach the value, at the cost
- * of a DDA step per block, and it carries the field's sign from block to
+ * walk already skips every block that cannot reach the value, a whole cube
+ * of them a leap (the kind's leap field, rebuilt in O(macrocells) when the
+ * value changes; macrocell.h LEAPS), and it carries the field's sign from block to
  * block (iso_cell.h HALF-OPEN SEGMENTS), so no crossing on a block face is
  * lost or found twice. Blocks as primitives would need boxes that follow
  * the value (a rebuild, or a refit, per value) to cull anything more, and
