@@ -485,3 +485,92 @@ Test(volume_iso, sphere_no_cracks)
     macrocell_grid_destroy(grids[1]);
     volume_destroy(v);
 }
+
+/* The walk with a leap field against the walk without: the same candidate
+ * cells, with the same t's, cubics and carried entry values bit for bit,
+ * on a field of a few blobs in a flat background (wide runs of macrocells
+ * on both sides of the value, both below and above it) at several values. */
+Test(volume_iso, leaping_walk_gives_the_same_candidates)
+{
+    enum { N = 61 };
+    rng_state = 21;
+    tess_error err = {{0}};
+    volume *v = volume_create(N, N - 8, N + 5, VOLUME_FLOAT32, &err);
+    cr_assert_not_null(v, "%s", err.msg);
+    double centre[5][3], radius[5], sign[5];
+    for (int b = 0; b < 5; b++) {
+        for (int a = 0; a < 3; a++)
+            centre[b][a] = 8.0 + rng_unit() * (N - 16);
+        radius[b] = 3.0 + rng_unit() * 8.0;
+        sign[b] = b % 2 ? -1.0 : 1.0; /* bumps and dips */
+    }
+    float *s = volume_voxels(v);
+    for (uint32_t k = 0; k < v->nz; k++)
+        for (uint32_t j = 0; j < v->ny; j++)
+            for (uint32_t i = 0; i < v->nx; i++) {
+                double f = 0.0;
+                for (int b = 0; b < 5; b++) {
+                    double d[3] = {i - centre[b][0], j - centre[b][1], k - centre[b][2]};
+                    double x = 1.0 - norm3(d) / radius[b];
+                    f += x > 0.0 ? sign[b] * 100.0 * x : 0.0;
+                }
+                s[volume_index(v, i, j, k)] = (float)f;
+            }
+    cr_assert(volume_update_range(v, "blobs", &err), "%s", err.msg);
+    v->spacing[1] = 0.5;
+    v->origin[2] = -3.0;
+    const uint32_t ks[] = {2, 4};
+    const float isos[] = {-50.0f, -0.5f, 0.5f, 20.0f, 70.0f};
+    size_t candidates = 0, leaps_used = 0;
+    for (size_t ki = 0; ki < sizeof ks / sizeof ks[0]; ki++) {
+        macrocell_grid *g = macrocell_grid_create(v, ks[ki], &err);
+        cr_assert_not_null(g, "%s", err.msg);
+        uint8_t *leap = malloc(macrocell_count(g));
+        cr_assert_not_null(leap);
+        for (size_t ii = 0; ii < sizeof isos / sizeof isos[0]; ii++) {
+            float iso = isos[ii];
+            for (size_t m = 0; m < macrocell_count(g); m++)
+                leap[m] = macrocell_may_reach(g, m, iso) ? 0 : MACROCELL_LEAP_MARK;
+            macrocell_leap_build(g, leap);
+            for (int r = 0; r < 400; r++) {
+                double o_vox[3], d_vox[3], o[3], d[3];
+                for (int a = 0; a < 3; a++) {
+                    o_vox[a] = rng_unit() * (N + 20) - 10.0;
+                    d_vox[a] = rng_unit() * (N - 20) + 10.0 - o_vox[a];
+                }
+                if (r % 5 == 0) /* along an axis, on a macrocell plane */
+                    for (int a = 1; a < 3; a++) {
+                        d_vox[a] = 0.0;
+                        o_vox[a] = floor(o_vox[a] / ks[ki]) * ks[ki];
+                    }
+                voxel_to_world(v, o_vox, d_vox, o, d);
+                iso_cell_walk plain, leaping;
+                bool any = iso_cell_walk_begin(&plain, v, g, o, d, 0.0, INFINITY, iso);
+                cr_assert_eq(iso_cell_walk_begin(&leaping, v, g, o, d, 0.0, INFINITY, iso), any);
+                if (!any)
+                    continue;
+                leaping.leap = leap;
+                iso_cell_candidate a, b;
+                for (;;) {
+                    bool more = iso_cell_walk_next(&plain, &a);
+                    cr_assert_eq(iso_cell_walk_next(&leaping, &b), more, "ray %d: one walk ended first", r);
+                    if (!more)
+                        break;
+                    cr_assert(a.cell[0] == b.cell[0] && a.cell[1] == b.cell[1] && a.cell[2] == b.cell[2]);
+                    cr_assert(a.te == b.te && a.tx == b.tx && a.f0 == b.f0, "ray %d cell (%d %d %d)", r, a.cell[0],
+                              a.cell[1], a.cell[2]);
+                    cr_assert(a.f.a == b.f.a && a.f.b == b.f.b && a.f.c == b.f.c && a.f.d == b.f.d);
+                    candidates++;
+                }
+            }
+            for (size_t m = 0; m < macrocell_count(g); m++)
+                leaps_used += (leap[m] & MACROCELL_LEAP_MARK) && macrocell_leap_dist(leap[m]) >= MACROCELL_LEAP_MIN;
+        }
+        free(leap);
+        macrocell_grid_destroy(g);
+    }
+    cr_assert_gt(candidates, 1000u);
+    cr_assert_gt(leaps_used, 100u, "the field has room to leap");
+    cr_log_info("volume_iso leaping walk: %zu candidates equal", candidates);
+    volume_destroy(v);
+}

@@ -314,3 +314,129 @@ Test(volume_macrocell, degenerate_rays)
     macrocell_grid_destroy(g);
     volume_destroy(v);
 }
+
+static bool same_span(const macrocell_span *a, const macrocell_span *b)
+{
+    return a->m[0] == b->m[0] && a->m[1] == b->m[1] && a->m[2] == b->m[2] && a->index == b->index &&
+           a->t_enter == b->t_enter && a->t_exit == b->t_exit;
+}
+
+/* marks for a leap field: a few random balls of one class in the other, so
+ * distances run from 1 to well past MACROCELL_LEAP_MIN */
+static void random_marks(const macrocell_grid *g, uint8_t *leap)
+{
+    double centre[4][3], radius[4];
+    for (int b = 0; b < 4; b++) {
+        for (int a = 0; a < 3; a++)
+            centre[b][a] = rng_unit() * g->m[a];
+        radius[b] = 0.5 + rng_unit() * 4.0;
+    }
+    for (uint32_t c = 0; c < g->m[2]; c++)
+        for (uint32_t b = 0; b < g->m[1]; b++)
+            for (uint32_t a = 0; a < g->m[0]; a++) {
+                bool inside = false;
+                for (int i = 0; i < 4; i++) {
+                    double dx = a - centre[i][0], dy = b - centre[i][1], dz = c - centre[i][2];
+                    inside |= dx * dx + dy * dy + dz * dz <= radius[i] * radius[i];
+                }
+                leap[macrocell_index(g, a, b, c)] = inside ? 0 : MACROCELL_LEAP_MARK;
+            }
+}
+
+/* the leap field against the distance scanned directly, and every walk
+ * that leaps from every span against the walk that does not: its spans are
+ * some of the full walk's, bit for bit, and those it leaps over are of the
+ * class of the span it leapt from */
+Test(volume_macrocell, leaps_match_full_walk)
+{
+    rng_state = 11;
+    const uint32_t dims[][3] = {{41, 31, 21}, {17, 40, 9}, {9, 9, 50}};
+    const uint32_t ks[] = {1, 2};
+    static macrocell_span full[4096];
+    size_t leaps_taken = 0, spans_leapt = 0;
+    for (size_t d = 0; d < sizeof dims / sizeof dims[0]; d++) {
+        volume *v = random_volume(dims[d][0], dims[d][1], dims[d][2]);
+        v->spacing[0] = 0.5;
+        v->spacing[2] = 2.0;
+        v->origin[1] = -7.0;
+        for (size_t ki = 0; ki < sizeof ks / sizeof ks[0]; ki++) {
+            tess_error err = {{0}};
+            macrocell_grid *g = macrocell_grid_create(v, ks[ki], &err);
+            cr_assert_not_null(g, "%s", err.msg);
+            uint8_t *leap = malloc(macrocell_count(g));
+            cr_assert_not_null(leap);
+            for (int field = 0; field < 4; field++) {
+                random_marks(g, leap);
+                macrocell_leap_build(g, leap);
+                for (uint32_t c = 0; c < g->m[2]; c++)
+                    for (uint32_t b = 0; b < g->m[1]; b++)
+                        for (uint32_t a = 0; a < g->m[0]; a++) {
+                            uint8_t here = leap[macrocell_index(g, a, b, c)];
+                            uint32_t best = MACROCELL_LEAP_MAX;
+                            for (uint32_t z = 0; z < g->m[2]; z++)
+                                for (uint32_t y = 0; y < g->m[1]; y++)
+                                    for (uint32_t x = 0; x < g->m[0]; x++) {
+                                        uint8_t there = leap[macrocell_index(g, x, y, z)];
+                                        if ((there & MACROCELL_LEAP_MARK) == (here & MACROCELL_LEAP_MARK))
+                                            continue;
+                                        uint32_t dx = x > a ? x - a : a - x, dy = y > b ? y - b : b - y,
+                                                 dz = z > c ? z - c : c - z;
+                                        uint32_t dist = dx > dy ? dx : dy;
+                                        dist = dz > dist ? dz : dist;
+                                        best = dist < best ? dist : best;
+                                    }
+                            cr_assert_eq(macrocell_leap_dist(here), best, "(%u %u %u)", a, b, c);
+                        }
+                for (int r = 0; r < 200; r++) {
+                    double org_vox[3], dir_vox[3], org[3], dir[3];
+                    random_ray(g->cells, org_vox, dir_vox);
+                    for (int a = 0; a < 3; a++) {
+                        org[a] = v->origin[a] + org_vox[a] * v->spacing[a];
+                        dir[a] = dir_vox[a] * v->spacing[a];
+                    }
+                    double t_min = rng_next() % 2 ? 0.0 : -1e30, t_max = rng_next() % 4 ? 1e30 : 0.6;
+                    macrocell_walk w;
+                    macrocell_span span;
+                    size_t nf = 0;
+                    bool any = macrocell_walk_begin(&w, g, org, dir, t_min, t_max);
+                    while (any && macrocell_walk_next(&w, &span)) {
+                        cr_assert(nf < 4096);
+                        full[nf++] = span;
+                    }
+                    any = macrocell_walk_begin(&w, g, org, dir, t_min, t_max);
+                    size_t at = 0;
+                    uint8_t from_class = 0;
+                    bool leapt = false;
+                    while (any && macrocell_walk_next(&w, &span)) {
+                        /* the full walk's spans it passed lie in the cube it leapt over */
+                        while (at < nf && !same_span(&full[at], &span)) {
+                            cr_assert(leapt, "ray %d: a span (%u %u %u) lost without a leap", r, full[at].m[0],
+                                      full[at].m[1], full[at].m[2]);
+                            cr_assert_eq(leap[full[at].index] & MACROCELL_LEAP_MARK, from_class);
+                            at++;
+                            spans_leapt++;
+                        }
+                        cr_assert(at < nf, "ray %d: span (%u %u %u) [%a %a] is not the full walk's", r, span.m[0],
+                                  span.m[1], span.m[2], span.t_enter, span.t_exit);
+                        at++;
+                        uint8_t here = leap[span.index];
+                        from_class = here & MACROCELL_LEAP_MARK;
+                        leapt = macrocell_leap_dist(here) >= MACROCELL_LEAP_MIN;
+                        leaps_taken += leapt;
+                        macrocell_walk_leap(&w, &span, macrocell_leap_dist(here));
+                    }
+                    for (; at < nf; at++) {
+                        cr_assert(leapt, "ray %d: the walk ended early without a leap", r);
+                        cr_assert_eq(leap[full[at].index] & MACROCELL_LEAP_MARK, from_class);
+                        spans_leapt++;
+                    }
+                }
+            }
+            free(leap);
+            macrocell_grid_destroy(g);
+        }
+        volume_destroy(v);
+    }
+    cr_assert_gt(spans_leapt, leaps_taken, "leaps pass more than one span");
+    cr_log_info("volume_macrocell leaps: %zu leaps passed %zu spans", leaps_taken, spans_leapt);
+}

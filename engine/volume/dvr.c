@@ -45,6 +45,20 @@
  * ones on noisy data (both shared volumes) the classic
  * midpoint rule is as good and cheaper.
  *
+ * SKIPPING. The macrocell walk (macrocell.h) classes each macrocell as
+ * empty (cell_opacity 0) or not and leaps over whole cubes of one class
+ * (LEAPS: the leap field cell_leap, rebuilt with the transfer function in
+ * O(macrocells)): empty cubes are passed, non-empty ones extend the run
+ * being gathered, and each run is composited when an empty span closes
+ * it. A run's ends are plane t's the cell-by-cell walk gives as well, and
+ * where the walk ends a run reaches tb; the slab grid is global along the
+ * ray, so leaping changes only which slabs are visited, and a slab visited
+ * in empty space adds exactly 0: the pictures are bitwise those without
+ * skipping. Before the leaps the MRI under mri-soft stepped a ray through
+ * 18 non-empty macrocells (and, the profile said, as many empty ones) one
+ * DDA step each: ~40 % of its time (perf: macrocell_walk_next,
+ * volume_dda_next, the walk's loop); leaping made the frame ~1.15x as fast.
+ *
  * COST. The time goes per sample: the CT bunny under ct-bone has opacity
  * in its air noise, so nothing is skipped there and a ray takes ~200
  * samples. A sample is a position in double (p = org + t dir at the slab's
@@ -322,7 +336,9 @@ static void build_cell_opacity(dvr_volume *d)
         /* a bilinear read blends the entries on both sides of its coordinate */
         float b = range_max_query(&rm_pre, preint_cell(preint_coord(d, lo)), preint_cell(preint_coord(d, hi)) + 1);
         d->cell_opacity[m] = a > b ? a : b;
+        d->cell_leap[m] = d->cell_opacity[m] > 0.0f ? 0 : MACROCELL_LEAP_MARK;
     }
+    macrocell_leap_build(g, d->cell_leap);
 }
 
 void dvr_set_transfer(dvr_volume *d, const colormap *tf)
@@ -388,7 +404,8 @@ dvr_volume *dvr_create(const volume *vol, const macrocell_grid *grid, const colo
         d->own_grid = true;
     }
     d->cell_opacity = malloc(macrocell_count(d->grid) * sizeof *d->cell_opacity);
-    if (!d->cell_opacity) {
+    d->cell_leap = malloc(macrocell_count(d->grid) * sizeof *d->cell_leap);
+    if (!d->cell_opacity || !d->cell_leap) {
         tess_error_set(err, "volume rendering: out of memory for %zu macrocells", macrocell_count(d->grid));
         goto fail;
     }
@@ -420,6 +437,7 @@ void dvr_destroy(dvr_volume *d)
         macrocell_grid_destroy((macrocell_grid *)d->grid);
     free(d->preint);
     free(d->cell_opacity);
+    free(d->cell_leap);
     free(d->range_scratch);
     free(d->sums);
     free(d);
@@ -725,17 +743,24 @@ bool dvr_integrate_stats(const dvr_volume *d, const double org[3], const double 
         composite_run(&r, r.ta, r.tb);
     else {
         /* runs of non-empty spans, each composited when an empty span (or
-         * the end) closes it */
+         * the end) closes it; from any span the walk leaps over the
+         * macrocells of its class around it (macrocell.h LEAPS). A leap's
+         * exit is the plane t the full walk would give there; where the
+         * walk ends the run reaches tb, as the full walk's last span may
+         * (slabs past the last non-empty span add exactly 0, so taking
+         * more of them changes no bit) */
         macrocell_walk w;
         macrocell_span span;
         bool in_run = false;
         double run0 = 0.0, run1 = 0.0;
         macrocell_walk_begin(&w, g, org, dir, r.ta, r.tb);
         while (!r.done && macrocell_walk_next(&w, &span)) {
-            if (d->cell_opacity[span.index] > 0.0f) {
+            uint8_t leap = d->cell_leap[span.index];
+            macrocell_walk_leap(&w, &span, macrocell_leap_dist(leap));
+            if (!(leap & MACROCELL_LEAP_MARK)) {
                 if (!in_run)
                     run0 = span.t_enter;
-                run1 = span.t_exit;
+                run1 = w.dda.done ? r.tb : w.dda.t;
                 in_run = true;
                 continue;
             }

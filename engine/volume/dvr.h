@@ -86,7 +86,7 @@ typedef struct dvr_settings {
 typedef struct dvr_stats {
     uint64_t samples;         /* trilinear field samples taken */
     uint64_t slabs;           /* slabs composited */
-    uint64_t spans_skipped;   /* macrocell spans passed over as empty */
+    uint64_t spans_skipped;   /* empty macrocell spans the walk stopped at (a leap passes more) */
     uint64_t terminated;      /* 1 when the ray stopped on min_transmittance */
 } dvr_stats;
 
@@ -111,6 +111,7 @@ typedef struct dvr_volume {
     dvr_rgba *preint;             /* DVR_PREINT_SIZE^2, [front * SIZE + back]; NULL until first needed */
     double preint_lo, preint_scale; /* value to preint entry: (v - lo) * scale, rounded; scale 0 when lo == hi */
     float *cell_opacity;          /* per macrocell: largest opacity its values reach (both binnings) */
+    uint8_t *cell_leap;           /* per macrocell: leap field (macrocell.h LEAPS), marked where cell_opacity is 0 */
     float *range_scratch;         /* dvr_set_transfer's range-maximum tables (dvr.c) */
     struct dvr_preint_sums *sums; /* dvr_set_transfer's running integrals of the transfer function (dvr.c) */
 } dvr_volume;

@@ -131,7 +131,9 @@ typedef struct iso_hit {
  * order, each with its cubic along the ray and the field's value at its
  * entry, whose sign is carried from where the walk left the cell before
  * (rounding at a shared face cannot flip it: no root is lost or found
- * twice between cells). */
+ * twice between cells). Given a leap field (iso_cell_walk.leap), runs of
+ * macrocells that cannot reach iso are passed in one leap each (macrocell.h
+ * LEAPS); the cells given, their t's and carried signs are the same. */
 
 typedef struct iso_cell_candidate {
     int32_t cell[3];  /* its low corner sample */
@@ -157,6 +159,11 @@ typedef struct iso_cell_walk {
     iso_cubic last_f;
     double last_s1;
     double dir_len;       /* |dir| in voxel units: tolerances in cells become tolerances in t */
+    /* the caller's, or NULL (begin sets it so): a leap field over the grid
+     * whose MACROCELL_LEAP_MARK is set exactly where the macrocell cannot
+     * reach iso (macrocell.h LEAPS); the walk then leaps from such spans
+     * over the cube around them, all of one sign (below) */
+    const uint8_t *leap;
     /* the caller's: stop (next returns false, stopped set) after skipping a
      * span or cell whose entry's float t is above stop_beyond (INFINITY:
      * never), so a caller waiting for the walk to pass a t does not walk on
@@ -167,7 +174,11 @@ typedef struct iso_cell_walk {
 } iso_cell_walk;
 
 /* A value of the sign the field has everywhere in a block whose samples
- * lie in [lo, hi] with iso outside it: what is carried past a skipped block. */
+ * lie in [lo, hi] with iso outside it: what is carried past a skipped block.
+ * Also past a leap: the macrocells of a leap's cube cannot reach iso and
+ * neighbours share their face samples, so a macrocell below iso has no
+ * neighbour above it; the cube is connected through faces, hence all of
+ * it lies on the side of the macrocell leapt from. */
 static inline double iso_sign_value(float lo, float hi, float iso)
 {
     return lo > iso ? (double)lo - iso : (double)hi - iso;
@@ -188,6 +199,7 @@ static inline bool iso_cell_walk_begin(iso_cell_walk *w, const volume *v, const 
     w->have_last = false;
     w->stop_beyond = INFINITY;
     w->stopped = false;
+    w->leap = NULL;
     if (!macrocell_walk_begin(&w->walk, grid, org, dir, t_min, t_max))
         return false;
     const double *d = w->walk.dir;
@@ -216,6 +228,15 @@ static inline bool iso_cell_walk_next(iso_cell_walk *w, iso_cell_candidate *out)
                 if ((float)span.t_enter > w->stop_beyond) {
                     w->stopped = true;
                     return false;
+                }
+                uint32_t dist = w->leap ? macrocell_leap_dist(w->leap[span.index]) : 0;
+                if (dist >= MACROCELL_LEAP_MIN) {
+                    macrocell_walk_leap(&w->walk, &span, dist);
+                    /* past stop_beyond in skipped space: no crossing lies between */
+                    if ((float)w->walk.dda.t > w->stop_beyond) {
+                        w->stopped = true;
+                        return false;
+                    }
                 }
                 continue;
             }

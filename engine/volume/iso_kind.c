@@ -1,8 +1,9 @@
 /* iso_kind.c - direct iso-surfaces as a geometry kind (iso_kind.h).
  *
  * Why one primitive rather than one per block of macrocells: the macrocell
- * walk already skips every block that cannot reach the value, at the cost
- * of a DDA step per block, and it carries the field's sign from block to
+ * walk already skips every block that cannot reach the value, a whole cube
+ * of them a leap (the kind's leap field, rebuilt in O(macrocells) when the
+ * value changes; macrocell.h LEAPS), and it carries the field's sign from block to
  * block (iso_cell.h HALF-OPEN SEGMENTS), so no crossing on a block face is
  * lost or found twice. Blocks as primitives would need boxes that follow
  * the value (a rebuild, or a refit, per value) to cull anything more, and
@@ -61,7 +62,19 @@ struct iso_kind {
     vec3 colour;          /* linear RGB of every hit */
     uint32_t material_id; /* scene material */
     iso_method method;    /* how a cell's root is found (iso_cell.h) */
+    uint8_t *leap;        /* leap field of the grid for iso_traced (marked: cannot reach it); rebuilt with
+                             the value, O(macrocells), where nothing traces */
 };
+
+/* the walks' leap field for the kind's current value (iso_cell.h) */
+static void build_leap(iso_kind *k)
+{
+    const macrocell_grid *g = k->shared->now.grid;
+    size_t count = macrocell_count(g);
+    for (size_t m = 0; m < count; m++)
+        k->leap[m] = macrocell_may_reach(g, m, k->iso_traced) ? 0 : MACROCELL_LEAP_MARK;
+    macrocell_leap_build(g, k->leap);
+}
 
 /* ---- the shared volume ------------------------------------------------- */
 
@@ -339,6 +352,12 @@ iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colou
         tess_error_set(err, "iso surface: out of memory");
         return NULL;
     }
+    k->leap = malloc(macrocell_count(shared->now.grid));
+    if (!k->leap) {
+        free(k);
+        tess_error_set(err, "iso surface: out of memory");
+        return NULL;
+    }
     iso_volume_retain(shared);
     k->shared = shared;
     k->iso = iso_value;
@@ -346,6 +365,7 @@ iso_kind *iso_kind_create_shared(iso_volume *shared, float iso_value, vec3 colou
     k->colour = colour;
     k->material_id = material_id;
     k->method = method;
+    build_leap(k);
     return k;
 }
 
@@ -365,6 +385,7 @@ void iso_kind_destroy(iso_kind *k)
     if (!k)
         return;
     iso_volume_release(k->shared);
+    free(k->leap);
     free(k);
 }
 
@@ -374,6 +395,7 @@ bool iso_kind_set_value(iso_kind *k, float iso_value)
         return false;
     k->iso = iso_value;
     k->iso_traced = traced_value(k->shared->now.v, iso_value);
+    build_leap(k);
     return true;
 }
 
@@ -472,6 +494,7 @@ static bool first_crossing(const iso_kind *k, const double org[3], const double 
     iso_cell_walk walk;
     if (!iso_cell_walk_begin(&walk, vol, g, org, dir, t_start, INFINITY, iso))
         return false;
+    walk.leap = k->leap;
     double tol_s = ISO_CELL_TOL / walk.dir_len; /* ISO_CELL_TOL cell widths, in t */
     crossing_group group = {0.f, 0};
     iso_cell_candidate cand;
@@ -635,10 +658,10 @@ static void kind_describe(const void *data, uint32_t prim, const ray *r, const h
 
 static size_t kind_bytes(const void *data)
 {
-    (void)data;
     /* the volume and grid are shared (and may be borrowed): counted by
-     * whoever loaded them, not once per iso-value */
-    return sizeof(iso_kind);
+     * whoever loaded them, not once per iso-value; the leap field is the kind's */
+    const iso_kind *k = data;
+    return sizeof(iso_kind) + macrocell_count(k->shared->now.grid);
 }
 
 static void kind_destroy(void *data) { iso_kind_destroy(data); }
@@ -659,7 +682,13 @@ static bool kind_step_ready(void *data, uint32_t step) { return iso_volume_step_
  * first to be set swaps it, the others find it shown. */
 static bool kind_set_step(void *data, uint32_t step, tess_error *err)
 {
-    return iso_volume_set_step(((iso_kind *)data)->shared, step, err);
+    iso_kind *k = data;
+    if (!iso_volume_set_step(k->shared, step, err))
+        return false;
+    /* the step's macrocells (whichever kind of the volume swapped them in):
+     * every kind's set_step runs in the same serial section, before any walk */
+    build_leap(k);
+    return true;
 }
 
 static bool kind_value(const void *data, float *value, float *lo, float *hi)

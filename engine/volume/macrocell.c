@@ -97,6 +97,46 @@ void macrocell_grid_destroy(macrocell_grid *g)
     free(g);
 }
 
+/* Two chamfer passes with the 26 neighbours at distance 1, forward over
+ * the 13 neighbours before a macrocell in memory order, then backward over
+ * the 13 after it: exact for the chessboard (L-infinity) distance, as
+ * Rosenfeld and Pfaltz's two-pass transform is in 2D ("Sequential
+ * Operations in Digital Picture Processing", JACM 1966). A neighbour of
+ * the other class is at distance 1; one of the same class passes its own
+ * distance on, plus 1 (the transform towards the other class's macrocells,
+ * for both classes at once). */
+void macrocell_leap_build(const macrocell_grid *g, uint8_t *leap)
+{
+    const int32_t m[3] = {(int32_t)g->m[0], (int32_t)g->m[1], (int32_t)g->m[2]};
+    size_t count = macrocell_count(g);
+    for (size_t i = 0; i < count; i++)
+        leap[i] = (uint8_t)((leap[i] & MACROCELL_LEAP_MARK) | MACROCELL_LEAP_MAX);
+    for (int pass = 0; pass < 2; pass++) {
+        int32_t s = pass == 0 ? -1 : 1; /* the neighbours already final lie on side s */
+        for (int32_t n = 0; n < m[2]; n++)
+            for (int32_t nb = 0; nb < m[1]; nb++)
+                for (int32_t na = 0; na < m[0]; na++) {
+                    int32_t c = pass == 0 ? n : m[2] - 1 - n, b = pass == 0 ? nb : m[1] - 1 - nb,
+                            a = pass == 0 ? na : m[0] - 1 - na;
+                    uint8_t *here = &leap[macrocell_index(g, (uint32_t)a, (uint32_t)b, (uint32_t)c)];
+                    unsigned mark = *here & MACROCELL_LEAP_MARK, best = *here & MACROCELL_LEAP_MAX;
+                    /* (dz, dy, dx) lexicographically on side s of (0, 0, 0) */
+                    for (int32_t dz = 0; dz <= 1 && best > 1; dz++)
+                        for (int32_t dy = dz ? -1 : 0; dy <= 1; dy++)
+                            for (int32_t dx = dz || dy ? -1 : 1; dx <= 1; dx++) {
+                                int32_t x = a + s * dx, y = b + s * dy, z = c + s * dz;
+                                if (x < 0 || y < 0 || z < 0 || x >= m[0] || y >= m[1] || z >= m[2])
+                                    continue;
+                                uint8_t there = leap[macrocell_index(g, (uint32_t)x, (uint32_t)y, (uint32_t)z)];
+                                unsigned d = (there & MACROCELL_LEAP_MARK) != mark ? 1u
+                                                                                   : (there & MACROCELL_LEAP_MAX) + 1u;
+                                best = d < best ? d : best;
+                            }
+                    *here = (uint8_t)(mark | best);
+                }
+    }
+}
+
 void volume_ray_to_voxel(const double origin[3], const double spacing[3], const double org[3], const double dir[3],
                          double org_vox[3], double dir_vox[3])
 {
@@ -132,13 +172,19 @@ bool volume_clip_box(const double org[3], const double dir[3], const double lo[3
     return true;
 }
 
+/* the t where the ray leaves cell c of axis a through its far plane (step != 0) */
+static inline double cell_far_t(const volume_dda *w, int a, int32_t c)
+{
+    double plane = (double)(w->step[a] > 0 ? c + 1 : c) * w->cell_size;
+    return (plane - w->org[a]) / w->dir[a];
+}
+
 /* the t where the ray leaves the current cell through axis a's far plane */
 static inline double dda_leave(const volume_dda *w, int a)
 {
     if (w->step[a] == 0)
         return INFINITY;
-    double plane = (double)(w->step[a] > 0 ? w->cell[a] + 1 : w->cell[a]) * w->cell_size;
-    return (plane - w->org[a]) / w->dir[a];
+    return cell_far_t(w, a, w->cell[a]);
 }
 
 void volume_dda_begin(volume_dda *w, const double org[3], const double dir[3], double t0, double t1,
@@ -238,6 +284,77 @@ bool macrocell_walk_next(macrocell_walk *w, macrocell_span *span)
         span->m[a] = (uint32_t)c[a];
     span->index = macrocell_index(w->grid, span->m[0], span->m[1], span->m[2]);
     return true;
+}
+
+void macrocell_walk_leap(macrocell_walk *w, const macrocell_span *span, uint32_t dist)
+{
+    volume_dda *d = &w->dda;
+    if (dist < MACROCELL_LEAP_MIN || d->done)
+        return;
+    int32_t r = (int32_t)dist - 1;
+    /* where the ray leaves the cube: its first far plane; an axis where the
+     * cube reaches past the grid leaves it at the walk's end */
+    double t_exit = d->t_end;
+    int exit_axis = -1;
+    for (int a = 0; a < 3; a++) {
+        if (d->step[a] == 0)
+            continue;
+        int32_t far = (int32_t)span->m[a] + d->step[a] * r;
+        if (far < d->lo[a] || far > d->hi[a])
+            continue;
+        double t = cell_far_t(d, a, far);
+        if (t < t_exit) {
+            t_exit = t;
+            exit_axis = a;
+        }
+    }
+    if (!(t_exit > d->t))
+        return; /* the walk is there already */
+    if (t_exit >= d->t_end || exit_axis < 0) {
+        d->t = d->t_end;
+        d->done = true;
+        return;
+    }
+    /* per axis the cell whose planes' t bracket t_exit (near <= t_exit <
+     * far: a tie goes on, where the full walk gives a zero-length span).
+     * The exit axis' is the cube's far cell's neighbour, entered at t_exit.
+     * On another axis the walk stays where its current cell's far t is
+     * beyond t_exit (no plane crossed: the usual case, no division); else
+     * the point's floor, which rounding may put one off, corrected with the
+     * plane t's the walk steps by (never behind the current cell, whose
+     * near t is at most the walk's t) */
+    for (int a = 0; a < 3; a++) {
+        int32_t step = d->step[a], cell;
+        if (step == 0 || (a != exit_axis && d->t_leave[a] > t_exit))
+            continue;
+        if (a == exit_axis)
+            cell = (int32_t)span->m[a] + step * (r + 1);
+        else {
+            double c = floor((d->org[a] + t_exit * d->dir[a]) / d->cell_size);
+            c = c < d->lo[a] ? d->lo[a] : c > d->hi[a] ? d->hi[a] : c;
+            cell = (int32_t)c;
+            if ((cell - d->cell[a]) * step <= 0)
+                cell = d->cell[a] + step; /* the current cell's far t is not beyond t_exit */
+            else
+                while (cell - step != d->cell[a] && cell_far_t(d, a, cell - step) > t_exit)
+                    cell -= step;
+        }
+        for (;;) {
+            if (cell < d->lo[a] || cell > d->hi[a]) {
+                d->t = t_exit;
+                d->done = true; /* out of the grid: the full walk ends here too */
+                return;
+            }
+            double t_far = cell_far_t(d, a, cell);
+            if (t_far > t_exit) {
+                d->cell[a] = cell;
+                d->t_leave[a] = t_far;
+                break;
+            }
+            cell += step;
+        }
+    }
+    d->t = t_exit;
 }
 
 void macrocell_walk_cells(const macrocell_walk *w, const macrocell_span *span, volume_dda *cells)
