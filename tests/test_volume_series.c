@@ -130,6 +130,18 @@ static void expect_step(const scene *s, const accel *a, int k)
     float lo, hi;
     iso_kind_range(iso_of(s, 0), &lo, &hi);
     cr_expect_float_eq(hi, (float)r, 1e-6f, "step %d: the value range is the step's", k);
+    /* from the 8 corners inwards: the walk leaps over macrocells far from the
+     * surface (its leap field must be the step's: one left from a smaller
+     * ball jumps over the bigger one's surface near the corners) */
+    for (int c = 0; c < 8; c++) {
+        vec3 d = v3_normalize(v3(c & 1 ? 1.f : -1.f, c & 2 ? 1.f : -1.f, c & 4 ? 1.f : -1.f));
+        ray ry = {v3_scale(d, -30.f), d, 0.f, INFINITY};
+        hit h;
+        cr_assert(accel_intersect_instance(a, 0, &ry, NULL, &h), "step %d corner %d: no hit", k, c);
+        float dist = 30.f - h.t; /* from the centre, along the diagonal */
+        cr_expect(fabsf(dist - (float)r) < 0.15f, "step %d corner %d: the surface at %g from the centre, want %g",
+                  k, c, (double)dist, r);
+    }
 }
 
 static void wait_ready(const scene *s, uint32_t step)
