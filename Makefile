@@ -150,7 +150,7 @@ test-asan: deps
 # cannot start under TSan (its issue #274), so these files are compiled against
 # tests/tsan/criterion/criterion.h, a stand-in that runs the same Test() bodies.
 TSAN_TESTS := tests/test_pipeline.c tests/test_overlay.c tests/test_input.c tests/test_governor.c \
-              tests/test_frame_state.c
+              tests/test_frame_state.c tests/test_volume_series.c
 TSAN_BIN := build-tsan/tessera_tsan_tests
 test-tsan: deps
 	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)

@@ -9,12 +9,14 @@
  * message and exits 1; a test's .timeout (default 600 s) is an alarm that
  * kills the run, so a deadlock fails instead of hanging.
  * Supports only what those files use: Test(suite, name[, .timeout = N]),
- * cr_assert, cr_assert_not, cr_assert_eq, cr_assert_null, cr_assert_geq,
- * cr_expect*, cr_expect_str_eq, cr_expect_geq, cr_log_info. Several test files link into one binary: the registry and
+ * cr_assert, cr_assert_not, cr_assert_eq, cr_assert_null, cr_assert_not_null,
+ * cr_assert_geq, cr_assert_gt, cr_assert_leq, cr_assert_float_eq,
+ * cr_assert_str_eq, cr_expect*, cr_log_info. Several test files link into one binary: the registry and
  * main() are weak definitions, so each file's copy is the same one. */
 #ifndef TESSERA_TSAN_CRITERION_SHIM_H
 #define TESSERA_TSAN_CRITERION_SHIM_H
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -81,6 +83,16 @@ static inline void shim_check(bool ok, const char *file, int line, const char *e
 #define cr_expect_str_eq(a, b, ...) shim_check(strcmp((a), (b)) == 0, __FILE__, __LINE__, #a " == " #b, " " __VA_ARGS__)
 #define cr_assert_geq(a, b, ...) shim_check((a) >= (b), __FILE__, __LINE__, #a " >= " #b, " " __VA_ARGS__)
 #define cr_expect_geq(a, b, ...) cr_assert_geq(a, b, __VA_ARGS__)
+#define cr_assert_gt(a, b, ...) shim_check((a) > (b), __FILE__, __LINE__, #a " > " #b, " " __VA_ARGS__)
+#define cr_assert_leq(a, b, ...) shim_check((a) <= (b), __FILE__, __LINE__, #a " <= " #b, " " __VA_ARGS__)
+#define cr_assert_not_null(x, ...) shim_check((x) != NULL, __FILE__, __LINE__, #x " != NULL", " " __VA_ARGS__)
+#define cr_expect_null(x, ...) cr_assert_null(x, __VA_ARGS__)
+#define cr_assert_str_eq(a, b, ...) cr_expect_str_eq(a, b, __VA_ARGS__)
+/* |a - b| <= eps, as Criterion's (a, b and eps evaluated once each) */
+#define cr_assert_float_eq(a, b, eps, ...)                                                                            \
+    shim_check(fabs((double)(a) - (double)(b)) <= (double)(eps), __FILE__, __LINE__, "|" #a " - " #b "| <= " #eps,    \
+               " " __VA_ARGS__)
+#define cr_expect_float_eq(a, b, eps, ...) cr_assert_float_eq(a, b, eps, __VA_ARGS__)
 /* Criterion's info log: printed to stderr here. */
 #define cr_log_info(...) (fprintf(stderr, "  info: " __VA_ARGS__), fputc('\n', stderr))
 
