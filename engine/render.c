@@ -542,7 +542,107 @@ typedef struct layer_walk {
     bool has_last[PACKET_MAX_RAYS];
     float transmit[PACKET_MAX_RAYS]; /* light still passing: product of 1 - opacity so far */
     vec3 sum[PACKET_MAX_RAYS];
+    float media_from[PACKET_MAX_RAYS]; /* where the media not yet composited start (with media) */
 } layer_walk;
+
+/* A number in [0, 1) from a ray's direction bits: where a medium's first
+ * sample lies within its step (render is a pure function of the pixel, so
+ * no frame counter: the same pixel always jitters the same). */
+static float ray_jitter(const ray *r)
+{
+    uint32_t bits[3];
+    memcpy(&bits[0], &r->dir.x, 4);
+    memcpy(&bits[1], &r->dir.y, 4);
+    memcpy(&bits[2], &r->dir.z, 4);
+    uint32_t h = bits[0] * 0x9E3779B1u ^ bits[1] * 0x85EBCA77u ^ bits[2] * 0xC2B2AE3Du;
+    h ^= h >> 15, h *= 0x2C1B3C6Du, h ^= h >> 12;
+    return (float)(h >> 8) * (1.f / 16777216.f);
+}
+
+/* The scene's participating media (scene.h, PARTICIPATING MEDIA) along r
+ * over [r->t_near, r->t_far] (world space, already cut by the planes):
+ * their colour (associated) and the transmittance left, nearest medium
+ * first; false (nothing written) when no medium meets the segment. */
+static bool media_segment(const scene *s, const ray *r, vec3 *rgb_out, float *transmittance_out)
+{
+    /* entries of the media along the ray, nearest first (few media: insertion order) */
+    float enter[8], leave[8];
+    uint32_t which[8], n = 0;
+    for (uint32_t m = 0; m < s->medium_count && n < 8; m++) {
+        const scene_medium *md = &s->media[m];
+        aabb box;
+        if (!md->ops->bounds(md->data, &box))
+            continue;
+        ray local = md->identity ? *r : affine3_ray(&md->to_object, r);
+        ray_derived d = ray_derive(&local);
+        float t0, t1;
+        if (!intersect_box_span(&local, &d, &box, &t0, &t1))
+            continue;
+        uint32_t k = n++;
+        while (k > 0 && enter[k - 1] > t0) {
+            enter[k] = enter[k - 1], leave[k] = leave[k - 1], which[k] = which[k - 1];
+            k--;
+        }
+        enter[k] = t0, leave[k] = t1, which[k] = m;
+    }
+    if (n == 0)
+        return false;
+    vec3 sum = v3(0.f, 0.f, 0.f);
+    float through = 1.f; /* transmittance so far */
+    float jitter = ray_jitter(r);
+    for (uint32_t k = 0; k < n && through > 0.f; k++) {
+        const scene_medium *md = &s->media[which[k]];
+        ray local = md->identity ? *r : affine3_ray(&md->to_object, r);
+        local.t_near = enter[k];
+        local.t_far = leave[k];
+        vec3 rgb;
+        float trans;
+        md->ops->integrate(md->data, &local, jitter, &rgb, &trans);
+        sum = v3_add(sum, v3_scale(rgb, through));
+        through *= trans;
+    }
+    *rgb_out = sum;
+    *transmittance_out = through;
+    return true;
+}
+
+/* Media in front of each ray's first surface when rays stop at it (no layer
+ * walk): colour = medium + transmittance x colour. */
+static void composite_media(const render_view *v, const clip_set *clip, uint32_t count, uint64_t active,
+                            const ray *rays, const render_first_surfaces *first, vec3 *colour)
+{
+    for (uint32_t i = 0; i < count; i++) {
+        if (!(active >> i & 1u))
+            continue;
+        ray r = rays[i];
+        if (first->hits >> i & 1u)
+            r.t_far = first->t[i];
+        /* the cutting planes cut media too: what is left of the ray is one
+         * interval (the kept half-spaces are convex) */
+        if (clip->count > 0 && !clip_ray(clip, &r, NULL))
+            continue;
+        vec3 rgb;
+        float through;
+        if (media_segment(v->scene, &r, &rgb, &through))
+            colour[i] = v3_add(rgb, v3_scale(colour[i], through));
+    }
+}
+
+/* In the layer walk: the media between the last surface (or the ray's start)
+ * and t_end go into ray i's sum and transmittance before what lies at t_end. */
+static void walk_media(const render_view *v, layer_walk *lw, uint32_t i, float t_end)
+{
+    ray r = lw->base[i];
+    r.t_near = lw->media_from[i];
+    r.t_far = t_end;
+    lw->media_from[i] = t_end;
+    vec3 rgb;
+    float through;
+    if (!(r.t_near < r.t_far) || !media_segment(v->scene, &r, &rgb, &through))
+        return;
+    lw->sum[i] = v3_add(lw->sum[i], v3_scale(rgb, lw->transmit[i]));
+    lw->transmit[i] *= through;
+}
 
 /* Trace and shade the primary packet p surface after surface, front to back
  * in the next-hit order (accel_intersect_after: exact depth order, coplanar
@@ -563,6 +663,7 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
     const uint32_t count = p->count, facts = p->flags & (PACKET_COMMON_ORIGIN | PACKET_CONSTANT_SIGNS | PACKET_NORMALIZED);
     const vec3 background = v->shading == RENDER_SHADE_EYELIGHT ? v3(0.f, 0.f, 0.f) : s->background;
     const bool caps = x->set.caps && x->clip.count > 0;
+    const bool media = s->medium_count > 0; /* composited between the layers, front to back */
     uint64_t walking = 0;
     counts->primary_rays += count;
     for (uint32_t i = 0; i < count; i++) {
@@ -576,6 +677,7 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
         else
             walking |= 1ull << i;
         lw->entry[i] = (int8_t)entry;
+        lw->media_from[i] = lw->base[i].t_near;
     }
     for (int layer = 0; walking; layer++) {
         packet_reset(p, count, facts);
@@ -596,6 +698,8 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
                 ps->hits |= 1ull << i;
                 continue;
             }
+            if (media)
+                walk_media(v, lw, i, lw->base[i].t_far);
             lw->sum[i] = v3_add(lw->sum[i], v3_scale(background, lw->transmit[i]));
             walking &= ~(1ull << i);
         }
@@ -629,6 +733,8 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
         for (uint64_t m = ps->hits; m; m &= m - 1) {
             uint32_t i = (uint32_t)__builtin_ctzll(m);
             float alpha = alpha_of[i];
+            if (media)
+                walk_media(v, lw, i, p->hit_t[i]);
             lw->sum[i] = v3_add(lw->sum[i], v3_scale(ps->colour[i], lw->transmit[i] * alpha));
             lw->transmit[i] *= 1.f - alpha;
             if (alpha >= 1.f || lw->transmit[i] < x->set.min_transmittance) {
@@ -645,89 +751,17 @@ static void render_layers(const render_view *v, const view_extras *x, ray_packet
         ps->colour[i] = lw->sum[i];
 }
 
-/* A number in [0, 1) from a ray's direction bits: where a medium's first
- * sample lies within its step (render is a pure function of the pixel, so
- * no frame counter: the same pixel always jitters the same). */
-static float ray_jitter(const ray *r)
-{
-    uint32_t bits[3];
-    memcpy(&bits[0], &r->dir.x, 4);
-    memcpy(&bits[1], &r->dir.y, 4);
-    memcpy(&bits[2], &r->dir.z, 4);
-    uint32_t h = bits[0] * 0x9E3779B1u ^ bits[1] * 0x85EBCA77u ^ bits[2] * 0xC2B2AE3Du;
-    h ^= h >> 15, h *= 0x2C1B3C6Du, h ^= h >> 12;
-    return (float)(h >> 8) * (1.f / 16777216.f);
-}
-
-/* The scene's participating media in front of each ray's first surface
- * (scene.h, PARTICIPATING MEDIA): colour = medium + transmittance x colour,
- * nearest medium first. */
-static void composite_media(const render_view *v, const clip_set *clip, uint32_t count, uint64_t active,
-                            const ray *rays, const render_first_surfaces *first, vec3 *colour)
-{
-    const scene *s = v->scene;
-    for (uint32_t i = 0; i < count; i++) {
-        if (!(active >> i & 1u))
-            continue;
-        ray r = rays[i];
-        if (first->hits >> i & 1u)
-            r.t_far = first->t[i];
-        /* the cutting planes cut media too: what is left of the ray is one
-         * interval (the kept half-spaces are convex) */
-        if (clip->count > 0 && !clip_ray(clip, &r, NULL))
-            continue;
-        float t_end = r.t_far;
-        /* entries of the media along the ray, nearest first (few media: insertion order) */
-        float enter[8], leave[8];
-        uint32_t which[8], n = 0;
-        for (uint32_t m = 0; m < s->medium_count && n < 8; m++) {
-            const scene_medium *md = &s->media[m];
-            aabb box;
-            if (!md->ops->bounds(md->data, &box))
-                continue;
-            ray local = md->identity ? r : affine3_ray(&md->to_object, &r);
-            ray_derived d = ray_derive(&local);
-            float t0, t1;
-            local.t_far = t_end;
-            if (!intersect_box_span(&local, &d, &box, &t0, &t1))
-                continue;
-            uint32_t k = n++;
-            while (k > 0 && enter[k - 1] > t0) {
-                enter[k] = enter[k - 1], leave[k] = leave[k - 1], which[k] = which[k - 1];
-                k--;
-            }
-            enter[k] = t0, leave[k] = t1, which[k] = m;
-        }
-        if (n == 0)
-            continue;
-        vec3 sum = v3(0.f, 0.f, 0.f);
-        float through = 1.f; /* transmittance so far */
-        float jitter = ray_jitter(&r);
-        for (uint32_t k = 0; k < n && through > 0.f; k++) {
-            const scene_medium *md = &s->media[which[k]];
-            ray local = md->identity ? r : affine3_ray(&md->to_object, &r);
-            local.t_near = enter[k];
-            local.t_far = leave[k];
-            vec3 rgb;
-            float trans;
-            md->ops->integrate(md->data, &local, jitter, &rgb, &trans);
-            sum = v3_add(sum, v3_scale(rgb, through));
-            through *= trans;
-        }
-        colour[i] = v3_add(sum, v3_scale(colour[i], through));
-    }
-}
-
-/* Per thread, for the media of a packet: its first surfaces when the caller
- * asked for none (render_first_surfaces is 3.6 KB), and its rays as they
- * were before tracing (the layer walk of transparency and cutting planes
- * reuses the packet). */
+/* Per thread, for the media of a packet when rays stop at their first
+ * surface: those surfaces when the caller asked for none
+ * (render_first_surfaces is 3.6 KB), and the rays as they were before
+ * tracing. */
 static _Thread_local render_first_surfaces media_first;
 static _Thread_local ray media_rays[PACKET_MAX_RAYS];
 
 /* Trace and shade primary packet p into ps->colour, by the walk the frame
  * needs; `first` (may be NULL) receives each ray's first surface. Media
- * (scene.h) go in front of the first surfaces. */
+ * (scene.h) go in front of the first surfaces, or between the layers when
+ * rays walk them. */
 static void trace_packet(const render_view *v, const view_extras *x, ray_packet *p, ray_packet *shadows,
                          packet_shading *ps, layer_walk *lw, render_first_surfaces *first, render_counts *counts)
 {
@@ -742,10 +776,11 @@ static void trace_packet(const render_view *v, const view_extras *x, ray_packet 
     }
     if (first)
         first->hits = 0;
-    if (needs_layers(x))
+    if (needs_layers(x)) { /* media between the layers (render_layers) */
         render_layers(v, x, p, shadows, ps, lw, first, counts);
-    else
-        shade_packet(v, x, p, shadows, ps, first, counts);
+        return;
+    }
+    shade_packet(v, x, p, shadows, ps, first, counts);
     if (media)
         composite_media(v, &x->clip, count, active, media_rays, first, ps->colour);
 }

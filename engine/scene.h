@@ -77,15 +77,18 @@ typedef struct sphere_set {
  * volume rendered directly). A medium lies in its own box (object space),
  * placed by to_world; along a primary ray it is integrated from the ray's
  * start to its first surface (or to the end of the box) and composited in
- * front of that surface: colour = medium + transmittance x surface. Media
- * are assumed not to overlap (each is integrated alone, nearest first).
+ * front of that surface: colour = medium + transmittance x surface; where
+ * rays walk translucent surfaces layer by layer, each stretch between two
+ * layers in turn, up to the first opaque one; only the part on the kept side
+ * of the cutting planes. Media are assumed not to overlap (each is
+ * integrated alone, nearest first).
  * A scene without media pays nothing (medium_count 0). */
 typedef struct medium_ops {
     const char *name; /* the kind, for logs ("dvr") */
     /* The medium's box in object space; false when it is empty. */
     bool (*bounds)(const void *data, aabb *out);
     /* Integrate along r (object space; r->t_near .. r->t_far are already
-     * clipped to the box and to the first surface): emitted colour (linear
+     * clipped to the box and to the stretch between surfaces): emitted colour (linear
      * RGB, associated: already weighted by opacity) and the transmittance
      * left, in [0, 1]. jitter in [0, 1): where within its first step the
      * first sample lies. Any thread. */

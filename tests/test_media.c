@@ -190,3 +190,51 @@ Test(media, cutting_planes_cut_media)
     scene_destroy(s);
     scene_destroy(clear);
 }
+
+/* A white quad at z = `z` (10 x 10 around the axis) facing +z. */
+static void add_quad(scene *s, uint32_t material_id, float z, const char *name)
+{
+    mesh *q = mesh_create();
+    cr_assert(mesh_add_vertex(q, -10.f, -10.f, z) && mesh_add_vertex(q, 10.f, -10.f, z) &&
+              mesh_add_vertex(q, 10.f, 10.f, z) && mesh_add_vertex(q, -10.f, 10.f, z));
+    cr_assert(mesh_add_triangle(q, 0, 1, 2) && mesh_add_triangle(q, 0, 2, 3));
+    cr_assert_geq(scene_add_mesh(s, q, material_id, name), 0);
+}
+
+/* Media go between translucent surfaces: a white sheet at z = 0 in the
+ * middle of the fog and the white floor at z = -3, both of opacity 0.5.
+ * Front to back: fog over z 1..0 (F, T: one unit), the sheet (C), fog over
+ * z 0..-1 (F, T), the floor (C), the background (B):
+ *     F + T (C/2 + 1/2 (F + T (C/2 + B/2)))
+ * with C from the same view without fog (C/2 + C/4 + B/4). */
+Test(media, media_lie_between_translucent_surfaces)
+{
+    vec3 px[2];
+    float background = 0.f;
+    for (int fog = 0; fog < 2; fog++) {
+        scene *s = fog_scene(fog == 1, 1.f);
+        add_quad(s, 0, 0.f, "sheet");
+        background = s->background.z;
+        tess_error err = {{0}};
+        accel *a = accel_build(s, 1, &err);
+        cr_assert(a, "%s", err.msg);
+        frame_state st;
+        frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+        frame_state_set_global_opacity(&st, 0.5f);
+        camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
+        render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33),
+                         .shading = RENDER_SHADE_PHONG, .state = &st};
+        float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
+        render_image(&v, 2, rgb, NULL);
+        px[fog] = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
+        free(rgb);
+        frame_state_finish(&st);
+        accel_destroy(a);
+        scene_destroy(s);
+    }
+    float C = (px[0].z - 0.25f * background) / 0.75f;
+    float T = expf(-SIGMA * 1.f), F = 0.8f * (1.f - T);
+    float want = F + T * (0.5f * C + 0.5f * (F + T * (0.5f * C + 0.5f * background)));
+    cr_assert_float_eq(px[1].z, want, 1e-5f, "fog between the layers: %g, want %g (C %g)", (double)px[1].z,
+                       (double)want, (double)C);
+}
