@@ -90,6 +90,7 @@ static const char *const gesture_names[INPUT_GESTURE_COUNT + 1] = {
     [INPUT_GESTURE_LONG_PRESS] = "long-press",
     [INPUT_GESTURE_TWO_FINGER_TAP] = "two-finger-tap",
     [INPUT_GESTURE_THREE_FINGER_TAP] = "three-finger-tap",
+    [INPUT_GESTURE_THREE_FINGER_DRAG] = "three-finger-drag",
     [INPUT_GESTURE_COUNT] = NULL,
 };
 
@@ -185,6 +186,7 @@ static const unsigned char default_gestures[INPUT_GESTURE_COUNT] = {
     [INPUT_GESTURE_LONG_PRESS] = INPUT_ACTION_ISOLATE,
     [INPUT_GESTURE_TWO_FINGER_TAP] = INPUT_ACTION_SHOW_ALL,
     [INPUT_GESTURE_THREE_FINGER_TAP] = INPUT_ACTION_PLANE_PLACE,
+    [INPUT_GESTURE_THREE_FINGER_DRAG] = INPUT_ACTION_VALUE_DRAG,
 };
 
 static const int default_chord[] = {KEY_LEFTCTRL, KEY_LEFTALT, KEY_Q};

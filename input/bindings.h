@@ -100,6 +100,7 @@ typedef enum input_gesture {
     INPUT_GESTURE_TWO_FINGER_TAP,   /* "two-finger-tap": two fingers down and up, short, without motion */
     INPUT_GESTURE_THREE_FINGER_TAP, /* "three-finger-tap": three fingers down and up, short, without motion;
                                        acts where the first finger landed */
+    INPUT_GESTURE_THREE_FINGER_DRAG, /* "three-finger-drag": the motion of three fingers' centre */
     INPUT_GESTURE_COUNT
 } input_gesture;
 

@@ -1172,6 +1172,21 @@ static void long_press_if_due(input_controller *c, uint64_t now_us)
         long_press(c, now_us);
 }
 
+/* The centre of the fingers down. */
+static void touch_centre(const input_controller *c, double *x, double *y)
+{
+    double sx = 0.0, sy = 0.0;
+    int n = 0;
+    for (int i = 0; i < TOUCH_SLOTS; i++)
+        if (c->touches[i].active) {
+            sx += c->touches[i].x;
+            sy += c->touches[i].y;
+            n++;
+        }
+    *x = n ? sx / n : 0.0;
+    *y = n ? sy / n : 0.0;
+}
+
 static void touch_frame(input_controller *c, uint64_t now_us)
 {
     touch *a, *b;
@@ -1191,6 +1206,9 @@ static void touch_frame(input_controller *c, uint64_t now_us)
             c->prev_y = a->y;
             c->one_drag_started = false;
             c->touch_point = point_under(c, a->x, a->y, NULL);
+        } else if (n == 3) {
+            touch_centre(c, &c->prev_x, &c->prev_y);
+            c->touch_point = point_under(c, c->prev_x, c->prev_y, NULL);
         } else {
             c->prev_x = 0.5 * (a->x + b->x);
             c->prev_y = 0.5 * (a->y + b->y);
@@ -1212,6 +1230,14 @@ static void touch_frame(input_controller *c, uint64_t now_us)
              a->y - c->prev_y);
         c->prev_x = a->x;
         c->prev_y = a->y;
+        return;
+    }
+    if (n == 3) { /* the three fingers' centre drags (no pinch) */
+        double cx, cy;
+        touch_centre(c, &cx, &cy);
+        drag(c, (input_action)g[INPUT_GESTURE_THREE_FINGER_DRAG], c->touch_point, cx - c->prev_x, cy - c->prev_y);
+        c->prev_x = cx;
+        c->prev_y = cy;
         return;
     }
     double cx = 0.5 * (a->x + b->x), cy = 0.5 * (a->y + b->y);

@@ -89,7 +89,7 @@
  *  - VALUES AND MAPS. value-down [T] and value-up [Y] step the scalar
  *    parameter (an iso-value) of every geometry that has one (config
  *    `values`) by INPUT_VALUE_STEPS of its range, clamped ("value FIRST
- *    COUNT V"); value-drag [side button] is a drag: up raises every value,
+ *    COUNT V"); value-drag [side button, three fingers] is a drag: up raises every value,
  *    INPUT_VALUE_DRAG_PER_UNIT of its range per plane unit, the records
  *    coalesced to one per target an input frame; colormap-next [M] gives every geometry coloured through a
  *    map (config `maps`) the next built-in map or transfer function

@@ -149,6 +149,7 @@ Test(bindings, defaults_are_as_documented)
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_LONG_PRESS], INPUT_ACTION_ISOLATE);
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_TWO_FINGER_TAP], INPUT_ACTION_SHOW_ALL);
     cr_expect_eq(b.gesture_action[INPUT_GESTURE_THREE_FINGER_TAP], INPUT_ACTION_PLANE_PLACE);
+    cr_expect_eq(b.gesture_action[INPUT_GESTURE_THREE_FINGER_DRAG], INPUT_ACTION_VALUE_DRAG);
     cr_expect_eq(b.quit_chord_len, 3);
     cr_expect_eq(b.quit_chord[0], KEY_LEFTCTRL);
     cr_expect_eq(b.quit_chord[1], KEY_LEFTALT);
@@ -215,6 +216,7 @@ Test(bindings, every_gesture_name_round_trips)
         [INPUT_GESTURE_WHEEL] = true,           [INPUT_GESTURE_ONE_FINGER_DRAG] = true,
         [INPUT_GESTURE_TWO_FINGER_DRAG] = true, [INPUT_GESTURE_TWO_FINGER_PINCH] = true,
         [INPUT_GESTURE_TOUCHPAD_PINCH] = true,  [INPUT_GESTURE_TOUCHPAD_SWIPE] = true,
+        [INPUT_GESTURE_THREE_FINGER_DRAG] = true,
     };
     for (int g = 0; g < INPUT_GESTURE_COUNT; g++) {
         const char *name = input_gesture_name((input_gesture)g);
@@ -420,7 +422,7 @@ Test(bindings, bad_gestures_section)
     expect_members_failure(", \"gestures\": {\"triple-tap\": \"pick\"}", "gestures.triple-tap",
                            "unknown field (expected one of: click, wheel, tap, double-tap, one-finger-drag, "
                            "two-finger-drag, two-finger-pinch, touchpad-pinch, touchpad-swipe, long-press, "
-                           "two-finger-tap, three-finger-tap)");
+                           "two-finger-tap, three-finger-tap, three-finger-drag)");
     expect_members_failure(", \"gestures\": [\"tap\"]", "gestures", "expected an object, got array");
     expect_members_failure(", \"keys\": \"KEY_W\"", "keys", "expected an object, got string");
 }

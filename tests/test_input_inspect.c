@@ -645,6 +645,32 @@ Test(input_inspect, value_drag_follows_the_pointer)
     rig_free(r);
 }
 
+/* Three fingers moved together up the screen drag every iso-value (the
+ * shipped three-finger-drag), by their centre's motion; no tap, no plane. */
+Test(input_inspect, three_fingers_drag_the_iso_value)
+{
+    input_controller_config cfg;
+    input_controller_config_default(&cfg);
+    cfg.values[0] = (input_value_target){.first = 2, .count = 1, .value = 10.f, .lo = 0.f, .hi = 100.f};
+    cfg.value_count = 1;
+    rig *r = rig_make_with(&cfg);
+    int at = r->count;
+    for (int s = 0; s < 3; s++)
+        send(r, (input_event){.kind = INPUT_TOUCH_DOWN, .slot = s, .x = -0.2 + 0.2 * s, .y = 0.0});
+    send(r, (input_event){.kind = INPUT_TOUCH_FRAME});
+    r->now_us += 20000;
+    for (int s = 0; s < 3; s++) /* the centre up by 0.2 units: + 0.1 of the range */
+        send(r, (input_event){.kind = INPUT_TOUCH_MOTION, .slot = s, .x = -0.2 + 0.2 * s, .y = 0.2});
+    send(r, (input_event){.kind = INPUT_TOUCH_FRAME});
+    r->now_us += 20000;
+    for (int s = 0; s < 3; s++)
+        send(r, (input_event){.kind = INPUT_TOUCH_UP, .slot = s});
+    send(r, (input_event){.kind = INPUT_TOUCH_FRAME});
+    cr_expect_str_eq(text_of(only(r, at, TXN_VALUE)), "value 2 1 0x1.4p+4", "%s", made_since(r, at));
+    cr_expect(strstr(made_since(r, at), "clip-plane") == NULL, "a drag is no tap: %s", made_since(r, at));
+    rig_free(r);
+}
+
 /* With volumes rendered directly, M steps their transfer function through
  * the built-ins that have opacity. */
 Test(input_inspect, colormap_next_steps_the_transfer_function_of_volumes)
