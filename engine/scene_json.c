@@ -586,57 +586,84 @@ static bool load_sphere(loader *L, json_object *v)
 }
 
 
+/* What an entry that may be a time series gives (its fields already
+ * checked): "file" or "files" (exactly one), resolved, with its placement;
+ * a series' files in `steps`; `first` the file to load now. */
+typedef struct series_entry {
+    const char *key; /* "file" or "files" */
+    char resolved[MESH_PATH_BYTES];
+    float xform[12];
+    bool optional;
+    series_paths steps; /* files only; freed by the caller (series_paths_free) */
+    const char *first;
+} series_entry;
+
+/* Read a series entry; false on an error (reported), true with *skip when
+ * an optional entry's file (or every file of its pattern) is missing. */
+static bool read_series_entry(loader *L, json_object *v, series_entry *e, bool *skip)
+{
+    jr_ctx *c = &L->ctx;
+    json_object *ignored;
+    bool has_file = jr_get_member(v, "file", &ignored), files = jr_get_member(v, "files", &ignored);
+    *skip = false;
+    memset(&e->steps, 0, sizeof e->steps);
+    if (has_file == files)
+        return jr_field_fail(c, "give either 'file' or 'files' (a time series)");
+    e->key = files ? "files" : "file";
+    if (!entry_path(L, v, e->key, e->resolved, e->xform, &e->optional))
+        return false;
+    e->first = e->resolved;
+    if (!files) {
+        *skip = skip_missing(L, e->resolved, e->optional);
+        return true;
+    }
+    tess_error why = {{0}};
+    if (!series_paths_glob(e->resolved, &e->steps, &why)) {
+        if (e->optional && !e->steps.failed) {
+            log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, e->resolved);
+            *skip = true;
+            return true;
+        }
+        return jr_member_fail(c, "files", why.msg);
+    }
+    e->first = e->steps.paths[0];
+    return true;
+}
+
 /* A "particles" entry: the file and where it goes here, the rest in
  * particles/particle_json.c. */
 static bool load_particles(loader *L, json_object *v)
 {
     jr_ctx *c = &L->ctx;
-    bool optional;
-    float xform[12];
-    char resolved[MESH_PATH_BYTES];
     uint32_t material_id = 0;
-    json_object *ignored;
-    bool has_file = jr_get_member(v, "file", &ignored), files = jr_get_member(v, "files", &ignored);
-    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, particle_json_fields))
+    series_entry e;
+    bool skip;
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, particle_json_fields) || !material_ref(L, v, &material_id) ||
+        !read_series_entry(L, v, &e, &skip))
         return false;
-    if (has_file == files)
-        return jr_field_fail(c, "give either 'file' or 'files' (a time series)");
-    const char *key = files ? "files" : "file";
-    if (!material_ref(L, v, &material_id) || !entry_path(L, v, key, resolved, xform, &optional))
-        return false;
-    series_paths steps = {0};
-    if (files) {
-        tess_error why = {{0}};
-        if (!series_paths_glob(resolved, &steps, &why)) {
-            if (optional && !steps.failed) {
-                log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, resolved);
-                return true;
-            }
-            return jr_member_fail(c, "files", why.msg);
-        }
-    }
-    if (!files && skip_missing(L, resolved, optional))
+    if (skip)
         return true;
     tess_error why = {{0}};
-    particle_set *set = particles_load(files ? steps.paths[0] : resolved, &why);
+    particle_set *set = particles_load(e.first, &why);
     if (!set) {
-        series_paths_free(&steps);
-        return jr_member_fail(c, key, why.msg[0] ? why.msg : "cannot load the particles");
+        series_paths_free(&e.steps);
+        return jr_member_fail(c, e.key, why.msg[0] ? why.msg : "cannot load the particles");
     }
     particle_kind *k = particle_json_kind(c, v, set, material_id);
-    if (k && files && !particle_kind_attach_series(k, (const char *const *)steps.paths, steps.count, &why)) {
+    if (k && e.steps.count > 0 &&
+        !particle_kind_attach_series(k, (const char *const *)e.steps.paths, e.steps.count, &why)) {
         particle_kind_destroy(k);
         k = NULL;
-        jr_member_fail(c, key, why.msg);
+        jr_member_fail(c, e.key, why.msg);
     }
-    series_paths_free(&steps);
+    series_paths_free(&e.steps);
     if (!k)
         return false;
-    int g = scene_add_geometry(L->s, &particle_kind_ops, k, base_name(resolved));
+    int g = scene_add_geometry(L->s, &particle_kind_ops, k, base_name(e.resolved));
     if (g < 0)
         return out_of_memory(L);
     affine3 placement;
-    memcpy(placement.m, xform, sizeof placement.m);
+    memcpy(placement.m, e.xform, sizeof placement.m);
     return scene_add_instance(L->s, (uint32_t)g, affine3_is_identity(&placement) ? NULL : &placement,
                               SCENE_NO_PART) >= 0 ||
            out_of_memory(L);
@@ -649,45 +676,29 @@ static int material_by_name(void *ctx, const char *name) { return find_material(
 static bool load_volume(loader *L, json_object *v)
 {
     jr_ctx *c = &L->ctx;
-    bool optional;
-    float xform[12];
-    char resolved[MESH_PATH_BYTES];
-    json_object *ignored;
-    bool has_file = jr_get_member(v, "file", &ignored), files = jr_get_member(v, "files", &ignored);
-    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, volume_json_fields))
+    series_entry e;
+    bool skip;
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, volume_json_fields) || !read_series_entry(L, v, &e, &skip))
         return false;
-    if (has_file == files)
-        return jr_field_fail(c, "give either 'file' or 'files' (a time series)");
-    const char *key = files ? "files" : "file";
-    if (!entry_path(L, v, key, resolved, xform, &optional))
-        return false;
-    series_paths steps = {0};
-    tess_error why = {{0}};
-    if (files && !series_paths_glob(resolved, &steps, &why)) {
-        if (optional && !steps.failed) {
-            log_warn("%s: field '%s.files': no file matches %s; skipped (optional)", c->path, c->field, resolved);
-            return true;
-        }
-        return jr_member_fail(c, "files", why.msg);
-    }
-    if (!files && skip_missing(L, resolved, optional))
+    if (skip)
         return true;
-    volume *vol = volume_load(files ? steps.paths[0] : resolved, &why);
+    tess_error why = {{0}};
+    volume *vol = volume_load(e.first, &why);
     int mat = vol ? default_material_id(L) : -1;
     bool ok;
     if (!vol)
-        ok = jr_member_fail(c, key, why.msg[0] ? why.msg : "cannot load the volume");
+        ok = jr_member_fail(c, e.key, why.msg[0] ? why.msg : "cannot load the volume");
     else if (mat < 0) {
         volume_destroy(vol);
         ok = out_of_memory(L);
     } else {
         affine3 placement;
-        memcpy(placement.m, xform, sizeof placement.m);
-        ok = volume_json_add(c, v, vol, files ? (const char *const *)steps.paths : NULL, steps.count,
+        memcpy(placement.m, e.xform, sizeof placement.m);
+        ok = volume_json_add(c, v, vol, e.steps.count > 0 ? (const char *const *)e.steps.paths : NULL, e.steps.count,
                              affine3_is_identity(&placement) ? NULL : &placement, L->s, (uint32_t)mat,
                              material_by_name, L);
     }
-    series_paths_free(&steps);
+    series_paths_free(&e.steps);
     return ok;
 }
 
