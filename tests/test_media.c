@@ -58,19 +58,34 @@ static scene *fog_scene(bool with_fog, float scale)
     return s;
 }
 
-/* The centre pixel looking down -z from z = 5 (through 2 units of fog, then the floor). */
-static vec3 centre_pixel(scene *s)
+/* The centre pixel looking down -z from z = 5 (through 2 units of fog, then
+ * the floor), rendered with frame state `st` (NULL: none). */
+static vec3 centre_pixel_with(scene *s, const frame_state *st)
 {
     tess_error err = {{0}};
     accel *a = accel_build(s, 1, &err);
     cr_assert(a, "%s", err.msg);
     camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
-    render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33), .shading = RENDER_SHADE_PHONG};
+    render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33), .shading = RENDER_SHADE_PHONG,
+                     .state = st};
     float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
     render_image(&v, 2, rgb, NULL);
     vec3 px = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
     free(rgb);
     accel_destroy(a);
+    return px;
+}
+
+static vec3 centre_pixel(scene *s) { return centre_pixel_with(s, NULL); }
+
+/* The centre pixel with every surface of opacity 0.5. */
+static vec3 centre_pixel_half_opaque(scene *s)
+{
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
+    frame_state_set_global_opacity(&st, 0.5f);
+    vec3 px = centre_pixel_with(s, &st);
+    frame_state_finish(&st);
     return px;
 }
 
@@ -127,25 +142,7 @@ Test(media, placed_media_bound_the_scene)
 Test(media, media_and_transparency_compose)
 {
     scene *clear = fog_scene(false, 1.f), *foggy = fog_scene(true, 1.f);
-    vec3 px[2];
-    scene *scenes[2] = {clear, foggy};
-    for (int k = 0; k < 2; k++) {
-        tess_error err = {{0}};
-        accel *a = accel_build(scenes[k], 1, &err);
-        cr_assert(a, "%s", err.msg);
-        frame_state st;
-        frame_state_init(&st, renderer_by_name("raytracer"), false, 1, scenes[k]->instance_count);
-        frame_state_set_global_opacity(&st, 0.5f);
-        camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
-        render_view v = {.scene = scenes[k], .accel = a, .camera = camera_basis_make(&c, 33, 33),
-                         .shading = RENDER_SHADE_PHONG, .state = &st};
-        float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
-        render_image(&v, 2, rgb, NULL);
-        px[k] = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
-        free(rgb);
-        frame_state_finish(&st);
-        accel_destroy(a);
-    }
+    vec3 px[2] = {centre_pixel_half_opaque(clear), centre_pixel_half_opaque(foggy)};
     float t = expf(-SIGMA * 2.f);
     cr_assert_float_eq(px[1].z, 0.8f * (1.f - t) + px[0].z * t, 1e-5f, "%g vs %g", (double)px[1].z,
                        (double)(0.8f * (1.f - t) + px[0].z * t));
@@ -157,28 +154,16 @@ Test(media, media_and_transparency_compose)
  * unit of the fog (z in [-1, 0]) in front of the floor. */
 Test(media, cutting_planes_cut_media)
 {
-    scene *s = fog_scene(true, 1.f);
-    tess_error err = {{0}};
-    accel *a = accel_build(s, 1, &err);
-    cr_assert(a, "%s", err.msg);
+    scene *s = fog_scene(true, 1.f), *clear = fog_scene(false, 1.f);
     frame_state st;
     frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
     vec3 px[2];
-    for (int cut = 0; cut < 2; cut++) {
-        if (cut) {
-            const float point[3] = {0.f, 0.f, 0.f}, normal[3] = {0.f, 0.f, 1.f};
-            txn_record r = txn_clip_plane(0, true, point, normal);
-            cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
-        }
-        camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
-        render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33),
-                         .shading = RENDER_SHADE_PHONG, .state = &st};
-        float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
-        render_image(&v, 2, rgb, NULL);
-        px[cut] = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
-        free(rgb);
-    }
-    scene *clear = fog_scene(false, 1.f);
+    px[0] = centre_pixel_with(s, &st);
+    const float point[3] = {0.f, 0.f, 0.f}, normal[3] = {0.f, 0.f, 1.f};
+    txn_record r = txn_clip_plane(0, true, point, normal);
+    tess_error err = {{0}};
+    cr_assert(txn_apply(&r, &st, &err), "%s", err.msg);
+    px[1] = centre_pixel_with(s, &st);
     vec3 floor_px = centre_pixel(clear);
     for (int cut = 0; cut < 2; cut++) {
         float t = expf(-SIGMA * (cut ? 1.f : 2.f));
@@ -186,7 +171,6 @@ Test(media, cutting_planes_cut_media)
                            (double)px[cut].z, (double)(0.8f * (1.f - t) + floor_px.z * t));
     }
     frame_state_finish(&st);
-    accel_destroy(a);
     scene_destroy(s);
     scene_destroy(clear);
 }
@@ -215,21 +199,7 @@ Test(media, media_lie_between_translucent_surfaces)
         scene *s = fog_scene(fog == 1, 1.f);
         add_quad(s, 0, 0.f, "sheet");
         background = s->background.z;
-        tess_error err = {{0}};
-        accel *a = accel_build(s, 1, &err);
-        cr_assert(a, "%s", err.msg);
-        frame_state st;
-        frame_state_init(&st, renderer_by_name("raytracer"), false, 1, s->instance_count);
-        frame_state_set_global_opacity(&st, 0.5f);
-        camera_desc c = {.eye = v3(0.f, 0.f, 5.f), .look_at = v3(0.f, 0.f, 0.f), .up = v3(0.f, 1.f, 0.f), .fov_deg = 30.f};
-        render_view v = {.scene = s, .accel = a, .camera = camera_basis_make(&c, 33, 33),
-                         .shading = RENDER_SHADE_PHONG, .state = &st};
-        float *rgb = calloc(33 * 33 * 3, sizeof *rgb);
-        render_image(&v, 2, rgb, NULL);
-        px[fog] = v3(rgb[3 * (16 * 33 + 16)], rgb[3 * (16 * 33 + 16) + 1], rgb[3 * (16 * 33 + 16) + 2]);
-        free(rgb);
-        frame_state_finish(&st);
-        accel_destroy(a);
+        px[fog] = centre_pixel_half_opaque(s);
         scene_destroy(s);
     }
     float C = (px[0].z - 0.25f * background) / 0.75f;
