@@ -44,8 +44,9 @@
 # Then a fourth run on a particle time series made here (3 LAMMPS dumps of 2,744
 # particles with a kinetic-energy column, written by this script) beside a small
 # volume's iso-surface: 0 steps forward, . crops by the energy, Y raises the
-# iso-value and a side-button drag up raises it further (a time-step, a crop
-# and value records, and the status lines); the
+# iso-value and a side-button drag up raises it further, M gives the volume
+# rendered directly the next transfer function (a time-step, a crop, value and
+# transfer records, and the status lines); the
 # heads equal the native replay, which loads the same step.
 # Nothing here waits a fixed time for a picture: under TCG a frame takes 0.3 s
 # to 8 s depending on the host's CPU model. tessera in the guest runs with
@@ -111,7 +112,8 @@ for s in 0 1 2; do
     }' > "$W/steps/step_$s.dump"
 done
 # and beside it a 16^3 8-bit volume of a ball (value 200 at the centre falling to 0), its
-# iso-surface ray traced directly
+# iso-surface ray traced directly, the shell in front of it rendered directly (ct-bone over the
+# samples' range: opacity from 71 up)
 python3 -c '
 import math, sys
 sys.stdout.buffer.write(bytes(max(0, min(200, int(200 - 25 * math.sqrt((x - 7.5) ** 2 + (y - 7.5) ** 2 + (z - 7.5) ** 2))))
@@ -123,7 +125,8 @@ cat > "$W/particles.json" <<'EOF'
   "ambient": [0.3, 0.3, 0.3],
   "particles": [{"files": "steps/step_*.dump", "radius": 0.4, "color_by": "c_ke",
                  "color_map": {"map": "viridis", "range": [0, 11]}, "crop": {"attribute": "c_ke"}}],
-  "volumes": [{"file": "ball.txt", "iso": [{"value": 100, "color": [0.9, 0.3, 0.2]}]}]
+  "volumes": [{"file": "ball.txt", "iso": [{"value": 100, "color": [0.9, 0.3, 0.2]}],
+               "dvr": {"transfer": "ct-bone", "step": 0.5}}]
 }
 EOF
 
@@ -462,6 +465,18 @@ particles_run() {
         ok "volume: the side-button drag raised the iso-value to $_iso ($_value; $_n pixels changed)"
     else
         bad "volume: side-button drag: record '$_value', '$(rec_last ' status ')', $_n pixels changed"
+    fi
+    # M: the volume rendered directly takes the next built-in transfer function with opacity
+    # (ct-bone -> mri-soft) and the particles the next colour map; the heads equal the replay
+    _k4=$K
+    qmp key m
+    check "volume: M (the next transfer function)"
+    _tf=$(rec_last ' transfer ')
+    _n=$(heads_differ $_k4 $K)
+    if [ "$_tf" = "transfer mri-soft" ] && [ "$_n" -gt 50 ]; then
+        ok "volume: M changed the transfer function ($_tf; $_n pixels changed)"
+    else
+        bad "volume: M: record '$_tf', '$(rec_last ' status ')', $_n pixels changed"
     fi
 }
 
