@@ -471,6 +471,7 @@ static void field_view_init(field_view *fv, const volume *v)
     }
 }
 
+#if !defined(__SSE2__) /* the SSE2 corner fetch reads the samples itself */
 DVR_INLINE float sample_value(const void *data, volume_type type, size_t index)
 {
     switch (type) {
@@ -481,6 +482,7 @@ DVR_INLINE float sample_value(const void *data, volume_type type, size_t index)
     }
     return 0.0f;
 }
+#endif
 
 #if defined(__SSE2__)
 /* The two samples at index i and i + 1 as one load (x86 is little-endian:
