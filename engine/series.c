@@ -39,6 +39,8 @@ struct series {
         slot_state state;
         void *data;           /* SLOT_READY: the step's data, owned until taken */
         char error[TESS_ERROR_MSG_BYTES]; /* SLOT_FAILED: why */
+        bool reported;        /* SLOT_FAILED: a take returned the error: the next take of the step
+                                 (another sharer of the same step change) gets it without a reload */
     } pending;
 };
 
@@ -73,6 +75,7 @@ static void load_pending(series *S, uint32_t step)
         snprintf(S->pending.error, sizeof S->pending.error, "%s",
                  why.msg[0] ? why.msg : "cannot load the step");
         S->pending.state = SLOT_FAILED;
+        S->pending.reported = false;
     }
     pthread_cond_broadcast(&S->cond);
 }
@@ -204,8 +207,14 @@ bool series_take(series *S, uint32_t step, void **data, tess_error *err)
         pthread_mutex_unlock(&S->lock);
         return true;
     }
-    if (S->pending.step == step && S->pending.state == SLOT_FAILED)
-        pending_clear(S); /* ask again: the file may be there now */
+    if (S->pending.step == step && S->pending.state == SLOT_FAILED) {
+        if (S->pending.reported) { /* failed for this take already: not read again */
+            tess_error_set(err, "%s", S->pending.error);
+            pthread_mutex_unlock(&S->lock);
+            return false;
+        }
+        pending_clear(S); /* a read-ahead failed: ask again, the file may be there now */
+    }
     S->needed = step;
     wake(S);
     if (!S->loader_started && !(S->pending.step == step && S->pending.state == SLOT_READY))
@@ -215,6 +224,7 @@ bool series_take(series *S, uint32_t step, void **data, tess_error *err)
     S->needed = NO_STEP;
     if (S->pending.state == SLOT_FAILED) {
         tess_error_set(err, "%s", S->pending.error);
+        S->pending.reported = true;
         S->want = NO_STEP;
         pthread_mutex_unlock(&S->lock);
         return false;

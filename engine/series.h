@@ -20,8 +20,11 @@
  *    step after the one shown is asked for ahead (playing forward).
  *  - A step that failed to load keeps its error in the pending slot; asking
  *    whether it is ready does not load it again (no retry loop at the
- *    input's rate), taking it does (the file may be there now). The step
- *    shown stays shown on every failure.
+ *    input's rate). Taking a step whose read-ahead failed loads it again
+ *    (the file may be there now); taking it again after a take failed
+ *    gives the same error without a reload (the other sharers of one step
+ *    change: a volume's iso-surfaces and its medium), until another step
+ *    loads. The step shown stays shown on every failure.
  *  - The thread starts with the first request, and series_destroy asks it
  *    to stop and joins it: a load in progress finishes first (a destroy
  *    waits for at most one load), its result is freed.

@@ -47,12 +47,6 @@ struct iso_volume {
     volume first;                /* step 0's layout (no samples: data, map, buffer NULL) */
     uint32_t macrocell_k;        /* every step's grid block edge: step 0's */
     iso_volume_watcher *watchers; /* told of every swap; changed only where nothing traces */
-    /* the step whose file failed last (UINT32_MAX: none) and its error: the
-     * other kinds and the medium sharing this volume are told the same in
-     * that step change, not made to read the file again; written only in
-     * iso_volume_set_step (a serial section) */
-    uint32_t failed_step;
-    tess_error failed_err;
 };
 
 struct iso_kind {
@@ -154,7 +148,6 @@ static iso_volume *shared_make(const volume *v, const macrocell_grid *grid, tess
         return NULL;
     }
     atomic_init(&s->refs, 1u);
-    s->failed_step = UINT32_MAX;
     s->now.v = v;
     s->now.grid = grid;
     boundary_range(v, &s->now.boundary_min, &s->now.boundary_max);
@@ -274,22 +267,9 @@ bool iso_volume_set_step(iso_volume *shared, uint32_t step, tess_error *err)
 {
     if (!shared->series)
         return true; /* one field: every step is it */
-    step %= series_step_count(shared->series);
-    if (step == shared->failed_step) {
-        if (err)
-            *err = shared->failed_err;
+    void *taken; /* a failed step is not read again by the other sharers (series.h) */
+    if (!series_take(shared->series, step, &taken, err))
         return false;
-    }
-    void *taken;
-    tess_error why = {{0}};
-    if (!series_take(shared->series, step, &taken, &why)) {
-        shared->failed_step = step;
-        shared->failed_err = why;
-        if (err)
-            *err = why;
-        return false;
-    }
-    shared->failed_step = UINT32_MAX;
     if (!taken)
         return true; /* shown already (another kind of this volume took it) */
     iso_field old = shared->now;
