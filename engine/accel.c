@@ -43,29 +43,10 @@ struct accel {
                        (accel_scene_bounds); empty when nothing can be hit; never changes */
 };
 
-/* Shared by the threads computing primitive boxes. */
-typedef struct box_job {
-    const geometry_ops *ops;
-    const void *data;
-    aabb *boxes; /* per primitive; empty for one that can never be hit */
-} box_job;
-
-static void prim_boxes(void *ctx, size_t begin, size_t end, int worker)
-{
-    (void)worker;
-    box_job *job = ctx;
-    for (size_t i = begin; i < end; i++)
-        if (!job->ops->prim_bounds(job->data, (uint32_t)i, &job->boxes[i]))
-            job->boxes[i] = aabb_empty();
-}
-
-/* Primitives per parallel chunk of box computation. */
-#define ACCEL_BOX_GRAIN 16384
-
 /* One geometry's wide BVH; primitives that can never be hit are left out. */
 static bool build_geometry(wbvh *out, const scene_geometry *g, int threads, tess_error *err)
 {
-    if (g->ops->leaf == GEOMETRY_LEAF_POINTS) { /* the kind keeps its tree: borrow it */
+    if (g->ops->tree) { /* the kind keeps its tree: borrow it */
         const wbvh *kept = g->ops->tree(g->data, threads, err);
         if (!kept)
             return false;
@@ -73,24 +54,10 @@ static bool build_geometry(wbvh *out, const scene_geometry *g, int threads, tess
         out->borrowed = true;
         return true;
     }
-    uint32_t count = g->ops->prim_count(g->data);
-    aabb *boxes = malloc(((size_t)count + 1) * sizeof *boxes);
-    uint32_t *prim_ids = malloc(((size_t)count + 1) * sizeof *prim_ids);
-    if (!boxes || !prim_ids) {
-        free(boxes);
-        free(prim_ids);
-        return tess_error_set(err, "accel: out of memory for %u bounds of geometry '%s'", count, g->name);
-    }
-    box_job job = {g->ops, g->data, boxes};
-    parallel_for(threads, count, ACCEL_BOX_GRAIN, prim_boxes, &job);
-    /* compact (in order, so the result does not depend on the thread count) */
-    uint32_t kept = 0;
-    for (uint32_t i = 0; i < count; i++) {
-        if (aabb_is_empty(boxes[i]))
-            continue;
-        boxes[kept] = boxes[i];
-        prim_ids[kept++] = i;
-    }
+    aabb *boxes;
+    uint32_t *prim_ids, kept;
+    if (!geometry_hit_boxes(g->ops, g->data, threads, &boxes, &prim_ids, &kept))
+        return tess_error_set(err, "accel: out of memory for the bounds of geometry '%s'", g->name);
     bvh binary;
     bool ok = bvh_build(&binary, boxes, kept, threads, err);
     if (ok) {

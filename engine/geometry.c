@@ -8,6 +8,8 @@
 
 #include "intersect.h"
 #include "mesh.h"
+#include "mesh_tree.h"
+#include "parallel.h"
 #include "scene.h"
 #include "wbvh.h"
 
@@ -60,6 +62,52 @@ aabb affine3_box(const affine3 *a, aabb b)
     return out;
 }
 
+/* Shared by the threads computing primitive boxes. */
+typedef struct box_job {
+    const geometry_ops *ops;
+    const void *data;
+    aabb *boxes; /* per primitive; empty for one that can never be hit */
+} box_job;
+
+static void prim_boxes(void *ctx, size_t begin, size_t end, int worker)
+{
+    (void)worker;
+    box_job *job = ctx;
+    for (size_t i = begin; i < end; i++)
+        if (!job->ops->prim_bounds(job->data, (uint32_t)i, &job->boxes[i]))
+            job->boxes[i] = aabb_empty();
+}
+
+/* Primitives per parallel chunk of box computation. */
+#define GEOMETRY_BOX_GRAIN 16384
+
+bool geometry_hit_boxes(const geometry_ops *ops, const void *data, int threads, aabb **boxes_out, uint32_t **ids_out,
+                        uint32_t *kept_out)
+{
+    uint32_t count = ops->prim_count(data);
+    aabb *boxes = malloc(((size_t)count + 1) * sizeof *boxes);
+    uint32_t *ids = malloc(((size_t)count + 1) * sizeof *ids);
+    if (!boxes || !ids) {
+        free(boxes);
+        free(ids);
+        return false;
+    }
+    box_job job = {ops, data, boxes};
+    parallel_for(threads, count, GEOMETRY_BOX_GRAIN, prim_boxes, &job);
+    /* compact (in order, so the result does not depend on the thread count) */
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        if (aabb_is_empty(boxes[i]))
+            continue;
+        boxes[kept] = boxes[i];
+        ids[kept++] = i;
+    }
+    *boxes_out = boxes;
+    *ids_out = ids;
+    *kept_out = kept;
+    return true;
+}
+
 /* ---- triangles ---------------------------------------------------------- */
 
 static vec3 mesh_point(const mesh *m, uint32_t i)
@@ -98,17 +146,9 @@ static bool triangles_prim_bounds(const void *data, uint32_t prim, aabb *out)
     return true;
 }
 
-static void triangles_fill_lane(void *block, int lane, uint32_t prim, const void *data)
+static const wbvh *triangles_tree(void *data, int threads, tess_error *err)
 {
-    wbvh_tri_block *b = block;
-    const mesh *m = ((const scene_mesh *)data)->mesh;
-    const uint32_t *idx = m->indices + 3 * (size_t)prim;
-    const float *p0 = m->positions + 3 * (size_t)idx[0], *p1 = m->positions + 3 * (size_t)idx[1],
-                *p2 = m->positions + 3 * (size_t)idx[2];
-    b->v0x[lane] = p0[0], b->v0y[lane] = p0[1], b->v0z[lane] = p0[2];
-    b->v1x[lane] = p1[0], b->v1y[lane] = p1[1], b->v1z[lane] = p1[2];
-    b->v2x[lane] = p2[0], b->v2y[lane] = p2[1], b->v2z[lane] = p2[2];
-    b->prim_id[lane] = prim;
+    return mesh_tree_get(data, threads, err);
 }
 
 static bool triangles_intersect(const void *data, uint32_t prim, const ray *r, float *t, float *u, float *v)
@@ -244,11 +284,11 @@ done:
 
 const geometry_ops geometry_triangles_ops = {
     .name = "triangles",
-    .leaf = GEOMETRY_LEAF_TRIANGLES,
+    .leaf = GEOMETRY_LEAF_MESH,
     .prim_count = triangles_count,
     .bounds = triangles_bounds,
     .prim_bounds = triangles_prim_bounds,
-    .fill_lane = triangles_fill_lane,
+    .tree = triangles_tree,
     .intersect = triangles_intersect,
     .describe = triangles_describe,
     .bytes = triangles_bytes,

@@ -31,13 +31,23 @@
 
 /* How a kind's primitives sit in the leaves of its wide BVH (wbvh.h). */
 typedef enum geometry_leaf_layout {
-    GEOMETRY_LEAF_TRIANGLES, /* wbvh_tri_block, filled by fill_lane: the SIMD watertight kernels */
     GEOMETRY_LEAF_SPHERES,   /* wbvh_sphere_block, filled by fill_lane */
     GEOMETRY_LEAF_PRIMS,     /* wbvh_prim_block (ids only): `intersect` decides, one ray at a time */
     GEOMETRY_LEAF_POINTS,    /* spheres read in place from the kind's arrays (geometry_points): a
                                 leaf is a range of them, tested RAY_LANES at a time, never copied;
                                 the kind builds and keeps its tree (`tree`) */
+    GEOMETRY_LEAF_MESH,      /* triangles read in place from the kind's indexed arrays
+                                (geometry_mesh_arrays): a leaf is a range of them, never copied,
+                                tested by the SIMD watertight kernels; the kind builds and keeps
+                                its tree (`tree`), putting its triangles in the tree's order */
 } geometry_leaf_layout;
+
+/* What the kernels read of a GEOMETRY_LEAF_MESH kind, in place: triangle t
+ * has vertices indices[3t..3t+2], each the xyz at positions[3 * index]. */
+typedef struct geometry_mesh_arrays {
+    const float *positions;  /* 3 floats a vertex */
+    const uint32_t *indices; /* 3 a triangle, each < the vertex count */
+} geometry_mesh_arrays;
 
 /* A range of values that hides the points whose value lies outside it
  * (particles cropped by an attribute). Read by every query; changed only
@@ -93,7 +103,7 @@ typedef struct geometry_ops {
     /* Bounds of primitive `prim`; false when it can never be hit (it is left
      * out of the BVH: a degenerate triangle, a sphere of radius 0). */
     bool (*prim_bounds)(const void *data, uint32_t prim, aabb *out);
-    /* TRIANGLES and SPHERES layouts: write primitive `prim` into lane `lane`
+    /* SPHERES layout: write primitive `prim` into lane `lane`
      * of a zeroed block of that layout (unused for PRIMS; may be NULL). */
     void (*fill_lane)(void *block, int lane, uint32_t prim, const void *data);
     /* The scalar reference: the hit of ray r with primitive `prim` in
@@ -119,10 +129,10 @@ typedef struct geometry_ops {
     /* GEOMETRY_LEAF_POINTS only. The arrays the leaves read (valid as long
      * as the data, in the order of the kind's tree). */
     void (*points)(const void *data, geometry_points *out);
-    /* GEOMETRY_LEAF_POINTS only: the kind's wide BVH, built on the first
-     * call over `threads` threads (which may reorder the kind's points so
-     * that each leaf is a range of them) and kept with the data: every
-     * accel borrows it. Safe to call from several threads at once; NULL
+    /* GEOMETRY_LEAF_POINTS and GEOMETRY_LEAF_MESH: the kind's wide BVH,
+     * built on the first call over `threads` threads (which may reorder the
+     * kind's points or triangles so that each leaf is a range of them) and
+     * kept with the data: every accel borrows it. Safe to call from several threads at once; NULL
      * with err set on failure. */
     const struct wbvh *(*tree)(void *data, int threads, tess_error *err);
     /* Kinds that crop (geometry_points.crop_value): set the range. Only
@@ -237,6 +247,13 @@ bool affine3_invert(const affine3 *a, affine3 *inverse);
 
 /* Bounds of box b mapped by a (the 8 corners' box). */
 aabb affine3_box(const affine3 *a, aabb b);
+
+/* The boxes of a kind's primitives that can be hit (prim_bounds true), in
+ * id order, computed over `threads` threads: (*boxes)[k] bounds primitive
+ * (*ids)[k], *kept of them (the result does not depend on threads). The
+ * caller frees both arrays. False: out of memory. */
+bool geometry_hit_boxes(const geometry_ops *ops, const void *data, int threads, aabb **boxes, uint32_t **ids,
+                        uint32_t *kept);
 
 /* The built-in kinds: data is a scene_mesh (scene.h) / a sphere_set. */
 extern const geometry_ops geometry_triangles_ops;

@@ -230,3 +230,95 @@ mesh *mesh_load(const char *path, tess_error *err)
         return mesh_load_ply(path, err);
     return mesh_load_assimp(path, err);
 }
+
+/* One bit per element, for the in-place permutations below. */
+static uint64_t *bits_new(size_t n) { return calloc(n / 64 + 1, sizeof(uint64_t)); }
+static inline bool bit_get(const uint64_t *b, size_t i) { return b[i / 64] >> (i % 64) & 1u; }
+static inline void bit_set(uint64_t *b, size_t i) { b[i / 64] |= 1ull << (i % 64); }
+
+bool mesh_permute_triangles(mesh *m, const uint32_t *order)
+{
+    uint32_t n = m->triangle_count;
+    uint64_t *done = bits_new(n);
+    if (!done)
+        return false;
+    uint32_t *idx = m->indices, *mat = m->triangle_material;
+    /* gather in place along each cycle: slot j takes the triangle at order[j] */
+    for (uint32_t i = 0; i < n; i++) {
+        if (bit_get(done, i))
+            continue;
+        const uint32_t keep[3] = {idx[3 * (size_t)i], idx[3 * (size_t)i + 1], idx[3 * (size_t)i + 2]};
+        const uint32_t keep_mat = mat ? mat[i] : 0;
+        for (uint32_t j = i;;) {
+            uint32_t k = order[j];
+            bit_set(done, j);
+            uint32_t *dst = idx + 3 * (size_t)j;
+            if (k == i) {
+                dst[0] = keep[0], dst[1] = keep[1], dst[2] = keep[2];
+                if (mat)
+                    mat[j] = keep_mat;
+                break;
+            }
+            const uint32_t *src = idx + 3 * (size_t)k;
+            dst[0] = src[0], dst[1] = src[1], dst[2] = src[2];
+            if (mat)
+                mat[j] = mat[k];
+            j = k;
+        }
+    }
+    free(done);
+    return true;
+}
+
+/* Scatter the 3-float items of `a` in place: item v moves to new_id[v]. */
+static void scatter3(float *a, const uint32_t *new_id, uint32_t n, uint64_t *done)
+{
+    memset(done, 0, (n / 64 + 1) * sizeof *done);
+    for (uint32_t i = 0; i < n; i++) {
+        if (bit_get(done, i))
+            continue;
+        float carry[3] = {a[3 * (size_t)i], a[3 * (size_t)i + 1], a[3 * (size_t)i + 2]};
+        uint32_t j = i;
+        do {
+            uint32_t k = new_id[j];
+            float *slot = a + 3 * (size_t)k;
+            const float next[3] = {slot[0], slot[1], slot[2]};
+            slot[0] = carry[0], slot[1] = carry[1], slot[2] = carry[2];
+            bit_set(done, k);
+            carry[0] = next[0], carry[1] = next[1], carry[2] = next[2];
+            j = k;
+        } while (j != i);
+    }
+}
+
+bool mesh_renumber_vertices(mesh *m)
+{
+    uint32_t nv = m->vertex_count;
+    uint32_t *new_id = malloc(((size_t)nv + 1) * sizeof *new_id);
+    uint64_t *done = bits_new(nv);
+    if (!new_id || !done) {
+        free(new_id);
+        free(done);
+        return false;
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        new_id[v] = UINT32_MAX;
+    uint32_t next = 0;
+    size_t corners = 3 * (size_t)m->triangle_count;
+    for (size_t c = 0; c < corners; c++)
+        if (new_id[m->indices[c]] == UINT32_MAX)
+            new_id[m->indices[c]] = next++;
+    for (uint32_t v = 0; v < nv; v++) /* unused vertices keep their order, after the used ones */
+        if (new_id[v] == UINT32_MAX)
+            new_id[v] = next++;
+    for (size_t c = 0; c < corners; c++)
+        m->indices[c] = new_id[m->indices[c]];
+    scatter3(m->positions, new_id, nv, done);
+    if (m->normals)
+        scatter3(m->normals, new_id, nv, done);
+    if (m->colors)
+        scatter3(m->colors, new_id, nv, done);
+    free(new_id);
+    free(done);
+    return true;
+}

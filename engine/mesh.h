@@ -62,6 +62,17 @@ bool mesh_bounds(const mesh *m, float lo[3], float hi[3]);
  * the inverse transpose, renormalised). */
 void mesh_transform(mesh *m, const float xform[12]);
 
+/* Put the triangles in a new order, in place: triangle i becomes the old
+ * triangle order[i] (with its material); order is a permutation of
+ * 0..triangle_count-1. Only a bitmap is allocated (a bit a triangle), so
+ * the triangles are never held twice. False: out of memory, nothing moved. */
+bool mesh_permute_triangles(mesh *m, const uint32_t *order);
+/* Number the vertices in the order the triangles first use them (unused
+ * ones last, in their order), in place, so the vertices of neighbouring
+ * triangles are neighbours in memory; the triangles keep their corners.
+ * False: out of memory, nothing moved. */
+bool mesh_renumber_vertices(mesh *m);
+
 /* Bytes held by the mesh's arrays (by count, not capacity). */
 size_t mesh_bytes(const mesh *m);
 

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "mesh_tree.h"
 #include "parallel.h"
 #include "part_tree.h"
 #include "particles/particle_kind.h"
@@ -59,6 +60,7 @@ void scene_destroy(scene *s)
             s->media[m].ops->destroy(s->media[m].data);
     free(s->media);
     for (uint32_t i = 0; i < s->mesh_count; i++) {
+        mesh_tree_release(s->meshes[i]);
         mesh_destroy(s->meshes[i]->mesh);
         free(s->meshes[i]->mesh_material_ids);
         free(s->meshes[i]);
@@ -179,7 +181,8 @@ static bool reserve_one(void **array, uint32_t count, uint32_t *capacity, size_t
 int scene_add_geometry(scene *s, const geometry_ops *ops, void *data, const char *name)
 {
     bool ops_ok = ops && ops->prim_count && ops->prim_bounds && ops->intersect && ops->describe &&
-                  (ops->leaf == GEOMETRY_LEAF_PRIMS || ops->fill_lane ||
+                  (ops->leaf == GEOMETRY_LEAF_PRIMS || (ops->leaf == GEOMETRY_LEAF_SPHERES && ops->fill_lane) ||
+                   (ops->leaf == GEOMETRY_LEAF_MESH && ops->tree) ||
                    (ops->leaf == GEOMETRY_LEAF_POINTS && ops->points && ops->tree));
     if (!ops_ok || !reserve_one((void **)&s->geometries, s->geometry_count, &s->geometry_capacity,
                                 sizeof *s->geometries)) {
@@ -265,6 +268,7 @@ int scene_add_mesh(scene *s, mesh *m, uint32_t material_id, const char *name)
         /* undo the geometry: the mesh was taken, so it is freed here */
         scene_mesh *sm = s->meshes[--s->mesh_count];
         s->geometry_count--;
+        mesh_tree_release(sm);
         mesh_destroy(sm->mesh);
         free(sm->mesh_material_ids);
         free(sm);

@@ -63,6 +63,9 @@ typedef struct scene_mesh {
     uint32_t *mesh_material_ids; /* mesh->material_count scene material ids for a mesh with its own
                                     materials (OBJ+MTL), else NULL; owned */
     char name[SCENE_NAME_BYTES];
+    /* its wide BVH (mesh_tree.h), NULL until the first accel is built;
+     * building it put the mesh in the tree's order. Owned */
+    _Atomic(struct wbvh *) tree;
 } scene_mesh;
 
 /* All spheres of a scene, structure of arrays (millions of particles later). */

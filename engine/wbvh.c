@@ -137,7 +137,8 @@ static bool run_collapse(collapse *c, tess_error *err)
             node->hi_x[i] = k->bounds.hi.x, node->hi_y[i] = k->bounds.hi.y, node->hi_z[i] = k->bounds.hi.z;
             node->child_mask |= (uint8_t)(1u << i);
             node->slot_mask |= (uint8_t)(1u << i);
-            if (k->count > 0 && out->kind == WBVH_POINTS) { /* a range of the kind's points */
+            if (k->count > 0 && (out->kind == WBVH_POINTS || out->kind == WBVH_MESH)) {
+                /* a range of the kind's points / triangles */
                 node->child[i] = k->first;
                 node->leaf_blocks[i] = (uint8_t)k->count;
             } else if (k->count > 0) {
@@ -174,21 +175,34 @@ static bool build(wbvh *out, wbvh_kind kind, const bvh *binary, size_t block_byt
 static size_t block_bytes_of(wbvh_kind kind)
 {
     switch (kind) {
-    case WBVH_TRIANGLES: return sizeof(wbvh_tri_block);
     case WBVH_SPHERES: return sizeof(wbvh_sphere_block);
     case WBVH_PRIMS:
     case WBVH_INSTANCES: return sizeof(wbvh_prim_block);
-    case WBVH_POINTS: return 0;
+    case WBVH_POINTS:
+    case WBVH_MESH: return 0;
     }
     return sizeof(wbvh_prim_block);
+}
+
+bool wbvh_build_mesh(wbvh *out, const bvh *binary, const geometry_ops *ops, const void *data,
+                     const geometry_mesh_arrays *arrays, tess_error *err)
+{
+    for (uint32_t i = 0; i < binary->node_count; i++)
+        if (binary->nodes[i].count > BVH_LEAF_DEFAULT)
+            return tess_error_set(err, "wbvh: a leaf of %u triangles (at most %d)", binary->nodes[i].count,
+                                  BVH_LEAF_DEFAULT);
+    if (!build(out, WBVH_MESH, binary, 0, NULL, NULL, NULL, err))
+        return false;
+    out->mesh = *arrays;
+    out->ops = ops;
+    out->data = data;
+    return true;
 }
 
 bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const void *data, const uint32_t *prim_ids,
                 tess_error *err)
 {
-    wbvh_kind kind = ops->leaf == GEOMETRY_LEAF_TRIANGLES ? WBVH_TRIANGLES
-                     : ops->leaf == GEOMETRY_LEAF_SPHERES ? WBVH_SPHERES
-                                                          : WBVH_PRIMS;
+    wbvh_kind kind = ops->leaf == GEOMETRY_LEAF_SPHERES ? WBVH_SPHERES : WBVH_PRIMS;
     fill_lane_fn fill = kind == WBVH_PRIMS ? fill_prim_id : ops->fill_lane;
     if (!build(out, kind, binary, block_bytes_of(kind), fill, data, prim_ids, err))
         return false;

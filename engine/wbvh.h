@@ -46,14 +46,6 @@ typedef struct wbvh_node {
     uint8_t pad[22];
 } wbvh_node; /* 256 bytes: four cache lines */
 
-/* Four triangles, vertices as SoA (lane i = triangle i of the block). */
-typedef struct wbvh_tri_block {
-    alignas(16) float v0x[WBVH_BLOCK], v0y[WBVH_BLOCK], v0z[WBVH_BLOCK];
-    float v1x[WBVH_BLOCK], v1y[WBVH_BLOCK], v1z[WBVH_BLOCK];
-    float v2x[WBVH_BLOCK], v2y[WBVH_BLOCK], v2z[WBVH_BLOCK];
-    uint32_t prim_id[WBVH_BLOCK]; /* triangle index in its mesh, RAY_INVALID_ID in unused lanes */
-} wbvh_tri_block;                 /* 160 bytes */
-
 /* Four spheres, SoA. */
 typedef struct wbvh_sphere_block {
     alignas(16) float cx[WBVH_BLOCK], cy[WBVH_BLOCK], cz[WBVH_BLOCK], r[WBVH_BLOCK];
@@ -67,7 +59,6 @@ typedef struct wbvh_prim_block {
 } wbvh_prim_block;
 
 typedef enum wbvh_kind {
-    WBVH_TRIANGLES,
     WBVH_SPHERES,
     WBVH_PRIMS,
     WBVH_INSTANCES,
@@ -75,6 +66,10 @@ typedef enum wbvh_kind {
      * point and `leaf_blocks` its point count (1..WBVH_POINTS_LEAF_MAX),
      * read in place through `points` */
     WBVH_POINTS,
+    /* GEOMETRY_LEAF_MESH: no blocks; a leaf child's `child` is its first
+     * triangle and `leaf_blocks` its triangle count (1..BVH_LEAF_DEFAULT),
+     * read in place through `mesh` */
+    WBVH_MESH,
 } wbvh_kind;
 
 /* Most points in one leaf of a WBVH_POINTS tree (one AVX-512 test). */
@@ -98,7 +93,7 @@ typedef struct wbvh {
     wbvh_kind kind;
     wbvh_node *nodes;   /* nodes[0] is the root; node_count 0 for an empty geometry */
     uint32_t node_count;
-    void *blocks;       /* wbvh_tri_block or wbvh_sphere_block array, by kind */
+    void *blocks;       /* wbvh_sphere_block or wbvh_prim_block array, by kind */
     uint32_t block_count;
     float coord_abs_max; /* largest |coordinate| of the bounds: scales the cull slack */
     /* WBVH_PRIMS: the kind whose `intersect` tests each primitive, and its data */
@@ -123,6 +118,9 @@ typedef struct wbvh {
      * subtrees. */
     geometry_points points;
     float *crop_lo, *crop_hi;
+    /* WBVH_MESH: the kind's arrays, in the tree's order (read in place:
+     * copying a triangle's vertices into SoA blocks took 40 bytes) */
+    geometry_mesh_arrays mesh;
     /* a copy of a tree its kind keeps (geometry_ops.tree): wbvh_finish
      * leaves the arrays to the kind */
     bool borrowed;
@@ -143,6 +141,12 @@ bool wbvh_build(wbvh *out, const bvh *binary, const geometry_ops *ops, const voi
  * leaf is the range [first, first + count) of `points`; leaves hold at most
  * WBVH_POINTS_LEAF_MAX points. */
 bool wbvh_build_points(wbvh *out, const bvh *binary, const geometry_points *points, tess_error *err);
+/* A GEOMETRY_LEAF_MESH tree: the binary BVH's primitive i must be
+ * triangle i of `arrays` (the kind has put its triangles in the binary
+ * tree's prim_order), so every leaf is the range [first, first + count) of
+ * them; leaves hold at most BVH_LEAF_DEFAULT triangles. */
+bool wbvh_build_mesh(wbvh *out, const bvh *binary, const geometry_ops *ops, const void *data,
+                     const geometry_mesh_arrays *arrays, tess_error *err);
 /* The instance level: the binary BVH's primitive i is instance i. */
 bool wbvh_build_instances(wbvh *out, const bvh *binary, const wbvh_instance *instances, const atomic_uchar *hidden,
                           tess_error *err);

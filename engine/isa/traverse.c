@@ -172,8 +172,17 @@ static inline unsigned valid_lanes(const uint32_t prim_id[WBVH_BLOCK])
     return valid;
 }
 
+/* Four triangles, vertices as SoA (lane i = triangle i), gathered from a
+ * WBVH_MESH leaf for the single-ray test. */
+typedef struct tri_block {
+    alignas(16) float v0x[WBVH_BLOCK], v0y[WBVH_BLOCK], v0z[WBVH_BLOCK];
+    float v1x[WBVH_BLOCK], v1y[WBVH_BLOCK], v1z[WBVH_BLOCK];
+    float v2x[WBVH_BLOCK], v2y[WBVH_BLOCK], v2z[WBVH_BLOCK];
+    uint32_t prim_id[WBVH_BLOCK]; /* triangle id, RAY_INVALID_ID in unused lanes */
+} tri_block;
+
 /* One ray against 4 triangles. Returns whether a hit was recorded (any: found). */
-static bool tri_block1(const wbvh_tri_block *b, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
+static bool tri_block1(const tri_block *b, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
 {
     const float *v0[3] = {b->v0x, b->v0y, b->v0z}, *v1[3] = {b->v1x, b->v1y, b->v1z}, *v2[3] = {b->v2x, b->v2y, b->v2z};
     const float org[3] = {r->org.x, r->org.y, r->org.z};
@@ -397,6 +406,39 @@ static bool points_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t
 
 static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d_in, hit *h, bool any);
 
+/* One ray against a WBVH_MESH leaf: its triangles gathered 4 at a time into
+ * a block on the stack (unused lanes: the zero triangle, id invalid) and
+ * tested by the block kernel, so both layouts give the same bits. */
+static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t geom_id, ray *r, const ray_derived *d,
+                       hit *h, bool any)
+{
+    const float *pos = w->mesh.positions;
+    bool found = false;
+    for (uint32_t k = first; k < first + count; k += WBVH_BLOCK) {
+        tri_block b;
+        for (uint32_t lane = 0; lane < WBVH_BLOCK; lane++) {
+            if (k + lane >= first + count) {
+                b.v0x[lane] = b.v0y[lane] = b.v0z[lane] = b.v1x[lane] = b.v1y[lane] = b.v1z[lane] = 0.f;
+                b.v2x[lane] = b.v2y[lane] = b.v2z[lane] = 0.f;
+                b.prim_id[lane] = RAY_INVALID_ID;
+                continue;
+            }
+            const uint32_t prim = k + lane, *idx = w->mesh.indices + 3 * (size_t)prim;
+            const float *p0 = pos + 3 * (size_t)idx[0], *p1 = pos + 3 * (size_t)idx[1], *p2 = pos + 3 * (size_t)idx[2];
+            b.v0x[lane] = p0[0], b.v0y[lane] = p0[1], b.v0z[lane] = p0[2];
+            b.v1x[lane] = p1[0], b.v1y[lane] = p1[1], b.v1z[lane] = p1[2];
+            b.v2x[lane] = p2[0], b.v2y[lane] = p2[1], b.v2z[lane] = p2[2];
+            b.prim_id[lane] = prim;
+        }
+        if (tri_block1(&b, geom_id, r, d, h, any)) {
+            if (any)
+                return true;
+            found = true;
+        }
+    }
+    return found;
+}
+
 static inline bool instance_hidden(const wbvh *w, uint32_t id)
 {
     return atomic_load_explicit(&w->hidden[id], memory_order_relaxed) != 0;
@@ -439,11 +481,12 @@ static bool leaf1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const r
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
     if (w->kind == WBVH_POINTS)
         return points_leaf1(w, first, count, geom_id, r, d, h, any);
+    if (w->kind == WBVH_MESH)
+        return mesh_leaf1(w, first, count, geom_id, r, d, h, any);
     bool found = false;
     for (uint32_t k = first; k < first + count; k++) {
         bool hit_here;
         switch (w->kind) {
-        case WBVH_TRIANGLES: hit_here = tri_block1((const wbvh_tri_block *)w->blocks + k, geom_id, r, d, h, any); break;
         case WBVH_SPHERES:
             hit_here = sphere_block1((const wbvh_sphere_block *)w->blocks + k, geom_id, r, d, h, any);
             break;
@@ -777,17 +820,18 @@ static inline void offer_packet(packet_ctx *c, uint32_t i, float t, float u, flo
     c->improved |= 1ull << i;
 }
 
-/* The rays of `mask` (all with axis order `axes`) against triangle `lane` of
- * block b, RAY_LANES rays at a time, in the operation order of intersect_triangle. */
-static void triangle_rays(packet_ctx *c, const wbvh_tri_block *b, int lane, const int axes[3], uint64_t mask)
+/* The rays of `mask` (all with axis order `axes`) against the triangle
+ * v0 v1 v2 (id prim), RAY_LANES rays at a time, in the operation order of
+ * intersect_triangle. */
+static void triangle_rays(packet_ctx *c, const float *v0_in, const float *v1_in, const float *v2_in, uint32_t prim,
+                          const int axes[3], uint64_t mask)
 {
     ray_packet *p = c->p;
-    const float v0[3] = {b->v0x[lane], b->v0y[lane], b->v0z[lane]};
-    const float v1[3] = {b->v1x[lane], b->v1y[lane], b->v1z[lane]};
-    const float v2[3] = {b->v2x[lane], b->v2y[lane], b->v2z[lane]};
+    /* copies: the stores to the packet below may alias the inputs, which would reload them */
+    const float v0[3] = {v0_in[0], v0_in[1], v0_in[2]}, v1[3] = {v1_in[0], v1_in[1], v1_in[2]},
+                v2[3] = {v2_in[0], v2_in[1], v2_in[2]};
     const float *org[3] = {p->org_x, p->org_y, p->org_z};
     const int kx = axes[0], ky = axes[1], kz = axes[2];
-    const uint32_t prim = b->prim_id[lane];
     const vr zero = vr_set1(0.f);
     for (uint32_t g = 0; g < PACKET_MAX_RAYS; g += RAY_LANES) {
         unsigned lanes = (unsigned)(mask >> g) & ((1u << RAY_LANES) - 1u);
@@ -1042,22 +1086,30 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         instances_leaf_packet(c, ref, mask);
         return;
     }
-    if (w->kind != WBVH_TRIANGLES || __builtin_popcountll(mask) <= (c->any ? LEAF_SINGLE_RAY_MAX_ANY : LEAF_SINGLE_RAY_MAX)) {
+    if (w->kind != WBVH_MESH || __builtin_popcountll(mask) <= (c->any ? LEAF_SINGLE_RAY_MAX_ANY : LEAF_SINGLE_RAY_MAX)) {
         /* few rays, spheres, or a kind without a SIMD layout: one ray at a time */
         finish_single(c, ref, mask);
         return;
     }
     ensure_shear(c);
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
-    for (uint32_t k = first; k < first + count; k++) {
-        const wbvh_tri_block *b = (const wbvh_tri_block *)w->blocks + k;
-        for (int lane = 0; lane < WBVH_BLOCK; lane++) {
-            if (b->prim_id[lane] == RAY_INVALID_ID)
-                continue;
+    {
+        const float *pos = w->mesh.positions;
+        /* the leaf's triangles are cache misses on a large mesh: ask for
+         * their indices, then their vertices, before testing any */
+        for (uint32_t k = first; k < first + count; k++) {
+            const uint32_t *idx = w->mesh.indices + 3 * (size_t)k;
+            __builtin_prefetch(pos + 3 * (size_t)idx[0]);
+            __builtin_prefetch(pos + 3 * (size_t)idx[1]);
+            __builtin_prefetch(pos + 3 * (size_t)idx[2]);
+        }
+        for (uint32_t k = first; k < first + count; k++) {
+            const uint32_t prim = k, *idx = w->mesh.indices + 3 * (size_t)prim;
+            const float *v0 = pos + 3 * (size_t)idx[0], *v1 = pos + 3 * (size_t)idx[1], *v2 = pos + 3 * (size_t)idx[2];
             for (int o = 0; o < c->order_count; o++) {
                 uint64_t m = mask & c->order_mask[o] & ~c->done;
                 if (m)
-                    triangle_rays(c, b, lane, c->order_axes[o], m);
+                    triangle_rays(c, v0, v1, v2, prim, c->order_axes[o], m);
             }
         }
     }

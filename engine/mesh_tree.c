@@ -1,0 +1,91 @@
+#include "mesh_tree.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+
+#include "bvh.h"
+#include "mesh.h"
+
+/* Serialises first builds (rare: once per mesh); the built tree is
+ * published through sm->tree with release order, read with acquire. */
+static pthread_mutex_t build_lock = PTHREAD_MUTEX_INITIALIZER;
+
+/* The tree's order of all triangles: the leaves' (kept ids in leaf order),
+ * then the ones that can never be hit, in id order. */
+static uint32_t *full_order(const bvh *binary, const uint32_t *kept_ids, uint32_t count)
+{
+    uint32_t *order = malloc(((size_t)count + 1) * sizeof *order);
+    uint8_t *placed = calloc((size_t)count + 1, 1);
+    if (!order || !placed) {
+        free(order);
+        free(placed);
+        return NULL;
+    }
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < binary->prim_count; i++) {
+        order[n] = kept_ids[binary->prim_order[i]];
+        placed[order[n++]] = 1;
+    }
+    for (uint32_t t = 0; t < count; t++)
+        if (!placed[t])
+            order[n++] = t;
+    free(placed);
+    return order;
+}
+
+static wbvh *build(scene_mesh *sm, int threads, tess_error *err)
+{
+    mesh *m = sm->mesh;
+    aabb *boxes;
+    uint32_t *kept_ids, kept;
+    if (!geometry_hit_boxes(&geometry_triangles_ops, sm, threads, &boxes, &kept_ids, &kept)) {
+        tess_error_set(err, "mesh '%s': out of memory for the bounds of %u triangles", sm->name, m->triangle_count);
+        return NULL;
+    }
+    bvh binary;
+    bool ok = bvh_build(&binary, boxes, kept, threads, err);
+    free(boxes);
+    if (!ok) {
+        free(kept_ids);
+        return NULL;
+    }
+    uint32_t *order = full_order(&binary, kept_ids, m->triangle_count);
+    free(kept_ids);
+    wbvh *tree = calloc(1, sizeof *tree);
+    ok = order && tree && mesh_permute_triangles(m, order) && mesh_renumber_vertices(m);
+    free(order);
+    if (!ok) {
+        tess_error_set(err, "mesh '%s': out of memory putting %u triangles in order", sm->name, m->triangle_count);
+    } else {
+        geometry_mesh_arrays arrays = {m->positions, m->indices};
+        ok = wbvh_build_mesh(tree, &binary, &geometry_triangles_ops, sm, &arrays, err);
+    }
+    bvh_finish(&binary);
+    if (!ok) {
+        free(tree);
+        return NULL;
+    }
+    return tree;
+}
+
+const wbvh *mesh_tree_get(scene_mesh *sm, int threads, tess_error *err)
+{
+    wbvh *tree = atomic_load_explicit(&sm->tree, memory_order_acquire);
+    if (tree)
+        return tree;
+    pthread_mutex_lock(&build_lock);
+    tree = atomic_load_explicit(&sm->tree, memory_order_relaxed);
+    if (!tree && (tree = build(sm, threads, err)))
+        atomic_store_explicit(&sm->tree, tree, memory_order_release);
+    pthread_mutex_unlock(&build_lock);
+    return tree;
+}
+
+void mesh_tree_release(scene_mesh *sm)
+{
+    wbvh *tree = atomic_exchange_explicit(&sm->tree, NULL, memory_order_acq_rel);
+    if (tree) {
+        wbvh_finish(tree);
+        free(tree);
+    }
+}
