@@ -670,6 +670,16 @@ const void *cache_section(const cache_file *c, const char *tag, size_t element_b
 
 size_t cache_section_count(const cache_file *c) { return c->section_count; }
 
+cache_section_info cache_section_at(const cache_file *c, size_t i)
+{
+    const cache_section_entry *e = &c->table[i];
+    return (cache_section_info){.tag = e->tag, /* NUL-terminated: checked by cache_open */
+                                .data = c->map + e->offset,
+                                .bytes = e->bytes,
+                                .element_bytes = e->element_bytes,
+                                .element_count = e->element_count};
+}
+
 uint64_t cache_file_bytes(const cache_file *c) { return c->file_bytes; }
 
 void cache_close(cache_file *c)

@@ -60,7 +60,13 @@
 extern "C" {
 #endif
 
-/* ---- the on-disk layout (exposed for the tests and for documentation) ---- */
+/* Cost, measured on a 2 GiB file of random bytes in the page cache (a 2-core "AMD EPYC" VM,
+ * family 26 model 2, under the load of other builds; Debian's libxxhash 0.8.1):
+ * cache_hash_file 6.5..17 GB/s, cache_open (all checks) 7.7..17.5 GB/s, XXH3 on a heap
+ * buffer 13 GB/s. Cold (evicted with POSIX_FADV_DONTNEED) both run at the disk's speed:
+ * 1.2..3.3 GB/s, where O_DIRECT reads 1.3..1.4 GB/s. Writing 2 GiB with its fsync: 2.9 s.
+ *
+ * ---- the on-disk layout (exposed for the tests and for documentation) ---- */
 
 #define CACHE_FILE_MAGIC "TSRCACHE"        /* 8 bytes, no NUL on disk */
 #define CACHE_FILE_FORMAT_VERSION 1u       /* this header and table layout */
@@ -192,6 +198,15 @@ cache_status cache_open(const char *path, cache_key expected_key, uint32_t expec
 const void *cache_section(const cache_file *c, const char *tag, size_t element_bytes, size_t *count_out,
                           tess_error *err);
 size_t cache_section_count(const cache_file *c);
+
+/* Section i (< cache_section_count) in file order, for listing and checking a whole file. */
+typedef struct cache_section_info {
+    const char *tag;   /* in the map: NUL-terminated */
+    const void *data;  /* 64-byte aligned, read-only */
+    uint64_t bytes;    /* = element_bytes * element_count */
+    uint64_t element_bytes, element_count;
+} cache_section_info;
+cache_section_info cache_section_at(const cache_file *c, size_t i);
 uint64_t cache_file_bytes(const cache_file *c);
 /* Unmap; every pointer from cache_section dies. c may be NULL. */
 void cache_close(cache_file *c);

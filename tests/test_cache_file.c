@@ -187,6 +187,10 @@ Test(cache_file, round_trip_every_section_byte_exact_and_aligned)
         cr_assert_eq(count, src->element_count, "section %s", src->tag);
         if (count)
             cr_assert_eq(memcmp(p, src->data, count * src->element_bytes), 0, "section %s bytes", src->tag);
+        cache_section_info info = cache_section_at(c, i); /* in the order written */
+        cr_assert_str_eq(info.tag, src->tag);
+        cr_assert(info.data == p && info.element_bytes == src->element_bytes &&
+                  info.element_count == src->element_count && info.bytes == count * src->element_bytes);
     }
 
     /* the wrong element size (a layout changed without a version change) and a missing tag */
