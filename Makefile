@@ -3,7 +3,7 @@
 
 CC  ?= gcc
 CXX ?= g++
-PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp
+PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp libxxhash
 TEST_PKGS := criterion
 
 BUILD := build
