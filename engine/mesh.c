@@ -11,6 +11,11 @@ void mesh_destroy(mesh *m)
 {
     if (!m)
         return;
+    if (m->owner) {
+        m->release(m->owner);
+        free(m);
+        return;
+    }
     free(m->positions);
     free(m->normals);
     free(m->colors);

@@ -33,6 +33,12 @@ typedef struct mesh {
     /* capacities in elements (vertices / triangles), for the append helpers */
     uint32_t vertex_capacity;
     uint32_t triangle_capacity;
+    /* NULL: the mesh allocated its arrays (and may grow and change them).
+     * Else the arrays are read-only views into `owner` (a mapped cache file,
+     * mesh_cache.h), which mesh_destroy gives to release instead of freeing
+     * them; such a mesh must never be changed */
+    void *owner;
+    void (*release)(void *owner);
 } mesh;
 
 mesh *mesh_create(void);

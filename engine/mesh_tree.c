@@ -5,6 +5,7 @@
 
 #include "bvh.h"
 #include "mesh.h"
+#include "mesh_cache.h"
 
 /* Serialises first builds (rare: once per mesh); the built tree is
  * published through sm->tree with release order, read with acquire. */
@@ -65,6 +66,7 @@ static wbvh *build(scene_mesh *sm, int threads, tess_error *err)
         free(tree);
         return NULL;
     }
+    mesh_cache_store(sm, tree);
     return tree;
 }
 

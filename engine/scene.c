@@ -9,6 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "mesh_cache.h"
 #include "mesh_tree.h"
 #include "parallel.h"
 #include "part_tree.h"
@@ -543,15 +544,21 @@ static scene *scene_load_particle_file(const char *path, tess_error *err);
 /* A scene of one mesh file in file coordinates, the default material and light. */
 static scene *scene_load_mesh_file(const char *path, tess_error *err)
 {
-    mesh *m = mesh_load(path, err);
+    mesh_cache_params params;
+    memset(&params, 0, sizeof params);
+    memcpy(params.xform, (const float[12]){1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}, sizeof params.xform);
+    mesh_cache_load cached;
+    mesh *m = mesh_cache_load_file(path, &params, &cached, err);
     if (!m)
         return NULL;
     if (m->triangle_count == 0 && m->vertex_count > 0 && has_extension(path, ".ply")) {
         /* vertices only: a point set, drawn as particles (as the Embree peer does) */
+        mesh_cache_abandon(&cached);
         mesh_destroy(m);
         return scene_load_particle_file(path, err);
     }
     if (m->triangle_count == 0) {
+        mesh_cache_abandon(&cached);
         mesh_destroy(m);
         tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
         return NULL;
@@ -560,8 +567,12 @@ static scene *scene_load_mesh_file(const char *path, tess_error *err)
     material def_mat = material_default();
     light def_light = light_default_directional();
     int mat_id = s ? scene_add_material(s, &def_mat) : -1;
-    if (mat_id < 0 || scene_add_mesh(s, m, (uint32_t)mat_id, path_basename(path)) < 0 ||
-        scene_add_light(s, &def_light) < 0) {
+    int mesh_id = mat_id < 0 ? -1 : scene_add_mesh(s, m, (uint32_t)mat_id, path_basename(path));
+    if (mesh_id >= 0)
+        mesh_cache_adopt(s->meshes[mesh_id], &cached);
+    else
+        mesh_cache_abandon(&cached);
+    if (mesh_id < 0 || scene_add_light(s, &def_light) < 0) {
         if (mat_id < 0)
             mesh_destroy(m); /* scene_add_mesh was never reached to take it */
         scene_destroy(s);

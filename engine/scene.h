@@ -66,6 +66,10 @@ typedef struct scene_mesh {
     /* its wide BVH (mesh_tree.h), NULL until the first accel is built;
      * building it put the mesh in the tree's order. Owned */
     _Atomic(struct wbvh *) tree;
+    /* the structure cache (mesh_cache.h): a mesh_cache_state, and the key
+     * the cache is written under after the tree's build (state PENDING) */
+    int cache_state;
+    uint64_t cache_key[2];
 } scene_mesh;
 
 /* All spheres of a scene, structure of arrays (millions of particles later). */

@@ -90,6 +90,7 @@
 #include <sys/stat.h>
 
 #include "json_read.h"
+#include "mesh_cache.h"
 #include "log.h"
 #include "particles/particle_json.h"
 #include "series.h"
@@ -491,23 +492,34 @@ static bool load_mesh(loader *L, json_object *v)
     if (skip_missing(L, resolved, optional))
         return true;
     tess_error why = {{0}};
-    mesh *m = mesh_load(resolved, &why);
+    mesh_cache_params params;
+    memset(&params, 0, sizeof params);
+    memcpy(params.xform, xform, sizeof params.xform);
+    params.drop_materials = named >= 0;
+    mesh_cache_load cached;
+    mesh *m = mesh_cache_load_file(resolved, &params, &cached, &why);
     if (!m)
         return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the mesh");
-    if (named >= 0)
-        drop_mesh_materials(m);
-    if (memcmp(xform, identity_xform, sizeof identity_xform) != 0)
-        mesh_transform(m, xform);
+    if (cached.state != MESH_CACHE_HIT) { /* a mapped mesh has them applied */
+        if (named >= 0)
+            drop_mesh_materials(m);
+        if (memcmp(xform, identity_xform, sizeof identity_xform) != 0)
+            mesh_transform(m, xform);
+    }
     bool own_materials = m->material_count > 0 && m->triangle_material != NULL;
     int material_id = named >= 0 ? named : own_materials ? 0 : default_material_id(L);
     if (material_id < 0) {
+        mesh_cache_abandon(&cached);
         mesh_destroy(m);
         return out_of_memory(L);
     }
     int id = scene_add_mesh(L->s, m, (uint32_t)material_id, base_name(resolved));
-    if (id < 0)
+    if (id < 0) {
+        mesh_cache_abandon(&cached);
         return out_of_memory(L);
+    }
     scene_mesh *sm = L->s->meshes[id];
+    mesh_cache_adopt(sm, &cached);
     if (sm->mesh_material_ids) /* keep material_id a valid index even where it is unused */
         sm->material_id = sm->mesh_material_ids[0];
     return true;

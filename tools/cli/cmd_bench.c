@@ -23,6 +23,7 @@
 #include "cli.h"
 #include "engine/accel.h"
 #include "engine/frame_state.h"
+#include "engine/mesh_cache.h"
 #include "engine/part_tree.h"
 #include "engine/render.h"
 #include "engine/render_ao.h"
@@ -130,7 +131,7 @@ static void bench_usage(FILE *f)
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
           "        renderer=NAME opacity= secondary_rays_frame= tile_px= points= point_bytes=\n"
-          "        bytes_per_point= and, with --renderer ao, ao_rays=\n"
+          "        bytes_per_point= cache= and, with --renderer ao, ao_rays=\n"
           "        ao_interleave= ao_filter= ao_dist=\n"
           "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
@@ -163,6 +164,9 @@ static void bench_usage(FILE *f)
           "  geometries       geometries stored (meshes, the sphere set)\n"
           "  triangles_instanced  triangles over all instances: what the picture holds\n"
           "  bytes_per_instanced_tri  (mesh_bytes + accel_bytes) / triangles_instanced\n"
+          "  cache            the structure cache (README, \"Structure cache\") over the meshes:\n"
+          "                   hit (every cached mesh and its tree mapped from it), written (built,\n"
+          "                   then written), failed (built; writing failed), unused (none cached)\n"
           "  renderer         eyelight or ao\n"
           "  opacity          --opacity's value (1: opaque)\n"
           "  secondary_rays_frame  rays of the last frame traced past their first surface (transparency)\n"
@@ -519,6 +523,14 @@ static void print_result(const bench_options *o, const render_view *view, double
     size_t points = scene_point_count(s), point_bytes = scene_point_bytes(s);
     printf(" points=%zu point_bytes=%zu bytes_per_point=%.2f", points, point_bytes,
            points ? (double)(point_bytes + accel_total) / (double)points : 0.0);
+    unsigned by_state[MESH_CACHE_FAILED + 1] = {0};
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        if (s->meshes[i]->cache_state >= 0 && s->meshes[i]->cache_state <= MESH_CACHE_FAILED)
+            by_state[s->meshes[i]->cache_state]++;
+    printf(" cache=%s", by_state[MESH_CACHE_FAILED]    ? "failed"
+                        : by_state[MESH_CACHE_WRITTEN] ? "written"
+                        : by_state[MESH_CACHE_HIT]     ? "hit"
+                                                       : "unused");
     if (o->ao) {
         for (int f = 0; f < n; f++) {
             double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;
