@@ -2,8 +2,10 @@
  * text of lines, bar and summary; the rate, time-left and percentage
  * arithmetic; silence for short tasks, when quiet and under TESSERA_LOG=warn;
  * an unknown (0) total; percentages that never go back while several threads
- * add at once. Every test drives a fake clock, so none depends on the speed
- * of the machine, and none sleeps. */
+ * add at once; and the hooks: a BVH is the same bytes whether the reporter
+ * counts or is silenced, and the PLY reader reports the bytes it read. Every
+ * test drives a fake clock, so none depends on the speed of the machine, and
+ * none sleeps. */
 #include <criterion/criterion.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -11,6 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/bvh.h"
+#include "engine/ply_read.h"
 #include "engine/progress.h"
 
 /* A clock the test sets by hand. */
@@ -363,4 +367,76 @@ Test(progress, concurrent_adds_never_show_a_smaller_percentage)
         cr_expect(strstr(text, "tessera: building BVH: 400 k prim in "), "style %d: no summary:\n%s", style, text);
         capture_close(&c);
     }
+}
+
+/* ---- the BVH builder's hook ---------------------------------------------- */
+
+/* n small boxes scattered by a fixed LCG (caller frees). */
+static aabb *scattered_boxes(uint32_t n)
+{
+    aabb *boxes = malloc((size_t)n * sizeof *boxes);
+    cr_assert(boxes);
+    uint32_t state = 12345u;
+    for (uint32_t i = 0; i < n; i++) {
+        float c[3];
+        for (int k = 0; k < 3; k++) {
+            state = state * 1664525u + 1013904223u;
+            c[k] = (float)(state >> 8) / (float)(1u << 24);
+        }
+        boxes[i] = (aabb){{c[0], c[1], c[2]}, {c[0] + 0.001f, c[1] + 0.002f, c[2] + 0.001f}};
+    }
+    return boxes;
+}
+
+/* The reporter counts what the build threads place, but the build never
+ * reads it back: the tree is the same bytes with it counting or silenced. */
+Test(progress, bvh_build_is_the_same_with_or_without_the_reporter)
+{
+    unsetenv("TESSERA_LOG");
+    const uint32_t n = 200000;
+    aabb *boxes = scattered_boxes(n);
+    bvh counted, silenced;
+    tess_error err = {{0}};
+    cr_assert(bvh_build(&counted, boxes, n, 2, &err), "%s", err.msg);
+    progress_set_quiet(true);
+    cr_assert(bvh_build(&silenced, boxes, n, 2, &err), "%s", err.msg);
+    progress_set_quiet(false);
+    cr_assert_eq(counted.node_count, silenced.node_count);
+    cr_expect(!memcmp(counted.nodes, silenced.nodes, counted.node_count * sizeof *counted.nodes));
+    cr_expect(!memcmp(counted.prim_order, silenced.prim_order, n * sizeof *counted.prim_order));
+    bvh_finish(&counted);
+    bvh_finish(&silenced);
+    free(boxes);
+}
+
+/* ---- the PLY reader's hook ------------------------------------------------- */
+
+/* The chunked reader tells its reporter the offset it has read up to: after
+ * reading a whole file of several chunks, the file's size. */
+Test(progress, ply_reader_reports_the_bytes_read)
+{
+    FILE *file = tmpfile();
+    cr_assert(file);
+    const size_t bytes = ((size_t)5 << 20) + 123; /* five 1 MiB chunks and a piece */
+    for (size_t i = 0; i < bytes; i++)
+        fputc((int)(i % 251), file);
+    rewind(file);
+    capture c;
+    capture_open(&c);
+    fake_clock clock = {0.0};
+    progress p;
+    begin_fake(&p, &c, &clock, PROGRESS_STYLE_LINES, "loading big.ply", bytes, "B");
+    ply_reader r;
+    cr_assert(ply_reader_init(&r, file, bytes));
+    r.progress = &p;
+    clock.now_s = 2.0;
+    cr_expect_eq(ply_reader_skip(&r, bytes), bytes);
+    cr_expect_eq(atomic_load(&p.done), bytes);
+    clock.now_s = 4.0;
+    progress_end(&p);
+    cr_expect(strstr(capture_text(&c), "tessera: loading big.ply: 5.2 MB in 4.0 s (1.3 MB/s)\n"), "%s",
+              capture_text(&c));
+    ply_reader_finish(&r);
+    fclose(file);
+    capture_close(&c);
 }
