@@ -34,16 +34,13 @@ double progress_rate(uint64_t done, double elapsed_s)
     return elapsed_s > 0.0 ? (double)done / elapsed_s : 0.0;
 }
 
-double progress_seconds_left(uint64_t done, uint64_t total, double elapsed_s)
+double progress_seconds_left(uint64_t done, uint64_t total, double rate)
 {
-    if (total == 0 || !(elapsed_s > 0.0))
+    if (total == 0)
         return -1.0;
     if (done >= total)
         return 0.0;
-    if (done == 0)
-        return -1.0;
-    /* (total - done) at done / elapsed_s units a second */
-    return (double)(total - done) * elapsed_s / (double)done;
+    return rate > 0.0 && isfinite(rate) ? (double)(total - done) / rate : -1.0;
 }
 
 int progress_percent(uint64_t done, uint64_t total)
@@ -155,12 +152,15 @@ void progress_begin_output(progress *p, const char *what, uint64_t total, const 
     snprintf(p->what, sizeof p->what, "%s", what ? what : "");
     snprintf(p->unit, sizeof p->unit, "%s", unit ? unit : "");
     atomic_store_explicit(&p->done, 0, memory_order_relaxed);
-    atomic_store_explicit(&p->check_at, p->step, memory_order_relaxed);
+    atomic_store_explicit(&p->check_at, 0, memory_order_relaxed); /* the first update sets the base */
     atomic_store_explicit(&p->busy, false, memory_order_relaxed);
     p->start_s = p->shown_s = p->on ? p->clock(p->clock_ctx) : 0.0;
     p->shown_done = 0;
     p->shown_decile = -1;
     p->shown = false;
+    p->have_base = false;
+    p->base_s = p->start_s;
+    p->base_done = 0;
 }
 
 /* ---- reports ------------------------------------------------------------------ */
@@ -186,12 +186,19 @@ static void format_left(char *buf, size_t size, double left_s)
         snprintf(buf, size, ", %s left", progress_format_seconds(t, sizeof t, left_s));
 }
 
+/* Units a second since the first update. */
+static double current_rate(const progress *p, uint64_t done, double now)
+{
+    return progress_rate(done - p->base_done, now - p->base_s);
+}
+
 /* The bar: "\rtessera: WHAT  40% [########------------] 410 MB/s, 1.3 s left\033[K",
  * WHAT cut so the line fits the terminal. Without a total: amount and rate. */
-static void show_bar(progress *p, uint64_t done, double elapsed)
+static void show_bar(progress *p, uint64_t done, double now)
 {
     char amount[FIELD_BYTES], rate[FIELD_BYTES], left[FIELD_BYTES], tail[160];
-    progress_format_amount(rate, sizeof rate, progress_rate(done, elapsed), p->unit);
+    double per_s = current_rate(p, done, now);
+    progress_format_amount(rate, sizeof rate, per_s, p->unit);
     if (p->total > 0) {
         int pct = progress_percent(done, p->total);
         char cells[BAR_CELLS + 1];
@@ -199,7 +206,7 @@ static void show_bar(progress *p, uint64_t done, double elapsed)
         for (int i = 0; i < BAR_CELLS; i++)
             cells[i] = i < full ? '#' : '-';
         cells[BAR_CELLS] = '\0';
-        format_left(left, sizeof left, progress_seconds_left(done, p->total, elapsed));
+        format_left(left, sizeof left, progress_seconds_left(done, p->total, per_s));
         snprintf(tail, sizeof tail, " %3d%% [%s] %s/s%s", pct, cells, rate, left);
     } else {
         snprintf(tail, sizeof tail, " %s, %s/s", progress_format_amount(amount, sizeof amount, (double)done, p->unit),
@@ -220,14 +227,15 @@ static void show_bar(progress *p, uint64_t done, double elapsed)
 }
 
 /* A line: "tessera: WHAT: 40% (348 MB of 870 MB, 410 MB/s, 1.3 s left)". */
-static void show_line(progress *p, uint64_t done, double elapsed)
+static void show_line(progress *p, uint64_t done, double now)
 {
     char amount[FIELD_BYTES], total[FIELD_BYTES], rate[FIELD_BYTES], left[FIELD_BYTES], text[REPORT_BYTES];
+    double per_s = current_rate(p, done, now);
     progress_format_amount(amount, sizeof amount, (double)done, p->unit);
-    progress_format_amount(rate, sizeof rate, progress_rate(done, elapsed), p->unit);
+    progress_format_amount(rate, sizeof rate, per_s, p->unit);
     int n;
     if (p->total > 0) {
-        format_left(left, sizeof left, progress_seconds_left(done, p->total, elapsed));
+        format_left(left, sizeof left, progress_seconds_left(done, p->total, per_s));
         n = snprintf(text, sizeof text, "tessera: %s: %d%% (%s of %s, %s/s%s)\n", p->what,
                      progress_percent(done, p->total), amount,
                      progress_format_amount(total, sizeof total, (double)p->total, p->unit), rate, left);
@@ -237,12 +245,13 @@ static void show_line(progress *p, uint64_t done, double elapsed)
     emit(p, text, n, sizeof text);
 }
 
-/* Is a report due at `now`? Only after PROGRESS_SILENT_S; a bar every
+/* Is a report due at `now`? Only after PROGRESS_SILENT_S, with a rate
+ * measured over PROGRESS_RATE_MIN_S; a bar every
  * PROGRESS_BAR_PERIOD_S; a line at a new 10 % step (not 100 %: the summary
  * says that) after PROGRESS_LINE_GAP_S, or after PROGRESS_LINE_STALL_S anyway. */
 static bool report_due(const progress *p, uint64_t done, double now)
 {
-    if (now - p->start_s < PROGRESS_SILENT_S)
+    if (now - p->start_s < PROGRESS_SILENT_S || now - p->base_s < PROGRESS_RATE_MIN_S)
         return false;
     double since = now - p->shown_s;
     if (p->bar)
@@ -268,12 +277,16 @@ static void poll(progress *p)
     uint64_t next = done > UINT64_MAX - p->step ? UINT64_MAX : done + p->step;
     atomic_store_explicit(&p->check_at, next, memory_order_relaxed);
     double now = p->clock(p->clock_ctx);
+    if (!p->have_base) {
+        p->have_base = true;
+        p->base_s = now;
+        p->base_done = done;
+    }
     if (report_due(p, done, now)) {
-        double elapsed = now - p->start_s;
         if (p->bar)
-            show_bar(p, done, elapsed);
+            show_bar(p, done, now);
         else
-            show_line(p, done, elapsed);
+            show_line(p, done, now);
         p->shown_s = now;
         p->shown_done = done;
         if (p->total > 0)

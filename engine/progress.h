@@ -10,7 +10,10 @@
  * passes a new multiple of 10 % (at most one every PROGRESS_LINE_GAP_S, and one
  * every PROGRESS_LINE_STALL_S without a new step), then the same summary:
  *   tessera: loading dragon.ply: 40% (348 MB of 870 MB, 410 MB/s, 1.3 s left)
- * The rate is the average since progress_begin; the time left assumes it holds.
+ * The rate is the average since the task's first update (so time before
+ * anything could be counted, such as the top levels of a BVH build, does not
+ * dilute it); the time left assumes it holds. The summary's rate is the
+ * whole task's: amount / time since progress_begin.
  * A total of 0 means "unknown": amounts and rate, no percentage or time left.
  *
  * WHEN IT IS SILENT. A task that ends within PROGRESS_SILENT_S prints nothing at
@@ -41,6 +44,8 @@
 
 /* a task that ends sooner prints nothing; a longer one shows from then on */
 #define PROGRESS_SILENT_S 1.0
+/* ... once its rate has been measured over this long */
+#define PROGRESS_RATE_MIN_S 0.5
 /* a terminal's bar is redrawn at most this often */
 #define PROGRESS_BAR_PERIOD_S 0.1
 /* plain lines: at most one per this many seconds, each at a new 10 % step ... */
@@ -74,7 +79,7 @@ typedef struct progress_output {
 typedef struct progress {
     /* shared by the updating threads */
     _Atomic uint64_t done;     /* units done so far; only grows */
-    _Atomic uint64_t check_at; /* an update that brings done to this reads the clock */
+    _Atomic uint64_t check_at; /* an update that brings done to this reads the clock (0: the first does) */
     atomic_bool busy;          /* held by the one thread formatting and writing */
     /* set by progress_begin, read-only until progress_end */
     bool on;                   /* begun and not quiet: updates may print */
@@ -92,6 +97,9 @@ typedef struct progress {
     double shown_s;            /* clock when something was last written (start_s before) */
     uint64_t shown_done;       /* the largest done written: what is shown never goes back */
     int shown_decile;          /* lines: the last 10 % step written (-1: none) */
+    bool have_base;            /* the first update has been seen: base_s and base_done hold */
+    double base_s;             /* clock at the first update: the rate is measured from here */
+    uint64_t base_done;        /* done at the first update */
     bool shown;                /* something was written: progress_end must close it */
 } progress;
 
@@ -118,9 +126,9 @@ void progress_set_quiet(bool quiet);
 
 /* done / elapsed_s units a second; 0 when elapsed_s is not positive. */
 double progress_rate(uint64_t done, double elapsed_s);
-/* Seconds left at the average rate so far; < 0 when unknown (nothing done
- * yet, no total, no time elapsed). 0 once done >= total. */
-double progress_seconds_left(uint64_t done, uint64_t total, double elapsed_s);
+/* Seconds left for total - done units at `rate` units a second; < 0 when
+ * unknown (no total, no positive rate). 0 once done >= total. */
+double progress_seconds_left(uint64_t done, uint64_t total, double rate);
 /* Whole percent done, 0..100 (100 only when done >= total); 0 for total 0.
  * Exact while done * 100 fits in 64 bits, in doubles beyond. */
 int progress_percent(uint64_t done, uint64_t total);

@@ -65,6 +65,7 @@ Test(progress, lines_at_ten_percent_steps_then_a_summary)
     fake_clock clock = {0.0};
     progress p;
     begin_fake(&p, &c, &clock, PROGRESS_STYLE_LINES, "loading dragon.ply", 870000000u, "B");
+    progress_set(&p, 0u); /* the first update: the rate counts from here */
     clock.now_s = 0.5;
     progress_set(&p, 100000000u); /* inside the silent second */
     cr_expect_str_eq(capture_text(&c), "");
@@ -91,6 +92,7 @@ Test(progress, lines_keep_a_gap_and_speak_when_stalled)
     fake_clock clock = {0.0};
     progress p;
     begin_fake(&p, &c, &clock, PROGRESS_STYLE_LINES, "building BVH", 1000000u, "prim");
+    progress_add(&p, 0u);
     clock.now_s = 1.0;
     progress_add(&p, 100000u); /* 10 %: the first line */
     clock.now_s = 1.5;
@@ -117,6 +119,7 @@ Test(progress, bar_redrawn_in_place_then_replaced_by_the_summary)
     fake_clock clock = {0.0};
     progress p;
     begin_fake(&p, &c, &clock, PROGRESS_STYLE_BAR, "loading dragon.ply", 870000000u, "B");
+    progress_set(&p, 0u);
     clock.now_s = 1.0;
     progress_set(&p, 348000000u);
     const char *first = "\rtessera: loading dragon.ply  40% [########------------] 348 MB/s, 1.5 s left\033[K";
@@ -146,6 +149,7 @@ Test(progress, bar_fits_the_line_with_a_long_name)
     memset(what, 'x', sizeof what - 1);
     what[sizeof what - 1] = '\0';
     begin_fake(&p, &c, &clock, PROGRESS_STYLE_BAR, what, 1000u, "B");
+    progress_set(&p, 0u);
     clock.now_s = 2.0;
     progress_set(&p, 500u);
     const char *text = capture_text(&c);
@@ -261,11 +265,11 @@ Test(progress, rate_time_left_and_percent)
     cr_expect_float_eq(progress_rate(100, 2.0), 50.0, 1e-12);
     cr_expect_eq(progress_rate(100, 0.0), 0.0);
     cr_expect_eq(progress_rate(100, -1.0), 0.0);
-    /* 250 of 1000 in 1 s: 750 more at 250 a second */
-    cr_expect_float_eq(progress_seconds_left(250, 1000, 1.0), 3.0, 1e-12);
-    cr_expect_lt(progress_seconds_left(0, 1000, 1.0), 0.0);  /* no rate yet */
-    cr_expect_lt(progress_seconds_left(10, 1000, 0.0), 0.0); /* no time yet */
-    cr_expect_eq(progress_seconds_left(1000, 1000, 4.0), 0.0);
+    /* 250 of 1000 done: 750 more at 250 a second */
+    cr_expect_float_eq(progress_seconds_left(250, 1000, 250.0), 3.0, 1e-12);
+    cr_expect_lt(progress_seconds_left(250, 1000, 0.0), 0.0); /* no rate yet */
+    cr_expect_lt(progress_seconds_left(250, 0, 100.0), 0.0);  /* no total */
+    cr_expect_eq(progress_seconds_left(1000, 1000, 0.0), 0.0);
     cr_expect_eq(progress_seconds_left(2000, 1000, 4.0), 0.0); /* more than announced */
     cr_expect_eq(progress_percent(0, 1000), 0);
     cr_expect_eq(progress_percent(999, 1000), 99);
@@ -438,5 +442,32 @@ Test(progress, ply_reader_reports_the_bytes_read)
               capture_text(&c));
     ply_reader_finish(&r);
     fclose(file);
+    capture_close(&c);
+}
+
+/* Time before the first update (the BVH build's top levels place no leaf)
+ * does not count in the rate or the time left; the summary's rate is the
+ * whole task's. Nothing is shown before the rate has 0.5 s behind it. */
+Test(progress, rate_counts_from_the_first_update)
+{
+    capture c;
+    capture_open(&c);
+    fake_clock clock = {0.0};
+    progress p;
+    begin_fake(&p, &c, &clock, PROGRESS_STYLE_LINES, "building BVH", 1000000u, "prim");
+    clock.now_s = 3.0; /* nothing counted for 3 s */
+    progress_add(&p, 10000u);
+    clock.now_s = 3.25;
+    progress_add(&p, 90000u); /* 10 %, but the rate has only 0.25 s behind it */
+    cr_expect_str_eq(capture_text(&c), "");
+    clock.now_s = 4.0;
+    progress_add(&p, 100000u); /* 20 %: 190 k in 1 s since the first update */
+    cr_expect_str_eq(capture_text(&c),
+                     "tessera: building BVH: 20% (200 k prim of 1.0 M prim, 190 k prim/s, 4.2 s left)\n");
+    clock.now_s = 8.0;
+    progress_add(&p, 800000u);
+    progress_end(&p);
+    cr_expect(strstr(capture_text(&c), "tessera: building BVH: 1.0 M prim in 8.0 s (125 k prim/s)\n"), "%s",
+              capture_text(&c));
     capture_close(&c);
 }
