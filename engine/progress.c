@@ -22,8 +22,8 @@
 /* "1.3 s", "870 MB", "12.3 M prim" with room to spare */
 #define FIELD_BYTES 48
 
-/* progress_set_quiet: read by every progress_begin */
-static atomic_bool all_quiet;
+/* progress_set_quiet: read by every progress_begin; a process starts quiet */
+static atomic_bool all_quiet = true;
 
 void progress_set_quiet(bool quiet) { atomic_store_explicit(&all_quiet, quiet, memory_order_relaxed); }
 

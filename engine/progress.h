@@ -16,10 +16,12 @@
  * whole task's: amount / time since progress_begin.
  * A total of 0 means "unknown": amounts and rate, no percentage or time left.
  *
- * WHEN IT IS SILENT. A task that ends within PROGRESS_SILENT_S prints nothing at
- * all (so tests and small scenes stay quiet). Nothing is printed when quiet:
- * progress_set_quiet(true) for the whole process, TESSERA_LOG=warn or error
- * (progress is info, engine/log.h), or progress_output.quiet for one task.
+ * WHEN IT IS SILENT. A process is quiet until it calls progress_set_quiet(false):
+ * tessera's main does; the engine used as a library (the test suite, the soak
+ * driver, the fuzzers) prints no progress unless it asks. A task that ends
+ * within PROGRESS_SILENT_S prints nothing at all (so small scenes stay quiet).
+ * Nothing is printed either under TESSERA_LOG=warn or error (progress is info,
+ * engine/log.h), or with progress_output.quiet for one task.
  * Output goes to stderr only (the benchmarks' parsers read stdout). A failed
  * write is ignored, never reported.
  *
@@ -119,7 +121,8 @@ void progress_set(progress *p, uint64_t done);
  * short one stays silent. The reporter is silent afterwards. */
 void progress_end(progress *p);
 
-/* Silence every reporter of the process from their next progress_begin (true) or not. */
+/* Silence every reporter of the process from their next progress_begin (true,
+ * as a process starts), or let them speak (false). */
 void progress_set_quiet(bool quiet);
 
 /* ---- the arithmetic, exposed for tests ---------------------------------- */

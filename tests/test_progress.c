@@ -54,6 +54,7 @@ static void capture_close(capture *c)
 static void begin_fake(progress *p, capture *c, fake_clock *clock, enum progress_style style, const char *what,
                        uint64_t total, const char *unit)
 {
+    progress_set_quiet(false); /* a process starts quiet (tessera's main speaks) */
     progress_output out = {.stream = c->stream, .style = style, .clock = read_fake_clock, .clock_ctx = clock};
     progress_begin_output(p, what, total, unit, &out);
 }
@@ -200,6 +201,11 @@ Test(progress, quiet_prints_nothing)
 {
     capture c;
     capture_open(&c);
+    cr_expect_str_eq(long_task(&c, false), "", "a process starts quiet");
+    capture_close(&c);
+
+    progress_set_quiet(false);
+    capture_open(&c);
     cr_expect_str_neq(long_task(&c, false), ""); /* the task does speak when not quiet */
     capture_close(&c);
 
@@ -323,6 +329,7 @@ static void *add_ones(void *arg)
 /* Run ADDERS threads of ADDS_EACH progress_add(1) with `style`, reporting into c. */
 static void run_adders(enum progress_style style, capture *c)
 {
+    progress_set_quiet(false);
     atomic_store(&clock_reads, 0u);
     progress p;
     progress_output out = {.stream = c->stream, .style = style, .clock = ticking_clock};
@@ -397,6 +404,7 @@ static aabb *scattered_boxes(uint32_t n)
 Test(progress, bvh_build_is_the_same_with_or_without_the_reporter)
 {
     unsetenv("TESSERA_LOG");
+    progress_set_quiet(false);
     const uint32_t n = 200000;
     aabb *boxes = scattered_boxes(n);
     bvh counted, silenced;
