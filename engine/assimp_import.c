@@ -44,6 +44,7 @@
 #include <sys/stat.h>
 
 #include "mesh.h"
+#include "progress.h"
 
 /* ValidateDataStructure turns out-of-range indices into an import failure
  * instead of a scene we would have to distrust. JoinIdenticalVertices runs
@@ -542,10 +543,23 @@ static void *import_on_deep_stack(void *arg)
     return NULL;
 }
 
+/* Progress (engine/progress.h): assimp's C API has no progress callback (its
+ * ProgressHandler is C++ only, set on an Assimp::Importer), so a long import
+ * shows nothing until it ends, then its summary: bytes of the file named (not
+ * of the .mtl or .bin files it pulls in) and the time. */
 const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_error *err)
 {
+    struct stat st;
+    const char *name = strrchr(path, '/');
+    char what[PROGRESS_WHAT_BYTES];
+    snprintf(what, sizeof what, "loading %s", name ? name + 1 : path);
+    progress bytes;
+    progress_begin(&bytes, what, stat(path, &st) == 0 ? (uint64_t)st.st_size : 0, "B");
     import_job job = {.path = path, .flags = flags, .err = err};
     run_deep(import_on_deep_stack, &job);
+    if (job.scene)
+        progress_set(&bytes, bytes.total);
+    progress_end(&bytes);
     return job.scene;
 }
 

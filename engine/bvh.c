@@ -40,6 +40,7 @@
 #include <string.h>
 
 #include "parallel.h"
+#include "progress.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -64,6 +65,9 @@
  * the output's definition (it fixes the order of refs within large nodes): changing
  * it changes prim_order, never the thread-count independence. */
 #define BVH_PARTITION_BLOCK 4096u
+/* Leaf primitives a subtree task places before telling the progress reporter:
+ * one atomic add per this many, so the reporter costs nothing measurable. */
+#define BVH_PROGRESS_GRAIN 4096
 /* Misplaced pairs swapped per chunk of a parallel partition's exchange step. */
 #define BVH_SWAP_GRAIN 16384u
 /* Refs per chunk of parallel binning and bounds passes: a few tens of microseconds. */
@@ -443,6 +447,7 @@ typedef struct builder {
     bvh_node *out_nodes;    /* the canonical layout being written */
     uint32_t leaf_max;      /* most primitives in a leaf, 1..BVH_LEAF_MAX */
     unsigned block_log2;    /* leaves are tested 2^this primitives at a time (the SAH's leaf cost) */
+    progress *progress;     /* told the primitives placed in leaves; never read back by the build */
 } builder;
 
 static uint32_t alloc_pair(builder *B, worker_state *w)
@@ -782,6 +787,7 @@ static uint32_t build_subtree(builder *B, worker_state *w, const build_item *roo
     build_item stack[BVH_MAX_DEPTH + 1]; /* one pending right sibling per level */
     int top = 0;
     uint32_t inner = 0;
+    uint32_t placed = 0; /* leaf primitives not yet told to B->progress */
     stack[top++] = *root;
     while (top > 0) {
         build_item it = stack[--top];
@@ -791,8 +797,12 @@ static uint32_t build_subtree(builder *B, worker_state *w, const build_item *roo
             assert(top + 2 <= BVH_MAX_DEPTH + 1);
             stack[top++] = kids[1];
             stack[top++] = kids[0];
+        } else if ((placed += it.end - it.begin) >= BVH_PROGRESS_GRAIN) {
+            progress_add(B->progress, placed);
+            placed = 0;
         }
     }
+    progress_add(B->progress, placed);
     return inner;
 }
 
@@ -846,6 +856,8 @@ static bool build_top(builder *B, const build_item *root)
             assert(top + 2 <= BVH_MAX_DEPTH + 1);
             stack[top++] = kids[1];
             stack[top++] = kids[0];
+        } else {
+            progress_add(B->progress, it.end - it.begin);
         }
     }
     return true;
@@ -1043,7 +1055,10 @@ bool bvh_build_blocks(bvh *out, const aabb *prim_bounds, uint32_t count, int thr
         return true;
     if (threads < 1 || count <= BVH_PARALLEL_NODE_MIN)
         threads = 1;
+    progress report; /* leaf primitives placed (engine/progress.h) */
+    progress_begin(&report, "building BVH", count, "prim");
     builder B = {0};
+    B.progress = &report;
     B.leaf_max = leaf_max;
     B.block_log2 = block_log2;
     B.threads = threads > 1 ? parallel_pool_create(threads) : NULL; /* NULL: serial build */
@@ -1052,6 +1067,7 @@ bool bvh_build_blocks(bvh *out, const aabb *prim_bounds, uint32_t count, int thr
     uint64_t capacity = 2 * (uint64_t)count + (uint64_t)B.thread_count * BVH_NODE_BLOCK;
     if (capacity > UINT32_MAX) {
         builder_free(&B);
+        progress_end(&report);
         return tess_error_set(err, "bvh: too many primitives (%u)", count);
     }
     B.pool_capacity = (uint32_t)capacity;
@@ -1112,10 +1128,12 @@ bool bvh_build_blocks(bvh *out, const aabb *prim_bounds, uint32_t count, int thr
     parallel_pool_for(B.threads, count, BVH_SCAN_GRAIN, order_chunk, &oj);
     out->prim_count = count;
     builder_free(&B);
+    progress_end(&report);
     return true;
 
 out_of_memory:
     builder_free(&B);
+    progress_end(&report);
     bvh_finish(out);
     return tess_error_set(err, "bvh: out of memory for %u primitives", count);
 }

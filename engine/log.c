@@ -28,6 +28,8 @@ static enum log_level threshold(void)
     return LOG_INFO;
 }
 
+bool log_enabled(enum log_level level) { return level >= threshold(); }
+
 static void emit(enum log_level level, const char *file, int line, const char *suffix, const char *fmt,
                  va_list ap)
 {

@@ -3,6 +3,8 @@
 #ifndef TESSERA_LOG_H
 #define TESSERA_LOG_H
 
+#include <stdbool.h>
+
 enum log_level { LOG_DEBUG, LOG_INFO, LOG_WARN, LOG_ERROR };
 
 void log_write(enum log_level level, const char *file, int line, const char *fmt, ...)
@@ -10,6 +12,9 @@ void log_write(enum log_level level, const char *file, int line, const char *fmt
 /* As log_write, with ": strerror(errno)" appended (errno read on entry). */
 void log_write_errno(enum log_level level, const char *file, int line, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
+/* Would a message of `level` be written (TESSERA_LOG's threshold)? Progress
+ * reports (engine/progress.h) are info: TESSERA_LOG=warn silences them. */
+bool log_enabled(enum log_level level);
 
 /* Divert the calling thread's messages: each formatted line (no newline) goes
  * to fn(ctx, line) instead of stderr until log_divert_thread(NULL, NULL).

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "ply_read.h"
+#include "progress.h"
 
 /* What the loader does with a property (its ply_property.role). ROLE_X..ROLE_BLUE
  * are consecutive: role - ROLE_X is the property's slot in a vertex (see
@@ -48,6 +49,7 @@ typedef struct ply_loader {
     mesh *m;                  /* the result, owned by the loader until returned */
     uint32_t vertex_total;    /* vertices declared by the header: face indices must be below it */
     uint32_t triangle_total;  /* triangles written to m->indices so far */
+    progress progress;        /* bytes of the file read, once the header is checked */
 } ply_loader;
 
 static uint32_t min_u32(uint64_t a, uint64_t b) { return (uint32_t)(a < b ? a : b); }
@@ -369,6 +371,12 @@ static bool load(ply_loader *ld, const char *path, tess_error *err)
     if (!ply_open(&ld->f, path, err, assign_role, NULL) || !check_header(ld) || !prepare_mesh(ld))
         return false;
     ld->f.cite_line = ld->f.format == PLY_ASCII;
+    const char *name = strrchr(path, '/');
+    char what[PROGRESS_WHAT_BYTES];
+    snprintf(what, sizeof what, "loading %s", name ? name + 1 : path);
+    progress_begin(&ld->progress, what, ld->f.file_bytes, "B");
+    ld->f.in.progress = &ld->progress;
+    progress_set(&ld->progress, ld->f.in.base + ld->f.in.len); /* the header and the first buffer */
     for (size_t i = 0; i < ld->f.element_count; i++)
         if (!read_element(ld, &ld->f.elements[i]))
             return false;
@@ -386,6 +394,7 @@ mesh *mesh_load_ply(const char *path, tess_error *err)
         result = ld.m;
         ld.m = NULL;
     }
+    progress_end(&ld.progress);
     mesh_destroy(ld.m);
     ply_close(&ld.f);
     return result;

@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 
+#include "progress.h"
+
 /* fread size: big enough that system calls and the partial-record memmove
  * between chunks cost nothing measurable */
 #define READ_CHUNK_BYTES ((size_t)1 << 20)
@@ -126,6 +128,7 @@ bool ply_reader_fill(ply_reader *r, size_t limit)
         return false;
     }
     r->len += got;
+    progress_set(r->progress, r->base + r->len);
     return true;
 }
 

@@ -90,6 +90,8 @@ typedef struct ply_element {
     size_t prop_capacity;       /* properties allocated in props */
 } ply_element;
 
+struct progress; /* engine/progress.h */
+
 /* A window onto a file: buf[pos, len) holds bytes not yet consumed. Used by
  * ply_file, and on its own by any loader that wants chunked lines
  * (the LAMMPS reader). */
@@ -104,6 +106,7 @@ typedef struct ply_reader {
     int read_errno;     /* errno of a failed fread, 0 if none */
     bool out_of_memory; /* growing buf failed */
     bool line_too_long; /* a line did not fit the limit given to ply_reader_line */
+    struct progress *progress; /* NULL, or told the file offset reached after every read (engine/progress.h) */
 } ply_reader;
 
 /* An open PLY file. Every field is the reader's; a loader reads format,

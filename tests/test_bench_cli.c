@@ -29,7 +29,7 @@ static const char *const bench_fields[] = {
     "triangles",    "spheres",      "load_s",   "build_s",       "prim_mrays", "total_mrays", "frame_ms_median",
     "frame_ms_min", "frame_ms_max", "hit_rate", "bytes_per_tri", "mesh_bytes", "accel_bytes", "cpu_other",
     "hits",         "instances",    "geometries", "triangles_instanced", "bytes_per_instanced_tri",
-    "renderer",     "opacity",      "secondary_rays_frame", "tile_px",
+    "renderer",     "opacity",      "secondary_rays_frame", "tile_px", "peak_rss_mb", "rss_after_build_mb",
 };
 #define BENCH_FIELD_COUNT (sizeof bench_fields / sizeof bench_fields[0])
 
@@ -127,6 +127,9 @@ static void check_consistent(const char *line)
     cr_expect(fabs(per_placed - (mesh_b + accel_b) / placed) <= 0.0051, "bytes_per_instanced_tri %g, expected (%g + %g) / %g",
               per_placed, mesh_b, accel_b, placed);
     cr_expect(field(line, "instances") >= 1 && field(line, "geometries") >= 1, "%s", line);
+    /* memory after load + build: resident then, and a peak at least that */
+    double peak = field(line, "peak_rss_mb"), after = field(line, "rss_after_build_mb");
+    cr_expect(after > 0.0 && peak >= after, "peak_rss_mb %g, rss_after_build_mb %g", peak, after);
     char size[64];
     int w = 0, h = 0;
     cr_assert(field_text(line, "size", size, sizeof size) && sscanf(size, "%dx%d", &w, &h) == 2);

@@ -72,6 +72,12 @@ typedef struct frame_sample {
                                 pixels traced again (render_ao.h) */
 } frame_sample;
 
+/* Memory of the process right after load + build, MiB (2^20 bytes); -1 when unknown. */
+typedef struct memory_use {
+    double peak_mb;        /* VmHWM: the high-water mark so far, i.e. of loading and building */
+    double after_build_mb; /* VmRSS: resident then */
+} memory_use;
+
 static void bench_usage(FILE *f)
 {
     fputs("usage: tessera bench [options]\n"
@@ -125,13 +131,17 @@ static void bench_usage(FILE *f)
           "                   --ao); any other extension goes through the dump backend (.exr:\n"
           "                   linear float RGB, .png: 8-bit sRGB)\n"
           "\n"
+          "Loading and building a large scene report progress on stderr (a bar on a terminal,\n"
+          "a line per 10 % otherwise; nothing for what takes under a second, nothing with\n"
+          "TESSERA_LOG=warn); the result goes to stdout.\n"
+          "\n"
           "output: one line, fields in this order:\n"
           "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 isa=NAME\n"
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
           "        renderer=NAME opacity= secondary_rays_frame= tile_px= points= point_bytes=\n"
-          "        bytes_per_point= cache= and, with --renderer ao, ao_rays=\n"
+          "        bytes_per_point= peak_rss_mb= rss_after_build_mb= cache= and, with --renderer ao, ao_rays=\n"
           "        ao_interleave= ao_filter= ao_dist=\n"
           "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
@@ -174,6 +184,11 @@ static void bench_usage(FILE *f)
           "  point_bytes      their own data: positions and attributes (counts, not capacities)\n"
           "  bytes_per_point  (point_bytes + accel_bytes) / points, 0 when there are none: the\n"
           "                   whole cost of a particle when the scene holds particles only\n"
+          "  peak_rss_mb      the process's peak resident memory (VmHWM, /proc/self/status) read right\n"
+          "                   after load + build, before any frame: the memory high-water mark of\n"
+          "                   loading and building, in MiB (2^20 bytes); -1 if unknown\n"
+          "  rss_after_build_mb  resident memory at that moment (VmRSS), MiB; -1 if\n"
+          "                   unknown. peak - after: what loading and building held only while working\n"
           "  ao_rays, ao_interleave, ao_filter  the AO settings used; ao_dist: the ray length used\n"
           "  ao_rays_frame    AO rays of the last frame (apron pixels included)\n"
           "  ao_mrays         median over the timed frames of (AO rays of the frame / seconds) / 1e6\n"
@@ -473,8 +488,31 @@ static void measure(const bench_options *o, const render_view *view, float *rgb,
     }
 }
 
+/* Read right after load + build, before anything is rendered: VmHWM and
+ * VmRSS of one read of /proc/self/status (one snapshot of the kernel's
+ * counters, so peak >= resident), else getrusage's ru_maxrss for the peak. */
+static memory_use measure_memory(void)
+{
+    memory_use m = {-1.0, -1.0};
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    unsigned long kib;
+    while (f && fgets(line, sizeof line, f)) {
+        if (sscanf(line, "VmHWM: %lu kB", &kib) == 1)
+            m.peak_mb = (double)kib / 1024.0;
+        else if (sscanf(line, "VmRSS: %lu kB", &kib) == 1)
+            m.after_build_mb = (double)kib / 1024.0;
+    }
+    if (f)
+        fclose(f);
+    struct rusage ru;
+    if (m.peak_mb < 0.0 && getrusage(RUSAGE_SELF, &ru) == 0)
+        m.peak_mb = (double)ru.ru_maxrss / 1024.0; /* Linux counts it in KiB */
+    return m;
+}
+
 static void print_result(const bench_options *o, const render_view *view, double load_s, double build_s,
-                         const frame_sample *samples, double cpu_other, double *scratch)
+                         const memory_use *memory, const frame_sample *samples, double cpu_other, double *scratch)
 {
     const scene *s = view->scene;
     const accel *a = view->accel;
@@ -523,6 +561,7 @@ static void print_result(const bench_options *o, const render_view *view, double
     size_t points = scene_point_count(s), point_bytes = scene_point_bytes(s);
     printf(" points=%zu point_bytes=%zu bytes_per_point=%.2f", points, point_bytes,
            points ? (double)(point_bytes + accel_total) / (double)points : 0.0);
+    printf(" peak_rss_mb=%.1f rss_after_build_mb=%.1f", memory->peak_mb, memory->after_build_mb);
     unsigned by_state[MESH_CACHE_FAILED + 1] = {0};
     for (uint32_t i = 0; i < s->mesh_count; i++)
         if (s->meshes[i]->cache_state >= 0 && s->meshes[i]->cache_state <= MESH_CACHE_FAILED)
@@ -752,6 +791,7 @@ int cli_bench(int argc, char **argv)
     code = 1;
     if (!prepare(&o, &cs))
         goto done;
+    memory_use memory = measure_memory();
     if (o.part_txns > 0) {
         code = run_part_txns(&o, &cs);
         goto done;
@@ -775,7 +815,7 @@ int cli_bench(int argc, char **argv)
         view.state = &opacity_state;
     }
     measure(&o, &view, rgb, samples, &cpu_other);
-    print_result(&o, &view, cs.load_s, cs.build_s, samples, cpu_other, scratch);
+    print_result(&o, &view, cs.load_s, cs.build_s, &memory, samples, cpu_other, scratch);
     if (have_state)
         frame_state_finish(&opacity_state);
     if (o.out) {

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "engine/progress.h"
 #include "wall/drm.h"
 
 /* tessera outputs: what the cards offer, to help write a wall config. */
@@ -55,6 +56,7 @@ int main(int argc, char **argv)
         usage(stdout);
         return 0;
     }
+    progress_set_quiet(false); /* loading and building report progress on stderr (engine/progress.h) */
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);
