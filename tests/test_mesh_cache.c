@@ -232,3 +232,21 @@ Test(mesh_cache, the_transform_is_in_the_key)
     cr_assert_eq(trace(scene_a, again, any_again), MESH_CACHE_HIT);
     cr_assert(same_hits(hits_a, any_a, again, any_again));
 }
+
+/* A cache directory that cannot be made (a regular file in its path): the
+ * write fails with a warning, the scene renders all the same. */
+Test(mesh_cache, an_unwritable_cache_directory_is_a_warning_not_an_error)
+{
+    char blocker[160], under[200], model[128];
+    snprintf(blocker, sizeof blocker, "%s/not_a_dir", dir);
+    FILE *f = fopen(blocker, "w");
+    cr_assert(f);
+    cr_assert_eq(fclose(f), 0);
+    snprintf(under, sizeof under, "%s/cache", blocker);
+    setenv("TESSERA_CACHE_DIR", under, 1);
+    snprintf(model, sizeof model, "%s/sphere.ply", dir);
+    write_sphere(model, 30, 0.f);
+    cr_assert_eq(trace(model, hits_a, any_a), MESH_CACHE_FAILED);
+    cr_assert_eq(trace(model, hits_b, any_b), MESH_CACHE_FAILED, "nothing was written to be used");
+    cr_assert(same_hits(hits_a, any_a, hits_b, any_b));
+}
