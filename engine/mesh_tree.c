@@ -6,6 +6,7 @@
 #include "bvh.h"
 #include "mesh.h"
 #include "mesh_cache.h"
+#include "progress.h"
 
 /* Serialises first builds (rare: once per mesh); the built tree is
  * published through sm->tree with release order, read with acquire. */
@@ -53,7 +54,13 @@ static wbvh *build(scene_mesh *sm, int threads, tess_error *err)
     uint32_t *order = full_order(&binary, kept_ids, m->triangle_count);
     free(kept_ids);
     wbvh *tree = calloc(1, sizeof *tree);
-    ok = order && tree && mesh_permute_triangles(m, order) && mesh_renumber_vertices(m);
+    progress report; /* triangles moved, then renumbered: two passes */
+    progress_begin(&report, "ordering mesh", 2 * (uint64_t)m->triangle_count, "tri");
+    ok = order && tree && mesh_permute_triangles(m, order);
+    progress_add(&report, m->triangle_count);
+    ok = ok && mesh_renumber_vertices(m);
+    progress_add(&report, m->triangle_count);
+    progress_end(&report);
     free(order);
     if (!ok) {
         tess_error_set(err, "mesh '%s': out of memory putting %u triangles in order", sm->name, m->triangle_count);
