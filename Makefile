@@ -57,7 +57,7 @@ LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
 .PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall clean check-headers unrobust \
-        gen-assembly ply-replicate
+        gen-assembly ply-replicate bench-massive
 
 all: tessera
 
@@ -243,6 +243,15 @@ bench-parts:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera $(BUILD)/gen-assembly $(EMBREE_PARTS)
 	sh tools/bench_parts.sh
+
+# one mesh of 100 M triangles (tools/bench_massive.sh): the flattened assembly and the replicated CT
+# bunny, load, build, peak memory and frame rate against Embree; the "## Massive models" section of
+# BENCHMARKS.md. Not part of make bench (about 20 minutes and 15 GB of memory); BENCH_MASSIVE_TRIANGLES
+# sets the scale (default 100000000)
+bench-massive:
+	@sh tools/deps.sh --bench
+	$(MAKE) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) $(EMBREE_PARTS)
+	sh tools/bench_massive.sh
 
 # ambient occlusion against Embree's AO rays alone (tools/bench_ao.sh): the "## Ambient occlusion"
 # section of BENCHMARKS.md
