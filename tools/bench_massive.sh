@@ -53,7 +53,7 @@ GEN=build/gen-assembly
 REPLICATE=build/ply-replicate
 EMBREE_PARTS=build/embree_parts
 # estimated peak resident bytes a triangle, from 10 M-triangle runs (tessera 134,
-# embree_bench 131, embree_parts --flatten 135, tessera --flatten through assimp 600)
+# embree_bench 131, embree_parts --flatten 135, tessera --flatten through assimp 490-600)
 # with a margin; a run is started only when this fits in MemAvailable less 1 GB
 EST_TESSERA=150
 EST_EMBREE=150
@@ -317,7 +317,7 @@ measure() {
     cpus=$(nproc)
     cp "$FUS.gen" "$WORK/fuselage.gen"
     cp "$BUN.gen" "$WORK/bunny.gen"
-    meta TRIANGLES PARTS FRAMES MODE SIZE THREADS DATA BUNNY cols rows FUS_MADE BUN_MADE total_s RUN_MS LOAD_AT_START \
+    meta EST_TESSERA EST_EMBREE EST_ASSIMP TRIANGLES PARTS FRAMES MODE MAX_ATTEMPTS NOISE_LIMIT SIZE THREADS DATA BUNNY cols rows FUS_MADE BUN_MADE total_s RUN_MS LOAD_AT_START \
         revision cpu_model embree_version mem_total run_date cpus > "$WORK/meta"
 }
 
@@ -380,6 +380,9 @@ awk -F '\t' '{ last[$1] = $0; if (!($1 in seen)) { seen[$1] = 1; order[++n] = $1
     echo "the build). Peak RSS: GNU time's maximum resident set size of the whole process (load, build"
     echo "and frames). Mrays/s: tessera's \`prim_mrays\` (median of per-frame rates); Embree's W x H /"
     echo "\`median_ms\`. Every program frames the mesh itself by the same rule; hits: primary hits of the last frame."
+    echo "A run starts only when its estimated peak fits in MemAvailable less 1 GB: tessera $EST_TESSERA, Embree"
+    echo "$EST_EMBREE and assimp's flattening (tessera --flatten) $EST_ASSIMP bytes a triangle, from 10 M-triangle runs"
+    echo "(peak RSS 125-138, 123-135 and 490-600 B/tri) with a margin."
     echo
     printf '| mesh | program | start | triangles | load s | build s | held B/tri | peak RSS GB | peak RSS B/tri | Mrays/s | hits | camera as tessera'"'"'s | cpu_other |'
     for k in $cache_keys; do printf ' %s |' "$k"; done
@@ -431,6 +434,10 @@ awk -F '\t' '{ last[$1] = $0; if (!($1 in seen)) { seen[$1] = 1; order[++n] = $1
         for k in $cache_keys; do printf ' %s |' "$(kv "$line" "$k")"; done
         echo
     done < "$WORK/rows.tsv"
+    echo
+    awk -F '\t' -v lim="$NOISE_LIMIT" '$2 != "skipped" { n++; if ($2 == "noisy") noisy++ }
+        END { if (n) printf "Noise: %d of %d runs were noisy (other programs used more than %s CPU of the %s during the timed frames, column cpu_other; repeated up to BENCH_MASSIVE_ATTEMPTS=%s attempts in all): their Mrays/s and build s are what a shared machine gave, not what the programs can do.\n", noisy, n, lim, cpus, attempts }' \
+        cpus="$cpus" attempts="$MAX_ATTEMPTS" "$WORK/rows.tsv"
     echo
     case " $cache_keys" in
     *" cache"*) ;;
