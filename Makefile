@@ -57,7 +57,7 @@ LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
 .PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall clean check-headers unrobust \
-        gen-assembly
+        gen-assembly ply-replicate bench-massive
 
 all: tessera
 
@@ -87,6 +87,13 @@ tessera: $(CLI_OBJ) $(LIB)
 $(BUILD)/gen-assembly: $(GEN_ASSEMBLY_OBJ)
 	$(CC) $(LDFLAGS) $(SAN) -o $@ $(GEN_ASSEMBLY_OBJ) -lm
 gen-assembly: $(BUILD)/gen-assembly
+
+# a mesh copied onto a grid as one binary PLY (tools/ply_replicate/ply_replicate.c: mesh_load, so it
+# links the engine); make bench-massive makes the replicated CT bunny with it, the suite tests it
+PLY_REPLICATE := $(BUILD)/ply-replicate
+$(PLY_REPLICATE): $(BUILD)/tools/ply_replicate/ply_replicate.o $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(BUILD)/tools/ply_replicate/ply_replicate.o $(LIB) $(LDLIBS)
+ply-replicate: $(PLY_REPLICATE)
 
 # the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST) for the report's robustness
 # knob: their own tree build-unrobust/ and binary build-unrobust/tessera; never ./tessera
@@ -134,7 +141,7 @@ run: deps
 # qemu guest (tests/vm_wall.sh) and input driving it there (tests/vm_input.sh): each its own
 # summary line; SKIPPED, said so, when qemu cannot be installed
 test: deps
-	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly check-headers
+	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
@@ -142,8 +149,10 @@ test: deps
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan: deps
 	$(MAKE) BUILD=build-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
-	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests build-asan/gen-assembly
-	cd tests && TESSERA_BIN=../tessera-asan TESSERA_GEN_ASSEMBLY=../build-asan/gen-assembly ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
+	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests build-asan/gen-assembly \
+	    build-asan/ply-replicate
+	cd tests && TESSERA_BIN=../tessera-asan TESSERA_GEN_ASSEMBLY=../build-asan/gen-assembly \
+	    TESSERA_PLY_REPLICATE=../build-asan/ply-replicate ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
 	cd tests && ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_fault_tests --jobs 2
 
 # the threaded tests under ThreadSanitizer; any report fails the run. Criterion
@@ -234,6 +243,15 @@ bench-parts:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera $(BUILD)/gen-assembly $(EMBREE_PARTS)
 	sh tools/bench_parts.sh
+
+# one mesh of 100 M triangles (tools/bench_massive.sh): the flattened assembly and the replicated CT
+# bunny, load, build, peak memory and frame rate against Embree; the "## Massive models" section of
+# BENCHMARKS.md. Not part of make bench (about 20 minutes and 15 GB of memory); BENCH_MASSIVE_TRIANGLES
+# sets the scale (default 100000000)
+bench-massive:
+	@sh tools/deps.sh --bench
+	$(MAKE) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) $(EMBREE_PARTS)
+	sh tools/bench_massive.sh
 
 # ambient occlusion against Embree's AO rays alone (tools/bench_ao.sh): the "## Ambient occlusion"
 # section of BENCHMARKS.md

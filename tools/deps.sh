@@ -11,8 +11,9 @@ PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libseat-dev libinput-de
 libsystemd-dev libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev libxxhash-dev"
 # test-only: systemd-analyze verifies configs/systemd/ (tests/test_service.c)
 PACKAGES="$PACKAGES systemd"
+# time: GNU time -v, the peak resident memory of tools/bench_massive.sh's runs
 if [ "${1:-}" = "--bench" ]; then
-    PACKAGES="$PACKAGES libembree-dev"
+    PACKAGES="$PACKAGES libembree-dev time"
 fi
 # bookworm's clang is clang-14; libclang_rt.fuzzer*.a comes with libclang-rt-14-dev
 if [ "${1:-}" = "--fuzz" ]; then
