@@ -1,14 +1,16 @@
-/* wbvh.h - 8-wide BVH with SIMD-friendly nodes and 4-primitive leaf blocks.
+/* wbvh.h - 8-wide BVH with SIMD-friendly nodes.
  *
  * Built by collapsing the binary SAH BVH (bvh.h): each wide node takes up to 8
  * descendants, always opening the child with the largest surface area next,
  * so the wide tree keeps the binary tree's SAH quality. Child boxes are
  * stored as structure of arrays, so one ray tests all 8 with one 8-lane
- * compare sequence. Leaves are runs of blocks of 4 triangles (or spheres) in
- * SoA layout, tested 4 at a time; unused lanes of a block are degenerate
- * (all-zero triangle, zero-radius sphere at the origin) with prim id
- * RAY_INVALID_ID and never report a hit. A tree whose binary root is a leaf
- * gets a root node with that one leaf child, so traversal has no special case. */
+ * compare sequence. A mesh's leaves (WBVH_MESH) and a point set's
+ * (WBVH_POINTS) are ranges of the kind's own arrays, read in place. Other
+ * leaves are runs of blocks of 4 spheres (SoA, tested 4 at a time) or of 4
+ * primitive ids; unused lanes of a block are degenerate (a zero-radius
+ * sphere at the origin) with prim id RAY_INVALID_ID and never report a hit.
+ * A tree whose binary root is a leaf gets a root node with that one leaf
+ * child, so traversal has no special case. */
 #ifndef TESSERA_WBVH_H
 #define TESSERA_WBVH_H
 

@@ -408,7 +408,8 @@ static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, con
 
 /* One ray against a WBVH_MESH leaf: its triangles gathered 4 at a time into
  * a block on the stack (unused lanes: the zero triangle, id invalid) and
- * tested by the block kernel, so both layouts give the same bits. */
+ * tested 4-wide, in intersect_triangle's operations (the same bits as the
+ * packet path and the scalar reference). */
 static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t geom_id, ray *r, const ray_derived *d,
                        hit *h, bool any)
 {
@@ -1093,24 +1094,22 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
     }
     ensure_shear(c);
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
-    {
-        const float *pos = w->mesh.positions;
-        /* the leaf's triangles are cache misses on a large mesh: ask for
-         * their indices, then their vertices, before testing any */
-        for (uint32_t k = first; k < first + count; k++) {
-            const uint32_t *idx = w->mesh.indices + 3 * (size_t)k;
-            __builtin_prefetch(pos + 3 * (size_t)idx[0]);
-            __builtin_prefetch(pos + 3 * (size_t)idx[1]);
-            __builtin_prefetch(pos + 3 * (size_t)idx[2]);
-        }
-        for (uint32_t k = first; k < first + count; k++) {
-            const uint32_t prim = k, *idx = w->mesh.indices + 3 * (size_t)prim;
-            const float *v0 = pos + 3 * (size_t)idx[0], *v1 = pos + 3 * (size_t)idx[1], *v2 = pos + 3 * (size_t)idx[2];
-            for (int o = 0; o < c->order_count; o++) {
-                uint64_t m = mask & c->order_mask[o] & ~c->done;
-                if (m)
-                    triangle_rays(c, v0, v1, v2, prim, c->order_axes[o], m);
-            }
+    const float *pos = w->mesh.positions;
+    /* the leaf's indices are one run; its vertices may be cache misses on a
+     * large mesh: ask for all of them before testing any */
+    for (uint32_t k = first; k < first + count; k++) {
+        const uint32_t *idx = w->mesh.indices + 3 * (size_t)k;
+        __builtin_prefetch(pos + 3 * (size_t)idx[0]);
+        __builtin_prefetch(pos + 3 * (size_t)idx[1]);
+        __builtin_prefetch(pos + 3 * (size_t)idx[2]);
+    }
+    for (uint32_t prim = first; prim < first + count; prim++) {
+        const uint32_t *idx = w->mesh.indices + 3 * (size_t)prim;
+        const float *v0 = pos + 3 * (size_t)idx[0], *v1 = pos + 3 * (size_t)idx[1], *v2 = pos + 3 * (size_t)idx[2];
+        for (int o = 0; o < c->order_count; o++) {
+            uint64_t m = mask & c->order_mask[o] & ~c->done;
+            if (m)
+                triangle_rays(c, v0, v1, v2, prim, c->order_axes[o], m);
         }
     }
 }
