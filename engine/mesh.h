@@ -68,16 +68,17 @@ bool mesh_bounds(const mesh *m, float lo[3], float hi[3]);
  * the inverse transpose, renormalised). */
 void mesh_transform(mesh *m, const float xform[12]);
 
-/* Put the triangles in a new order, in place: triangle i becomes the old
- * triangle order[i] (with its material); order is a permutation of
- * 0..triangle_count-1. Only a bitmap is allocated (a bit a triangle), so
- * the triangles are never held twice. False: out of memory, nothing moved. */
-bool mesh_permute_triangles(mesh *m, const uint32_t *order);
+/* Put the triangles in a new order: triangle i becomes the old triangle
+ * order[i] (with its material); order is a permutation of
+ * 0..triangle_count-1. Gathered over `threads` threads into new arrays, one
+ * old array freed as its new one is filled (mesh.c, REORDERING). False: out
+ * of memory, nothing moved. */
+bool mesh_permute_triangles(mesh *m, const uint32_t *order, int threads);
 /* Number the vertices in the order the triangles first use them (unused
- * ones last, in their order), in place, so the vertices of neighbouring
- * triangles are neighbours in memory; the triangles keep their corners.
- * False: out of memory, nothing moved. */
-bool mesh_renumber_vertices(mesh *m);
+ * ones last, in their order), so the vertices of neighbouring triangles are
+ * neighbours in memory; the triangles keep their corners. False: out of
+ * memory, nothing moved. */
+bool mesh_renumber_vertices(mesh *m, int threads);
 
 /* Bytes held by the mesh's arrays (by count, not capacity). */
 size_t mesh_bytes(const mesh *m);

@@ -56,9 +56,9 @@ static wbvh *build(scene_mesh *sm, int threads, tess_error *err)
     wbvh *tree = calloc(1, sizeof *tree);
     progress report; /* triangles moved, then renumbered: two passes */
     progress_begin(&report, "ordering mesh", 2 * (uint64_t)m->triangle_count, "tri");
-    ok = order && tree && mesh_permute_triangles(m, order);
+    ok = order && tree && mesh_permute_triangles(m, order, threads);
     progress_add(&report, m->triangle_count);
-    ok = ok && mesh_renumber_vertices(m);
+    ok = ok && mesh_renumber_vertices(m, threads);
     progress_add(&report, m->triangle_count);
     progress_end(&report);
     free(order);

@@ -91,7 +91,7 @@ Test(mesh_tree, permuting_triangles_moves_each_with_its_corners_and_material)
         order[i] = order[j];
         order[j] = tmp;
     }
-    cr_assert(mesh_permute_triangles(m, order));
+    cr_assert(mesh_permute_triangles(m, order, 2));
     for (uint32_t i = 0; i < nt; i++) {
         corner_values now = triangle_values(m, i);
         cr_assert(memcmp(&now, &before[order[i]], sizeof now) == 0, "triangle %u is not the old triangle %u", i,
@@ -108,7 +108,7 @@ Test(mesh_tree, renumbering_vertices_keeps_triangles_and_numbers_by_first_use)
     mesh *m = random_mesh(3000, 2000, false); /* some vertices unused */
     corner_values *before = all_values(m);
     uint32_t nv = m->vertex_count;
-    cr_assert(mesh_renumber_vertices(m));
+    cr_assert(mesh_renumber_vertices(m, 2));
     cr_assert_eq(m->vertex_count, nv);
     for (uint32_t t = 0; t < m->triangle_count; t++) {
         corner_values now = triangle_values(m, t);
