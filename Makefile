@@ -38,6 +38,8 @@ ROBUST_SRC := $(wildcard tools/robust/*.c)
 CLI_SRC := $(wildcard tools/cli/*.c)
 # tools/gen_assembly/README.md: the assembly generator, a program of its own (libm only)
 GEN_ASSEMBLY_SRC := $(wildcard tools/gen_assembly/*.c)
+# the tile counter's cost per tile at many thread counts (tools/scaling_model.sh)
+TILE_CONTENTION_SRC := tools/scaling/tile_contention.c
 TEST_SRC := $(wildcard tests/*.c)
 
 # traversal kernels: one source compiled per instruction set, picked at run time
@@ -52,6 +54,7 @@ LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC) $(
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
+TILE_CONTENTION_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TILE_CONTENTION_SRC))
 TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
@@ -87,6 +90,10 @@ tessera: $(CLI_OBJ) $(LIB)
 $(BUILD)/gen-assembly: $(GEN_ASSEMBLY_OBJ)
 	$(CC) $(LDFLAGS) $(SAN) -o $@ $(GEN_ASSEMBLY_OBJ) -lm
 gen-assembly: $(BUILD)/gen-assembly
+
+# the dynamic load balancer's tile counter under N threads (tools/scaling/tile_contention.c)
+$(BUILD)/tile-contention: $(TILE_CONTENTION_OBJ) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TILE_CONTENTION_OBJ) $(LIB) $(LDLIBS)
 
 # the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST) for the report's robustness
 # knob: their own tree build-unrobust/ and binary build-unrobust/tessera; never ./tessera
