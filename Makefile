@@ -59,7 +59,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly
 
 all: tessera
@@ -270,6 +270,11 @@ bench-wall: deps
 bench-pipeline: deps
 	$(MAKE) tessera
 	sh tools/bench_pipeline.sh
+
+# the scaling model (BENCHMARKS.md "Scaling past this machine"): needs valgrind
+scaling-model: deps
+	$(MAKE) tessera $(BUILD)/tile-contention
+	sh tools/scaling_model.sh
 
 # the speed-against-error report (README "Speed against error: make report"): REPORT.md and
 # report/*.png from tools/report/report.sh, one section per quality knob (tools/report/knob_*.sh);
