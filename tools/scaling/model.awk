@@ -95,7 +95,7 @@ END {
     name["bunny"] = "bunny (69 k tris)"; name["dragon"] = "dragon (871 k)"
     name["ctbunny"] = "CT bunny (4.15 M)"; name["m100"] = "100 M model (extrapolated)"
 
-    print "### Fitted constants (this machine, 1920x1080, eyelight primary rays)"
+    print "#### Fitted constants (this machine, 1920x1080, eyelight primary rays)"
     print ""
     print "| mesh | T1 ms | T2 ms | measured E(2) | W ms (render, 1 core) | Mrays/s a core | d: display ms | s: serial ms | rel2: release ms | kappa | LL misses a ray: reads (4 MB / 32 MB LL) | B: DRAM bytes a ray (4 MB / 32 MB LL) |"
     print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
@@ -132,6 +132,21 @@ END {
         }
         print ""
     }
+    # against Manta's 92 % of linear at 64 CPUs
+    print "#### Against Manta (92 % of linear at 64 CPUs)"
+    print ""
+    for (sc = 1; sc <= 3; sc++) {
+        lo = 1e9; hi = -1
+        for (i = 1; i <= nm; i++) {
+            e = eff(ms[i], 64, dm[sc], hs[sc] == 1 ? H : 0, td[sc])
+            lo = min(lo, e); hi = max(hi, e)
+        }
+        verdict = "below Manta's on all"
+        if (hi >= 0.92) verdict = "at or above Manta's on some"
+        if (lo >= 0.92) verdict = "at or above Manta's on all"
+        printf "- %s: E(64) = %.2f-%.2f over the four meshes (%s).\n", title[sc], lo, hi, verdict
+    }
+    print ""
     print "#### The terms at 64 and 128 cores, as built (ms a frame)"
     print ""
     print "| mesh | N | work C(N) | display d | tile counter floor K(N) | DRAM floor M(N) | serial s | release rel(N) | tail | L(N) ns | DRAM GB/s demanded at full speed (of assumed) |"
