@@ -52,7 +52,7 @@ END {
     LCCD = f["assume.l_ccd_ns"]; LSOCK = f["assume.l_socket_ns"]; BWS = f["assume.bw_socket_gbs"]
     R = f["frame.rays"]; TILES = f["frame.tiles"]
     # the tile counter on this machine: extra CPU per tile when 2 threads share it
-    LCCX = max(0, f["tiles.2.cpu_ns"] - f["tiles.1.cpu_ns"])
+    LCCX = max(0, f["tiles.2.thread_ns"] - f["tiles.1.thread_ns"])
     # the barrier's release per extra thread: least squares over the oversubscribed empty frames
     sx = sy = sxx = sxy = k = 0
     for (n = 2; n <= 64; n *= 2) if (("empty." n ".release_ms") in f) {
@@ -107,7 +107,7 @@ END {
             printf "| %s | %.1f | %.1f | %.3f | %.1f | %.2f | %.2f | %.4f | %.4f | %.3f | %.3f / %.3f | %.1f / %.1f |\n", name[m], 1e3 * t1[m], 1e3 * t2[m], t1[m] / (2 * t2[m]), 1e3 * w[m], 1e-6 * rate[m], 1e3 * disp[m], 1e3 * ser[m], 1e3 * rel2[m], kap[m], rd4[m], f[m ".ll32.dlmr"] / R, bpr[m], bpr32[m]
     }
     print ""
-    printf "Machine-wide constants: tiles a frame %d (16-px tiles); tile counter, extra CPU a tile with 2 threads on this machine's 2 cores L_ccx = %.1f ns (build/tile-contention, %.2f ns a tile alone, %.2f with 2 threads); barrier release per extra thread h = %.2f us (slope of release_ms over the oversubscribed empty frames, 2..64 threads).\n", TILES, LCCX, f["tiles.1.cpu_ns"], f["tiles.2.cpu_ns"], 1e6 * H
+    printf "Machine-wide constants: tiles a frame %d (16-px tiles); tile counter, extra time a tile when 2 threads on this machine's 2 cores share it L_ccx = %.1f ns (build/tile-contention: %.2f thread ns a tile alone, %.2f side by side); barrier release per extra thread h = %.2f us (slope of release_ms over the oversubscribed empty frames, 2..64 threads).\n", TILES, LCCX, f["tiles.1.thread_ns"], f["tiles.2.thread_ns"], 1e6 * H
     print ""
     split("8 16 32 64 128", ns, " ")
     split("convert|tiles|tiles", dm, "|")

@@ -23,10 +23,15 @@
  * finishing, all of them started before the first tile) / tiles, median over rounds; cpu_ns_per_tile: the process's CPU
  * time (user + system) over the frames / tiles handed out, median over rounds;
  * min_share / max_share: the smallest and largest share of a frame's tiles
- * one thread took, times N (1: even). */
+ * one thread took, times N (1: even); thread_ns_per_tile: frame time x the
+ * threads that can run at once / tiles, median over the frames in which every
+ * thread took at least 0.8 of an even share (side_by_side_frames of them: the
+ * threads really ran side by side, not kept off a CPU by other programs),
+ * every frame when oversubscribed; -1 if there was none. */
 #include <pthread.h>
 #include <sched.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,7 +44,7 @@
 
 #define MAX_THREADS 256
 #define MAX_COUNTS 32
-#define MAX_ROUNDS 101
+#define MAX_ROUNDS 1001
 
 static double now_s(void)
 {
@@ -103,6 +108,7 @@ typedef struct shared {
     int frames;
     atomic_int quit;
     atomic_int ready; /* threads started in the current frame: nobody takes a tile before all have */
+    bool oversubscribed; /* more threads than CPUs */
     double t_start[MAX_THREADS], t_end[MAX_THREADS];
     uint64_t tiles[MAX_THREADS];
 } shared;
@@ -125,8 +131,12 @@ static void *worker_main(void *arg)
         /* all threads running (or, oversubscribed, all scheduled once) before the first tile:
          * otherwise a frame can be over before a late thread wakes, and nothing contends */
         atomic_fetch_add(&sh->ready, 1);
-        while (atomic_load(&sh->ready) < sh->threads)
-            sched_yield();
+        while (atomic_load(&sh->ready) < sh->threads) {
+            if (sh->oversubscribed)
+                sched_yield(); /* let the threads that have not started run */
+            else
+                __builtin_ia32_pause(); /* stay on the CPU: a yield can lose it to other programs */
+        }
         sh->t_start[w->id] = now_s();
         sh->t->ops->render(sh->t, &stub_renderer, &single, &counts);
         sh->t_end[w->id] = now_s();
@@ -166,15 +176,15 @@ static void usage(FILE *f)
     fputs("usage: tile-contention [--threads 1,2,4,...] [--size WxH] [--tile-size N] [--work-ns NS]\n"
           "                       [--frames F] [--rounds R]\n"
           "The cost per tile of the tiled traverser's atomic tile counter at each thread count\n"
-          "(defaults: threads 1,2,4,8,16,32,64; 16384x16384 pixels in 16-pixel tiles = 1048576\n"
-          "tiles a frame; work 0 ns per tile; 3 frames a round; 5 rounds).\n",
+          "(defaults: threads 1,2,4,8,16,32,64; 4096x4096 pixels in 16-pixel tiles = 65536 tiles\n"
+          "a frame; work 0 ns per tile; 40 frames a round; 5 rounds).\n",
           f);
 }
 
 int main(int argc, char **argv)
 {
     int counts[MAX_COUNTS] = {1, 2, 4, 8, 16, 32, 64}, n_counts = 7;
-    int width = 16384, height = 16384, tile_px = 16, frames = 3, rounds = 5;
+    int width = 4096, height = 4096, tile_px = 16, frames = 40, rounds = 5;
     double work_ns = 0.0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -210,7 +220,7 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (tile_px < 1 || frames < 1 || rounds < 1 || rounds > MAX_ROUNDS || work_ns < 0.0) {
+    if (tile_px < 1 || frames < 1 || frames > 100000 || rounds < 1 || rounds > MAX_ROUNDS || work_ns < 0.0) {
         usage(stderr);
         return 2;
     }
@@ -242,6 +252,7 @@ int main(int argc, char **argv)
         }
         sh->t = t;
         sh->threads = n;
+        sh->oversubscribed = n > sysconf(_SC_NPROCESSORS_ONLN);
         pthread_barrier_init(&sh->start, NULL, (unsigned)n + 1);
         pthread_barrier_init(&sh->end, NULL, (unsigned)n + 1);
         atomic_init(&sh->quit, 0);
@@ -253,6 +264,14 @@ int main(int argc, char **argv)
             }
         }
         double wall[MAX_ROUNDS], cpu[MAX_ROUNDS], min_share = 1e300, max_share = 0.0;
+        const long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+        const int running = n < cpus ? n : (int)cpus; /* threads that can run at once */
+        double *busy = calloc((size_t)rounds * (size_t)frames, sizeof *busy);
+        int kept = 0;
+        if (!busy) {
+            fprintf(stderr, "tile-contention: out of memory\n");
+            return 1;
+        }
         for (int r = 0; r < rounds; r++) {
             double wall_sum = 0.0, c0 = cpu_s();
             for (int f = 0; f < frames; f++) {
@@ -260,7 +279,7 @@ int main(int argc, char **argv)
                 atomic_store(&sh->ready, 0);
                 pthread_barrier_wait(&sh->start);
                 pthread_barrier_wait(&sh->end);
-                double first = sh->t_start[0], last = sh->t_end[0];
+                double first = sh->t_start[0], last = sh->t_end[0], frame_min_share = 1e300;
                 uint64_t total = 0;
                 for (int i = 0; i < n; i++) {
                     first = sh->t_start[i] < first ? sh->t_start[i] : first;
@@ -269,7 +288,14 @@ int main(int argc, char **argv)
                     double share = (double)sh->tiles[i] * n / (double)tiles;
                     min_share = share < min_share ? share : min_share;
                     max_share = share > max_share ? share : max_share;
+                    frame_min_share = share < frame_min_share ? share : frame_min_share;
                 }
+                /* a frame in which every thread took at least 0.8 of an even share ran them
+                 * side by side (up to the CPUs) nearly all along: its thread time a tile is the
+                 * cost with the line shared; frames where other programs kept a thread off its
+                 * CPU are left out (oversubscribed: every frame) */
+                if (n > cpus || frame_min_share >= 0.8)
+                    busy[kept++] = 1e9 * (last - first) * running / (double)tiles;
                 if (total != tiles) {
                     fprintf(stderr, "tile-contention: %llu tiles rendered of %llu\n", (unsigned long long)total,
                             (unsigned long long)tiles);
@@ -288,9 +314,11 @@ int main(int argc, char **argv)
         pthread_barrier_destroy(&sh->start);
         pthread_barrier_destroy(&sh->end);
         printf("TILES threads=%d work_ns=%.0f tiles_per_frame=%llu frames=%d rounds=%d wall_ns_per_tile=%.2f "
-               "cpu_ns_per_tile=%.2f min_share=%.3f max_share=%.3f cpus=%ld\n",
+               "cpu_ns_per_tile=%.2f min_share=%.3f max_share=%.3f cpus=%ld side_by_side_frames=%d "
+               "thread_ns_per_tile=%.2f\n",
                n, work_ns, (unsigned long long)tiles, frames, rounds, median(wall, rounds), median(cpu, rounds),
-               min_share, max_share, sysconf(_SC_NPROCESSORS_ONLN));
+               min_share, max_share, cpus, kept, kept ? median(busy, kept) : -1.0);
+        free(busy);
         fflush(stdout);
         free(sh);
         free(ws);
