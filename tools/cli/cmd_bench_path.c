@@ -424,6 +424,8 @@ typedef struct scaling_sample {
     double serial_ms;  /* per frame barrier: the serial section */
     double release_ms; /* per frame barrier: serial section's end to the last thread leaving */
     double wait_ms;    /* per frame and thread: time at the frame barrier (idle + serial + release) */
+    double cpu_ms;     /* per frame: this process's CPU time (all threads), which other programs
+                          sharing the machine change much less than the wall time */
 } scaling_sample;
 
 /* One timed run of the animation at `threads`. */
@@ -458,6 +460,7 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
     out->serial_ms = 1e3 * st.serial_s / barriers;
     out->release_ms = 1e3 * st.release_s / barriers;
     out->wait_ms = 1e3 * st.barrier_s / ((double)threads * barriers);
+    out->cpu_ms = st.frames_rendered ? 1e3 * (own1 - own0) / (double)st.frames_rendered : 0.0;
     pipeline_destroy(p);
     return ok;
 }
@@ -482,6 +485,17 @@ static double row_median(const scaling_sample *row, int rounds, size_t offset, d
     for (int r = 0; r < rounds; r++)
         memcpy(&scratch[r], (const char *)&row[r] + offset, sizeof(double));
     return cli_median(scratch, (size_t)rounds);
+}
+
+/* The smallest value of one field over a row's rounds (the least disturbed). */
+static double row_min(const scaling_sample *row, int rounds, size_t offset)
+{
+    double lo = INFINITY, v;
+    for (int r = 0; r < rounds; r++) {
+        memcpy(&v, (const char *)&row[r] + offset, sizeof(double));
+        lo = fmin(lo, v);
+    }
+    return lo;
 }
 
 /* counts[0..n): the thread counts to run, in order; the speed-up is against the first. */
@@ -542,11 +556,18 @@ static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, const int
         double speedup = base / t;
         printf("SCALING threads=%d median_s=%.4f min_s=%.4f max_s=%.4f frames_per_s=%.2f speedup=%.3f "
                "fraction_of_linear=%.3f display_ms_per_frame=%.2f barrier_share=%.4f cpu_other_s=%.3f "
-               "frames=%d serial_ms_per_frame=%.4f release_ms_per_frame=%.4f wait_ms_per_frame=%.4f\n",
+               "frames=%d serial_ms_per_frame=%.4f release_ms_per_frame=%.4f wait_ms_per_frame=%.4f "
+               "cpu_ms_per_frame=%.3f cpu_ms_per_frame_min=%.3f display_ms_min=%.3f serial_ms_min=%.4f "
+               "release_ms_min=%.4f\n",
                n, t, lo, hi, spec->frames / t, speedup, speedup / n, d, wait, other, spec->frames,
                row_median(row, rounds, offsetof(scaling_sample, serial_ms), scratch),
                row_median(row, rounds, offsetof(scaling_sample, release_ms), scratch),
-               row_median(row, rounds, offsetof(scaling_sample, wait_ms), scratch));
+               row_median(row, rounds, offsetof(scaling_sample, wait_ms), scratch),
+               row_median(row, rounds, offsetof(scaling_sample, cpu_ms), scratch),
+               row_min(row, rounds, offsetof(scaling_sample, cpu_ms)),
+               row_min(row, rounds, offsetof(scaling_sample, display_ms)),
+               row_min(row, rounds, offsetof(scaling_sample, serial_ms)),
+               row_min(row, rounds, offsetof(scaling_sample, release_ms)));
     }
     code = 0;
 done:
@@ -606,7 +627,8 @@ static void usage(FILE *f)
           "  Per frame barrier (medians over the rounds): serial_ms_per_frame (the serial section,\n"
           "  one thread working), release_ms_per_frame (its end to the last thread leaving the\n"
           "  barrier), wait_ms_per_frame (a thread's time at the barrier: idle at the frame's end,\n"
-          "  serial section and release).\n"
+          "  serial section and release); cpu_ms_per_frame: the process's CPU time a frame (less\n"
+          "  sensitive to other programs than wall time); *_min: the smallest over the rounds.\n"
           "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
           "  --size WxH       image size (default 1280x720)\n"
           "  --frames N       --scaling: frames per run (default: the path at --rate, or 48)\n"

@@ -55,8 +55,9 @@ END {
     LCCX = max(0, f["tiles.2.thread_ns"] - f["tiles.1.thread_ns"])
     # the barrier's release per extra thread: least squares over the oversubscribed empty frames
     sx = sy = sxx = sxy = k = 0
-    for (n = 2; n <= 64; n *= 2) if (("empty." n ".release_ms") in f) {
-        x = n; y = f["empty." n ".release_ms"] * 1e-3
+    hkey = f["fit.stat"] == "cpu" ? ".cpu_ms" : ".release_ms"
+    for (n = 2; n <= 64; n *= 2) if (("empty." n hkey) in f) {
+        x = n; y = f["empty." n hkey] * 1e-3
         sx += x; sy += y; sxx += x * x; sxy += x * y; k++
     }
     H = k > 1 ? (k * sxy - sx * sy) / (k * sxx - sx * sx) : 0
@@ -69,7 +70,11 @@ END {
         disp[m] = f[m ".1.display_ms"] * 1e-3
         ser[m] = f[m ".2.serial_ms"] * 1e-3
         rel2[m] = f[m ".2.release_ms"] * 1e-3
-        w[m] = t1[m] - disp[m] - f[m ".1.serial_ms"] * 1e-3
+        if (f["fit.stat"] == "cpu") rel2[m] = f["empty.2.release_min_ms"] * 1e-3
+        if (f["fit.stat"] == "cpu")
+            w[m] = f[m ".1.cpu_ms"] * 1e-3 - disp[m] - f[m ".1.serial_ms"] * 1e-3
+        else
+            w[m] = t1[m] - disp[m] - f[m ".1.serial_ms"] * 1e-3
         rate[m] = R / w[m]
         # bytes a ray from DRAM: LL read misses + write misses (write-allocate: read + write-back)
         bpr[m] = (f[m ".ll4.dlmr"] + 2 * f[m ".ll4.dlmw"]) * 64 / R
@@ -78,7 +83,10 @@ END {
         tris[m] = f[m ".triangles"]
         # kappa: what the measured 2-thread frame has beyond the model's other terms
         c2 = t2[m] - ser[m] - rel2[m] - (w[m] / TILES) / 2 - TILES / 2 * line_ns(2) * 1e-9
-        kap[m] = (2 * c2 - disp[m]) / w[m] - 1
+        if (f["fit.stat"] == "cpu")
+            kap[m] = (f[m ".2.cpu_ms"] - f[m ".1.cpu_ms"]) * 1e-3 / w[m]
+        else
+            kap[m] = (2 * c2 - disp[m]) / w[m] - 1
     }
     # the 100 M-triangle model: the CT bunny's constants, traversal cost ~ log2(triangles),
     # LL read misses a ray extrapolated by the power law through the dragon and the CT bunny
@@ -97,7 +105,7 @@ END {
 
     print "#### Fitted constants (this machine, 1920x1080, eyelight primary rays)"
     print ""
-    print "| mesh | T1 ms | T2 ms | measured E(2) | W ms (render, 1 core) | Mrays/s a core | d: display ms | s: serial ms | rel2: release ms | kappa | LL misses a ray: reads (4 MB / 32 MB LL) | B: DRAM bytes a ray (4 MB / 32 MB LL) |"
+    print "| mesh | T1 ms | T2 ms | measured E(2) (wall) | W ms (render, 1 core) | Mrays/s a core | d: display ms | s: serial ms | rel2: release ms | kappa | LL misses a ray: reads (4 MB / 32 MB LL) | B: DRAM bytes a ray (4 MB / 32 MB LL) |"
     print "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     for (i = 1; i <= nm; i++) {
         m = ms[i]
@@ -107,7 +115,7 @@ END {
             printf "| %s | %.1f | %.1f | %.3f | %.1f | %.2f | %.2f | %.4f | %.4f | %.3f | %.3f / %.3f | %.1f / %.1f |\n", name[m], 1e3 * t1[m], 1e3 * t2[m], t1[m] / (2 * t2[m]), 1e3 * w[m], 1e-6 * rate[m], 1e3 * disp[m], 1e3 * ser[m], 1e3 * rel2[m], kap[m], rd4[m], f[m ".ll32.dlmr"] / R, bpr[m], bpr32[m]
     }
     print ""
-    printf "Machine-wide constants: tiles a frame %d (16-px tiles); tile counter, extra time a tile when 2 threads on this machine's 2 cores share it L_ccx = %.1f ns (build/tile-contention: %.2f thread ns a tile alone, %.2f side by side); barrier release per extra thread h = %.2f us (slope of release_ms over the oversubscribed empty frames, 2..64 threads).\n", TILES, LCCX, f["tiles.1.thread_ns"], f["tiles.2.thread_ns"], 1e6 * H
+    printf "Machine-wide constants: tiles a frame %d (16-px tiles); tile counter, extra time a tile when 2 threads on this machine's 2 cores share it L_ccx = %.1f ns (build/tile-contention: %.2f thread ns a tile alone, %.2f side by side); barrier release per extra thread h = %.2f us (slope over the oversubscribed empty frames, 2..64 threads, of %s).\n", TILES, LCCX, f["tiles.1.thread_ns"], f["tiles.2.thread_ns"], 1e6 * H, f["fit.stat"] == "cpu" ? "the CPU time a frame" : "the release"
     print ""
     split("8 16 32 64 128", ns, " ")
     split("convert|tiles|tiles", dm, "|")
