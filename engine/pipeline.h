@@ -427,7 +427,8 @@ typedef struct pipeline_stats {
      * time inside serial sections (the last thread to arrive works, the others wait;
      * waiting there for work while idle not counted), and per barrier the release: from
      * the serial section's end to the last released thread leaving the barrier (wake-up
-     * and mutex hand-off; with more threads than cores, also the wait for a core) */
+     * and mutex hand-off; with more threads than cores, also the wait for a core), summed
+     * over every barrier but the last (whose release nothing follows) */
     double serial_s, release_s;
     uint64_t serial_sections;       /* frame barriers passed (serial sections run) */
     /* the governor (all 0 without one): rendered frames by kind, idle steps,

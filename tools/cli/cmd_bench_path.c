@@ -458,7 +458,7 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
     out->barrier_share = st.run_s > 0.0 ? st.barrier_s / ((double)threads * st.run_s) : 0.0;
     double barriers = st.serial_sections ? (double)st.serial_sections : 1.0;
     out->serial_ms = 1e3 * st.serial_s / barriers;
-    out->release_ms = 1e3 * st.release_s / barriers;
+    out->release_ms = 1e3 * st.release_s / (st.serial_sections > 1 ? (double)(st.serial_sections - 1) : 1.0);
     out->wait_ms = 1e3 * st.barrier_s / ((double)threads * barriers);
     out->cpu_ms = st.frames_rendered ? 1e3 * (own1 - own0) / (double)st.frames_rendered : 0.0;
     pipeline_destroy(p);

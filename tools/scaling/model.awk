@@ -118,13 +118,15 @@ END {
     printf "Machine-wide constants: tiles a frame %d (16-px tiles); tile counter, extra time a tile when 2 threads on this machine's 2 cores share it L_ccx = %.1f ns (build/tile-contention: %.2f thread ns a tile alone, %.2f side by side); barrier release per extra thread h = %.2f us (slope over the oversubscribed empty frames, 2..64 threads, of %s).\n", TILES, LCCX, f["tiles.1.thread_ns"], f["tiles.2.thread_ns"], 1e6 * H, f["fit.stat"] == "cpu" ? "the CPU time a frame" : "the release"
     print ""
     split("8 16 32 64 128", ns, " ")
-    split("convert|tiles|tiles", dm, "|")
-    split("1|1|0", hs, "|")
-    split("1|1|4", td, "|")
-    title[1] = "As built: display `convert` on thread 0, condvar barrier (h measured), 16-px tiles"
-    title[2] = "Display work in the render threads (`convert-tiles`, as the DRM display does), the rest as built"
-    title[3] = "Display in the render threads, a barrier whose release does not grow with threads (h = 0), 32-px tiles"
-    for (sc = 1; sc <= 3; sc++) {
+    NSC = 4
+    split("convert|tiles|tiles|tiles", dm, "|")
+    split("1|1|0|0", hs, "|")
+    split("1|1|1|4", td, "|")
+    title[1] = "(a) as built: display `convert` on thread 0, condvar barrier (h measured), 16-px tiles"
+    title[2] = "(b) the display work in the render threads (`convert-tiles`, as the DRM display does), the rest as built"
+    title[3] = "(c) as (b), and a barrier whose release does not grow with threads (h = 0)"
+    title[4] = "(d) as (c), and 32-px tiles (a quarter of the counter's fetches)"
+    for (sc = 1; sc <= NSC; sc++) {
         print "#### Predicted efficiency E(N) = T(1) / (N T(N)): " title[sc]
         print ""
         print "| mesh | 2 (model) | 8 | 16 | 32 | 64 | 128 | frames/s at 64 | binding term at 128 |"
@@ -143,7 +145,7 @@ END {
     # against Manta's 92 % of linear at 64 CPUs
     print "#### Against Manta (92 % of linear at 64 CPUs)"
     print ""
-    for (sc = 1; sc <= 3; sc++) {
+    for (sc = 1; sc <= NSC; sc++) {
         lo = 1e9; hi = -1
         for (i = 1; i <= nm; i++) {
             e = eff(ms[i], 64, dm[sc], hs[sc] == 1 ? H : 0, td[sc])
@@ -152,7 +154,7 @@ END {
         verdict = "below Manta's on all"
         if (hi >= 0.92) verdict = "at or above Manta's on some"
         if (lo >= 0.92) verdict = "at or above Manta's on all"
-        printf "- %s: E(64) = %.2f-%.2f over the four meshes (%s).\n", title[sc], lo, hi, verdict
+        printf "- %s: E(64) = %.3f-%.3f over the four meshes (%s).\n", title[sc], lo, hi, verdict
     }
     print ""
     print "#### The terms at 64 and 128 cores, as built (ms a frame)"
