@@ -87,6 +87,8 @@ END {
             kap[m] = (f[m ".2.cpu_ms"] - f[m ".1.cpu_ms"]) * 1e-3 / w[m]
         else
             kap[m] = (2 * c2 - disp[m]) / w[m] - 1
+        kraw[m] = kap[m]
+        if (kap[m] < 0) kap[m] = 0 # within the noise: no super-linear predictions
     }
     # the 100 M-triangle model: the CT bunny's constants, traversal cost ~ log2(triangles),
     # LL read misses a ray extrapolated by the power law through the dragon and the CT bunny
@@ -112,7 +114,7 @@ END {
         if (m == "m100")
             printf "| %s | - | - | - | %.1f | %.2f | %.2f | %.4f | %.4f | %.3f | %.3f (power law, exponent %.2f) | %.1f |\n", name[m], 1e3 * w[m], 1e-6 * rate[m], 1e3 * disp[m], 1e3 * ser[m], 1e3 * rel2[m], kap[m], rd4[m], ex, bpr[m]
         else
-            printf "| %s | %.1f | %.1f | %.3f | %.1f | %.2f | %.2f | %.4f | %.4f | %.3f | %.3f / %.3f | %.1f / %.1f |\n", name[m], 1e3 * t1[m], 1e3 * t2[m], t1[m] / (2 * t2[m]), 1e3 * w[m], 1e-6 * rate[m], 1e3 * disp[m], 1e3 * ser[m], 1e3 * rel2[m], kap[m], rd4[m], f[m ".ll32.dlmr"] / R, bpr[m], bpr32[m]
+            printf "| %s | %.1f | %.1f | %.3f | %.1f | %.2f | %.2f | %.4f | %.4f | %s | %.3f / %.3f | %.1f / %.1f |\n", name[m], 1e3 * t1[m], 1e3 * t2[m], t1[m] / (2 * t2[m]), 1e3 * w[m], 1e-6 * rate[m], 1e3 * disp[m], 1e3 * ser[m], 1e3 * rel2[m], kraw[m] < 0 ? sprintf("0 (fit %.3f)", kraw[m]) : sprintf("%.3f", kap[m]), rd4[m], f[m ".ll32.dlmr"] / R, bpr[m], bpr32[m]
     }
     print ""
     printf "Machine-wide constants: tiles a frame %d (16-px tiles); tile counter, extra time a tile when 2 threads on this machine's 2 cores share it L_ccx = %.1f ns (build/tile-contention: %.2f thread ns a tile alone, %.2f side by side); barrier release per extra thread h = %.2f us (slope over the oversubscribed empty frames, 2..64 threads, of %s).\n", TILES, LCCX, f["tiles.1.thread_ns"], f["tiles.2.thread_ns"], 1e6 * H, f["fit.stat"] == "cpu" ? "the CPU time a frame" : "the release"
@@ -129,7 +131,7 @@ END {
     for (sc = 1; sc <= NSC; sc++) {
         print "#### Predicted efficiency E(N) = T(1) / (N T(N)): " title[sc]
         print ""
-        print "| mesh | 2 (model) | 8 | 16 | 32 | 64 | 128 | frames/s at 64 | binding term at 128 |"
+        print "| mesh | 2 (model) | 8 | 16 | 32 | 64 | 128 | frames/s at 64 | binding term at 64 / 128 |"
         print "|---|---:|---:|---:|---:|---:|---:|---:|---|"
         for (i = 1; i <= nm; i++) {
             m = ms[i]
@@ -137,8 +139,9 @@ END {
             printf "| %s | %.3f", name[m], eff(m, 2, dm[sc], hh, td[sc])
             for (j = 1; j <= 5; j++) printf " | **%.3f**", eff(m, ns[j], dm[sc], hh, td[sc])
             fps = 1 / frame_t(m, 64, dm[sc], hh, td[sc])
+            b64 = BIND
             frame_t(m, 128, dm[sc], hh, td[sc])
-            printf " | %.0f | %s |\n", fps, BIND
+            printf " | %.0f | %s / %s |\n", fps, b64, BIND
         }
         print ""
     }
