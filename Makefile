@@ -38,6 +38,8 @@ ROBUST_SRC := $(wildcard tools/robust/*.c)
 CLI_SRC := $(wildcard tools/cli/*.c)
 # tools/gen_assembly/README.md: the assembly generator, a program of its own (libm only)
 GEN_ASSEMBLY_SRC := $(wildcard tools/gen_assembly/*.c)
+# the tile counter's cost per tile at many thread counts (tools/scaling_model.sh)
+TILE_CONTENTION_SRC := tools/scaling/tile_contention.c
 TEST_SRC := $(wildcard tests/*.c)
 
 # traversal kernels: one source compiled per instruction set, picked at run time
@@ -52,11 +54,12 @@ LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(INPUT_SRC) $(
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
+TILE_CONTENTION_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TILE_CONTENTION_SRC))
 TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive
 
 all: tessera
@@ -94,6 +97,9 @@ PLY_REPLICATE := $(BUILD)/ply-replicate
 $(PLY_REPLICATE): $(BUILD)/tools/ply_replicate/ply_replicate.o $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(BUILD)/tools/ply_replicate/ply_replicate.o $(LIB) $(LDLIBS)
 ply-replicate: $(PLY_REPLICATE)
+# the dynamic load balancer's tile counter under N threads (tools/scaling/tile_contention.c)
+$(BUILD)/tile-contention: $(TILE_CONTENTION_OBJ) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TILE_CONTENTION_OBJ) $(LIB) $(LDLIBS)
 
 # the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST) for the report's robustness
 # knob: their own tree build-unrobust/ and binary build-unrobust/tessera; never ./tessera
@@ -281,6 +287,11 @@ bench-wall: deps
 bench-pipeline: deps
 	$(MAKE) tessera
 	sh tools/bench_pipeline.sh
+
+# the scaling model (BENCHMARKS.md "Scaling past this machine"): needs valgrind
+scaling-model: deps
+	$(MAKE) tessera $(BUILD)/tile-contention
+	sh tools/scaling_model.sh
 
 # the speed-against-error report (README "Speed against error: make report"): REPORT.md and
 # report/*.png from tools/report/report.sh, one section per quality knob (tools/report/knob_*.sh);

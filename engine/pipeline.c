@@ -114,6 +114,8 @@ typedef struct render_thread {
     render_counts counts; /* rays of the current frame; written by this thread in the render
                              stage, read and cleared by the serial section */
     double barrier_s;     /* this thread's time at frame barriers so far; its own until run ends */
+    double left_barrier_s; /* when it last left the frame barrier (now_s); written by this thread,
+                              read by the next serial section (the barrier orders them) */
     double render_stage_s; /* its render stage in the current step: written by this thread, read
                               and cleared by the serial section (the frame barrier orders them) */
     double upscale_stage_s; /* of which upscaling; the same rules */
@@ -220,6 +222,13 @@ struct pipeline {
     /* statistics: guarded by stats_lock */
     pthread_mutex_t stats_lock;
     pipeline_stats stats;
+    /* per-frame aggregates of the frame barrier, written only by serial sections (one at a
+     * time, ordered by the barrier) and copied into stats when the run ends */
+    double serial_s;          /* time inside serial sections */
+    double release_s;         /* per barrier: from the serial section's end to the last thread leaving */
+    double serial_end_s;      /* when the last serial section ended (now_s), 0 before the first */
+    int released_threads;     /* threads the last serial section released */
+    uint64_t serial_sections; /* frame barriers passed */
 
     /* What the serial section logs (a refused setter, a slow transaction): kept
      * here and written by thread 0 after the barrier, never at it (stderr may
@@ -1445,8 +1454,11 @@ static int serial_section_steps(pipeline *p)
         tls_serial_owner = NULL;
         return -1;
     }
-    if (s->info.idle && p->cfg.time_mode == PIPELINE_TIME_REAL)
+    if (s->info.idle && p->cfg.time_mode == PIPELINE_TIME_REAL) {
+        double w0 = now_s();
         wait_while_idle(p);
+        p->serial_s -= now_s() - w0; /* waiting for work is not serial work */
+    }
     double now = now_s();
     uint64_t frame = p->next_frame, step = p->next_step;
     s->info.frame = frame;
@@ -1519,9 +1531,23 @@ static int serial_section_steps(pipeline *p)
 /* The serial section, its log lines kept for thread 0 (flush_barrier_log). */
 static int serial_section(pipeline *p)
 {
+    double t0 = now_s();
+    /* the previous barrier's release: when its last thread left (threads that left the
+     * loop there, or started then, have an older or no timestamp and do not count) */
+    if (p->serial_end_s > 0.0) {
+        double last = p->serial_end_s;
+        for (int i = 0; i < p->released_threads; i++)
+            if (p->threads[i].left_barrier_s > last)
+                last = p->threads[i].left_barrier_s;
+        p->release_s += last - p->serial_end_s;
+    }
     log_divert_thread(keep_barrier_log, p);
     int threads = serial_section_steps(p);
     log_divert_thread(NULL, NULL);
+    p->serial_end_s = now_s();
+    p->serial_s += p->serial_end_s - t0;
+    p->serial_sections++;
+    p->released_threads = threads > 0 ? threads : p->thread_count;
     return threads;
 }
 
@@ -1626,7 +1652,8 @@ static void frame_loop(render_thread *t)
             render_stage(p, t);
         double arrived = now_s();
         barrier_wait(&p->frame_barrier, p, serial_section);
-        t->barrier_s += now_s() - arrived;
+        t->left_barrier_s = now_s();
+        t->barrier_s += t->left_barrier_s - arrived;
     }
 }
 
@@ -1776,6 +1803,9 @@ bool pipeline_run(pipeline *p, tess_error *err)
     pthread_mutex_lock(&p->stats_lock);
     p->stats.run_s = run_s;
     p->stats.barrier_s = barrier_s;
+    p->stats.serial_s = p->serial_s;
+    p->stats.release_s = p->release_s;
+    p->stats.serial_sections = p->serial_sections;
     p->stats.transactions_discarded += discarded;
     pthread_mutex_unlock(&p->stats_lock);
     if (p->display_failed)

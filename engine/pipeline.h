@@ -423,6 +423,14 @@ typedef struct pipeline_stats {
     double run_s;                   /* pipeline_run's wall time */
     double barrier_s;               /* summed over threads: time from arriving at a frame barrier to
                                        leaving it (idle at the end of frames + serial sections) */
+    /* the frame barrier's serial part (per-frame aggregates, two clock reads a frame):
+     * time inside serial sections (the last thread to arrive works, the others wait;
+     * waiting there for work while idle not counted), and per barrier the release: from
+     * the serial section's end to the last released thread leaving the barrier (wake-up
+     * and mutex hand-off; with more threads than cores, also the wait for a core), summed
+     * over every barrier but the last (whose release nothing follows) */
+    double serial_s, release_s;
+    uint64_t serial_sections;       /* frame barriers passed (serial sections run) */
     /* the governor (all 0 without one): rendered frames by kind, idle steps,
      * moving frames whose loop step took longer than the budget */
     uint64_t frames_scaled, frames_accumulated, frames_resolved, idle_steps;

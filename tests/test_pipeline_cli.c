@@ -284,6 +284,30 @@ Test(pipeline_cli, bench_scaling_prints_a_fraction_of_linear_per_thread_count)
     }
 }
 
+/* --thread-counts: only those counts, in that order, more than the CPUs too; the
+ * speed-up is against the first; each line has the frame barrier's aggregates. */
+Test(pipeline_cli, bench_scaling_runs_the_thread_counts_asked_for)
+{
+    char out[8192];
+    cr_assert_eq(run(out, sizeof out, "bench --scaling --thread-counts 2,5 --rounds 1 --frames 4 --size 32x24"), 0,
+                 "%s", out);
+    cr_expect_null(strstr(out, "SCALING threads=1 "), "%s", out);
+    const char *two = strstr(out, "SCALING threads=2 "), *five = strstr(out, "SCALING threads=5 ");
+    cr_assert(two && five && two < five, "%s", out);
+    cr_expect(strstr(two, "speedup=2.000 fraction_of_linear=1.000"), "%s", two); /* linear up to the first */
+    double serial = -1, release = -1, wait = -1;
+    const char *a = strstr(five, "serial_ms_per_frame="), *b = strstr(five, "release_ms_per_frame="),
+               *c = strstr(five, "wait_ms_per_frame=");
+    cr_assert(a && b && c && strstr(five, "frames=4 "), "%s", five);
+    sscanf(a, "serial_ms_per_frame=%lf", &serial);
+    sscanf(b, "release_ms_per_frame=%lf", &release);
+    sscanf(c, "wait_ms_per_frame=%lf", &wait);
+    cr_expect(serial > 0 && release >= 0 && wait > 0, "%s", five);
+    cr_expect_neq(run(out, sizeof out, "bench --scaling --thread-counts 0,2 --rounds 1 --frames 2 --size 8x8"), 0,
+                  "%s", out);
+    cr_expect_neq(run(out, sizeof out, "bench --path configs/paths/orbit.json --thread-counts 2"), 0, "%s", out);
+}
+
 /* Every example config renders (tiny, one frame), run from a scratch directory
  * so their relative out/ patterns land there. */
 Test(pipeline_cli, example_configs_render)

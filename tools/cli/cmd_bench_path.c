@@ -3,6 +3,7 @@
  * saw) and `tessera bench --scaling` (the same animation at 1..N threads and
  * the fraction of linear speed-up at each). */
 #include <math.h>
+#include <stddef.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -23,6 +24,7 @@
 #define BENCH_PATH_MAX_FLIP_SAMPLES 1000
 #define SCALING_DEFAULT_ROUNDS 3
 #define SCALING_DEFAULT_FRAMES 48
+#define SCALING_MAX_COUNTS 32 /* --thread-counts entries */
 
 /* Per-frame durations, kept by a serial callback (serial section only). */
 typedef struct frame_clock {
@@ -419,6 +421,11 @@ typedef struct scaling_sample {
     double display_ms; /* thread 0's display stage per frame */
     double cpu_other;  /* CPU seconds other programs took during the run */
     double barrier_share; /* thread time spent at frame barriers / (threads x run time) */
+    double serial_ms;  /* per frame barrier: the serial section */
+    double release_ms; /* per frame barrier: serial section's end to the last thread leaving */
+    double wait_ms;    /* per frame and thread: time at the frame barrier (idle + serial + release) */
+    double cpu_ms;     /* per frame: this process's CPU time (all threads), which other programs
+                          sharing the machine change much less than the wall time */
 } scaling_sample;
 
 /* One timed run of the animation at `threads`. */
@@ -449,6 +456,11 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
     out->display_ms = st.frames_displayed ? 1e3 * st.display_s / (double)st.frames_displayed : 0.0;
     out->cpu_other = busy0 < 0.0 ? 0.0 : (busy1 - busy0) - (own1 - own0);
     out->barrier_share = st.run_s > 0.0 ? st.barrier_s / ((double)threads * st.run_s) : 0.0;
+    double barriers = st.serial_sections ? (double)st.serial_sections : 1.0;
+    out->serial_ms = 1e3 * st.serial_s / barriers;
+    out->release_ms = 1e3 * st.release_s / (st.serial_sections > 1 ? (double)(st.serial_sections - 1) : 1.0);
+    out->wait_ms = 1e3 * st.barrier_s / ((double)threads * barriers);
+    out->cpu_ms = st.frames_rendered ? 1e3 * (own1 - own0) / (double)st.frames_rendered : 0.0;
     pipeline_destroy(p);
     return ok;
 }
@@ -467,7 +479,27 @@ static bool scaling_run(cli_pipeline_spec *spec, const cli_scene *cs, const came
     return true; /* kept, and counted as noisy in the report */
 }
 
-static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_threads, int rounds,
+/* The median of one field over a row's rounds. */
+static double row_median(const scaling_sample *row, int rounds, size_t offset, double *scratch)
+{
+    for (int r = 0; r < rounds; r++)
+        memcpy(&scratch[r], (const char *)&row[r] + offset, sizeof(double));
+    return cli_median(scratch, (size_t)rounds);
+}
+
+/* The smallest value of one field over a row's rounds (the least disturbed). */
+static double row_min(const scaling_sample *row, int rounds, size_t offset)
+{
+    double lo = INFINITY, v;
+    for (int r = 0; r < rounds; r++) {
+        memcpy(&v, (const char *)&row[r] + offset, sizeof(double));
+        lo = fmin(lo, v);
+    }
+    return lo;
+}
+
+/* counts[0..n): the thread counts to run, in order; the speed-up is against the first. */
+static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, const int *counts, int n_counts, int rounds,
                          bool reject_noisy)
 {
     tess_error err = {{0}};
@@ -481,7 +513,7 @@ static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_t
     if (spec->frames == 0)
         spec->frames = have_path ? (int)floor(camera_path_duration(&path) * spec->rate_hz) + 1
                                  : SCALING_DEFAULT_FRAMES;
-    size_t n_samples = (size_t)max_threads * (size_t)rounds;
+    size_t n_samples = (size_t)n_counts * (size_t)rounds;
     scaling_sample *samples = calloc(n_samples, sizeof *samples);
     double *scratch = calloc((size_t)rounds, sizeof *scratch);
     int code = 1, rejected = 0;
@@ -491,8 +523,8 @@ static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_t
     }
     /* rounds alternate over the thread counts, so slow drifts of the machine hit all alike */
     for (int r = 0; r < rounds; r++)
-        for (int n = 1; n <= max_threads; n++)
-            if (!scaling_run(spec, cs, have_path ? &path : NULL, n, reject_noisy, &samples[(n - 1) * rounds + r],
+        for (int k = 0; k < n_counts; k++)
+            if (!scaling_run(spec, cs, have_path ? &path : NULL, counts[k], reject_noisy, &samples[k * rounds + r],
                              &rejected))
                 goto done;
     printf("# %d frames %dx%d, display %s, %d rounds, %d noisy runs repeated; medians; fraction = speed-up / "
@@ -500,8 +532,9 @@ static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_t
            spec->frames, spec->channels[0].width_px, spec->channels[0].height_px, spec->channels[0].display, rounds,
            rejected);
     double base = 0.0;
-    for (int n = 1; n <= max_threads; n++) {
-        const scaling_sample *row = &samples[(n - 1) * rounds];
+    for (int k = 0; k < n_counts; k++) {
+        const int n = counts[k];
+        const scaling_sample *row = &samples[k * rounds];
         double t, d, other, wait, lo = INFINITY, hi = 0.0;
         for (int r = 0; r < rounds; r++) {
             scratch[r] = row[r].run_s;
@@ -518,12 +551,23 @@ static int bench_scaling(cli_pipeline_spec *spec, const cli_scene *cs, int max_t
         for (int r = 0; r < rounds; r++)
             scratch[r] = row[r].barrier_share;
         wait = cli_median(scratch, (size_t)rounds);
-        if (n == 1)
-            base = t;
+        if (k == 0)
+            base = t * counts[0];
         double speedup = base / t;
         printf("SCALING threads=%d median_s=%.4f min_s=%.4f max_s=%.4f frames_per_s=%.2f speedup=%.3f "
-               "fraction_of_linear=%.3f display_ms_per_frame=%.2f barrier_share=%.4f cpu_other_s=%.3f\n",
-               n, t, lo, hi, spec->frames / t, speedup, speedup / n, d, wait, other);
+               "fraction_of_linear=%.3f display_ms_per_frame=%.2f barrier_share=%.4f cpu_other_s=%.3f "
+               "frames=%d serial_ms_per_frame=%.4f release_ms_per_frame=%.4f wait_ms_per_frame=%.4f "
+               "cpu_ms_per_frame=%.3f cpu_ms_per_frame_min=%.3f display_ms_min=%.3f serial_ms_min=%.4f "
+               "release_ms_min=%.4f\n",
+               n, t, lo, hi, spec->frames / t, speedup, speedup / n, d, wait, other, spec->frames,
+               row_median(row, rounds, offsetof(scaling_sample, serial_ms), scratch),
+               row_median(row, rounds, offsetof(scaling_sample, release_ms), scratch),
+               row_median(row, rounds, offsetof(scaling_sample, wait_ms), scratch),
+               row_median(row, rounds, offsetof(scaling_sample, cpu_ms), scratch),
+               row_min(row, rounds, offsetof(scaling_sample, cpu_ms)),
+               row_min(row, rounds, offsetof(scaling_sample, display_ms)),
+               row_min(row, rounds, offsetof(scaling_sample, serial_ms)),
+               row_min(row, rounds, offsetof(scaling_sample, release_ms)));
     }
     code = 0;
 done:
@@ -534,6 +578,32 @@ done:
 }
 
 /* ---------------------------------------------------------------- the command */
+
+/* --thread-counts LIST: comma-separated counts, each 1..PIPELINE_MAX_THREADS. */
+static bool parse_counts(const char *option, const char *text, int *counts, int *n)
+{
+    char buf[512];
+    if (strlen(text) >= sizeof buf) {
+        cli_error("%s: list too long", option);
+        return false;
+    }
+    snprintf(buf, sizeof buf, "%s", text);
+    *n = 0;
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+        if (*n == SCALING_MAX_COUNTS) {
+            cli_error("%s: at most %d thread counts", option, SCALING_MAX_COUNTS);
+            return false;
+        }
+        if (!cli_parse_int(option, tok, 1, PIPELINE_MAX_THREADS, &counts[*n]))
+            return false;
+        ++*n;
+    }
+    if (*n == 0) {
+        cli_error("%s: no thread count in '%s'", option, text);
+        return false;
+    }
+    return true;
+}
 
 static void usage(FILE *f)
 {
@@ -554,9 +624,17 @@ static void usage(FILE *f)
           "  alternating), and prints per thread count a SCALING line: median wall time, speed-up\n"
           "  and the fraction of linear speed-up. Default display: convert (the work a scan-out\n"
           "  display does), so the display stage's overlap with rendering is measured too.\n"
+          "  Per frame barrier (medians over the rounds): serial_ms_per_frame (the serial section,\n"
+          "  one thread working), release_ms_per_frame (its end to the last thread leaving the\n"
+          "  barrier), wait_ms_per_frame (a thread's time at the barrier: idle at the frame's end,\n"
+          "  serial section and release); cpu_ms_per_frame: the process's CPU time a frame (less\n"
+          "  sensitive to other programs than wall time); *_min: the smallest over the rounds.\n"
           "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
           "  --size WxH       image size (default 1280x720)\n"
           "  --frames N       --scaling: frames per run (default: the path at --rate, or 48)\n"
+          "  --thread-counts LIST  --scaling: run these thread counts (comma-separated, e.g.\n"
+          "                   1,2,8,64; more threads than CPUs oversubscribe them) instead of 1..N;\n"
+          "                   the speed-up is against the first, taken as linear up to it\n"
           "  --keep-noisy     --scaling: keep runs during which other programs were busy (for a control\n"
           "                   that runs copies side by side); by default such runs are repeated\n",
           f);
@@ -570,6 +648,7 @@ int cli_bench_path(int argc, char **argv)
     const char *scene_path = NULL;
     bool scaling = false, reject_noisy = true;
     int rounds = SCALING_DEFAULT_ROUNDS, flip_samples = -1;
+    int counts[SCALING_MAX_COUNTS], n_counts = 0; /* --thread-counts; 0: 1..--threads */
     const char *config = cli_pipeline_find_config(argc, argv);
     if (config && !cli_pipeline_config_load(config, &spec))
         return 2;
@@ -593,6 +672,9 @@ int cli_bench_path(int argc, char **argv)
         } else if (!strcmp(a, "--flip-samples")) {
             if (!(val = cli_option_value(argc, argv, &i)) ||
                 !cli_parse_int(a, val, 0, BENCH_PATH_MAX_FLIP_SAMPLES, &flip_samples))
+                return 2;
+        } else if (!strcmp(a, "--thread-counts")) {
+            if (!(val = cli_option_value(argc, argv, &i)) || !parse_counts(a, val, counts, &n_counts))
                 return 2;
         } else if (!strcmp(a, "--keep-noisy")) {
             reject_noisy = false;
@@ -618,15 +700,22 @@ int cli_bench_path(int argc, char **argv)
         snprintf(spec.channels[0].display, sizeof spec.channels[0].display, "convert");
     if (!scaling)
         spec.time_mode = PIPELINE_TIME_REAL;
+    if (n_counts && !scaling) {
+        cli_error("--thread-counts: an option of bench --scaling");
+        return 2;
+    }
     cli_scene cs;
     int max_threads = spec.threads;
+    if (!n_counts)
+        for (int n = 1; n <= max_threads && n_counts < SCALING_MAX_COUNTS; n++)
+            counts[n_counts++] = n;
     if (!cli_scene_prepare(scene_path, max_threads, &cs)) {
         cli_scene_finish(&cs);
         return 1;
     }
     if (flip_samples < 0)
         flip_samples = spec.budget_ms > 0.0 ? BENCH_PATH_DEFAULT_FLIP_SAMPLES : 0;
-    int code = scaling ? bench_scaling(&spec, &cs, max_threads, rounds, reject_noisy)
+    int code = scaling ? bench_scaling(&spec, &cs, counts, n_counts, rounds, reject_noisy)
                        : bench_path(&spec, &cs, flip_samples);
     cli_scene_finish(&cs);
     return code;
