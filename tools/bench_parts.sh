@@ -29,6 +29,9 @@
 # Environment: BENCH_PARTS_ROUNDS (3), BENCH_PARTS_FRAMES (10), BENCH_PARTS_TXNS
 # (50), BENCH_PARTS_ATTEMPTS (3), BENCH_MAX_WAIT (seconds of waiting for quiet per whole run, 300), TMPDIR.
 set -eu
+# build times are measured: the structure cache (README "Structure cache") stays off
+TESSERA_CACHE=off
+export TESSERA_CACHE
 
 cd "$(dirname "$0")/.."
 OUT=BENCHMARKS.md
