@@ -550,9 +550,10 @@ static void *import_on_deep_stack(void *arg)
 const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_error *err)
 {
     struct stat st;
-    const char *name = strrchr(path, '/');
+    const char *slash = strrchr(path, '/');
+    const char *name = slash ? slash + 1 : path;
     char what[PROGRESS_WHAT_BYTES];
-    snprintf(what, sizeof what, "loading %s", name ? name + 1 : path);
+    snprintf(what, sizeof what, "loading %s", name ? name : "");
     progress bytes;
     progress_begin(&bytes, what, stat(path, &st) == 0 ? (uint64_t)st.st_size : 0, "B");
     import_job job = {.path = path, .flags = flags, .err = err};

@@ -98,7 +98,7 @@ Test(cache_faults, a_full_disk_fails_the_write_and_leaves_nothing)
 {
     fill(1);
     for (long skip = 0; skip < 4; skip++) { /* the header, then each section */
-        char what[32];
+        char what[64];
         snprintf(what, sizeof what, "ENOSPC after %ld writes", skip);
         fault_io_fail_pwrite(ENOSPC, skip);
         expect_failed_write(strerror(ENOSPC), what);
