@@ -478,5 +478,10 @@ embree_version=${embree_kv#embree=}
     echo "Every attempt, with its command and result line, was logged to \`$LOG\` (not kept in the"
     echo "repository; \`sh tools/bench.sh --summarize $WORK\` rewrites this file from it)."
 } > "$WORK/BENCHMARKS.md"
+# the file's head (title, How, Results) is this script's; the other scripts' sections that
+# follow it in the old file (Wall, Particles, ... The pipeline) stay as they were
+if [ -f "$OUT" ]; then
+    awk '/^## / && $0 != "## How" && $0 != "## Results" { keep = 1 } keep' "$OUT" >> "$WORK/BENCHMARKS.md"
+fi
 mv "$WORK/BENCHMARKS.md" "$OUT"
 echo "bench: wrote $OUT ($met of $rows rows at ratio >= 1.0; $(min_s "$total_s"))" >&2

@@ -74,3 +74,23 @@ require_tessera_and_peer() {
         exit 1
     fi
 }
+
+# replace_section OUT HEADING SECTION TMP: write the file SECTION (which starts with the line
+# HEADING) into the markdown file OUT in place of OUT's section under HEADING (up to the next
+# "## " heading), else before "## The pipeline" (which bench_pipeline.sh keeps last), else at the
+# end; a missing OUT becomes SECTION. TMP: a scratch path.
+replace_section() {
+    if [ -f "$1" ]; then
+        awk -v heading="$2" -v section="$3" '
+            function put() { while ((getline l < section) > 0) print l; done = 1 }
+            $0 == heading { put(); skip = 1; next }
+            skip && /^## / { skip = 0 }
+            skip { next }
+            /^## The pipeline$/ && !done { put() }
+            { print }
+            END { if (!done) put() }' "$1" > "$4"
+        cp "$4" "$1"
+    else
+        cp "$3" "$1"
+    fi
+}

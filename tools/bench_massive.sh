@@ -478,17 +478,5 @@ awk -F '\t' '{ last[$1] = $0; if (!($1 in seen)) { seen[$1] = 1; order[++n] = $1
 cat "$WORK/section.md"
 
 # into BENCHMARKS.md: in place of the old section, else before "## The pipeline" (which stays last)
-if [ -f "$OUT" ]; then
-    awk -v section="$WORK/section.md" '
-        function put() { while ((getline l < section) > 0) print l; done = 1 }
-        /^## Massive models$/ { put(); skip = 1; next }
-        skip && /^## / { skip = 0 }
-        skip { next }
-        /^## The pipeline$/ && !done { put() }
-        { print }
-        END { if (!done) put() }' "$OUT" > "$WORK/BENCHMARKS.md"
-    cp "$WORK/BENCHMARKS.md" "$OUT"
-else
-    cp "$WORK/section.md" "$OUT"
-fi
+replace_section "$OUT" "## Massive models" "$WORK/section.md" "$WORK/BENCHMARKS.md"
 echo "$BENCH_NAME: wrote the massive-models section of $OUT ($(min_s "$total_s"))" >&2

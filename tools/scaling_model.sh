@@ -363,18 +363,8 @@ section=$WORK/section.md
     echo "- NUMA: where the mesh's pages live (first touch by the loading thread puts a whole mesh on one socket"
     echo "  unless interleaved) is not modelled; at 128 cores remote DRAM latency would slow W, not only BW."
     echo "- The barrier's wake-up chain on real cores (see h above), turbo frequency falling with active cores, SMT."
+    echo
 } > "$section"
 
-if [ -f "$OUT" ]; then
-    awk -v sec="$section" '
-        function emit() { while ((getline l < sec) > 0) print l; print ""; done = 1 }
-        /^## Scaling past this machine$/ { skip = 1; emit(); next }
-        skip && /^## / { skip = 0 }
-        !done && /^## The pipeline$/ { emit() }
-        !skip { print }
-        END { if (!done) { print ""; emit() } }' "$OUT" > "$WORK/benchmarks.md"
-    cp "$WORK/benchmarks.md" "$OUT"
-else
-    cp "$section" "$OUT"
-fi
+replace_section "$OUT" "## Scaling past this machine" "$section" "$WORK/benchmarks.md"
 echo "$BENCH_NAME: wrote the section \"Scaling past this machine\" of $OUT (logs: $WORK)" >&2
