@@ -129,9 +129,6 @@ typedef struct wbvh {
 } wbvh;
 
 
-/* Build from a binary BVH over the mesh's triangles / the spheres. The
- * binary BVH's primitive i is triangle prim_ids[i] of the mesh (prim_ids NULL:
- * triangle i), so triangles that can never be hit may be left out. */
 /* Build from a binary BVH over the primitives of a geometry of kind `ops`
  * (its leaf layout decides the blocks). The binary BVH's primitive i is
  * primitive prim_ids[i] of the geometry (prim_ids NULL: primitive i), so
