@@ -38,20 +38,15 @@
 #include "engine/wbvh.h"
 
 /* A packet with at most this many rays left in a subtree continues as single
- * rays: below it, per-ray node tests in lanes cost more than they share; at
- * a triangle leaf, rays up to the second number are tested one by one (one
- * ray against a block of triangles) rather than in lanes. Any-hit queries
- * (occlusion) leave packets earlier: their rays (ambient occlusion's most of
- * all) are incoherent and stop at their first hit, so packets thin out fast.
- * Measured (dragon, 1920x1080, AMD EPYC, 1 thread, 3 alternating runs, median
- * frame): the ao renderer at 8 rays, closest-hit thresholds (2, lanes / 2)
- * 469 / 510 / 522 ms, any-hit (4, 3 lanes / 4) 451 / 471 / 487 ms; the
- * same for closest hits too made primary + shadow frames 1 % slower
- * (122 -> 124 ms), so closest hits keep theirs. */
+ * rays: below it, per-ray node tests in lanes cost more than they share (at
+ * a triangle leaf the choice is priced per leaf: leaf_single_cheaper).
+ * Any-hit queries (occlusion) leave packets earlier: their rays (ambient
+ * occlusion's most of all) are incoherent and stop at their first hit, so
+ * packets thin out fast. Measured (dragon, 1920x1080, AMD EPYC, 1 thread, 3
+ * alternating runs, median frame): the ao renderer at 8 rays, closest-hit
+ * threshold 2: 469 / 510 / 522 ms, any-hit 4: 451 / 471 / 487 ms. */
 #define PACKET_SINGLE_RAY_MAX 2
-#define LEAF_SINGLE_RAY_MAX (RAY_LANES / 2)
 #define PACKET_SINGLE_RAY_MAX_ANY 4
-#define LEAF_SINGLE_RAY_MAX_ANY (3 * RAY_LANES / 4)
 
 /* Stack references: inner node index, or leaf = LEAF bit | first << 4 | (count - 1),
  * where first and count are blocks, or for WBVH_POINTS points (count 1..16). */
@@ -159,40 +154,33 @@ static inline bool offer1(ray *r, const ray_derived *d, hit *h, float t, float u
     return true;
 }
 
-static inline vec3 block_vertex(const float *x, const float *y, const float *z, int lane)
+/* A stand-in vertex for the unused lanes of a 4-triangle test (their ids are
+ * invalid: they never report a hit). */
+static const float zero_vertex[3];
+
+/* Coordinate `axis` of the four vertices p[0..3], one per lane. Loaded into
+ * the register lane by lane: a block written to memory and read back as
+ * vectors stalled on store forwarding (9 vectors a block). */
+static inline v4 lanes_of(const float *const p[WBVH_BLOCK], int axis)
 {
-    return v3(x[lane], y[lane], z[lane]);
+    return _mm_setr_ps(p[0][axis], p[1][axis], p[2][axis], p[3][axis]);
 }
 
-static inline unsigned valid_lanes(const uint32_t prim_id[WBVH_BLOCK])
+/* One ray against 4 triangles of a mesh leaf, corners p0[i], p1[i], p2[i] of
+ * lane i (zero_vertex in unused lanes), ids base + i for the lanes of
+ * `valid`. Returns whether a hit was recorded (any: found). */
+static bool triangles4_1(const float *const p0[WBVH_BLOCK], const float *const p1[WBVH_BLOCK],
+                         const float *const p2[WBVH_BLOCK], uint32_t base, unsigned valid, uint32_t geom_id, ray *r,
+                         const ray_derived *d, hit *h, bool any)
 {
-    unsigned valid = 0;
-    for (int i = 0; i < WBVH_BLOCK; i++)
-        valid |= (unsigned)(prim_id[i] != RAY_INVALID_ID) << i;
-    return valid;
-}
-
-/* Four triangles, vertices as SoA (lane i = triangle i), gathered from a
- * WBVH_MESH leaf for the single-ray test. */
-typedef struct tri_block {
-    alignas(16) float v0x[WBVH_BLOCK], v0y[WBVH_BLOCK], v0z[WBVH_BLOCK];
-    float v1x[WBVH_BLOCK], v1y[WBVH_BLOCK], v1z[WBVH_BLOCK];
-    float v2x[WBVH_BLOCK], v2y[WBVH_BLOCK], v2z[WBVH_BLOCK];
-    uint32_t prim_id[WBVH_BLOCK]; /* triangle id, RAY_INVALID_ID in unused lanes */
-} tri_block;
-
-/* One ray against 4 triangles. Returns whether a hit was recorded (any: found). */
-static bool tri_block1(const tri_block *b, uint32_t geom_id, ray *r, const ray_derived *d, hit *h, bool any)
-{
-    const float *v0[3] = {b->v0x, b->v0y, b->v0z}, *v1[3] = {b->v1x, b->v1y, b->v1z}, *v2[3] = {b->v2x, b->v2y, b->v2z};
     const float org[3] = {r->org.x, r->org.y, r->org.z};
     const int kx = d->kx, ky = d->ky, kz = d->kz;
     const v4 okx = v4_set1(org[kx]), oky = v4_set1(org[ky]), okz = v4_set1(org[kz]);
     const v4 sx = v4_set1(d->shear_x), sy = v4_set1(d->shear_y), sz = v4_set1(d->shear_z);
-    const v4 az = v4_sub(v4_load(v0[kz]), okz), bz = v4_sub(v4_load(v1[kz]), okz), cz = v4_sub(v4_load(v2[kz]), okz);
-    const v4 akx = v4_sub(v4_load(v0[kx]), okx), aky = v4_sub(v4_load(v0[ky]), oky);
-    const v4 bkx = v4_sub(v4_load(v1[kx]), okx), bky = v4_sub(v4_load(v1[ky]), oky);
-    const v4 ckx = v4_sub(v4_load(v2[kx]), okx), cky = v4_sub(v4_load(v2[ky]), oky);
+    const v4 az = v4_sub(lanes_of(p0, kz), okz), bz = v4_sub(lanes_of(p1, kz), okz), cz = v4_sub(lanes_of(p2, kz), okz);
+    const v4 akx = v4_sub(lanes_of(p0, kx), okx), aky = v4_sub(lanes_of(p0, ky), oky);
+    const v4 bkx = v4_sub(lanes_of(p1, kx), okx), bky = v4_sub(lanes_of(p1, ky), oky);
+    const v4 ckx = v4_sub(lanes_of(p2, kx), okx), cky = v4_sub(lanes_of(p2, ky), oky);
     const v4 ax = v4_sub(akx, v4_mul(sx, az)), ay = v4_sub(aky, v4_mul(sy, az));
     const v4 bx = v4_sub(bkx, v4_mul(sx, bz)), by = v4_sub(bky, v4_mul(sy, bz));
     const v4 cx = v4_sub(ckx, v4_mul(sx, cz)), cy = v4_sub(cky, v4_mul(sy, cz));
@@ -204,7 +192,6 @@ static bool tri_block1(const tri_block *b, uint32_t geom_id, ray *r, const ray_d
     const v4 ma = v4_add(v4_add(v4_abs(akx), v4_abs(aky)), v4_abs(az));
     const v4 mb = v4_add(v4_add(v4_abs(bkx), v4_abs(bky)), v4_abs(bz));
     const v4 mc = v4_add(v4_add(v4_abs(ckx), v4_abs(cky)), v4_abs(cz));
-    const unsigned valid = valid_lanes(b->prim_id);
     /* an edge sign float cannot vouch for: those lanes are decided by the scalar test, in double */
     const v4 pa = v4_add(v4_abs(ax), v4_abs(ay)), pb = v4_add(v4_abs(bx), v4_abs(by));
     const v4 pc = v4_add(v4_abs(cx), v4_abs(cy));
@@ -215,7 +202,6 @@ static bool tri_block1(const tri_block *b, uint32_t geom_id, ray *r, const ray_d
         valid;
 #else
     const v4 zero = v4_set1(0.f);
-    const unsigned valid = valid_lanes(b->prim_id);
     const unsigned on_edge = 0u; /* fast build (intersect.h): float decides every edge */
 #endif
     const v4 any_neg = v4_or(v4_or(v4_lt(u, zero), v4_lt(v, zero)), v4_lt(w, zero));
@@ -239,14 +225,14 @@ static bool tri_block1(const tri_block *b, uint32_t geom_id, ray *r, const ray_d
     bool found = false;
     for (int i = 0; i < WBVH_BLOCK; i++) {
         if (hits >> i & 1u)
-            found |= offer1(r, d, h, t_lane[i], u_lane[i], v_lane[i], geom_id, b->prim_id[i]);
+            found |= offer1(r, d, h, t_lane[i], u_lane[i], v_lane[i], geom_id, base + (uint32_t)i);
         else if (on_edge >> i & 1u) {
             float te, ue, ve;
-            if (intersect_triangle(r, d, block_vertex(b->v0x, b->v0y, b->v0z, i), block_vertex(b->v1x, b->v1y, b->v1z, i),
-                                   block_vertex(b->v2x, b->v2y, b->v2z, i), &te, &ue, &ve)) {
+            if (intersect_triangle(r, d, v3(p0[i][0], p0[i][1], p0[i][2]), v3(p1[i][0], p1[i][1], p1[i][2]),
+                                   v3(p2[i][0], p2[i][1], p2[i][2]), &te, &ue, &ve)) {
                 if (any)
                     return true;
-                found |= offer1(r, d, h, te, ue, ve, geom_id, b->prim_id[i]);
+                found |= offer1(r, d, h, te, ue, ve, geom_id, base + (uint32_t)i);
             }
         }
     }
@@ -406,9 +392,8 @@ static bool points_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t
 
 static bool traverse1(const wbvh *w, uint32_t ref, uint32_t geom_id, ray *r, const ray_derived *d_in, hit *h, bool any);
 
-/* One ray against a WBVH_MESH leaf: its triangles gathered 4 at a time into
- * a block on the stack (unused lanes: the zero triangle, id invalid) and
- * tested 4-wide, in intersect_triangle's operations (the same bits as the
+/* One ray against a WBVH_MESH leaf: its triangles tested 4 at a time
+ * (triangles4_1), in intersect_triangle's operations (the same bits as the
  * packet path and the scalar reference). */
 static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t geom_id, ray *r, const ray_derived *d,
                        hit *h, bool any)
@@ -416,22 +401,19 @@ static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t g
     const float *pos = w->mesh.positions;
     bool found = false;
     for (uint32_t k = first; k < first + count; k += WBVH_BLOCK) {
-        tri_block b;
+        const float *p0[WBVH_BLOCK], *p1[WBVH_BLOCK], *p2[WBVH_BLOCK];
+        const uint32_t lanes = first + count - k < WBVH_BLOCK ? first + count - k : WBVH_BLOCK;
         for (uint32_t lane = 0; lane < WBVH_BLOCK; lane++) {
-            if (k + lane >= first + count) {
-                b.v0x[lane] = b.v0y[lane] = b.v0z[lane] = b.v1x[lane] = b.v1y[lane] = b.v1z[lane] = 0.f;
-                b.v2x[lane] = b.v2y[lane] = b.v2z[lane] = 0.f;
-                b.prim_id[lane] = RAY_INVALID_ID;
+            if (lane >= lanes) {
+                p0[lane] = p1[lane] = p2[lane] = zero_vertex;
                 continue;
             }
-            const uint32_t prim = k + lane, *idx = w->mesh.indices + 3 * (size_t)prim;
-            const float *p0 = pos + 3 * (size_t)idx[0], *p1 = pos + 3 * (size_t)idx[1], *p2 = pos + 3 * (size_t)idx[2];
-            b.v0x[lane] = p0[0], b.v0y[lane] = p0[1], b.v0z[lane] = p0[2];
-            b.v1x[lane] = p1[0], b.v1y[lane] = p1[1], b.v1z[lane] = p1[2];
-            b.v2x[lane] = p2[0], b.v2y[lane] = p2[1], b.v2z[lane] = p2[2];
-            b.prim_id[lane] = prim;
+            const uint32_t *idx = w->mesh.indices + 3 * (size_t)(k + lane);
+            p0[lane] = pos + 3 * (size_t)idx[0];
+            p1[lane] = pos + 3 * (size_t)idx[1];
+            p2[lane] = pos + 3 * (size_t)idx[2];
         }
-        if (tri_block1(&b, geom_id, r, d, h, any)) {
+        if (triangles4_1(p0, p1, p2, k, (1u << lanes) - 1u, geom_id, r, d, h, any)) {
             if (any)
                 return true;
             found = true;
@@ -1080,6 +1062,28 @@ static void instances_leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
     }
 }
 
+/* LEAF: are the rays of `mask` cheaper one by one against a leaf of `count`
+ * triangles than in lanes? One by one, each ray runs ceil(count / 4) 4-wide
+ * tests; in lanes, each triangle runs one RAY_LANES-wide test per started
+ * vector of rays in each axis order (triangle_rays groups rays by it), so
+ * rays of one direction (shadow rays toward a directional light, a camera's
+ * rays) share every test and incoherent rays (ambient occlusion) share few.
+ * A lane test is priced at half a 4-wide test: what was measured best
+ * (AMD EPYC, AVX-512, 1 thread, 1920x1080, frame times of alternating runs
+ * against the former fixed counts, RAY_LANES / 2 rays for closest hits and
+ * 3 RAY_LANES / 4 for any-hit: dragon primary 77 / 84 ms, dragon + one
+ * shadow ray a hit 117 / 134 ms, 4 M CT bunny ambient occlusion 870 / 904
+ * ms; pricing it at a whole 4-wide test gave 77 / 120 / 897 ms, at a
+ * quarter - / 120 / 887 ms, the bunny's primary rays 45 ms at all three). */
+static inline bool leaf_single_cheaper(const packet_ctx *c, uint64_t mask, uint32_t count)
+{
+    unsigned lane_vectors = 0;
+    for (int o = 0; o < c->order_count; o++)
+        lane_vectors += ((unsigned)__builtin_popcountll(mask & c->order_mask[o]) + RAY_LANES - 1u) / RAY_LANES;
+    const unsigned single_tests = (unsigned)__builtin_popcountll(mask) * ((count + WBVH_BLOCK - 1u) / WBVH_BLOCK);
+    return 2u * single_tests <= lane_vectors * count;
+}
+
 static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
 {
     const wbvh *w = c->w;
@@ -1087,13 +1091,16 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         instances_leaf_packet(c, ref, mask);
         return;
     }
-    if (w->kind != WBVH_MESH || __builtin_popcountll(mask) <= (c->any ? LEAF_SINGLE_RAY_MAX_ANY : LEAF_SINGLE_RAY_MAX)) {
-        /* few rays, spheres, or a kind without a SIMD layout: one ray at a time */
+    if (w->kind != WBVH_MESH) { /* spheres, or a kind without a SIMD layout: one ray at a time */
         finish_single(c, ref, mask);
         return;
     }
     ensure_shear(c);
     uint32_t first = (ref & ~REF_LEAF) >> REF_BLOCKS_BITS, count = (ref & ((1u << REF_BLOCKS_BITS) - 1u)) + 1u;
+    if (leaf_single_cheaper(c, mask, count)) {
+        finish_single(c, ref, mask);
+        return;
+    }
     const float *pos = w->mesh.positions;
     /* the leaf's indices are one run; its vertices may be cache misses on a
      * large mesh: ask for all of them before testing any */
