@@ -41,6 +41,7 @@ struct accel {
     bool lock_ready;
     aabb scene_box; /* union of the instances' world boxes as the scene placed them at build
                        (accel_scene_bounds); empty when nothing can be hit; never changes */
+    bool single_rays; /* accel_set_single_rays: set before tracing, never during */
 };
 
 /* One geometry's wide BVH; primitives that can never be hit are left out. */
@@ -405,6 +406,51 @@ bool accel_pick(const accel *ca, const ray *r, hit *h)
     return found;
 }
 
+void accel_set_single_rays(accel *a, bool single_rays)
+{
+    a->single_rays = single_rays;
+}
+
+/* accel_set_single_rays: the packet's rays of `mask` traced one by one
+ * through the single-ray queries; closest hits (with the packet's next-hit
+ * bounds) written back as the packet kernels write them. Returns the rays
+ * that hit (any: occluded). */
+static uint64_t packet_one_by_one(const accel *a, ray_packet *p, uint64_t mask, bool any)
+{
+    uint64_t found = 0;
+    for (uint64_t m = mask; m; m &= m - 1) {
+        const uint32_t i = (uint32_t)__builtin_ctzll(m);
+        ray one = packet_get_ray(p, i);
+        if (any) {
+            if (accel_occluded(a, &one))
+                found |= 1ull << i;
+            continue;
+        }
+        const hit before = packet_get_hit(p, i);
+        hit h;
+        bool hit_here;
+        if (p->flags & PACKET_AFTER_HIT) {
+            const hit after = {.t = p->after_t[i], .geom_id = p->after_geom[i], .prim_id = p->after_prim[i]};
+            hit_here = accel_intersect_after(a, &one, &after, &h);
+        } else {
+            hit_here = accel_intersect(a, &one, &h);
+        }
+        /* the packet's own hit stands unless this one comes first (as the kernels' offer) */
+        if (!hit_here || !(h.t < before.t || (h.t == before.t && (h.geom_id < before.geom_id ||
+                                                                  (h.geom_id == before.geom_id &&
+                                                                   h.prim_id < before.prim_id)))))
+            continue;
+        p->hit_t[i] = h.t;
+        p->hit_u[i] = h.u;
+        p->hit_v[i] = h.v;
+        p->prim_id[i] = h.prim_id;
+        p->geom_id[i] = h.geom_id;
+        p->t_far[i] = h.t;
+        found |= 1ull << i;
+    }
+    return found;
+}
+
 void accel_intersect_packet(const accel *a, packet_range r)
 {
     /* hits change: what was derived from them is stale */
@@ -412,6 +458,10 @@ void accel_intersect_packet(const accel *a, packet_range r)
     uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r));
     if (!mask || a->top.node_count == 0)
         return;
+    if (a->single_rays) {
+        packet_one_by_one(a, r.packet, mask, false);
+        return;
+    }
     packet_derive_inv_dir(r.packet);
     const wbvh *sole = sole_geometry(a);
     a->kernels->intersect_packet(sole ? sole : &a->top, 0, r.packet, mask, false);
@@ -422,6 +472,8 @@ uint64_t accel_occluded_packet(const accel *a, packet_range r)
     uint64_t mask = a->kernels->traceable(r.packet, packet_range_mask(r));
     if (!mask || a->top.node_count == 0)
         return 0;
+    if (a->single_rays)
+        return packet_one_by_one(a, r.packet, mask, true);
     packet_derive_inv_dir(r.packet);
     const wbvh *sole = sole_geometry(a);
     return a->kernels->intersect_packet(sole ? sole : &a->top, 0, r.packet, mask, true);

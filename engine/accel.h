@@ -59,6 +59,12 @@ bool accel_intersect_instance(const accel *a, uint32_t geom_id, const ray *r, co
 /* Any hit in (r->t_near, r->t_far]; stops at the first one found. */
 bool accel_occluded(const accel *a, const ray *r);
 
+/* A measurement switch (tessera bench --single-rays): with it the packet
+ * queries below trace each ray alone through the single-ray queries above
+ * (same results, bit for bit), so the packet path can be timed against
+ * single rays on the same frames. Set it before tracing, never during. */
+void accel_set_single_rays(accel *a, bool single_rays);
+
 /* Closest hits for the active rays of a sub-packet: fills hit_* and shrinks
  * t_far of each ray that hits. Results are bit-identical to accel_intersect on
  * each ray alone (ties in t go to the lowest geometry id, then primitive id). */

@@ -405,3 +405,73 @@ Test(kernels, primary_directions_match_the_camera_bit_for_bit)
     }
     cr_expect_eq(differ, 0, "%ld primary directions differ from the scalar camera", differ);
 }
+
+/* accel_set_single_rays (tessera bench --single-rays) traces a packet's
+ * rays one by one: the same hits, occlusion and next hits as the packet
+ * kernels, inactive rays untouched. */
+Test(kernels, packets_traced_one_by_one_match_the_packet_kernels)
+{
+    rng_state = 777;
+    scene *s = make_scene();
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    static ray_packet in_packets, one_by_one;
+    long mismatches = 0, hits = 0, second_hits = 0;
+    for (int round = 0; round < 200; round++) {
+        uint32_t count = 1 + rng_u32() % 64;
+        packet_reset(&in_packets, count, 0);
+        for (uint32_t i = 0; i < count; i++) {
+            ray r = random_ray((int)(rng_u32() % 4));
+            packet_set_ray(&in_packets, i, &r);
+        }
+        in_packets.active = ((uint64_t)rng_u32() << 32 | rng_u32()) & packet_span_mask(0, count);
+        packet_detect_facts(&in_packets);
+        one_by_one = in_packets;
+        accel_set_single_rays(a, false);
+        uint64_t occ_packet = accel_occluded_packet(a, packet_whole(&in_packets));
+        accel_intersect_packet(a, packet_whole(&in_packets));
+        accel_set_single_rays(a, true);
+        uint64_t occ_single = accel_occluded_packet(a, packet_whole(&one_by_one));
+        accel_intersect_packet(a, packet_whole(&one_by_one));
+        mismatches += occ_packet != occ_single;
+        for (uint32_t i = 0; i < count; i++) {
+            mismatches += !same_hit(packet_get_hit(&in_packets, i), packet_get_hit(&one_by_one, i));
+            hits += packet_get_hit(&in_packets, i).t != INFINITY;
+        }
+        /* the next surface along each ray that hit: next-hit bounds */
+        ray_packet *both[2] = {&in_packets, &one_by_one};
+        for (int k = 0; k < 2; k++) {
+            ray_packet *p = both[k];
+            hit first[PACKET_MAX_RAYS];
+            for (uint32_t i = 0; i < count; i++)
+                first[i] = packet_get_hit(p, i);
+            ray rays[PACKET_MAX_RAYS];
+            for (uint32_t i = 0; i < count; i++)
+                rays[i] = packet_get_ray(p, i);
+            uint64_t active = p->active;
+            packet_reset(p, count, 0);
+            p->active = 0;
+            for (uint32_t i = 0; i < count; i++) {
+                rays[i].t_far = FLT_MAX;
+                packet_set_ray(p, i, &rays[i]);
+                if ((active >> i & 1u) && first[i].t != INFINITY) {
+                    packet_set_after(p, i, &first[i]);
+                    p->active |= 1ull << i;
+                }
+            }
+            packet_detect_facts(p);
+            accel_set_single_rays(a, k == 1);
+            accel_intersect_packet(a, packet_whole(p));
+        }
+        for (uint32_t i = 0; i < count; i++) {
+            mismatches += !same_hit(packet_get_hit(&in_packets, i), packet_get_hit(&one_by_one, i));
+            second_hits += packet_get_hit(&in_packets, i).t != INFINITY;
+        }
+    }
+    cr_log_info("one by one: %ld first hits, %ld next hits, %ld mismatches", hits, second_hits, mismatches);
+    cr_expect(hits > 500 && second_hits > 100, "too few hits to compare: %ld, %ld", hits, second_hits);
+    cr_expect_eq(mismatches, 0);
+    accel_destroy(a);
+    scene_destroy(s);
+}

@@ -65,6 +65,7 @@ typedef struct bench_options {
     int frames;             /* timed frames, >= 1 */
     int warmup;             /* untimed frames rendered first, >= 0 */
     bool shadows;           /* one shadow ray per hit toward the scene's first light */
+    bool single_rays;       /* every ray traced alone (accel_set_single_rays), not in packets */
     bool have_camera;       /* --camera given */
     camera_desc camera;
     const char *out;        /* image file for the last frame, or NULL */
@@ -112,6 +113,9 @@ static void bench_usage(FILE *f)
           "  --frames N       timed frames, each timed on its own (default 5)\n"
           "  --warmup N       untimed frames rendered first (default 1)\n"
           "  --shadows        trace a shadow ray per hit (default: primary rays only)\n"
+          "  --single-rays    trace every ray alone (the single-ray kernels from the root, as\n"
+          "                   Embree's rtcIntersect1 / embree_bench -m single), not in packets:\n"
+          "                   the same image, for timing the packet path against single rays\n"
           "  --opacity A      every surface's opacity, 0..1 (default 1): below 1 rays blend the\n"
           "                   surfaces they cross front to back (docs/inspection.md), with the\n"
           "                   default limits (transmittance 1/255, 16 layers)\n"
@@ -151,7 +155,7 @@ static void bench_usage(FILE *f)
           "TESSERA_LOG=warn); the result goes to stdout.\n"
           "\n"
           "output: one line, fields in this order:\n"
-          "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 isa=NAME\n"
+          "  BENCH scene=PATH size=WxH threads=N frames=N warmup=N shadows=0|1 isa=NAME single_rays=0|1\n"
           "        triangles=N spheres=N load_s= build_s= prim_mrays= total_mrays= frame_ms_median=\n"
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
@@ -281,6 +285,8 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             o->isa = val;
         } else if (!strcmp(a, "--shadows")) {
             o->shadows = true;
+        } else if (!strcmp(a, "--single-rays")) {
+            o->single_rays = true;
         } else if (!strcmp(a, "--renderer")) {
             if (!(val = cli_option_value(argc, argv, &i)))
                 goto bad;
@@ -562,8 +568,8 @@ static void print_result(const bench_options *o, const render_view *view, double
 
     printf("BENCH scene=");
     print_field_path(stdout, o->scene_path ? o->scene_path : "default");
-    printf(" size=%dx%d threads=%d frames=%d warmup=%d shadows=%d isa=%s", o->width_px, o->height_px, o->threads,
-           o->frames, o->warmup, o->shadows ? 1 : 0, accel_isa_name(a));
+    printf(" size=%dx%d threads=%d frames=%d warmup=%d shadows=%d isa=%s single_rays=%d", o->width_px, o->height_px,
+           o->threads, o->frames, o->warmup, o->shadows ? 1 : 0, accel_isa_name(a), o->single_rays ? 1 : 0);
     printf(" triangles=%zu spheres=%u load_s=%.3f build_s=%.3f", triangles, s->spheres.count, load_s, build_s);
     printf(" prim_mrays=%.3f total_mrays=%.3f frame_ms_median=%.2f frame_ms_min=%.2f frame_ms_max=%.2f", prim_mrays,
            total_mrays, 1e3 * ms_median, 1e3 * ms_min, 1e3 * ms_max);
@@ -822,6 +828,7 @@ int cli_bench(int argc, char **argv)
         cli_error("out of memory for a %dx%d image and %d frames", o.width_px, o.height_px, o.frames);
         goto done;
     }
+    accel_set_single_rays(cs.accel, o.single_rays);
     render_view view = {cs.scene, cs.accel, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
                         RENDER_SHADE_EYELIGHT, NULL, &o.settings};
     frame_state opacity_state;
