@@ -4,7 +4,7 @@
 # same camera, same image, same machine, same minutes; writes BENCHMARKS.md.
 #
 # For each round, mesh and thread count (1, 2) it runs, alternately,
-#   tessera, embree single, tessera, embree p8, tessera, embree p16   (primary rays)
+#   tessera, embree single, tessera --single-rays, tessera, embree p8, tessera, embree p16   (primary rays)
 #   tessera --shadows, embree p8 --shadows, tessera --shadows, embree p16 --shadows
 # each as its own process after a quiet second; a run during which other
 # programs used more than 0.05 CPU (cpu_other, which both programs measure from
@@ -223,6 +223,10 @@ measure() {
                     run primary tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
                         --frames "$FRAMES"
                     run primary embree "$m" "$t" "$mode" "$EMBREE" -r $SIZE -f "$FRAMES" -t "$t" -m "$mode" "$f"
+                    if [ "$mode" = single ]; then # tessera's single-ray path beside Embree's single mode
+                        run single tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
+                            --frames "$FRAMES" --single-rays
+                    fi
                 done
                 for mode in p8 p16; do
                     run shadows tessera "$m" "$t" - "$TESSERA" bench --scene "$f" --size $SIZE --threads "$t" \
@@ -372,6 +376,21 @@ END {
         if (any) print line " |"
     }
     print ""
+    print "### Single rays: tessera --single-rays against Embree single (rtcIntersect1): primary Mrays/s (median, spread, n)\n"
+    print "| mesh | threads | tessera --single-rays | Embree single | tessera / Embree | tessera packets / tessera single rays |"
+    print "|---|---:|---:|---:|---:|---:|"
+    for (k = 1; k <= nmeshes; k++) for (t = 1; t <= 2; t++) {
+        m = meshes[k]
+        sg = "single" SUBSEP m SUBSEP t SUBSEP "tessera" SUBSEP "-"
+        eg = "primary" SUBSEP m SUBSEP t SUBSEP "embree" SUBSEP "single"
+        tg = "primary" SUBSEP m SUBSEP t SUBSEP "tessera" SUBSEP "-"
+        if (!(sg in cnt) || !(eg in cnt)) continue
+        ts = gmed(sg, "prim"); es = gmed(eg, "prim")
+        printf "| %s | %d | %s%s (%.0f%%, n=%d) | %s%s (%.0f%%, n=%d) | **%s** | %s |\n", m, t, fmt(ts, 2), mark(sg),
+            gspread(sg, "prim"), gn(sg), fmt(es, 2), mark(eg), gspread(eg, "prim"), gn(eg), ratio(ts, es),
+            (tg in cnt) ? ratio(gmed(tg, "prim"), ts) : "–"
+    }
+    print ""
     print "### One shadow ray per hit: Mrays/s, primary / total (median; spread of primary, n)\n"
     print "| mesh | threads | tessera | best Embree mode (p8, p16): primary / total | tessera / Embree-best (frame rate) |"
     print "|---|---:|---:|---:|---:|"
@@ -444,16 +463,16 @@ embree_version=${embree_kv#embree=}
     echo "Commands (from the repository root; M = each mesh present in \`$DATA\`, T = 1 and 2):"
     echo
     echo '```sh'
-    echo "./tessera bench --scene $DATA/M --size $SIZE --threads T --frames $FRAMES [--shadows]"
+    echo "./tessera bench --scene $DATA/M --size $SIZE --threads T --frames $FRAMES [--shadows | --single-rays]"
     echo "$EMBREE -r $SIZE -f $FRAMES -t T -m single|p8|p16 [--shadows] $DATA/M"
     echo '```'
     echo
     echo "(\`./tessera\` is run as a copy taken at the start, \`$TESSERA\`.)"
     echo
     echo "Per round, mesh and thread count, in this order, each its own process: tessera, Embree"
-    echo "single, tessera, Embree p8, tessera, Embree p16; then tessera --shadows, Embree p8 --shadows,"
-    echo "tessera --shadows, Embree p16 --shadows. So tessera has 3 primary and 2 shadow runs per round"
-    echo "and each Embree mode one. Both programs frame a mesh by the same rule (the peer's), render"
+    echo "single, tessera --single-rays, tessera, Embree p8, tessera, Embree p16; then tessera --shadows,"
+    echo "Embree p8 --shadows, tessera --shadows, Embree p16 --shadows. So tessera has 3 primary, 1"
+    echo "single-ray and 2 shadow runs per round and each Embree mode one. Both programs frame a mesh by the same rule (the peer's), render"
     echo "1 untimed warm-up frame and then the timed frames, and shade the same image (|dot(Ng, dir)|;"
     echo "the hit rate columns check that they see the same picture)."
     echo
