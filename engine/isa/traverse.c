@@ -414,6 +414,7 @@ static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t g
                        hit *h, bool any)
 {
     const float *pos = w->mesh.positions;
+    const uint32_t *canon = w->mesh.canon; /* NULL: a triangle's id is its place */
     bool found = false;
     for (uint32_t k = first; k < first + count; k += WBVH_BLOCK) {
         tri_block b;
@@ -429,7 +430,7 @@ static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t g
             b.v0x[lane] = p0[0], b.v0y[lane] = p0[1], b.v0z[lane] = p0[2];
             b.v1x[lane] = p1[0], b.v1y[lane] = p1[1], b.v1z[lane] = p1[2];
             b.v2x[lane] = p2[0], b.v2y[lane] = p2[1], b.v2z[lane] = p2[2];
-            b.prim_id[lane] = prim;
+            b.prim_id[lane] = canon ? canon[prim] : prim;
         }
         if (tri_block1(&b, geom_id, r, d, h, any)) {
             if (any)
@@ -1103,13 +1104,15 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         __builtin_prefetch(pos + 3 * (size_t)idx[1]);
         __builtin_prefetch(pos + 3 * (size_t)idx[2]);
     }
+    const uint32_t *canon = w->mesh.canon; /* NULL: a triangle's id is its place */
     for (uint32_t prim = first; prim < first + count; prim++) {
         const uint32_t *idx = w->mesh.indices + 3 * (size_t)prim;
         const float *v0 = pos + 3 * (size_t)idx[0], *v1 = pos + 3 * (size_t)idx[1], *v2 = pos + 3 * (size_t)idx[2];
+        const uint32_t id = canon ? canon[prim] : prim;
         for (int o = 0; o < c->order_count; o++) {
             uint64_t m = mask & c->order_mask[o] & ~c->done;
             if (m)
-                triangle_rays(c, v0, v1, v2, prim, c->order_axes[o], m);
+                triangle_rays(c, v0, v1, v2, id, c->order_axes[o], m);
         }
     }
 }
