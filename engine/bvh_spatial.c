@@ -226,6 +226,38 @@ static float split_cost(float left_area, uint32_t left_n, float right_area, uint
     return BVH_COST_TRAVERSAL + BVH_COST_INTERSECT * sides / parent_area;
 }
 
+/* The SAH sweep over one axis's bins: every plane p (bins [0, p) left, the
+ * rest right), sides counted by left_n_of (the bins' references entering)
+ * and right_n_of (leaving); *best takes a strictly cheaper split (so ties
+ * go to the lower axis, then plane). Object splits record bin p - 1 (the
+ * last left bin), spatial ones the plane p. */
+#define SWEEP_BINS_MAX (BVH_SPATIAL_BINS > OBJECT_BINS ? BVH_SPATIAL_BINS : OBJECT_BINS)
+static void sweep(const sbox *box, const uint32_t *left_n_of, const uint32_t *right_n_of, int bins, int kind, int axis,
+                  float parent_area, choice *best)
+{
+    sbox right_box[SWEEP_BINS_MAX];
+    uint32_t right_n[SWEEP_BINS_MAX];
+    sbox acc = sbox_empty();
+    uint32_t acc_n = 0;
+    for (int b = bins - 1; b > 0; b--) {
+        sbox_grow(&acc, &box[b]);
+        acc_n += right_n_of[b];
+        right_box[b] = acc;
+        right_n[b] = acc_n;
+    }
+    acc = sbox_empty();
+    acc_n = 0;
+    for (int p = 1; p < bins; p++) {
+        sbox_grow(&acc, &box[p - 1]);
+        acc_n += left_n_of[p - 1];
+        if (acc_n == 0 || right_n[p] == 0)
+            continue;
+        float cost = split_cost(sbox_half_area(&acc), acc_n, sbox_half_area(&right_box[p]), right_n[p], parent_area);
+        if (cost < best->cost)
+            *best = (choice){kind, axis, kind == 1 ? p - 1 : p, cost, acc, right_box[p], acc_n, right_n[p]};
+    }
+}
+
 static choice best_object_split(const sref *refs, uint32_t n, float parent_area, object_map *map)
 {
     sbox cent = sbox_empty();
@@ -252,27 +284,7 @@ static choice best_object_split(const sref *refs, uint32_t n, float parent_area,
             sbox_grow(&box[b], &refs[i].box);
             count[b]++;
         }
-        sbox right_box[OBJECT_BINS];
-        uint32_t right_n[OBJECT_BINS];
-        sbox acc = sbox_empty();
-        uint32_t acc_n = 0;
-        for (int b = OBJECT_BINS - 1; b > 0; b--) {
-            sbox_grow(&acc, &box[b]);
-            acc_n += count[b];
-            right_box[b - 1] = acc;
-            right_n[b - 1] = acc_n;
-        }
-        acc = sbox_empty();
-        acc_n = 0;
-        for (int b = 0; b < OBJECT_BINS - 1; b++) {
-            sbox_grow(&acc, &box[b]);
-            acc_n += count[b];
-            if (acc_n == 0 || right_n[b] == 0)
-                continue;
-            float cost = split_cost(sbox_half_area(&acc), acc_n, sbox_half_area(&right_box[b]), right_n[b], parent_area);
-            if (cost < best.cost)
-                best = (choice){1, axis, b, cost, acc, right_box[b], acc_n, right_n[b]};
-        }
+        sweep(box, count, count, OBJECT_BINS, 1, axis, parent_area, &best);
     }
     return best;
 }
@@ -342,27 +354,7 @@ static choice best_spatial_split(const bvh_triangles *t, const sref *refs, uint3
             for (int b = 0; b < slabs; b++)
                 sbox_grow(&box[first + b], &parts[b]);
         }
-        sbox right_box[BVH_SPATIAL_BINS];
-        uint32_t right_n[BVH_SPATIAL_BINS];
-        sbox acc = sbox_empty();
-        uint32_t acc_n = 0;
-        for (int b = BVH_SPATIAL_BINS - 1; b > 0; b--) {
-            sbox_grow(&acc, &box[b]);
-            acc_n += leave[b];
-            right_box[b] = acc;
-            right_n[b] = acc_n;
-        }
-        acc = sbox_empty();
-        acc_n = 0;
-        for (int b = 1; b < BVH_SPATIAL_BINS; b++) { /* plane b: slabs [0, b) left */
-            sbox_grow(&acc, &box[b - 1]);
-            acc_n += enter[b - 1];
-            if (acc_n == 0 || right_n[b] == 0)
-                continue;
-            float cost = split_cost(sbox_half_area(&acc), acc_n, sbox_half_area(&right_box[b]), right_n[b], parent_area);
-            if (cost < best.cost)
-                best = (choice){2, axis, b, cost, acc, right_box[b], acc_n, right_n[b]};
-        }
+        sweep(box, enter, leave, BVH_SPATIAL_BINS, 2, axis, parent_area, &best);
     }
     return best;
 }
@@ -383,7 +375,7 @@ typedef struct builder {
     uint32_t node_count, node_capacity;
     uint32_t *order; /* references' prims in leaf order */
     uint64_t order_count, order_capacity;
-    uint64_t refs_total, refs_budget; /* references alive in the tree being made, and their limit */
+    uint64_t extra; /* references chopping may still add (the budget's rest), shared first come */
     float root_area;
     uint32_t depth;
     progress *report;
@@ -538,7 +530,7 @@ static bool split_node(builder *B, const node_item *it, sides *s, bool *ok)
         choice obj = best_object_split(it->refs, n, area, &map);
         choice best = obj;
         sbox overlap = sbox_and(&obj.left, &obj.right);
-        bool try_spatial = B->refs_total < B->refs_budget &&
+        bool try_spatial = B->extra > 0 &&
                            (obj.kind == 0 || sbox_half_area(&overlap) > BVH_SPATIAL_ALPHA * B->root_area);
         if (try_spatial) {
             choice sp = best_spatial_split(B->tris, it->refs, n, &it->bounds, area);
@@ -548,10 +540,14 @@ static bool split_node(builder *B, const node_item *it, sides *s, bool *ok)
         if (best.kind && (n > BVH_LEAF_DEFAULT || best.cost < leaf_cost)) {
             if (best.kind == 2) {
                 partition_spatial(B, it, &best, s);
-                uint64_t total = B->refs_total - n + s->left_n + s->right_n;
-                bool progress_made = s->left_n > 0 && s->right_n > 0 && s->left_n < n + 0u && s->right_n < n;
-                if (progress_made && total <= B->refs_budget) {
-                    B->refs_total = total;
+                uint64_t added = (uint64_t)s->left_n + s->right_n - n;
+                /* each side lost references or area (a side may keep all n, each chopped),
+                 * so no node repeats its parent */
+                bool progress_made = s->left_n > 0 && s->right_n > 0 &&
+                                     (s->left_n < n || sbox_half_area(&s->left_box) < area) &&
+                                     (s->right_n < n || sbox_half_area(&s->right_box) < area);
+                if (progress_made && added <= B->extra) {
+                    B->extra -= added;
                     return true;
                 }
                 /* over the budget, or a side held everything: the object split instead */
@@ -587,14 +583,16 @@ bool bvh_build_spatial(bvh *out, const bvh_triangles *tris, tess_error *err)
     uint32_t count = tris->count;
     if (count == 0)
         return true;
-    builder B = {.tris = tris, .refs_total = count, .refs_budget = bvh_spatial_reference_budget(count)};
-    if (B.refs_budget >= UINT32_MAX / 2)
+    builder B = {.tris = tris};
+    uint64_t budget = bvh_spatial_reference_budget(count);
+    if (budget >= UINT32_MAX / 2)
         return tess_error_set(err, "bvh: too many triangles for spatial splits (%u)", count);
     progress report;
     progress_begin(&report, "building SBVH", count, "tri");
     B.report = &report;
     node_item stack[BVH_MAX_DEPTH + 1];
     int top = 0;
+    B.extra = budget - count;
     node_item root = {0, 1, malloc((size_t)count * sizeof(sref)), count, sbox_empty()};
     bool ok = root.refs && grow_nodes(&B);
     if (ok) {
