@@ -378,7 +378,8 @@ typedef struct builder {
     uint64_t extra; /* references chopping may still add (the budget's rest), shared first come */
     float root_area;
     uint32_t depth;
-    progress *report;
+    progress *report;   /* references placed in leaves, told up to the triangle count */
+    uint64_t reported;
 } builder;
 
 static bool grow_nodes(builder *B)
@@ -588,7 +589,7 @@ bool bvh_build_spatial(bvh *out, const bvh_triangles *tris, tess_error *err)
     if (budget >= UINT32_MAX / 2)
         return tess_error_set(err, "bvh: too many triangles for spatial splits (%u)", count);
     progress report;
-    progress_begin(&report, "building SBVH", count, "tri");
+    progress_begin(&report, "building SBVH", count, "ref");
     B.report = &report;
     node_item stack[BVH_MAX_DEPTH + 1];
     int top = 0;
@@ -630,7 +631,10 @@ bool bvh_build_spatial(bvh *out, const bvh_triangles *tris, tess_error *err)
         }
         if (!split) {
             ok = emit_leaf(&B, &it);
-            progress_add(&report, it.n);
+            /* references outnumber triangles: the report stops at the triangle count */
+            uint64_t told = B.reported + it.n < count ? it.n : count - B.reported;
+            progress_add(&report, told);
+            B.reported += told;
             free(it.refs);
             continue;
         }
