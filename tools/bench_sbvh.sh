@@ -113,26 +113,18 @@ run() {
         fi
         line=$(grep '^BENCH ' "$WORK/run.out" | tail -n 1)
         other=$(kv "$line" cpu_other)
-        if awk -v o="$other" -v lim="$NOISE_LIMIT" 'BEGIN { exit !(o >= 0 && o <= lim) }'; then
-            status=clean
-        else
-            status=noisy
-        fi
+        status=$(noise_status "$other" "$NOISE_LIMIT")
         echo "bench_sbvh: $(basename "$r_mesh") $r_variant $r_kind: $(kv "$line" prim_mrays) / $(kv "$line" total_mrays)" \
             "Mrays/s, build $(kv "$line" build_s) s ($status, cpu_other $other)" >&2
-        if [ "$status" = clean ] || [ "$attempt" -ge "$MAX_ATTEMPTS" ]; then
-            printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$(basename "$r_mesh")" "$r_variant" "$r_kind" \
-                "$status" "$(kv "$line" prim_mrays)" "$(kv "$line" total_mrays)" "$(kv "$line" build_s)" \
-                "$(kv "$line" bytes_per_tri)" "$(kv "$line" triangles)" "$(kv "$line" references)" "$other" >> "$LOG"
-            return 0
-        fi
-        attempt=$((attempt + 1))
+        [ "$status" = noisy ] && [ "$attempt" -lt "$MAX_ATTEMPTS" ] && { attempt=$((attempt + 1)); continue; }
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$(basename "$r_mesh")" "$r_variant" "$r_kind" \
+            "$status" "$(kv "$line" prim_mrays)" "$(kv "$line" total_mrays)" "$(kv "$line" build_s)" \
+            "$(kv "$line" bytes_per_tri)" "$(kv "$line" triangles)" "$(kv "$line" references)" "$other" >> "$LOG"
+        return 0
     done
 }
 
-cpu_model=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
-start_s=$(date +%s)
-load_at_start=$(uptime | sed 's/.*load average: //')
+bench_started
 for f in $MESHES; do
     r=1
     while [ "$r" -le "$ROUNDS" ]; do
