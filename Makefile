@@ -60,7 +60,7 @@ LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
 .PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall scaling-model clean check-headers unrobust \
-        gen-assembly ply-replicate bench-massive
+        gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
 
@@ -258,6 +258,12 @@ bench-massive:
 	@sh tools/deps.sh --bench
 	$(MAKE) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) $(EMBREE_PARTS)
 	sh tools/bench_massive.sh
+
+# spatial splits' gain and cost (tools/bench_sbvh.sh): the "## Spatial splits" section of
+# BENCHMARKS.md; not part of make bench
+bench-sbvh:
+	$(MAKE) tessera $(BUILD)/gen-assembly
+	sh tools/bench_sbvh.sh
 
 # ambient occlusion against Embree's AO rays alone (tools/bench_ao.sh): the "## Ambient occlusion"
 # section of BENCHMARKS.md

@@ -48,19 +48,6 @@
 
 /* Bins per axis: 16 is where Wald (2007) found SAH quality saturates for binned builds. */
 #define BVH_BINS 16
-/* Relative costs of one node visit and one leaf block test in the SAH cost model
- * (MacDonald & Booth 1990; Wald 2007): an 8-wide box test and a 4-triangle test.
- * Measured with `tessera bench` on the shared meshes, 1 : 1 and 1 : 2 trace equally
- * fast with the current wide kernels, and 1 : 1 builds ~20 % faster; raise the
- * intersection cost if leaf tests get dearer relative to node visits. */
-#define BVH_COST_TRAVERSAL 1.0f
-#define BVH_COST_INTERSECT 1.0f
-/* Leaf primitives are tested 2^this at a time (4-wide SIMD), so a leaf costs per
- * started block, not per primitive: leaves of 1..4 cost the same. 0 gives the
- * classic per-primitive cost (and, with costs 1 : 1, the original builder's tree). */
-#define BVH_SAH_BLOCK_LOG2 2
-/* Beyond this depth splits are by count (halves), so depth stays below BVH_MAX_DEPTH. */
-#define BVH_SAH_DEPTH_LIMIT 60
 /* Refs per block of the canonical in-place partition: 128 KiB, fits in L2. Part of
  * the output's definition (it fixes the order of refs within large nodes): changing
  * it changes prim_order, never the thread-count independence. */
@@ -334,7 +321,6 @@ static inline float leaf_blocks_of(uint32_t n, unsigned block_log2)
 {
     return (float)((n + (1u << block_log2) - 1) >> block_log2);
 }
-static inline float leaf_blocks(uint32_t n) { return leaf_blocks_of(n, BVH_SAH_BLOCK_LOG2); }
 
 typedef struct split {
     int axis;            /* -1: no split with primitives on both sides */
@@ -1162,7 +1148,7 @@ double bvh_sah_cost(const bvh *b)
         const bvh_node *n = &b->nodes[i];
         /* a root without area (all boxes on one line or point): every node is visited */
         double p = root > 0.0 ? aabb_half_area(n->bounds) / root : 1.0;
-        cost += n->count ? p * BVH_COST_INTERSECT * leaf_blocks(n->count) : p * BVH_COST_TRAVERSAL;
+        cost += n->count ? p * BVH_COST_INTERSECT * bvh_leaf_blocks(n->count) : p * BVH_COST_TRAVERSAL;
     }
     return cost;
 }

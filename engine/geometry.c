@@ -259,6 +259,8 @@ static bool triangles_closed(const void *data)
     size_t edge_count = 0;
     for (uint32_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *idx = m->indices + 3 * (size_t)t;
+        if (m->canon && m->canon[t] != t) /* a repeated copy (spatial splits): its edges count once */
+            continue;
         if (intersect_triangle_degenerate(mesh_point(m, idx[0]), mesh_point(m, idx[1]), mesh_point(m, idx[2])))
             continue;
         for (int e = 0; e < 3; e++) {

@@ -47,6 +47,9 @@ typedef enum geometry_leaf_layout {
 typedef struct geometry_mesh_arrays {
     const float *positions;  /* 3 floats a vertex */
     const uint32_t *indices; /* 3 a triangle, each < the vertex count */
+    /* NULL, or per stored triangle the id it is hit as (mesh.h canon: a
+     * triangle stored once per leaf of a tree with spatial splits) */
+    const uint32_t *canon;
 } geometry_mesh_arrays;
 
 /* A range of values that hides the points whose value lies outside it

@@ -23,6 +23,7 @@ void mesh_destroy(mesh *m)
     free(m->colors);
     free(m->indices);
     free(m->triangle_material);
+    free(m->canon);
     free(m->materials);
     free(m);
 }
@@ -62,6 +63,8 @@ bool mesh_reserve_triangles(mesh *m, uint32_t n)
     if (!grow(&m->indices, n, 3 * sizeof(uint32_t)))
         return false;
     if (m->triangle_material && !grow(&m->triangle_material, n, sizeof(uint32_t)))
+        return false;
+    if (m->canon && !grow(&m->canon, n, sizeof(uint32_t)))
         return false;
     m->triangle_capacity = n;
     return true;
@@ -125,6 +128,8 @@ bool mesh_add_triangle(mesh *m, uint32_t a, uint32_t b, uint32_t c)
     t[2] = c;
     if (m->triangle_material)
         m->triangle_material[m->triangle_count] = 0;
+    if (m->canon) /* a new triangle is its own first copy */
+        m->canon[m->triangle_count] = m->triangle_count;
     m->triangle_count++;
     return true;
 }
@@ -221,6 +226,8 @@ size_t mesh_bytes(const mesh *m)
         bytes += v * 3 * sizeof(float);
     if (m->triangle_material)
         bytes += t * sizeof(uint32_t);
+    if (m->canon)
+        bytes += t * sizeof(uint32_t);
     bytes += m->material_count * sizeof(mesh_material);
     return bytes;
 }
@@ -297,13 +304,54 @@ static bool gather_arrays(void **arrays[], const size_t item_bytes[], int array_
     return true;
 }
 
-bool mesh_permute_triangles(mesh *m, const uint32_t *order, int threads)
+/* The per-triangle arrays gathered through from: count triangles after. */
+static bool gather_triangle_arrays(mesh *m, const uint32_t *from, uint32_t count, int threads)
 {
     void **arrays[2] = {(void **)&m->indices, (void **)&m->triangle_material};
     const size_t item_bytes[2] = {3 * sizeof(uint32_t), sizeof(uint32_t)};
-    if (!gather_arrays(arrays, item_bytes, 2, m->triangle_count, order, threads))
+    if (!gather_arrays(arrays, item_bytes, 2, count, from, threads))
         return false;
-    m->triangle_capacity = m->triangle_count;
+    m->triangle_count = m->triangle_capacity = count;
+    return true;
+}
+
+bool mesh_permute_triangles(mesh *m, const uint32_t *order, int threads)
+{
+    return gather_triangle_arrays(m, order, m->triangle_count, threads);
+}
+
+bool mesh_gather_triangles(mesh *m, const uint32_t *from, uint32_t count, int threads)
+{
+    if (m->canon)
+        return false;
+    /* first_at[t]: where old triangle t is first stored, UINT32_MAX before that */
+    uint32_t *first_at = malloc(((size_t)m->triangle_count + 1) * sizeof *first_at);
+    uint32_t *canon = malloc(((size_t)count + 1) * sizeof *canon);
+    if (!first_at || !canon) {
+        free(first_at);
+        free(canon);
+        return false;
+    }
+    for (uint32_t t = 0; t < m->triangle_count; t++)
+        first_at[t] = UINT32_MAX;
+    uint32_t duplicates = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        if (first_at[from[i]] == UINT32_MAX)
+            first_at[from[i]] = i;
+        canon[i] = first_at[from[i]];
+        duplicates += canon[i] != i;
+    }
+    free(first_at);
+    if (!gather_triangle_arrays(m, from, count, threads)) {
+        free(canon);
+        return false;
+    }
+    if (duplicates == 0) {
+        free(canon);
+        canon = NULL;
+    }
+    m->canon = canon;
+    m->duplicate_count = duplicates;
     return true;
 }
 

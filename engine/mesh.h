@@ -30,6 +30,14 @@ typedef struct mesh {
     uint32_t *triangle_material; /* triangle_count indices into materials, or NULL */
     mesh_material *materials;   /* material_count entries, or NULL */
     uint32_t material_count;
+    /* SPATIAL SPLITS (mesh_tree.c): a tree with spatial splits holds a
+     * triangle in several leaves, and the arrays above then hold it once per
+     * leaf (a reference). canon[t] is the position of stored triangle t's
+     * first copy (canon[canon[t]] == canon[t]): the one id every copy is hit
+     * as. NULL when no triangle is stored twice (no cost for plain meshes).
+     * duplicate_count: stored triangles t with canon[t] != t. */
+    uint32_t *canon;
+    uint32_t duplicate_count;
     /* capacities in elements (vertices / triangles), for the append helpers */
     uint32_t vertex_capacity;
     uint32_t triangle_capacity;
@@ -74,6 +82,15 @@ void mesh_transform(mesh *m, const float xform[12]);
  * old array freed as its new one is filled (mesh.c, REORDERING). False: out
  * of memory, nothing moved. */
 bool mesh_permute_triangles(mesh *m, const uint32_t *order, int threads);
+/* Put the triangles in the order of a tree with spatial splits: stored
+ * triangle i becomes the old triangle from[i] (with its material), for i <
+ * count; from may repeat a triangle, and every triangle that is not in from
+ * is dropped. Sets canon (NULL when nothing repeats) and duplicate_count.
+ * The mesh must have no canon yet. False: out of memory (or a canon
+ * already), nothing moved. */
+bool mesh_gather_triangles(mesh *m, const uint32_t *from, uint32_t count, int threads);
+/* Triangles as loaded: triangle_count less the repeated copies. */
+static inline uint32_t mesh_unique_triangles(const mesh *m) { return m->triangle_count - m->duplicate_count; }
 /* Number the vertices in the order the triangles first use them (unused
  * ones last, in their order), so the vertices of neighbouring triangles are
  * neighbours in memory; the triangles keep their corners. False: out of

@@ -7,20 +7,22 @@
 #include <sys/stat.h>
 
 #include "bvh.h"
+#include "bvh_spatial.h"
 #include "clock.h"
 #include "log.h"
 #include "wbvh.h"
 
 /* What the sections hold and how: bump on any change of the mesh or node
  * layout, of the tree builder's result or of the ordering (mesh_tree.c). */
-#define MESH_CACHE_CONTENT_VERSION 1u
+#define MESH_CACHE_CONTENT_VERSION 2u /* 2: spatial splits' repeated triangles and "canon" */
 
 #define MESH_CACHE_MIN_BYTES_DEFAULT (16ull << 20)
 
 /* The "meta" section: the counts and what the arrays hold. */
 typedef struct mesh_cache_meta {
     uint32_t vertex_count, triangle_count, material_count, node_count;
-    uint32_t has_normals, has_colors, has_triangle_material, reserved;
+    uint32_t has_normals, has_colors, has_triangle_material;
+    uint32_t duplicate_count; /* mesh.h: nonzero iff a "canon" section holds triangle_count ids */
     float coord_abs_max;
     uint32_t reserved2[7];
 } mesh_cache_meta;
@@ -29,6 +31,7 @@ typedef struct mesh_cache_meta {
 typedef struct key_params {
     mesh_cache_params caller;
     uint32_t leaf_max, width, node_bytes, max_depth;
+    uint32_t spatial_bins, spatial_growth_percent; /* 0 without spatial splits */
 } key_params;
 
 uint64_t mesh_cache_min_bytes(void)
@@ -54,6 +57,8 @@ static bool key_of(const char *path, const mesh_cache_params *params, cache_key 
     kp.width = WBVH_WIDTH;
     kp.node_bytes = (uint32_t)sizeof(wbvh_node);
     kp.max_depth = BVH_MAX_DEPTH;
+    if (params->spatial_splits) /* the builder's own limits decide the references */
+        kp.spatial_bins = BVH_SPATIAL_BINS, kp.spatial_growth_percent = (uint32_t)(BVH_SPATIAL_GROWTH * 100.0 + 0.5);
     return cache_hash_file(path, &kp, sizeof kp, key, err);
 }
 
@@ -104,6 +109,8 @@ static mesh *mesh_from_cache(cache_file *c, wbvh **tree_out, tess_error *err)
               (!meta->material_count ||
                (m->materials = (mesh_material *)section(c, "materials", sizeof(mesh_material),
                                                         meta->material_count, err))) &&
+              (!meta->duplicate_count ||
+               (m->canon = (uint32_t *)section(c, "canon", sizeof(uint32_t), meta->triangle_count, err))) &&
               (tree->nodes = (wbvh_node *)section(c, "nodes", sizeof(wbvh_node), meta->node_count, err));
     if (!ok) {
         free(m);
@@ -113,7 +120,8 @@ static mesh *mesh_from_cache(cache_file *c, wbvh **tree_out, tess_error *err)
     tree->kind = WBVH_MESH;
     tree->node_count = meta->node_count;
     tree->coord_abs_max = meta->coord_abs_max;
-    tree->mesh = (geometry_mesh_arrays){m->positions, m->indices};
+    m->duplicate_count = meta->duplicate_count;
+    tree->mesh = (geometry_mesh_arrays){m->positions, m->indices, m->canon};
     tree->ops = &geometry_triangles_ops;
     tree->borrowed = true; /* the nodes are the mapping's */
     m->owner = c;
@@ -190,9 +198,10 @@ void mesh_cache_store(scene_mesh *sm, const wbvh *tree)
     meta.has_normals = m->normals != NULL;
     meta.has_colors = m->colors != NULL;
     meta.has_triangle_material = m->triangle_material != NULL;
+    meta.duplicate_count = m->canon ? m->duplicate_count : 0;
     meta.coord_abs_max = tree->coord_abs_max;
     size_t nv3 = 3 * (size_t)m->vertex_count, nt3 = 3 * (size_t)m->triangle_count;
-    cache_section_source secs[8];
+    cache_section_source secs[9];
     size_t n = 0;
     secs[n++] = (cache_section_source){"meta", &meta, sizeof meta, 1};
     secs[n++] = (cache_section_source){"positions", m->positions, sizeof(float), nv3};
@@ -205,6 +214,8 @@ void mesh_cache_store(scene_mesh *sm, const wbvh *tree)
         secs[n++] = (cache_section_source){"tri_material", m->triangle_material, sizeof(uint32_t), m->triangle_count};
     if (meta.material_count)
         secs[n++] = (cache_section_source){"materials", m->materials, sizeof(mesh_material), meta.material_count};
+    if (meta.duplicate_count)
+        secs[n++] = (cache_section_source){"canon", m->canon, sizeof(uint32_t), m->triangle_count};
     secs[n++] = (cache_section_source){"nodes", tree->nodes, sizeof(wbvh_node), tree->node_count};
     double start = clock_monotonic_s();
     if (cache_path_for_key(key, path, sizeof path, &why) &&

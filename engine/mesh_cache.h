@@ -24,6 +24,7 @@
 typedef struct mesh_cache_params {
     float xform[12];         /* row-major [R|t] applied after loading (the identity when none) */
     uint32_t drop_materials; /* 1: the file's own materials are dropped (a scene names one) */
+    uint32_t spatial_splits; /* 1: the tree is built with spatial splits (scene_mesh.spatial_splits) */
 } mesh_cache_params;
 
 typedef enum mesh_cache_state {

@@ -487,7 +487,7 @@ size_t scene_triangle_count(const scene *s)
 {
     size_t total = 0;
     for (uint32_t i = 0; i < s->mesh_count; i++)
-        total += s->meshes[i]->mesh->triangle_count;
+        total += mesh_unique_triangles(s->meshes[i]->mesh);
     return total;
 }
 
@@ -497,7 +497,7 @@ size_t scene_instanced_triangle_count(const scene *s)
     for (uint32_t i = 0; i < s->instance_count; i++) {
         const scene_geometry *g = scene_instance_geometry(s, i);
         if (g->ops == &geometry_triangles_ops)
-            total += g->ops->prim_count(g->data);
+            total += mesh_unique_triangles(((const scene_mesh *)g->data)->mesh);
     }
     return total;
 }
@@ -542,10 +542,11 @@ static const char *path_basename(const char *path)
 static scene *scene_load_particle_file(const char *path, tess_error *err);
 
 /* A scene of one mesh file in file coordinates, the default material and light. */
-static scene *scene_load_mesh_file(const char *path, tess_error *err)
+static scene *scene_load_mesh_file(const char *path, bool spatial_splits, tess_error *err)
 {
     mesh_cache_params params;
     memset(&params, 0, sizeof params);
+    params.spatial_splits = spatial_splits;
     memcpy(params.xform, (const float[12]){1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0}, sizeof params.xform);
     mesh_cache_load cached;
     mesh *m = mesh_cache_load_file(path, &params, &cached, err);
@@ -568,8 +569,10 @@ static scene *scene_load_mesh_file(const char *path, tess_error *err)
     light def_light = light_default_directional();
     int mat_id = s ? scene_add_material(s, &def_mat) : -1;
     int mesh_id = mat_id < 0 ? -1 : scene_add_mesh(s, m, (uint32_t)mat_id, path_basename(path));
-    if (mesh_id >= 0)
+    if (mesh_id >= 0) {
+        s->meshes[mesh_id]->spatial_splits = spatial_splits;
         mesh_cache_adopt(s->meshes[mesh_id], &cached);
+    }
     else
         mesh_cache_abandon(&cached);
     if (mesh_id < 0 || scene_add_light(s, &def_light) < 0) {
@@ -643,15 +646,20 @@ static scene *scene_load_assembly_file(const char *path, tess_error *err)
     return s;
 }
 
-scene *scene_load(const char *path, tess_error *err)
+scene *scene_load(const char *path, tess_error *err) { return scene_load_with(path, NULL, err); }
+
+scene *scene_load_with(const char *path, const scene_load_options *opts, tess_error *err)
 {
+    const scene_load_options none = {0};
+    if (!opts)
+        opts = &none;
     if (has_extension(path, ".json"))
-        return scene_load_json(path, err);
+        return scene_load_json_with(path, opts, err);
     if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
         return scene_load_assembly_file(path, err);
     if (has_extension(path, ".dump") || has_extension(path, ".lammpstrj"))
         return scene_load_particle_file(path, err);
-    return scene_load_mesh_file(path, err);
+    return scene_load_mesh_file(path, opts->spatial_splits, err);
 }
 
 size_t scene_point_count(const scene *s)

@@ -63,6 +63,10 @@ typedef struct scene_mesh {
     uint32_t *mesh_material_ids; /* mesh->material_count scene material ids for a mesh with its own
                                     materials (OBJ+MTL), else NULL; owned */
     char name[SCENE_NAME_BYTES];
+    /* build its tree with spatial splits (bvh_spatial.h; set before the
+     * first accel build, part of the cache key): the mesh then stores a
+     * triangle once per leaf that holds it (mesh.h canon) */
+    bool spatial_splits;
     /* its wide BVH (mesh_tree.h), NULL until the first accel is built;
      * building it put the mesh in the tree's order. Owned */
     _Atomic(struct wbvh *) tree;
@@ -312,5 +316,17 @@ scene *scene_load_json(const char *path, tess_error *err);
  * names the text in messages, and relative mesh paths resolve from its
  * directory. */
 scene *scene_parse_json(const char *path, const char *text, size_t len, tess_error *err);
+
+/* What a caller decides of a scene beyond its file (all false: scene_load). */
+typedef struct scene_load_options {
+    /* meshes get trees with spatial splits: a mesh file, and every JSON
+     * "meshes" entry that does not say "spatial_splits" itself (assembly
+     * parts never) */
+    bool spatial_splits;
+} scene_load_options;
+scene *scene_load_with(const char *path, const scene_load_options *opts, tess_error *err);
+scene *scene_load_json_with(const char *path, const scene_load_options *opts, tess_error *err);
+scene *scene_parse_json_with(const char *path, const char *text, size_t len, const scene_load_options *opts,
+                             tess_error *err);
 
 #endif

@@ -110,6 +110,7 @@ typedef struct loader {
     size_t dir_len;           /* bytes of ctx.path up to and including its last '/', 0 if none */
     uint32_t named_materials; /* scene materials 0..n-1 are the file's "materials", in file order */
     int default_material;     /* scene id of the fallback material, -1 until something needs it */
+    scene_load_options opts;  /* the caller's defaults */
 } loader;
 
 static bool out_of_memory(loader *L)
@@ -477,14 +478,15 @@ static bool skip_missing(const loader *L, const char *resolved, bool optional)
 
 static bool load_mesh(loader *L, json_object *v)
 {
-    static const char *const fields[] = {"file", "material", "transform", "matrix", "optional", NULL};
+    static const char *const fields[] = {"file", "material", "transform", "matrix", "optional", "spatial_splits", NULL};
     jr_ctx *c = &L->ctx;
     const char *material_name = NULL;
-    bool optional;
+    bool optional, spatial_splits = L->opts.spatial_splits;
     float xform[12];
     char resolved[MESH_PATH_BYTES];
     if (!jr_expect_object(c, v) || !jr_check_fields(c, v, fields) || !jr_require_member(c, v, "file") ||
-        !jr_opt_string(c, v, "material", &material_name) || !entry_path(L, v, "file", resolved, xform, &optional))
+        !jr_opt_string(c, v, "material", &material_name) || !jr_opt_bool(c, v, "spatial_splits", &spatial_splits) ||
+        !entry_path(L, v, "file", resolved, xform, &optional))
         return false;
     int named = material_name ? find_material(L, material_name) : -1;
     if (material_name && named < 0)
@@ -496,6 +498,7 @@ static bool load_mesh(loader *L, json_object *v)
     memset(&params, 0, sizeof params);
     memcpy(params.xform, xform, sizeof params.xform);
     params.drop_materials = named >= 0;
+    params.spatial_splits = spatial_splits;
     mesh_cache_load cached;
     mesh *m = mesh_cache_load_file(resolved, &params, &cached, &why);
     if (!m)
@@ -519,6 +522,7 @@ static bool load_mesh(loader *L, json_object *v)
         return out_of_memory(L);
     }
     scene_mesh *sm = L->s->meshes[id];
+    sm->spatial_splits = spatial_splits;
     mesh_cache_adopt(sm, &cached);
     if (sm->mesh_material_ids) /* keep material_id a valid index even where it is unused */
         sm->material_id = sm->mesh_material_ids[0];
@@ -746,22 +750,32 @@ static bool load_scene(loader *L, json_object *root)
     return true;
 }
 
-scene *scene_load_json(const char *path, tess_error *err)
+scene *scene_load_json(const char *path, tess_error *err) { return scene_load_json_with(path, NULL, err); }
+
+scene *scene_load_json_with(const char *path, const scene_load_options *opts, tess_error *err)
 {
     size_t len = 0;
     char *text = jr_read_file(path, SCENE_JSON_MAX_BYTES, "a scene file", &len, err);
     if (!text)
         return NULL;
-    scene *s = scene_parse_json(path, text, len, err);
+    scene *s = scene_parse_json_with(path, text, len, opts, err);
     free(text);
     return s;
 }
 
 scene *scene_parse_json(const char *path, const char *text, size_t len, tess_error *err)
 {
+    return scene_parse_json_with(path, text, len, NULL, err);
+}
+
+scene *scene_parse_json_with(const char *path, const char *text, size_t len, const scene_load_options *opts,
+                             tess_error *err)
+{
     json_object *root = NULL;
     bool ok = jr_parse(path, text, len, &root, err);
     loader L = {.ctx = {.path = path, .err = err}, .default_material = -1};
+    if (opts)
+        L.opts = *opts;
     const char *slash = strrchr(path, '/');
     L.dir_len = slash ? (size_t)(slash - path) + 1 : 0;
     L.s = ok ? scene_create() : NULL;

@@ -40,6 +40,21 @@ wait_quiet() {
     WAIT_MS=$((WAIT_MS + $(now_ms) - w0))
 }
 
+# noise_status CPU_OTHER LIMIT: "clean" when the other programs' CPU share of a run (tessera
+# bench's cpu_other) is known (>= 0) and at most LIMIT, else "noisy"
+noise_status() {
+    if awk -v o="$1" -v lim="$2" 'BEGIN { exit !(o >= 0 && o <= lim) }'; then echo clean; else echo noisy; fi
+}
+
+# bench_started: sets cpu_model (lscpu's name), start_s (now, seconds) and load_at_start (uptime's
+# load averages), what a section's heading line reports
+# shellcheck disable=SC2034 # the three are the caller's
+bench_started() {
+    cpu_model=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
+    start_s=$(date +%s)
+    load_at_start=$(uptime | sed 's/.*load average: //')
+}
+
 # median of the numbers on stdin (one per line)
 median() { sort -g | awk '{ v[NR] = $1 } END { if (NR == 0) print 0; else if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 

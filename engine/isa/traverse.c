@@ -167,10 +167,11 @@ static inline v4 lanes_of(const float *const p[WBVH_BLOCK], int axis)
 }
 
 /* One ray against 4 triangles of a mesh leaf, corners p0[i], p1[i], p2[i] of
- * lane i (zero_vertex in unused lanes), ids base + i for the lanes of
+ * lane i (zero_vertex in unused lanes), id ids[i], for the lanes of
  * `valid`. Returns whether a hit was recorded (any: found). */
 static bool triangles4_1(const float *const p0[WBVH_BLOCK], const float *const p1[WBVH_BLOCK],
-                         const float *const p2[WBVH_BLOCK], uint32_t base, unsigned valid, uint32_t geom_id, ray *r,
+                         const float *const p2[WBVH_BLOCK], const uint32_t ids[WBVH_BLOCK], unsigned valid,
+                         uint32_t geom_id, ray *r,
                          const ray_derived *d, hit *h, bool any)
 {
     const float org[3] = {r->org.x, r->org.y, r->org.z};
@@ -225,14 +226,14 @@ static bool triangles4_1(const float *const p0[WBVH_BLOCK], const float *const p
     bool found = false;
     for (int i = 0; i < WBVH_BLOCK; i++) {
         if (hits >> i & 1u)
-            found |= offer1(r, d, h, t_lane[i], u_lane[i], v_lane[i], geom_id, base + (uint32_t)i);
+            found |= offer1(r, d, h, t_lane[i], u_lane[i], v_lane[i], geom_id, ids[i]);
         else if (on_edge >> i & 1u) {
             float te, ue, ve;
             if (intersect_triangle(r, d, v3(p0[i][0], p0[i][1], p0[i][2]), v3(p1[i][0], p1[i][1], p1[i][2]),
                                    v3(p2[i][0], p2[i][1], p2[i][2]), &te, &ue, &ve)) {
                 if (any)
                     return true;
-                found |= offer1(r, d, h, te, ue, ve, geom_id, base + (uint32_t)i);
+                found |= offer1(r, d, h, te, ue, ve, geom_id, ids[i]);
             }
         }
     }
@@ -399,21 +400,24 @@ static bool mesh_leaf1(const wbvh *w, uint32_t first, uint32_t count, uint32_t g
                        hit *h, bool any)
 {
     const float *pos = w->mesh.positions;
+    const uint32_t *canon = w->mesh.canon; /* NULL: a triangle's id is its place */
     bool found = false;
     for (uint32_t k = first; k < first + count; k += WBVH_BLOCK) {
         const float *p0[WBVH_BLOCK], *p1[WBVH_BLOCK], *p2[WBVH_BLOCK];
+        uint32_t ids[WBVH_BLOCK] = {RAY_INVALID_ID, RAY_INVALID_ID, RAY_INVALID_ID, RAY_INVALID_ID};
         const uint32_t lanes = first + count - k < WBVH_BLOCK ? first + count - k : WBVH_BLOCK;
         for (uint32_t lane = 0; lane < WBVH_BLOCK; lane++) {
             if (lane >= lanes) {
                 p0[lane] = p1[lane] = p2[lane] = zero_vertex;
                 continue;
             }
-            const uint32_t *idx = w->mesh.indices + 3 * (size_t)(k + lane);
+            const uint32_t prim = k + lane, *idx = w->mesh.indices + 3 * (size_t)prim;
             p0[lane] = pos + 3 * (size_t)idx[0];
             p1[lane] = pos + 3 * (size_t)idx[1];
             p2[lane] = pos + 3 * (size_t)idx[2];
+            ids[lane] = canon ? canon[prim] : prim;
         }
-        if (triangles4_1(p0, p1, p2, k, (1u << lanes) - 1u, geom_id, r, d, h, any)) {
+        if (triangles4_1(p0, p1, p2, ids, (1u << lanes) - 1u, geom_id, r, d, h, any)) {
             if (any)
                 return true;
             found = true;
@@ -1110,13 +1114,15 @@ static void leaf_packet(packet_ctx *c, uint32_t ref, uint64_t mask)
         __builtin_prefetch(pos + 3 * (size_t)idx[1]);
         __builtin_prefetch(pos + 3 * (size_t)idx[2]);
     }
+    const uint32_t *canon = w->mesh.canon; /* NULL: a triangle's id is its place */
     for (uint32_t prim = first; prim < first + count; prim++) {
         const uint32_t *idx = w->mesh.indices + 3 * (size_t)prim;
         const float *v0 = pos + 3 * (size_t)idx[0], *v1 = pos + 3 * (size_t)idx[1], *v2 = pos + 3 * (size_t)idx[2];
+        const uint32_t id = canon ? canon[prim] : prim;
         for (int o = 0; o < c->order_count; o++) {
             uint64_t m = mask & c->order_mask[o] & ~c->done;
             if (m)
-                triangle_rays(c, v0, v1, v2, prim, c->order_axes[o], m);
+                triangle_rays(c, v0, v1, v2, id, c->order_axes[o], m);
         }
     }
 }

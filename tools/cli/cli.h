@@ -56,6 +56,10 @@ typedef struct cli_scene {
  * `threads` threads; report sizes and times on stderr. On failure prints the
  * error and returns false (cli_scene_finish still frees what was made). */
 bool cli_scene_prepare(const char *scene_path, int threads, cli_scene *out);
+/* The same with load options (scene.h; NULL: none). */
+struct scene_load_options;
+bool cli_scene_prepare_with(const char *scene_path, const struct scene_load_options *opts, int threads,
+                            cli_scene *out);
 /* The camera: `given` (may be NULL), else the scene's, else the bounds framed
  * by the peer harness's rule for a W x H image; validated. */
 bool cli_scene_camera(const cli_scene *cs, const camera_desc *given, int width_px, int height_px, camera_desc *out);

@@ -76,6 +76,7 @@ typedef struct bench_options {
     render_settings settings; /* ao_rays, ao_distance, ao_interleave, ao_filter_px for --renderer ao */
     float opacity;          /* --opacity: every surface's opacity (1: opaque, the plain path) */
     int tile_px;            /* --tile-size: tile edge in pixels */
+    bool spatial_splits;    /* --spatial-splits: meshes' trees with spatial splits (bvh_spatial.h) */
 } bench_options;
 
 /* One timed frame. */
@@ -116,6 +117,9 @@ static void bench_usage(FILE *f)
           "  --single-rays    trace every ray alone (the single-ray kernels from the root, as\n"
           "                   Embree's rtcIntersect1 / embree_bench -m single), not in packets:\n"
           "                   the same image, for timing the packet path against single rays\n"
+          "  --spatial-splits build the meshes' trees with spatial splits (SBVH): a mesh file,\n"
+          "                   --flatten's mesh, and JSON \"meshes\" entries without their own\n"
+          "                   \"spatial_splits\" (default: off)\n"
           "  --opacity A      every surface's opacity, 0..1 (default 1): below 1 rays blend the\n"
           "                   surfaces they cross front to back (docs/inspection.md), with the\n"
           "                   default limits (transmittance 1/255, 16 layers)\n"
@@ -160,7 +164,8 @@ static void bench_usage(FILE *f)
           "        frame_ms_min= frame_ms_max= hit_rate= bytes_per_tri= mesh_bytes= accel_bytes=\n"
           "        cpu_other= hits= instances= geometries= triangles_instanced= bytes_per_instanced_tri=\n"
           "        renderer=NAME opacity= secondary_rays_frame= tile_px= points= point_bytes=\n"
-          "        bytes_per_point= peak_rss_mb= rss_after_build_mb= cache= and, with --renderer ao, ao_rays=\n"
+          "        bytes_per_point= peak_rss_mb= rss_after_build_mb= cache= spatial_splits= references=\n"
+          "        and, with --renderer ao, ao_rays=\n"
           "        ao_interleave= ao_filter= ao_dist=\n"
           "        ao_rays_frame= ao_mrays= primary_rays_frame=\n"
           "  scene            the --scene value ('default' for the built-in scene); whitespace and\n"
@@ -196,6 +201,9 @@ static void bench_usage(FILE *f)
           "  cache            the structure cache (README, \"Structure cache\") over the meshes:\n"
           "                   hit (every cached mesh and its tree mapped from it), written (built,\n"
           "                   then written), failed (built; writing failed), unused (none cached)\n"
+          "  spatial_splits   1 with --spatial-splits, else 0\n"
+          "  references       triangles the meshes store: one per leaf holding a triangle, so\n"
+          "                   more than `triangles` where spatial splits repeated some\n"
           "  renderer         eyelight or ao\n"
           "  opacity          --opacity's value (1: opaque)\n"
           "  secondary_rays_frame  rays of the last frame traced past their first surface (transparency)\n"
@@ -320,6 +328,8 @@ static bool parse_options(int argc, char **argv, bench_options *o, int *exit_cod
             o->opacity = (float)op;
         } else if (!strcmp(a, "--flatten")) {
             o->flatten = true;
+        } else if (!strcmp(a, "--spatial-splits")) {
+            o->spatial_splits = true;
         } else if (!strcmp(a, "--part-txns")) {
             if (!(val = cli_option_value(argc, argv, &i)) ||
                 !cli_parse_int(a, val, 1, BENCH_MAX_PART_TXNS, &o->part_txns))
@@ -413,7 +423,7 @@ static bool write_pfm_grey(const char *path, int width_px, int height_px, const 
 /* --flatten: the file's geometry as one mesh (mesh_load bakes the node
  * transforms), in a scene made as scene_load makes one of a mesh file: the
  * default material and light. Timed and reported like cli_scene_prepare. */
-static bool prepare_flat(const char *path, int threads, cli_scene *cs)
+static bool prepare_flat(const char *path, int threads, bool spatial_splits, cli_scene *cs)
 {
     *cs = (cli_scene){.name = path};
     tess_error err = {{0}};
@@ -439,6 +449,7 @@ static bool prepare_flat(const char *path, int threads, cli_scene *cs)
         cli_error("%s: out of memory building the scene", path);
         return false;
     }
+    cs->scene->meshes[0]->spatial_splits = spatial_splits;
     double t1 = cli_now_s();
     cs->accel = accel_build(cs->scene, threads, &err);
     if (!cs->accel) {
@@ -458,7 +469,9 @@ static bool prepare_flat(const char *path, int threads, cli_scene *cs)
  * embree_bench's syntax. On failure prints the error and returns false. */
 static bool prepare(bench_options *o, cli_scene *cs)
 {
-    if (!(o->flatten ? prepare_flat(o->scene_path, o->threads, cs) : cli_scene_prepare(o->scene_path, o->threads, cs)))
+    scene_load_options load = {.spatial_splits = o->spatial_splits};
+    if (!(o->flatten ? prepare_flat(o->scene_path, o->threads, o->spatial_splits, cs)
+                     : cli_scene_prepare_with(o->scene_path, &load, o->threads, cs)))
         return false;
     if (o->isa && !accel_use_isa(cs->accel, o->isa)) {
         cli_error("--isa: this CPU cannot run the %s kernels", o->isa);
@@ -594,6 +607,10 @@ static void print_result(const bench_options *o, const render_view *view, double
                         : by_state[MESH_CACHE_WRITTEN] ? "written"
                         : by_state[MESH_CACHE_HIT]     ? "hit"
                                                        : "unused");
+    size_t references = 0;
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        references += s->meshes[i]->mesh->triangle_count;
+    printf(" spatial_splits=%d references=%zu", o->spatial_splits ? 1 : 0, references);
     if (o->ao) {
         for (int f = 0; f < n; f++) {
             double sec = samples[f].seconds > 0.0 ? samples[f].seconds : 1e-9;

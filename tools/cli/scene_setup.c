@@ -9,10 +9,16 @@
 
 bool cli_scene_prepare(const char *scene_path, int threads, cli_scene *out)
 {
+    return cli_scene_prepare_with(scene_path, NULL, threads, out);
+}
+
+bool cli_scene_prepare_with(const char *scene_path, const struct scene_load_options *opts, int threads,
+                            cli_scene *out)
+{
     *out = (cli_scene){.name = scene_path ? scene_path : "(built-in default)"};
     tess_error err = {{0}};
     double t0 = cli_now_s();
-    out->scene = scene_path ? scene_load(scene_path, &err) : scene_create_default(&err);
+    out->scene = scene_path ? scene_load_with(scene_path, opts, &err) : scene_create_default(&err);
     if (!out->scene) {
         cli_error("%s", err.msg);
         return false;
