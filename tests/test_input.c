@@ -23,7 +23,7 @@
 #include "input/sink.h"
 #include "input/source.h"
 #include "support.h"
-#include "wall/display.h"
+#include "wall/display_backend.h"
 #include "wall/wall_config.h"
 #include "wall/wall_headless.h"
 
