@@ -15,7 +15,7 @@
 #include "engine/clock.h"
 #include "engine/thread_name.h"
 #include "engine/log.h"
-#include "wall/session.h"
+#include "seat/session.h"
 
 #define SEAT_CHECK_MS 200 /* with a seat: how often the input thread looks whether it is still ours */
 

@@ -17,7 +17,7 @@
 
 #include "engine/clock.h"
 #include "engine/log.h"
-#include "wall/session.h"
+#include "seat/session.h"
 
 #define PATH_RETRY_S 1.0
 #define SCROLL_FINGER_PX_PER_CLICK 15.0 /* touchpad two-finger scroll: pixels that make one wheel click */

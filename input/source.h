@@ -5,7 +5,7 @@
  * device udev gives that seat, added and removed while running), or, when
  * device paths are given, the path backend with exactly those (a path that
  * is missing or vanished is tried again every second). Device nodes are
- * opened through the seat (session.h) when there is one, else directly.
+ * opened through the seat (seat/session.h) when there is one, else directly.
  *
  * Placement on the plane (event.h): an absolute device (touchscreen, tablet
  * or absolute pointer) covers the output a rule names (matched by the

@@ -18,7 +18,7 @@
 #include "edid.h"
 #include "engine/log.h"
 #include "engine/pipeline.h"
-#include "session.h"
+#include "seat/session.h"
 #include "xrgb.h"
 
 #define DRM_MAX_CARDS 16

@@ -39,7 +39,7 @@
 typedef struct drm_card drm_card;
 typedef struct session session;
 
-/* Open a card through the session (wall/session.h: libseat, or direct as
+/* Open a card through the session (seat/session.h: libseat, or direct as
  * root): `path`, or NULL for the first /dev/dri/cardN that has a connected
  * connector. NULL with err (no card, not permitted, not master). The session
  * must outlive the card; VT switches it reports pause the wall (the display

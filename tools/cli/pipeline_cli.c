@@ -15,7 +15,7 @@
 #include "option_check.h"
 #include "wall/display_backend.h"
 #include "wall/drm.h"
-#include "wall/session.h"
+#include "seat/session.h"
 #include "wall/wall_headless.h"
 
 #define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
