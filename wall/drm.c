@@ -220,7 +220,11 @@ drm_card *drm_card_open(const char *path, session *sn, tess_error *err)
         return NULL;
     }
     drmSetClientCap(c->fd, DRM_CLIENT_CAP_UNIVERSAL_PLANES, 1);
-    c->kms = drmSetClientCap(c->fd, DRM_CLIENT_CAP_ATOMIC, 1) == 0 ? &drm_kms_atomic : &drm_kms_legacy;
+    /* TESSERA_DRM_NO_ATOMIC=1 (as wlroots' WLR_DRM_NO_ATOMIC): the legacy path on a card that has atomic,
+     * for a driver whose atomic support misbehaves, and for tests/vm_wall.sh to drive both paths */
+    const char *no_atomic = getenv("TESSERA_DRM_NO_ATOMIC");
+    bool atomic = !(no_atomic && !strcmp(no_atomic, "1")) && drmSetClientCap(c->fd, DRM_CLIENT_CAP_ATOMIC, 1) == 0;
+    c->kms = atomic ? &drm_kms_atomic : &drm_kms_legacy;
     struct stat st;
     if (fstat(c->fd, &st) == 0)
         c->devnum = st.st_rdev;

@@ -5,8 +5,9 @@
  * -> drm_card_connectors -> wall_config_match_device -> drm_wall_start (a CRTC
  * and its primary plane per output, four XRGB8888 dumb buffers and a black one
  * each, the mode set with one atomic commit tested first with TEST_ONLY, or the
- * legacy API where atomic is missing: the two paths are drm_atomic.c and
- * drm_legacy.c behind drm_card.h's drm_kms_ops) -> drm_wall_attach (the pipeline whose
+ * legacy API where atomic is missing or TESSERA_DRM_NO_ATOMIC=1: the two paths
+ * are drm_atomic.c and drm_legacy.c behind drm_card.h's drm_kms_ops) ->
+ * drm_wall_attach (the pipeline whose
  * channels the outputs are) -> frames through the displays it returns ->
  * drm_card_close (restores the saved CRTCs, frees the buffers).
  *
