@@ -1,6 +1,6 @@
 /* srgb.h - the sRGB transfer curve (IEC 61966-2-1) in double, both ways:
- * code values in [0, 1] <-> linear values in [0, 1]. The dump backend's
- * 8-bit encoder (wall/dump_oiio.cpp) is exact to this curve; the image
+ * code values in [0, 1] <-> linear values in [0, 1]. The 8-bit encoder of
+ * scan-out and image files (wall/srgb8.h) is exact to this curve; the image
  * reader, the FLIP error map's colours and the FLIP check's pairs use it too. */
 #ifndef TESSERA_SRGB_H
 #define TESSERA_SRGB_H

@@ -1,6 +1,7 @@
 /* runner.c - the input thread (runner.h). */
 #include "input/runner.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <poll.h>
 #include <pthread.h>
@@ -15,13 +16,14 @@
 #include "engine/clock.h"
 #include "engine/thread_name.h"
 #include "engine/log.h"
-#include "wall/session.h"
+#include "seat/session.h"
 
 #define SEAT_CHECK_MS 200 /* with a seat: how often the input thread looks whether it is still ours */
 
 struct input_runner {
     struct session *sn;       /* the seat (NULL: none): its devices are revoked on a VT switch */
-    input_source *source;
+    input_source *sources[INPUT_MAX_SOURCES]; /* owned; polled through their interface alone */
+    int source_count;
     input_controller *controller;
     input_sink *sink;
     input_pick_fn pick;
@@ -81,28 +83,39 @@ static void *input_main(void *arg)
             if (wait_us < 1000000u)
                 timeout_ms = (int)((wait_us + 999u) / 1000u);
         }
-        struct pollfd fds[2] = {{.fd = input_source_fd(r->source), .events = POLLIN},
-                                {.fd = r->wake_fd, .events = POLLIN}};
-        int n = poll(fds, 2, timeout_ms);
+        struct pollfd fds[INPUT_MAX_SOURCES + 1];
+        for (int i = 0; i < r->source_count; i++)
+            fds[i] = (struct pollfd){.fd = input_source_fd(r->sources[i]), .events = POLLIN};
+        fds[r->source_count] = (struct pollfd){.fd = r->wake_fd, .events = POLLIN};
+        int n = poll(fds, (nfds_t)r->source_count + 1, timeout_ms);
         if (n < 0 && errno != EINTR) {
             log_error("input: poll failed: %s; input stops", strerror(errno));
             break;
         }
         if (atomic_load(&r->stop))
             break;
-        /* a VT switch: the seat revokes our devices; release them in libinput and take them back
-         * on return (the display thread acknowledges the switch; this thread only follows it) */
-        if (seat && !session_active(r->sn))
-            input_source_suspend(r->source);
-        else if (seat && input_source_suspended(r->source))
-            input_source_resume(r->source);
-        if (!input_source_dispatch(r->source, on_event, r)) {
-            log_error("input: libinput failed; input stops (the wall goes on)");
-            break;
+        /* a VT switch: the seat revokes our devices; release them and take them back on return
+         * (the display thread acknowledges the switch; this thread only follows it) */
+        bool failed = false, all_resumed = true;
+        int devices = 0;
+        for (int i = 0; i < r->source_count && !failed; i++) {
+            input_source *src = r->sources[i];
+            if (seat && !session_active(r->sn))
+                input_source_suspend(src);
+            else if (seat && input_source_suspended(src))
+                input_source_resume(src);
+            if (!input_source_dispatch(src, on_event, r)) {
+                log_error("input: %s failed; input stops (the wall goes on)", src->ops->name);
+                failed = true;
+            }
+            all_resumed = all_resumed && !input_source_suspended(src);
+            devices += input_source_device_count(src);
         }
-        if (!said_devices && !input_source_suspended(r->source)) { /* the first events are the devices */
+        if (failed)
+            break;
+        if (!said_devices && all_resumed) { /* the first events are the devices */
             said_devices = true;
-            if (input_source_device_count(r->source) == 0)
+            if (devices == 0)
                 log_warn("input: no input device found (a wrong --seat or --input-device?); they are picked up "
                          "when they appear");
         }
@@ -113,15 +126,22 @@ static void *input_main(void *arg)
     return NULL;
 }
 
-input_runner *input_runner_start(const input_source_config *source, const input_controller_config *controller,
-                                 input_pick_fn pick, input_step_ready_fn step_ready, void *pick_ctx,
-                                 input_sink *sink, struct session *sn, tess_error *err)
+input_runner *input_runner_start(input_source *const *sources, int source_count,
+                                 const input_controller_config *controller, input_pick_fn pick,
+                                 input_step_ready_fn step_ready, void *pick_ctx, input_sink *sink, struct session *sn,
+                                 tess_error *err)
 {
+    assert(source_count >= 1 && source_count <= INPUT_MAX_SOURCES);
     input_runner *r = calloc(1, sizeof *r);
     if (!r) {
+        for (int i = 0; i < source_count; i++)
+            input_source_destroy(sources[i]);
         tess_error_set(err, "input: out of memory");
         return NULL;
     }
+    for (int i = 0; i < source_count; i++)
+        r->sources[i] = sources[i];
+    r->source_count = source_count;
     r->sink = sink;
     r->pick = pick;
     r->step_ready = step_ready;
@@ -138,9 +158,6 @@ input_runner *input_runner_start(const input_source_config *source, const input_
         goto fail;
     }
     r->sn = sn;
-    r->source = input_source_open(source, sn, err);
-    if (!r->source)
-        goto fail;
     if (pthread_create(&r->thread, NULL, input_main, r) != 0) {
         tess_error_set(err, "input: cannot start the input thread");
         goto fail;
@@ -163,7 +180,8 @@ void input_runner_stop(input_runner *r)
             log_warn("input: waking the input thread failed: %s", strerror(errno));
         pthread_join(r->thread, NULL);
     }
-    input_source_close(r->source);
+    for (int i = 0; i < r->source_count; i++)
+        input_source_destroy(r->sources[i]);
     input_controller_destroy(r->controller);
     if (r->wake_fd >= 0)
         close(r->wake_fd);

@@ -1,11 +1,13 @@
-/* runner.h - the input thread: polls libinput (source.h), feeds the mapping
- * layer (controller.h) and its clock, and hands what it says to the sink
- * (sink.h), which queues pipeline transactions. Nothing here touches
- * renderer state.
+/* runner.h - the input thread: polls its input sources (source.h, through
+ * their interface only: libinput's devices today), feeds the mapping layer
+ * (controller.h) and its clock, and hands what it says to the sink (sink.h),
+ * which queues pipeline transactions. Nothing here touches renderer state.
  *
- * The thread waits in poll(2) on libinput's fd and a wake-up eventfd, with
- * the controller's deadline as time-out (animation ticks at ~60 Hz while
- * something moves, the idle deadline otherwise). */
+ * The thread waits in poll(2) on every source's fd and a wake-up eventfd,
+ * with the controller's deadline as time-out (animation ticks at ~60 Hz while
+ * something moves, the idle deadline otherwise; at least once a second, when
+ * every source is dispatched for its own timers). On a VT switch (the seat
+ * no longer ours) it suspends every source, and resumes them on return. */
 #ifndef TESSERA_INPUT_RUNNER_H
 #define TESSERA_INPUT_RUNNER_H
 
@@ -24,13 +26,16 @@ typedef void (*input_pick_fn)(void *ctx, vec3 origin, vec3 dir, input_hit *out);
 /* Time-step readiness as in controller.h (called on the input thread). */
 typedef bool (*input_step_ready_fn)(void *ctx, uint32_t step);
 
-/* Open the devices and start the thread. pick and step_ready (NULL: every
- * step is ready) take pick_ctx. NULL with err. */
-input_runner *input_runner_start(const input_source_config *source, const input_controller_config *controller,
-                                 input_pick_fn pick, input_step_ready_fn step_ready, void *pick_ctx,
-                                 input_sink *sink, struct session *sn, tess_error *err);
+/* Start the thread over sources[0 .. source_count) (1..INPUT_MAX_SOURCES), which
+ * the runner owns from this call on, also when it fails. pick and step_ready
+ * (NULL: every step is ready) take pick_ctx; `sn` (NULL: none) tells whether
+ * the seat is ours. NULL with err. */
+input_runner *input_runner_start(input_source *const *sources, int source_count,
+                                 const input_controller_config *controller, input_pick_fn pick,
+                                 input_step_ready_fn step_ready, void *pick_ctx, input_sink *sink, struct session *sn,
+                                 tess_error *err);
 
-/* Stop the thread and close the devices (before the sink goes). NULL is fine. */
+/* Stop the thread and destroy the sources (before the sink goes). NULL is fine. */
 void input_runner_stop(input_runner *r);
 
 #endif

@@ -1,34 +1,25 @@
-/* source.h - libinput devices as input events (event.h) on the wall's image
- * plane.
+/* source.h - an input source: something that turns what people do into
+ * input events (event.h) on the wall's image plane. The input thread
+ * (runner.h) polls every source's fd and dispatches the readable ones through
+ * this interface alone, never by kind; a new source (a remote viewer) is a
+ * new implementation of input_source_ops. The one today is libinput's
+ * devices (libinput_source.h).
  *
- * Devices: libinput's udev backend on a seat (default "seat0": every input
- * device udev gives that seat, added and removed while running), or, when
- * device paths are given, the path backend with exactly those (a path that
- * is missing or vanished is tried again every second). Device nodes are
- * opened through the seat (session.h) when there is one, else directly.
+ * A source placed on the plane maps a device fraction to plane coordinates
+ * with input_area_point over the output it covers (input_output_area).
  *
- * Placement on the plane (event.h): an absolute device (touchscreen, tablet
- * or absolute pointer) covers the output a rule names (matched by the
- * device's name or its /dev/input node), else the whole plane; relative
- * pointer motion is scaled by the plane's pixels per plane unit. Key and
- * button codes are evdev's.
- *
- * Threading: one thread (the input thread). */
+ * Threading: a source is used by one thread at a time (the input thread
+ * while it runs; the thread that made it before and after). */
 #ifndef TESSERA_INPUT_SOURCE_H
 #define TESSERA_INPUT_SOURCE_H
 
 #include <stdbool.h>
 
 #include "engine/camera.h"
-#include "engine/err.h"
 #include "input/event.h"
 
-struct session;
-
-#define INPUT_NAME_BYTES 128
 #define INPUT_MAX_OUTPUTS 16
-#define INPUT_MAX_RULES 16
-#define INPUT_MAX_PATHS 16
+#define INPUT_MAX_SOURCES 4 /* sources one input thread polls */
 
 /* One output of the wall: its name (connector) and where it is on the plane. */
 typedef struct input_output_area {
@@ -36,50 +27,53 @@ typedef struct input_output_area {
     camera_window window;
 } input_output_area;
 
-/* An absolute device (by name or node) covers an output (by name). */
-typedef struct input_device_rule {
-    char device[INPUT_NAME_BYTES];
-    char output[32];
-} input_device_rule;
-
-typedef struct input_source_config {
-    char seat[64];                                /* udev backend; "" = "seat0" */
-    char paths[INPUT_MAX_PATHS][INPUT_NAME_BYTES]; /* path backend when path_count > 0 */
-    int path_count;
-    double px_per_unit_x, px_per_unit_y;          /* plane pixels per plane unit (relative motion) */
-    input_output_area outputs[INPUT_MAX_OUTPUTS];
-    int output_count;
-    input_device_rule rules[INPUT_MAX_RULES];
-    int rule_count;
-} input_source_config;
-
-typedef struct input_source input_source;
-
-/* NULL with err (libinput or udev unavailable, a rule naming an unknown output). */
-input_source *input_source_open(const input_source_config *cfg, struct session *sn, tess_error *err);
-void input_source_close(input_source *s);
-
-/* The fd to poll for readability. */
-int input_source_fd(const input_source *s);
-
-typedef void (*input_event_fn)(void *ctx, const input_event *e);
-
-/* Read what libinput has and hand each event to fn (frames closed as event.h
- * says); retries missing path devices when due. False when libinput failed. */
-bool input_source_dispatch(input_source *s, input_event_fn fn, void *ctx);
-
 /* Where a device fraction (fx, fy) in [0, 1]^2, fx right and fy down as
  * libinput's transformed coordinates, lands on the plane when the device
  * covers `area` (an output's window). */
 void input_area_point(const camera_window *area, double fx, double fy, double *sx, double *sy);
 
-/* A VT switch: release every device (libinput_suspend), and take them back
- * when the seat is ours again (resume; retried by the caller on failure). */
-void input_source_suspend(input_source *s);
-void input_source_resume(input_source *s);
-bool input_source_suspended(const input_source *s);
+typedef void (*input_event_fn)(void *ctx, const input_event *e);
 
-/* Devices currently open. */
-int input_source_device_count(const input_source *s);
+typedef struct input_source input_source;
+
+/* What a source does; every entry is set. */
+typedef struct input_source_ops {
+    const char *name; /* for messages: "libinput" */
+    /* the fd to poll for readability */
+    int (*fd)(const input_source *s);
+    /* read what is there and hand each event to fn, frames closed as event.h says; also
+     * called on every wake of the input thread (at least once a second) for the source's
+     * own timers. False when the source failed for good: input stops */
+    bool (*dispatch)(input_source *s, input_event_fn fn, void *ctx);
+    /* a VT switch away: let go of the devices (idempotent) */
+    void (*suspend)(input_source *s);
+    /* the seat is ours again: take them back; on failure stays suspended and the caller
+     * tries again on its next wake */
+    void (*resume)(input_source *s);
+    bool (*suspended)(const input_source *s);
+    /* devices the source has open now (a source that is not devices: 1) */
+    int (*device_count)(const input_source *s);
+    void (*destroy)(input_source *s); /* frees s */
+} input_source_ops;
+
+/* Implementations embed this as their first member. */
+struct input_source {
+    const input_source_ops *ops;
+};
+
+static inline int input_source_fd(const input_source *s) { return s->ops->fd(s); }
+static inline bool input_source_dispatch(input_source *s, input_event_fn fn, void *ctx)
+{
+    return s->ops->dispatch(s, fn, ctx);
+}
+static inline void input_source_suspend(input_source *s) { s->ops->suspend(s); }
+static inline void input_source_resume(input_source *s) { s->ops->resume(s); }
+static inline bool input_source_suspended(const input_source *s) { return s->ops->suspended(s); }
+static inline int input_source_device_count(const input_source *s) { return s->ops->device_count(s); }
+static inline void input_source_destroy(input_source *s)
+{
+    if (s)
+        s->ops->destroy(s);
+}
 
 #endif

@@ -4,13 +4,16 @@
  * through a running pipeline giving the same camera bit for bit
  * (input/sink.h). */
 #include <criterion/criterion.h>
+#include <fcntl.h>
 #include <linux/input-event-codes.h>
 #include <math.h>
 #include <pthread.h>
 #include <time.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <stdatomic.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "engine/accel.h"
 #include "engine/camera.h"
@@ -20,10 +23,11 @@
 #include "input/controller.h"
 #include "input/navigate.h"
 #include "input/record.h"
+#include "input/runner.h"
 #include "input/sink.h"
 #include "input/source.h"
 #include "support.h"
-#include "wall/display.h"
+#include "wall/display_backend.h"
 #include "wall/wall_config.h"
 #include "wall/wall_headless.h"
 
@@ -1114,3 +1118,99 @@ Test(input, the_default_tour_orbits_the_home_view_and_closes_its_loop)
     camera_path_free(&path);
     cr_expect(!navigate_orbit_path(&home, 0.0, 8, &path, &err));
 }
+
+/* ---- the runner polls its sources through source.h's interface ---- */
+
+/* A source over a pipe: dispatch drains what was written and counts it;
+ * after `fail_after` bytes it reports a failure. The counters are read by the
+ * test thread while the input thread runs. */
+typedef struct pipe_source {
+    input_source base;
+    int fds[2];
+    atomic_int bytes, dispatches, suspends;
+    int fail_after;         /* 0: never fails */
+    atomic_bool *destroyed; /* set by destroy (outlives the source) */
+} pipe_source;
+
+static int pipe_fd(const input_source *s) { return ((const pipe_source *)s)->fds[0]; }
+
+static bool pipe_dispatch(input_source *base, input_event_fn fn, void *ctx)
+{
+    (void)fn, (void)ctx;
+    pipe_source *s = (pipe_source *)base;
+    char buf[16];
+    ssize_t n;
+    while ((n = read(s->fds[0], buf, sizeof buf)) > 0)
+        atomic_fetch_add(&s->bytes, (int)n);
+    atomic_fetch_add(&s->dispatches, 1);
+    return !(s->fail_after > 0 && atomic_load(&s->bytes) >= s->fail_after);
+}
+
+static void pipe_suspend(input_source *s) { atomic_fetch_add(&((pipe_source *)s)->suspends, 1); }
+static void pipe_resume(input_source *s) { (void)s; }
+static bool pipe_suspended(const input_source *s) { (void)s; return false; }
+static int pipe_devices(const input_source *s) { (void)s; return 1; }
+
+static void pipe_destroy(input_source *base)
+{
+    pipe_source *s = (pipe_source *)base;
+    atomic_store(s->destroyed, true);
+    close(s->fds[0]);
+    close(s->fds[1]);
+    free(s);
+}
+
+static const input_source_ops pipe_ops = {"pipe", pipe_fd, pipe_dispatch, pipe_suspend, pipe_resume,
+                                          pipe_suspended, pipe_devices, pipe_destroy};
+
+static pipe_source *pipe_source_create(int fail_after, atomic_bool *destroyed)
+{
+    pipe_source *s = calloc(1, sizeof *s);
+    cr_assert(s);
+    s->base.ops = &pipe_ops;
+    cr_assert(pipe(s->fds) == 0);
+    cr_assert(fcntl(s->fds[0], F_SETFL, O_NONBLOCK) == 0);
+    s->fail_after = fail_after;
+    s->destroyed = destroyed;
+    return s;
+}
+
+/* Wait up to 5 s for *counter to reach at least `want`. */
+static bool wait_count(atomic_int *counter, int want)
+{
+    for (int i = 0; i < 500 && atomic_load(counter) < want; i++)
+        nanosleep(&(struct timespec){0, 10000000}, NULL);
+    return atomic_load(counter) >= want;
+}
+
+Test(input, runner_polls_every_source_through_the_interface)
+{
+    live l = live_make(NULL, 1);
+    input_controller_config cc;
+    input_controller_config_default(&cc);
+    atomic_bool destroyed[2] = {false, false};
+    pipe_source *a = pipe_source_create(0, &destroyed[0]), *b = pipe_source_create(3, &destroyed[1]);
+    input_source *sources[2] = {&a->base, &b->base};
+    tess_error err = {{0}};
+    input_runner *r = input_runner_start(sources, 2, &cc, NULL, NULL, NULL, l.sink, NULL, &err);
+    cr_assert(r, "%s", err.msg);
+    /* bytes on either source's fd wake the thread and reach that source's dispatch */
+    cr_assert_eq(write(a->fds[1], "x", 1), 1);
+    cr_assert(wait_count(&a->bytes, 1), "source a never dispatched its byte");
+    cr_assert_eq(write(b->fds[1], "yy", 2), 2);
+    cr_assert(wait_count(&b->bytes, 2), "source b never dispatched its bytes");
+    /* the second source failing for good stops the input thread: no dispatch after it */
+    cr_assert_eq(write(b->fds[1], "z", 1), 1);
+    cr_assert(wait_count(&b->bytes, 3));
+    nanosleep(&(struct timespec){0, 50000000}, NULL);
+    int after = atomic_load(&a->dispatches);
+    cr_assert_eq(write(a->fds[1], "x", 1), 1);
+    nanosleep(&(struct timespec){0, 100000000}, NULL);
+    cr_assert_eq(atomic_load(&a->dispatches), after, "a source was dispatched after another failed");
+    cr_assert_eq(atomic_load(&a->suspends) + atomic_load(&b->suspends), 0, "no seat: nothing suspended");
+    cr_assert(!destroyed[0] && !destroyed[1]);
+    input_runner_stop(r); /* destroys both sources */
+    cr_assert(destroyed[0] && destroyed[1]);
+    live_free(&l);
+}
+

@@ -44,7 +44,10 @@
 #      hide a tessera that does not restore;
 #   8. head 0 shows the same console picture after the run as before it: the
 #      guest first writes a line to the console and hides the (blinking) cursor,
-#      so the picture is steady and not all black.
+#      so the picture is steady and not all black;
+#   9. the legacy modesetting path (TESSERA_DRM_NO_ATOMIC=1; run last, the atomic
+#      one is checked above): the wall comes up with legacy modesetting, frames go
+#      on screen (their page-flip events come back) and tessera exits 0.
 # Exits 0 when all pass. When qemu cannot be installed (no apt, no network) it
 # says so and exits 0 with SKIPPED in its last line: never silently.
 #
@@ -53,7 +56,8 @@
 #   then `console-before.done`; guest: starts tessera, then runs each
 #   `cmd-N.sh` (N = 1, 2, ... in order) the host drops in, output to cmd-N.log,
 #   exit status to `cmd-N.done`; host: `done`; guest: SIGTERM, tessera.rc,
-#   outputs-after.txt, `console-after`; host: screendump, `console-after.done`.
+#   outputs-after.txt, `console-after`; host: screendump, `console-after.done`;
+#   guest: the legacy run's legacy.log and legacy.rc.
 #   To add a step while tessera runs: `guest_step N 'COMMAND' [SECS]` below
 #   (after the animation check, before `done`), then check $W/cmd-N.done / .log.
 #
@@ -117,6 +121,10 @@ stop_program $pid
 tessera outputs > outputs-after.txt 2>&1 3<&-
 touch console-after
 wait_for console-after.done 60
+# the legacy modesetting path on the same card (TESSERA_DRM_NO_ATOMIC=1): a few frames
+TESSERA_DRM_NO_ATOMIC=1 TESSERA_LOG=debug tessera run --wall wall.json --scene scene.json --path loop.json \
+    --time fixed --rate 4 --threads 2 --input off --frames 6 > legacy.log 2>&1 3<&-
+echo $? > legacy.rc
 exec 3<&-
 EOF
 tests/vm/run-guest.sh -c "$CACHE" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 3000 -- 'sh guest.sh' \
@@ -422,6 +430,14 @@ elif [ $console_before = yes ] && [ $console_after = yes ] &&
     ok "head 0 shows the console as before the run ($(python3 tests/vm/qmp.py colors "$W/console-after.ppm" 2))"
 else
     bad "head 0's console after the run (screendumps before: $console_before, after: $console_after): $(cat "$W/console.cmp" 2>/dev/null)"
+fi
+legacy_rc=$(cat "$W/legacy.rc" 2>/dev/null || echo none)
+legacy_up=$(grep -o '[0-9]* outputs up ([a-z]* modesetting)' "$W/legacy.log" 2>/dev/null)
+if [ "$legacy_rc" = 0 ] && [ "$legacy_up" = "4 outputs up (legacy modesetting)" ] && [ "$(last_frame legacy.log)" -ge 3 ]; then
+    ok "legacy modesetting (TESSERA_DRM_NO_ATOMIC=1): $legacy_up, frames on screen up to frame $(last_frame legacy.log), exit 0"
+else
+    bad "legacy modesetting (TESSERA_DRM_NO_ATOMIC=1): exit status '$legacy_rc', '${legacy_up:-no outputs up}', last frame on screen $(last_frame legacy.log)"
+    tail -n 20 "$W/legacy.log" 2>/dev/null
 fi
 echo "vm_wall: $PASS passed, $FAIL failed ($(elapsed) s)"
 [ $FAIL -eq 0 ]

@@ -205,29 +205,3 @@ image_display *display_convert_tiles_create(void)
     atomic_init(&d->ring, NULL);
     return &d->base;
 }
-
-image_display *display_create(const char *name, const char *dump_pattern, bool sequence, tess_error *err)
-{
-    if (!strcmp(name, "convert")) {
-        image_display *d = display_convert_create();
-        if (!d)
-            tess_error_set(err, "convert display: out of memory");
-        return d;
-    }
-    if (!strcmp(name, "convert-tiles")) {
-        image_display *d = display_convert_tiles_create();
-        if (!d)
-            tess_error_set(err, "convert-tiles display: out of memory");
-        return d;
-    }
-    if (!strcmp(name, "null")) {
-        image_display *d = display_null_create();
-        if (!d)
-            tess_error_set(err, "null display: out of memory");
-        return d;
-    }
-    if (!strcmp(name, "dump"))
-        return display_dump_create(dump_pattern, sequence, err);
-    tess_error_set(err, "unknown display '%s' (known: %s)", name, DISPLAY_NAMES);
-    return NULL;
-}

@@ -1,9 +1,9 @@
-/* display.h (wall) - the image displays the pipeline can hand frames to,
- * chosen by name: "null" (drops frames: benchmarks of rendering alone),
- * "convert" (encodes each finished frame to 8-bit sRGB like scan-out, then
- * drops it), "convert-tiles" (the same per tile on the render threads) and
- * "dump" (writes each frame through the dump backend, wall/dump.h). The DRM/KMS
- * display is wall/drm.h. */
+/* display.h (wall) - the headless image displays: null (drops frames:
+ * benchmarks of rendering alone), convert (encodes each finished frame to
+ * 8-bit sRGB like scan-out, then drops it), convert-tiles (the same per tile
+ * on the render threads) and dump (writes each frame through the dump
+ * backend, wall/dump.h). The DRM/KMS display is wall/drm.h; the table that
+ * chooses among them by name is wall/display_backend.h. */
 #ifndef TESSERA_WALL_DISPLAY_H
 #define TESSERA_WALL_DISPLAY_H
 
@@ -11,9 +11,6 @@
 
 #include "engine/display.h"
 #include "engine/err.h"
-
-/* Names display_create knows, for messages. */
-#define DISPLAY_NAMES "null, convert, convert-tiles, dump"
 
 /* A display that only counts frames. */
 image_display *display_null_create(void);
@@ -32,9 +29,5 @@ image_display *display_convert_tiles_create(void);
  * either gets _NNNN when `sequence`, else is one file rewritten each frame).
  * The pattern is copied. NULL with err when the pattern is invalid. */
 image_display *display_dump_create(const char *pattern, bool sequence, tess_error *err);
-
-/* By name: "null", "convert", or "dump" with `dump_pattern`. NULL with err naming the
- * unknown name. */
-image_display *display_create(const char *name, const char *dump_pattern, bool sequence, tess_error *err);
 
 #endif

@@ -1,5 +1,5 @@
 /* drm.c - the DRM/KMS backend (see drm.h). */
-#include "drm.h"
+#include "drm_card.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -15,10 +15,9 @@
 #include <xf86drm.h>
 #include <xf86drmMode.h>
 
-#include "edid.h"
 #include "engine/log.h"
 #include "engine/pipeline.h"
-#include "session.h"
+#include "seat/session.h"
 #include "xrgb.h"
 
 #define DRM_MAX_CARDS 16
@@ -27,102 +26,7 @@
 #define DRM_SEAT_WAIT_MS 200       /* while switched away: how often to look for a stop (and tell the pause hook) */
 #define DRM_IDLE_WAIT_MS 100       /* every monitor unplugged: wait this long for a hotplug event per step */
 #define DRM_IDLE_PROBE_MS 1000     /* ... and without udev, probe the connectors this often */
-/* Frame f is written into buffer f % DRM_FRAME_BUFFERS by the render threads
- * while f-1 waits for its flip and f-2 is on screen; until the flip to f-2
- * has completed (waited for at the end of the display stage of frame f-1,
- * before frame f starts) f-3 is on screen. So four never collide. */
-#define DRM_FRAME_BUFFERS 4
-#define DRM_PROP_CACHE 512 /* (object, property) pairs: outputs x (connector 1 + CRTC 2 + plane 10), spare for replugs */
-
-typedef struct drm_buffer {
-    uint32_t handle, fb_id, pitch_bytes;
-    uint64_t size_bytes;
-    uint8_t *map; /* write-only: scan-out memory may be write-combined */
-} drm_buffer;
-
-/* One output of the wall. Fixed after drm_wall_start: rotation, sizes,
- * buffers (render threads write them through write_tile). The rest belongs to
- * the display thread (show, end_stage) and drm_card_close. */
-typedef struct drm_output {
-    uint32_t connector_id, crtc_id, plane_id;
-    uint32_t mode_blob;          /* atomic: MODE_ID blob */
-    drmModeModeInfo mode;
-    int rotation_deg;            /* as mounted, clockwise (wall_config.h) */
-    drm_buffer buffers[DRM_FRAME_BUFFERS];
-    drm_buffer blank;            /* black: what a modeset shows before the first frame */
-    bool live;                   /* being driven (false once its monitor is unplugged) */
-    int ready;                   /* buffer of a finished frame to flip to at end_stage, -1 if none */
-    bool flip_pending;           /* its flip was queued and its event has not come yet */
-    drm_flip_outcome flip;       /* what became of its last flip, until judged at the next end_stage */
-    bool given_up;               /* switched off for failing flips: stays dark until its monitor is seen
-                                    unplugged (then it may come back like any unplugged one) */
-} drm_output;
-
-/* A property id of one KMS object, by name (a string literal). */
-typedef struct drm_prop_entry {
-    uint32_t object;
-    const char *name;
-    uint32_t id;
-} drm_prop_entry;
-
-/* One connector as the card reports it, with storage for wall_device_connector's strings. */
-typedef struct drm_connector_info {
-    uint32_t id;
-    char name[WALL_CONNECTOR_BYTES];
-    edid_identity edid;
-    bool has_edid;
-    wall_device_mode *modes;
-    drmModeModeInfo *mode_infos; /* the same modes, as KMS wants them */
-    uint32_t saved_crtc;         /* the CRTC driving it when the card was opened, 0 if none */
-} drm_connector_info;
-
-struct drm_card {
-    int fd;
-    session *session;             /* opened fd through it; VT switches come from it */
-    char path[64];
-    bool atomic;
-    drm_connector_info *infos;
-    wall_device_connector *conns; /* parallel to infos */
-    size_t conn_count;
-    drmModeCrtc **saved_crtcs;    /* the CRTC states found at open */
-    int saved_count;
-    drm_output outputs[WALL_MAX_OUTPUTS];
-    int output_count;
-    wall_config wall;             /* as matched at drm_wall_start: hotplug plans against it */
-    int pending_flips;            /* flip events still to come; display thread only */
-    uint64_t ready_frame;         /* the newest frame show() handed us (display thread) */
-    uint64_t flipping_frame;      /* the frame the last commit flips to (display thread) */
-    drm_flip_health flip_health;  /* per output: stages in a row whose flips failed (display thread) */
-    /* hotplug (display thread): udev's connector-change events for this card */
-    struct udev *udev;
-    struct udev_monitor *monitor; /* NULL: no udev; only flip timeouts make us probe */
-    dev_t devnum;
-    bool probe_needed;            /* read the connectors again at the next end_stage */
-    pipeline *pipeline;           /* whose channels first_channel.. are the outputs (drm_wall_attach) */
-    int first_channel;
-    drm_pause_fn pause_fn;        /* told while a VT switch pauses the wall (display thread) */
-    void *pause_ctx;
-    /* property ids by (object, name), looked up once: a flip then costs no property ioctls
-     * (display thread, and drm_wall_start before it) */
-    drm_prop_entry prop_cache[DRM_PROP_CACHE];
-    int prop_cached;
-};
-
 /* ---------------------------------------------------------------- properties */
-
-static uint32_t prop_id(int fd, uint32_t object, uint32_t type, const char *name)
-{
-    drmModeObjectProperties *props = drmModeObjectGetProperties(fd, object, type);
-    uint32_t id = 0;
-    for (uint32_t i = 0; props && i < props->count_props && !id; i++) {
-        drmModePropertyRes *p = drmModeGetProperty(fd, props->props[i]);
-        if (p && !strcmp(p->name, name))
-            id = p->prop_id;
-        drmModeFreeProperty(p);
-    }
-    drmModeFreeObjectProperties(props);
-    return id;
-}
 
 static bool prop_value(int fd, uint32_t object, uint32_t type, const char *name, uint64_t *value)
 {
@@ -316,7 +220,11 @@ drm_card *drm_card_open(const char *path, session *sn, tess_error *err)
         return NULL;
     }
     drmSetClientCap(c->fd, DRM_CLIENT_CAP_UNIVERSAL_PLANES, 1);
-    c->atomic = drmSetClientCap(c->fd, DRM_CLIENT_CAP_ATOMIC, 1) == 0;
+    /* TESSERA_DRM_NO_ATOMIC=1 (as wlroots' WLR_DRM_NO_ATOMIC): the legacy path on a card that has atomic,
+     * for a driver whose atomic support misbehaves, and for tests/vm_wall.sh to drive both paths */
+    const char *no_atomic = getenv("TESSERA_DRM_NO_ATOMIC");
+    bool atomic = !(no_atomic && !strcmp(no_atomic, "1")) && drmSetClientCap(c->fd, DRM_CLIENT_CAP_ATOMIC, 1) == 0;
+    c->kms = atomic ? &drm_kms_atomic : &drm_kms_legacy;
     struct stat st;
     if (fstat(c->fd, &st) == 0)
         c->devnum = st.st_rdev;
@@ -339,7 +247,7 @@ drm_card *drm_card_open(const char *path, session *sn, tess_error *err)
 }
 
 const char *drm_card_path(const drm_card *c) { return c->path; }
-bool drm_card_atomic(const drm_card *c) { return c->atomic; }
+bool drm_card_atomic(const drm_card *c) { return c->kms == &drm_kms_atomic; }
 
 size_t drm_card_connectors(const drm_card *c, const wall_device_connector **out)
 {
@@ -531,118 +439,18 @@ static bool assign_crtcs(drm_card *c, drmModeRes *res, tess_error *err)
             }
             drmModeFreePlane(pl);
         }
-        if (!out->plane_id && c->atomic)
+        if (!out->plane_id && c->kms->needs_primary_plane)
             ok = tess_error_set(err, "%s: no primary plane for CRTC %u", c->path, out->crtc_id);
     }
     drmModeFreePlaneResources(planes);
     return ok;
 }
 
-static bool add_prop(drm_card *c, drmModeAtomicReq *req, uint32_t object, uint32_t type, const char *name,
-                     uint64_t value)
-{
-    uint32_t id = 0;
-    for (int k = 0; k < c->prop_cached && !id; k++)
-        if (c->prop_cache[k].object == object && !strcmp(c->prop_cache[k].name, name))
-            id = c->prop_cache[k].id;
-    if (!id) {
-        id = prop_id(c->fd, object, type, name);
-        if (id && c->prop_cached < DRM_PROP_CACHE) /* names are string literals: kept, not copied */
-            c->prop_cache[c->prop_cached++] = (drm_prop_entry){object, name, id};
-    }
-    return id && drmModeAtomicAddProperty(req, object, id, value) >= 0;
-}
-
-/* Output o shows framebuffer fb_id; with `modeset` also its routing and mode. */
-static bool add_output_props(drm_card *c, drmModeAtomicReq *req, int o, uint32_t fb_id, bool modeset)
-{
-    drm_output *out = &c->outputs[o];
-    uint32_t w = out->mode.hdisplay, h = out->mode.vdisplay;
-    bool ok = true;
-    if (modeset) {
-        ok = add_prop(c, req, out->connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID", out->crtc_id) &&
-             add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "MODE_ID", out->mode_blob) &&
-             add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "ACTIVE", 1);
-        const char *names[] = {"CRTC_ID", "SRC_X", "SRC_Y", "SRC_W", "SRC_H", "CRTC_X", "CRTC_Y", "CRTC_W", "CRTC_H"};
-        uint64_t values[] = {out->crtc_id, 0, 0, (uint64_t)w << 16, (uint64_t)h << 16, 0, 0, w, h};
-        for (int k = 0; k < 9 && ok; k++)
-            ok = add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, names[k], values[k]);
-    }
-    return ok && add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, "FB_ID", fb_id);
-}
-
-/* Output o switched off: its connector, CRTC and plane released. */
-static bool add_disable_props(drm_card *c, drmModeAtomicReq *req, int o)
-{
-    drm_output *out = &c->outputs[o];
-    return add_prop(c, req, out->connector_id, DRM_MODE_OBJECT_CONNECTOR, "CRTC_ID", 0) &&
-           add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "ACTIVE", 0) &&
-           add_prop(c, req, out->crtc_id, DRM_MODE_OBJECT_CRTC, "MODE_ID", 0) &&
-           add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, "FB_ID", 0) &&
-           add_prop(c, req, out->plane_id, DRM_MODE_OBJECT_PLANE, "CRTC_ID", 0);
-}
-
-/* Commit a modeset request: tested whole (TEST_ONLY) before anything changes. */
-static bool commit_modeset(drm_card *c, drmModeAtomicReq *req, bool built, const char *what, tess_error *err)
-{
-    if (!req || !built)
-        return tess_error_set(err, "%s: cannot build the atomic request for %s", c->path, what);
-    if (drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_TEST_ONLY | DRM_MODE_ATOMIC_ALLOW_MODESET, NULL) != 0)
-        return tess_error_set(err, "%s: %s was refused by the driver (TEST_ONLY): %s", c->path, what,
-                              strerror(errno));
-    if (drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_ALLOW_MODESET, NULL) != 0)
-        return tess_error_set(err, "%s: the commit of %s failed: %s", c->path, what, strerror(errno));
-    return true;
-}
-
-static bool make_mode_blob(drm_card *c, drm_output *out, tess_error *err)
-{
-    if (out->mode_blob)
-        drmModeDestroyPropertyBlob(c->fd, out->mode_blob);
-    out->mode_blob = 0;
-    if (drmModeCreatePropertyBlob(c->fd, &out->mode, sizeof out->mode, &out->mode_blob) != 0)
-        return tess_error_set(err, "%s: cannot create a mode blob: %s", c->path, strerror(errno));
-    return true;
-}
-
-/* Light outputs [first, last] in their modes, showing their blank buffers. */
-static bool modeset(drm_card *c, int first, int last, const char *what, tess_error *err)
-{
-    if (!c->atomic) {
-        for (int o = first; o <= last; o++) {
-            drm_output *out = &c->outputs[o];
-            if (drmModeSetCrtc(c->fd, out->crtc_id, out->blank.fb_id, 0, 0, &out->connector_id, 1, &out->mode))
-                return tess_error_set(err, "%s: setting mode %s on CRTC %u failed: %s", c->path, out->mode.name,
-                                      out->crtc_id, strerror(errno));
-        }
-        return true;
-    }
-    for (int o = first; o <= last; o++)
-        if (!make_mode_blob(c, &c->outputs[o], err))
-            return false;
-    drmModeAtomicReq *req = drmModeAtomicAlloc();
-    bool built = req != NULL;
-    for (int o = first; o <= last && built; o++)
-        built = add_output_props(c, req, o, c->outputs[o].blank.fb_id, true);
-    bool ok = commit_modeset(c, req, built, what, err);
-    drmModeAtomicFree(req);
-    return ok;
-}
-
+/* Switch output o off (a monitor gone, or given up on); a failure is only logged. */
 static void disable_output(drm_card *c, int o)
 {
-    drm_output *out = &c->outputs[o];
     tess_error err = {{0}};
-    bool ok;
-    if (c->atomic) {
-        drmModeAtomicReq *req = drmModeAtomicAlloc();
-        ok = commit_modeset(c, req, req && add_disable_props(c, req, o), "switching an output off", &err);
-        drmModeAtomicFree(req);
-    } else {
-        ok = drmModeSetCrtc(c->fd, out->crtc_id, 0, 0, 0, NULL, 0, NULL) == 0 ||
-             tess_error_set(&err, "%s: switching CRTC %u off: %s", c->path, out->crtc_id, strerror(errno));
-    }
-    if (!ok)
+    if (!c->kms->disable(c, o, &err))
         log_warn("%s", err.msg);
 }
 
@@ -692,54 +500,13 @@ static void wait_flips(drm_card *c)
     log_debug("%s: frame %llu on screen", c->path, (unsigned long long)c->flipping_frame);
 }
 
-/* Flip every live output that has a new frame, in one commit (atomic) or one
- * page flip per CRTC (legacy: each on its own, so one refused CRTC does not
- * hold back the others). A refused flip makes the connectors be probed: an
- * output may have gone between the last probe and now. */
+/* Flip every live output that has a new frame (c->kms: in one atomic commit, or one page flip
+ * per CRTC). A refused flip makes the connectors be probed: an output may have gone between
+ * the last probe and now. */
 static void flip_ready(drm_card *c)
 {
-    int count = 0, refused = 0, refused_errno = 0;
-    if (c->atomic) {
-        drmModeAtomicReq *req = drmModeAtomicAlloc();
-        bool ok = req != NULL;
-        for (int o = 0; o < c->output_count && ok; o++) {
-            drm_output *out = &c->outputs[o];
-            if (out->live && out->ready >= 0) {
-                ok = add_output_props(c, req, o, out->buffers[out->ready].fb_id, false);
-                out->flip_pending = true;
-                count++;
-            }
-        }
-        if (ok && count > 0)
-            ok = drmModeAtomicCommit(c->fd, req, DRM_MODE_ATOMIC_NONBLOCK | DRM_MODE_PAGE_FLIP_EVENT, c) == 0;
-        refused_errno = errno;
-        drmModeAtomicFree(req);
-        if (!ok) { /* a failed atomic commit changed nothing: no events come, for any output in it */
-            for (int o = 0; o < c->output_count; o++)
-                if (c->outputs[o].live && c->outputs[o].ready >= 0) {
-                    c->outputs[o].flip_pending = false;
-                    c->outputs[o].flip = DRM_FLIP_REFUSED;
-                    refused++;
-                }
-            count = 0;
-        }
-    } else {
-        for (int o = 0; o < c->output_count; o++) {
-            drm_output *out = &c->outputs[o];
-            if (!out->live || out->ready < 0)
-                continue;
-            if (drmModePageFlip(c->fd, out->crtc_id, out->buffers[out->ready].fb_id, DRM_MODE_PAGE_FLIP_EVENT, c) ==
-                0) {
-                out->flip_pending = true;
-                count++;
-            } else {
-                refused_errno = errno;
-                out->flip = DRM_FLIP_REFUSED;
-                refused++;
-            }
-        }
-    }
-    c->pending_flips = count;
+    int refused = 0, refused_errno = 0;
+    c->pending_flips = c->kms->flip(c, &refused, &refused_errno);
     if (c->pending_flips > 0)
         c->flipping_frame = c->ready_frame;
     if (refused > 0) {
@@ -861,7 +628,7 @@ static void bring_back(drm_card *c, int o, int conn, int mode)
     out->connector_id = c->infos[conn].id;
     out->mode = c->infos[conn].mode_infos[mode];
     tess_error err = {{0}};
-    if (!modeset(c, o, o, "bringing an output back", &err)) {
+    if (!c->kms->modeset(c, o, o, "bringing an output back", &err)) {
         log_warn("outputs[%d] (%s) stays dark: %s", o, output_name(c, o), err.msg);
         out->connector_id = old_connector;
         out->mode = old_mode;
@@ -932,7 +699,7 @@ static void restore_wall(drm_card *c)
 {
     for (int o = 0; o < c->output_count; o++) {
         tess_error err = {{0}};
-        if (c->outputs[o].live && !modeset(c, o, o, "restoring an output after a VT switch", &err))
+        if (c->outputs[o].live && !c->kms->modeset(c, o, o, "restoring an output after a VT switch", &err))
             log_warn("outputs[%d] (%s): %s", o, output_name(c, o), err.msg);
     }
 }
@@ -1093,7 +860,7 @@ bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays,
         ok = ok && create_buffer(c, out->mode.hdisplay, out->mode.vdisplay, &out->blank, err);
     }
     drmModeFreeResources(res);
-    ok = ok && modeset(c, 0, c->output_count - 1, "the wall's configuration", err);
+    ok = ok && c->kms->modeset(c, 0, c->output_count - 1, "the wall's configuration", err);
     for (int o = 0; o < c->output_count && ok; o++) {
         drm_display *dd = calloc(1, sizeof *dd);
         if (!dd) {

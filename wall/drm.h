@@ -5,7 +5,9 @@
  * -> drm_card_connectors -> wall_config_match_device -> drm_wall_start (a CRTC
  * and its primary plane per output, four XRGB8888 dumb buffers and a black one
  * each, the mode set with one atomic commit tested first with TEST_ONLY, or the
- * legacy API where atomic is missing) -> drm_wall_attach (the pipeline whose
+ * legacy API where atomic is missing or TESSERA_DRM_NO_ATOMIC=1: the two paths
+ * are drm_atomic.c and drm_legacy.c behind drm_card.h's drm_kms_ops) ->
+ * drm_wall_attach (the pipeline whose
  * channels the outputs are) -> frames through the displays it returns ->
  * drm_card_close (restores the saved CRTCs, frees the buffers).
  *
@@ -39,7 +41,7 @@
 typedef struct drm_card drm_card;
 typedef struct session session;
 
-/* Open a card through the session (wall/session.h: libseat, or direct as
+/* Open a card through the session (seat/session.h: libseat, or direct as
  * root): `path`, or NULL for the first /dev/dri/cardN that has a connected
  * connector. NULL with err (no card, not permitted, not master). The session
  * must outlive the card; VT switches it reports pause the wall (the display

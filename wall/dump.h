@@ -12,6 +12,7 @@
 #include <stdint.h>
 
 #include "engine/err.h"
+#include "srgb8.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -47,13 +48,9 @@ bool dump_read_linear_rgb(const char *path, int *width_px, int *height_px, float
 bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes,
                      tess_error *err);
 
-/* sRGB encode one linear value (clamped to [0, 1]) to 8 bits, rounding to nearest. */
-uint8_t dump_srgb_encode_u8(float linear);
-
-/* `count` pixels of linear RGB (3 floats each), pixel i at rgb + 3 * i *
- * stride_px (stride_px may be negative), encoded as dump_srgb_encode_u8 does,
- * into XRGB8888 words out[0 .. count) (X = 0): one scan-out row in one call. */
-void dump_srgb_encode_xrgb(const float *rgb, long stride_px, int count, uint32_t *out);
+/* The code 8-bit files get for one linear value (clamped to [0, 1], rounded to nearest):
+ * srgb8_encode (wall/srgb8.h), the encoder scan-out shares. */
+static inline uint8_t dump_srgb_encode_u8(float linear) { return srgb8_encode(linear); }
 
 #ifdef __cplusplus
 }

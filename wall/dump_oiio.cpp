@@ -9,6 +9,7 @@
 #include "engine/err.h"
 #include "engine/srgb.h"
 #include "wall/dump.h"
+#include "wall/srgb8.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -29,68 +30,6 @@
 #include <vector>
 
 namespace {
-
-/* Encode table resolution: 2^12 buckets over [0, 1). The narrowest step
- * between two 8-bit codes is 1 / (255 * 12.92) ~= 3.04e-4 (the linear toe),
- * wider than one bucket (2.44e-4), so each bucket holds at most one rounding
- * boundary and one comparison against that boundary makes the result exact. */
-constexpr int SRGB_BUCKETS = 4096;
-
-/* The reference: the sRGB curve in double, clamped, rounded to nearest. */
-int srgb_encode_exact(float linear)
-{
-    if (!(linear > 0.0f)) /* also NaN */
-        return 0;
-    if (linear >= 1.0f)
-        return 255;
-    double x = linear;
-    double v = srgb_curve_encode(x);
-    double code = std::floor(v * 255.0 + 0.5);
-    return code < 0.0 ? 0 : code > 255.0 ? 255 : (int)code;
-}
-
-struct srgb_table {
-    uint8_t bucket_code[SRGB_BUCKETS]; /* exact code of the bucket's lower end, i / SRGB_BUCKETS */
-    float code_up[256];                /* [k]: smallest float whose code is > k; +inf for k = 255 */
-
-    srgb_table()
-    {
-        for (int i = 0; i < SRGB_BUCKETS; i++)
-            bucket_code[i] = (uint8_t)srgb_encode_exact((float)i / SRGB_BUCKETS);
-        for (int k = 0; k < 255; k++) {
-            /* Start at the inverse curve of code k + 0.5, then walk float by
-             * float to the exact first value the reference rounds above k
-             * (the reference is monotone in its input). */
-            double v = (k + 0.5) / 255.0;
-            double x = srgb_curve_decode(v);
-            float f = (float)x;
-            while (f > 0.0f && srgb_encode_exact(std::nextafter(f, 0.0f)) > k)
-                f = std::nextafter(f, 0.0f);
-            while (srgb_encode_exact(f) <= k)
-                f = std::nextafter(f, 2.0f);
-            code_up[k] = f;
-        }
-        code_up[255] = INFINITY;
-    }
-};
-
-/* Built once, on first use; C++11 makes the initialisation thread-safe. */
-const srgb_table &srgb_lut()
-{
-    static const srgb_table table;
-    return table;
-}
-
-inline uint8_t srgb_encode(const srgb_table &t, float linear)
-{
-    if (!(linear > 0.0f)) /* also NaN */
-        return 0;
-    if (linear >= 1.0f)
-        return 255;
-    /* linear * 4096 is exact (a power of two), so the bucket index is too. */
-    uint8_t code = t.bucket_code[(int)(linear * (float)SRGB_BUCKETS)];
-    return (uint8_t)(code + (linear >= t.code_up[code]));
-}
 
 const char *shown(const char *s) { return s ? s : "(null)"; }
 
@@ -290,10 +229,8 @@ bool write_rgb(const char *path, int width_px, int height_px, const float *rgb_l
         spec.attribute("oiio:ColorSpace", "Linear");
     } else {
         spec.attribute("oiio:ColorSpace", "sRGB");
-        const srgb_table &lut = srgb_lut();
         encoded.resize(values);
-        for (size_t i = 0; i < values; i++)
-            encoded[i] = srgb_encode(lut, rgb_linear[i]);
+        srgb8_encode_values(rgb_linear, values, encoded.data());
         pixels = encoded.data();
     }
 
@@ -546,31 +483,6 @@ bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, s
                      tess_error *err)
 {
     return guarded(pattern, err, [&] { return frame_path(pattern, frame, sequence, out, out_bytes, err); });
-}
-
-void dump_srgb_encode_xrgb(const float *rgb, long stride_px, int count, uint32_t *out)
-{
-    try {
-        const srgb_table &lut = srgb_lut();
-        long index = 0; /* in pixels from rgb: never a pointer outside the row */
-        for (int i = 0; i < count; i++, index += stride_px) {
-            const float *c = rgb + 3 * index;
-            out[i] = (uint32_t)srgb_encode(lut, c[0]) << 16 | (uint32_t)srgb_encode(lut, c[1]) << 8 |
-                     (uint32_t)srgb_encode(lut, c[2]);
-        }
-    } catch (...) { /* the table's construction allocates nothing; never reached */
-        for (int i = 0; i < count; i++)
-            out[i] = 0;
-    }
-}
-
-uint8_t dump_srgb_encode_u8(float linear)
-{
-    try {
-        return srgb_encode(srgb_lut(), linear);
-    } catch (...) { /* the table's construction allocates nothing; never reached */
-        return (uint8_t)srgb_encode_exact(linear);
-    }
 }
 
 } // extern "C"

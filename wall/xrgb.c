@@ -1,7 +1,7 @@
 /* xrgb.c - see xrgb.h. */
 #include "xrgb.h"
 
-#include "dump.h"
+#include "srgb8.h"
 
 /* Scan-out pixel (u, v) shows mounted pixel (x, y):
  *     0: x = u,          y = v
@@ -40,6 +40,6 @@ void xrgb_write_rect(const float *rgb, int mounted_w, int mounted_h, int x0, int
     for (int v = v0; v < v1; v++) {
         uint32_t *row = (uint32_t *)(dst->pixels + (size_t)v * dst->pitch_bytes);
         if (u1 > u0)
-            dump_srgb_encode_xrgb(rgb + 3 * (base + du * u0 + dv * v), du, u1 - u0, row + u0);
+            srgb8_encode_xrgb(rgb + 3 * (base + du * u0 + dv * v), du, u1 - u0, row + u0);
     }
 }

@@ -4,7 +4,7 @@
  *          one tile counter over all outputs), as `tessera run --wall` runs it;
  *   alone: each output by itself, a one-channel pipeline with that output's
  *          window of the wall camera, its size and its display;
- * for every display kind asked for (display_kinds below), so the lines show
+ * for every display kind asked for (the headless display backends), so the lines show
  * what sharing one pipeline across outputs buys or costs, and what handing
  * frames to the outputs costs. Rounds alternate over all the runs, as
  * `bench --scaling` does, so a noisy machine hits them alike; a run during
@@ -21,7 +21,7 @@
 #include "cli.h"
 #include "option_check.h"
 #include "pipeline_cli.h"
-#include "wall/display.h"
+#include "wall/display_backend.h"
 #include "wall/wall_config.h"
 #include "wall/wall_headless.h"
 
@@ -48,49 +48,30 @@
 
 /* ---------------------------------------------------------------- display kinds */
 
-/* One way of handing an output's frames over. A new kind (render threads
- * converting tiles straight into the scan-out buffer through the display's
- * write_tile hook, engine/display.h) is one more row of display_kinds, with
- * its own create function if display_create does not know it by name. */
-typedef struct wall_display_kind wall_display_kind;
-struct wall_display_kind {
-    const char *name;  /* the --display value */
-    const char *what;  /* for --help and the summary */
-    bool writes_files; /* needs --out DIR */
-    /* the display of output `o` in a `run` ("wall" or "alone") run; NULL with err */
-    image_display *(*create)(const wall_display_kind *kind, const char *out_dir, const char *run,
-                             const wall_output *o, tess_error *err);
-};
-
-/* display_create by the kind's name; a kind that writes files gets
- * OUT_DIR/bench-RUN-CONNECTOR.png, one file rewritten every frame. */
-static image_display *display_by_name(const wall_display_kind *kind, const char *out_dir, const char *run,
-                                      const wall_output *o, tess_error *err)
+/* The kinds are the headless display backends (wall/display_backend.h: those
+ * with a `create`): a new one there is measurable here. A kind that writes
+ * files gets OUT_DIR/bench-RUN-CONNECTOR.png, one file rewritten every frame. */
+static image_display *kind_display(const display_backend *kind, const char *out_dir, const char *run,
+                                   const wall_output *o, tess_error *err)
 {
     char pattern[CLI_PATTERN_BYTES] = "";
-    if (kind->writes_files) {
+    if (kind->options & DISPLAY_OPTION_OUT) {
         int n = snprintf(pattern, sizeof pattern, "%s/bench-%s-%s.png", out_dir, run, o->connector);
         if (n < 0 || (size_t)n >= sizeof pattern) {
             tess_error_set(err, "--out %s: path too long", out_dir);
             return NULL;
         }
     }
-    return display_create(kind->name, pattern, false, err);
+    display_backend_args args = {pattern, false};
+    return kind->create(&args, err);
 }
 
-static const wall_display_kind display_kinds[] = {
-    {"null", "drops each frame (rendering alone)", false, display_by_name},
-    {"convert", "encodes each frame to 8-bit sRGB XRGB8888 (scan-out's work, no device)", false, display_by_name},
-    {"convert-tiles", "the same, by the render threads tile by tile (as drm does)", false, display_by_name},
-    {"dump", "writes each frame to a PNG in --out DIR (encoding + file I/O)", true, display_by_name},
-};
-#define WALL_KIND_COUNT ((int)(sizeof display_kinds / sizeof display_kinds[0]))
-
-static const wall_display_kind *kind_by_name(const char *name, size_t len)
+static const display_backend *kind_by_name(const char *name, size_t len)
 {
-    for (int k = 0; k < WALL_KIND_COUNT; k++)
-        if (strlen(display_kinds[k].name) == len && !strncmp(display_kinds[k].name, name, len))
-            return &display_kinds[k];
+    for (size_t k = 0; k < display_backend_count; k++)
+        if (display_backends[k].create && strlen(display_backends[k].name) == len &&
+            !strncmp(display_backends[k].name, name, len))
+            return &display_backends[k];
     return NULL;
 }
 
@@ -104,7 +85,7 @@ typedef struct wall_sample {
 } wall_sample;
 
 typedef struct wall_variant {
-    const wall_display_kind *kind;
+    const display_backend *kind;
     int output;           /* the output rendered alone, or -1: the whole wall */
     wall_sample *samples; /* one per round */
     int repeated;         /* noisy runs thrown away and run again */
@@ -123,7 +104,7 @@ typedef struct bench_wall {
     const char *path_file;
     const char *out_dir;
     double size_scale;
-    const wall_display_kind *kinds[WALL_KIND_COUNT];
+    const display_backend *kinds[DISPLAY_BACKENDS_MAX];
     int kind_count;
     int rounds;
     bool reject_noisy;
@@ -152,7 +133,7 @@ static void step_tick(pipeline *p, void *ctx, const frame_info *fi)
 /* The pipeline of a run: every output as a channel (output -1), or that one
  * output alone; each its window of the wall camera's image plane, with
  * `kind`'s display. */
-static pipeline *make_pipeline(const bench_wall *b, const wall_display_kind *kind, int output, int frames,
+static pipeline *make_pipeline(const bench_wall *b, const display_backend *kind, int output, int frames,
                                tess_error *err)
 {
     pipeline_config cfg = cli_pipeline_config(&b->spec, b->cs);
@@ -164,7 +145,7 @@ static pipeline *make_pipeline(const bench_wall *b, const wall_display_kind *kin
     int first = output < 0 ? 0 : output, last = output < 0 ? b->wall.count : output + 1;
     for (int i = first; i < last; i++) {
         const wall_output *o = &b->wall.outputs[i];
-        image_display *d = kind->create(kind, b->out_dir, output < 0 ? "wall" : "alone", o, err);
+        image_display *d = kind_display(kind, b->out_dir, output < 0 ? "wall" : "alone", o, err);
         /* the pipeline owns d from pipeline_add_channel_window on, also on failure */
         if (!d || pipeline_add_channel_window(p, &b->camera, wall_plane_aspect(&b->wall),
                                               wall_output_window(&b->wall, i), o->width_px, o->height_px, d,
@@ -473,16 +454,17 @@ static bool parse_displays(const char *list, bench_wall *b)
     const char *p = list;
     for (;;) {
         size_t len = strcspn(p, ",");
-        const wall_display_kind *k = kind_by_name(p, len);
+        const display_backend *k = kind_by_name(p, len);
         if (len == 0) {
             cli_error("--display: empty name in '%s' (expected names separated by single commas)", list);
             return false;
         }
         if (!k) {
             char names[256] = "";
-            for (int i = 0; i < WALL_KIND_COUNT; i++)
-                snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "",
-                         display_kinds[i].name);
+            for (size_t i = 0; i < display_backend_count; i++)
+                if (display_backends[i].create)
+                    snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", names[0] ? ", " : "",
+                             display_backends[i].name);
             cli_error("--display: unknown display '%.*s' for bench --wall (expected a comma-separated list of: %s)",
                       (int)len, p, names);
             return false;
@@ -547,8 +529,9 @@ static void usage(FILE *f)
           "                    " WALL_DEFAULT_DISPLAYS "); the first is the baseline the others' cost is given\n"
           "                    against:\n",
           f);
-    for (int k = 0; k < WALL_KIND_COUNT; k++)
-        fprintf(f, "                      %-13s %s\n", display_kinds[k].name, display_kinds[k].what);
+    for (size_t k = 0; k < display_backend_count; k++)
+        if (display_backends[k].create)
+            fprintf(f, "                      %-13s %s\n", display_backends[k].name, display_backends[k].what);
     fputs("  --out DIR         where dump writes: DIR/bench-wall-CONNECTOR.png and\n"
           "                    DIR/bench-alone-CONNECTOR.png (required with dump, refused without)\n"
           "  --frames N        frames a run, at least 3 (default 24)\n"
@@ -691,15 +674,17 @@ static int parse_options(int argc, char **argv, bench_wall *b, const char **scen
     }
     if (!parse_displays(displays, b))
         return 2;
-    bool writes = false;
+    const display_backend *writer = NULL;
     for (int k = 0; k < b->kind_count; k++)
-        writes = writes || b->kinds[k]->writes_files;
-    if (writes && !b->out_dir) {
-        cli_error("--display dump: needs --out DIR (where each output's image is rewritten every frame)");
+        writer = writer ? writer : b->kinds[k]->options & DISPLAY_OPTION_OUT ? b->kinds[k] : NULL;
+    if (writer && !b->out_dir) {
+        cli_error("--display %s: needs --out DIR (where each output's image is rewritten every frame)", writer->name);
         return 2;
     }
-    if (!writes && b->out_dir) {
-        cli_error("--out %s: only the dump display writes files; --display is '%s'", b->out_dir, displays);
+    if (!writer && b->out_dir) {
+        char writers[128];
+        display_backend_names(DISPLAY_OPTION_OUT, " or ", writers, sizeof writers);
+        cli_error("--out %s: only the %s display writes files; --display is '%s'", b->out_dir, writers, displays);
         return 2;
     }
     if (b->out_dir && !out_dir_ok(b->out_dir))

@@ -17,6 +17,7 @@
 #include "engine/scene.h"
 #include "option_check.h"
 #include "pipeline_cli.h"
+#include "wall/display_backend.h"
 #include "wall/drm.h"
 #include "wall/dump.h"
 #include "wall/service.h"
@@ -110,7 +111,8 @@ static bool check_output_dir(const char *path)
 static bool check_outputs(const cli_pipeline_spec *s)
 {
     for (int i = 0; i < s->channel_count; i++)
-        if (!strcmp(s->channels[i].display, "dump") && !check_output_dir(s->channels[i].out))
+        if ((display_backend_by_name(s->channels[i].display)->options & DISPLAY_OPTION_OUT) &&
+            !check_output_dir(s->channels[i].out))
             return false;
     return (!s->record_file[0] || check_output_dir(s->record_file)) &&
            (!s->input.record_file[0] || check_output_dir(s->input.record_file));
@@ -237,7 +239,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
         snprintf(what, sizeof what, "wall of %d outputs (%.2f Mpixels)", channels, pixels * 1e-6);
     else
         snprintf(what, sizeof what, "%dx%d%s", ch->width_px, ch->height_px, channels > 1 ? " (+ more channels)" : "");
-    if (!strcmp(ch->display, "dump")) {
+    if (display_backend_by_name(ch->display)->options & DISPLAY_OPTION_OUT) {
         char first[4096], last[4096];
         uint64_t n = st.frames_displayed;
         bool sequence = s->frames != 1;
@@ -369,9 +371,9 @@ int cli_run(int argc, char **argv)
     /* the kiosk: a wall on a card when there is one, until stopped, in real time */
     if (s.wall_file[0] && !s.display_given && access("/dev/dri/card0", F_OK) == 0)
         snprintf(s.channels[0].display, sizeof s.channels[0].display, "drm");
-    if (!strcmp(s.channels[0].display, "drm")) {
+    if (display_backend_by_name(s.channels[0].display)->needs & DISPLAY_NEEDS_CARD) {
         if (!s.wall_file[0]) {
-            cli_error("--display drm needs --wall FILE (configs/walls/desk.json for one monitor)");
+            cli_error("--display %s needs --wall FILE (configs/walls/desk.json for one monitor)", s.channels[0].display);
             return 2;
         }
         if (!s.frames_given)
@@ -385,7 +387,8 @@ int cli_run(int argc, char **argv)
         return 2;
     cli_check_ignored_render_run(&given, &s, "run");
     /* the default output directory is ours to create */
-    if (!strcmp(s.channels[0].display, "dump") && !strcmp(s.channels[0].out, "out/frame_####.png") &&
+    if ((display_backend_by_name(s.channels[0].display)->options & DISPLAY_OPTION_OUT) &&
+        !strcmp(s.channels[0].out, "out/frame_####.png") &&
         mkdir("out", 0777) != 0 && errno != EEXIST) {
         cli_error("out: cannot create directory: %s", strerror(errno));
         return 1;

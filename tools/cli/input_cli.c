@@ -374,7 +374,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     input_controller_config_default(&cc);
     if (files->have_bindings)
         cc.bindings = files->bindings;
-    input_source_config sc = {0};
+    input_libinput_config sc = {0};
     snprintf(sc.seat, sizeof sc.seat, "%s", s->seat);
     for (int i = 0; i < s->device_count; i++)
         snprintf(sc.paths[i], sizeof sc.paths[i], "%s", s->devices[i]);
@@ -404,7 +404,10 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.media = cs->scene->medium_count > 0;
     if (cc.media && cs->scene->media[0].ops->colormap)
         snprintf(cc.transfer, sizeof cc.transfer, "%s", cs->scene->media[0].ops->colormap(cs->scene->media[0].data)->name);
-    in->runner = input_runner_start(&sc, &cc, pick, step_ready, (void *)cs, in->sink, cli_pipeline_session(), &err);
+    input_source *devices = input_libinput_open(&sc, cli_pipeline_session(), &err);
+    in->runner = devices ? input_runner_start(&devices, 1, &cc, pick, step_ready, (void *)cs, in->sink,
+                                              cli_pipeline_session(), &err)
+                         : NULL;
     if (!in->runner) {
         cli_error("%s", err.msg);
         return false;

@@ -14,7 +14,7 @@
 #include "engine/pipeline.h"
 #include "input/bindings.h"
 #include "input/sink.h"
-#include "input/source.h"
+#include "input/libinput_source.h"
 
 #define CLI_INPUT_PATH_BYTES 4096
 

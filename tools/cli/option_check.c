@@ -4,6 +4,8 @@
 #include <stdarg.h>
 #include <string.h>
 
+#include "wall/display_backend.h"
+
 void cli_given_add(cli_given *g, const char *name)
 {
     if (g->count < CLI_GIVEN_MAX)
@@ -33,16 +35,24 @@ static const char *const live_input_options[] = {"--bindings", "--seat", "--inpu
 void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s, const char *command)
 {
     const char *display = s->channels[0].display;
+    const display_backend *backend = display_backend_by_name(display); /* checked when parsed */
     bool live_input = s->input.enabled == 1;
     if (s->wall_file[0] && cli_given_has(g, "--size"))
         cli_warn("--size is ignored with --wall (each output's size comes from the wall config)");
-    if (strcmp(display, "dump") && cli_given_has(g, "--out"))
-        cli_warn("--out is ignored with --display %s (only the dump display writes files)", display);
+    char takers[128];
+    if (!(backend->options & DISPLAY_OPTION_OUT) && cli_given_has(g, "--out")) {
+        display_backend_names(DISPLAY_OPTION_OUT, " or ", takers, sizeof takers);
+        cli_warn("--out is ignored with --display %s (only the %s display writes files)", display, takers);
+    }
     if (s->time_mode == PIPELINE_TIME_REAL && cli_given_has(g, "--rate"))
         cli_warn("--rate is ignored in real time (it is the frame rate of --time fixed)%s",
-                 !strcmp(display, "drm") && !s->time_given ? "; the kiosk on a DRM card runs in real time" : "");
-    if (strcmp(display, "drm") && cli_given_has(g, "--card"))
-        cli_warn("--card is ignored with --display %s (only the drm display drives a card)", display);
+                 (backend->needs & DISPLAY_NEEDS_CARD) && !s->time_given
+                     ? "; the kiosk on a DRM card runs in real time"
+                     : "");
+    if (!(backend->options & DISPLAY_OPTION_CARD) && cli_given_has(g, "--card")) {
+        display_backend_names(DISPLAY_OPTION_CARD, " or ", takers, sizeof takers);
+        cli_warn("--card is ignored with --display %s (only the %s display drives a card)", display, takers);
+    }
     if (s->path_file[0] && !live_input && !s->input.replay_file[0] && cli_given_has(g, "--camera"))
         cli_warn("--camera is ignored with --path (the path sets the camera from the first frame)");
     const bool governed = s->budget_ms > 0.0;

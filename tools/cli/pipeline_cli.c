@@ -13,9 +13,9 @@
 #include "engine/log.h"
 #include "engine/scene.h"
 #include "option_check.h"
-#include "wall/display.h"
+#include "wall/display_backend.h"
 #include "wall/drm.h"
-#include "wall/session.h"
+#include "seat/session.h"
 #include "wall/wall_headless.h"
 
 #define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
@@ -137,22 +137,32 @@ static bool resolve_relative(const char *config_file, const char *path, char *ou
 static bool opt_display(jr_ctx *c, json_object *obj, cli_channel_spec *ch)
 {
     static const char *const fields[] = {"name", "out", NULL};
-    static const char *const names[] = {"null", "convert", "convert-tiles", "dump", "drm", NULL};
     json_object *m;
     if (!jr_get_member(obj, "display", &m))
         return true;
     size_t saved = jr_field_key(c, "display");
-    int which = -1;
-    char out[CLI_PATTERN_BYTES] = "";
+    const char *name = NULL;
+    const display_backend *b = NULL;
+    char out[CLI_PATTERN_BYTES] = "", reason[512];
     bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) && jr_require_member(c, m, "name") &&
-              jr_opt_choice(c, m, "name", names, &which) && opt_text(c, m, "out", out, sizeof out);
-    if (ok && !strcmp(names[which], "dump") && !out[0])
-        ok = jr_member_fail(c, "out", "required for the dump display (a file pattern such as out/frame_####.png)");
+              jr_opt_string(c, m, "name", &name);
+    if (ok && !(b = display_backend_by_name(name))) {
+        char names[256];
+        display_backend_names(0, ", ", names, sizeof names);
+        snprintf(reason, sizeof reason, "unknown value '%s' (expected one of: %s)", name, names);
+        ok = jr_member_fail(c, "name", reason);
+    }
+    ok = ok && opt_text(c, m, "out", out, sizeof out);
+    if (ok && (b->options & DISPLAY_OPTION_OUT) && !out[0]) {
+        snprintf(reason, sizeof reason, "required for the %s display (a file pattern such as out/frame_####.png)",
+                 b->name);
+        ok = jr_member_fail(c, "out", reason);
+    }
     if (ok && out[0])
         snprintf(ch->out, sizeof ch->out, "%s", out); /* relative to the working directory, as --out */
     jr_field_leave(c, saved);
     if (ok)
-        snprintf(ch->display, sizeof ch->display, "%s", names[which]);
+        snprintf(ch->display, sizeof ch->display, "%s", b->name);
     return ok;
 }
 
@@ -379,8 +389,8 @@ static bool load_channels(jr_ctx *c, json_object *root, cli_pipeline_spec *s)
         ch->out[0] = '\0';
         size_t at = jr_field_index(c, i);
         ok = load_channel(c, json_object_array_get_idx(m, i), ch);
-        if (ok && !strcmp(ch->display, "dump") && !ch->out[0])
-            ok = jr_field_fail(c, "a dump display needs its own \"out\" pattern");
+        if (ok && (display_backend_by_name(ch->display)->options & DISPLAY_OPTION_OUT) && !ch->out[0])
+            ok = jr_field_fail(c, "a %s display needs its own \"out\" pattern", ch->display);
         jr_field_leave(c, at);
     }
     jr_field_leave(c, saved);
@@ -554,9 +564,10 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--display")) {
         if (!(val = cli_option_value(argc, argv, i)))
             return false;
-        if (strcmp(val, "null") && strcmp(val, "convert") && strcmp(val, "convert-tiles") && strcmp(val, "dump") &&
-            strcmp(val, "drm")) {
-            cli_error("--display: unknown display '%s' (expected one of: %s, drm)", val, DISPLAY_NAMES);
+        if (!display_backend_by_name(val)) {
+            char names[256];
+            display_backend_names(0, ", ", names, sizeof names);
+            cli_error("--display: unknown display '%s' (expected one of: %s)", val, names);
             return false;
         }
         s->display_given = true;
@@ -598,11 +609,11 @@ void cli_pipeline_usage(FILE *f)
           "  --upscale F      how reduced frames are enlarged: bilinear, or clamped-cubic (Catmull-Rom\n"
           "                   clamped to the 2x2 neighbourhood) (default bilinear)\n"
           "  --no-shadows     skip shadow rays\n"
-          "  --display D      null (drop frames), convert (to 8-bit sRGB as scan-out would, then\n"
-          "                   drop), convert-tiles (the same, per tile on the render threads, as\n"
-          "                   drm does), dump (write files to --out), drm (scan-out on the wall's\n"
-          "                   monitors through DRM/KMS; needs --wall)\n"
-          "  --card PATH      DRM card for --display drm (default: the first with a connected monitor)\n"
+          "  --display D      where frames go, one of:\n",
+          f);
+    for (size_t i = 0; i < display_backend_count; i++)
+        fprintf(f, "                     %-14s %s\n", display_backends[i].name, display_backends[i].what);
+    fputs("  --card PATH      DRM card for --display drm (default: the first with a connected monitor)\n"
           "  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
           "  --record FILE    write the main channel's camera changes as a camera path\n"
           "  --wall FILE      render a display wall's layout (configs/walls/*.json, docs/wall-format.md):\n"
@@ -688,7 +699,8 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
     tess_error err = {{0}};
     wall_config wall;
     const cli_channel_spec *main_ch = &s->channels[0];
-    bool on_device = !strcmp(main_ch->display, "drm");
+    const display_backend *backend = display_backend_by_name(main_ch->display);
+    bool on_device = backend->needs & DISPLAY_NEEDS_CARD;
     image_display *displays[WALL_MAX_OUTPUTS] = {NULL};
     bool ok = wall_config_load(s->wall_file, &wall, &err);
     if (ok && on_device)
@@ -708,13 +720,8 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
             image_display_destroy(displays[i]);
         return false;
     }
-    if (on_device)
-        ok = true;
-    else if (!strcmp(main_ch->display, "dump"))
-        ok = wall_headless_displays(&wall, main_ch->out, s->frames != 1, displays, &err);
-    else
-        for (int i = 0; ok && i < wall.count; i++)
-            ok = (displays[i] = display_create(main_ch->display, NULL, false, &err)) != NULL;
+    display_backend_args args = {main_ch->out, s->frames != 1};
+    ok = on_device || display_backend_create_wall(backend, &wall, &args, displays, &err);
     /* the pipeline owns each display from pipeline_add_channel_window on, also on failure */
     int added = 0, first_channel = -1;
     for (int i = 0; ok && i < wall.count; i++, added++) {

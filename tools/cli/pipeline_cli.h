@@ -23,7 +23,7 @@ typedef struct cli_channel_spec {
     int width_px, height_px;
     bool have_camera;            /* else the scene's camera, else framed bounds */
     camera_desc camera;
-    char display[16];            /* "null", "convert", "convert-tiles", "dump" or "drm" */
+    char display[16];            /* a name of wall/display_backend.h's table */
     char out[CLI_PATTERN_BYTES]; /* dump: file pattern */
 } cli_channel_spec;
 

@@ -1,4 +1,4 @@
-/* session.h - the seat: who may open the DRM card (and, for input, the event
+/* session.h (seat) - the seat: who may open the DRM card (and, for input, the event
  * devices) and when, through libseat. libseat reaches seatd or logind, so the
  * kiosk runs without root; as root with neither, its builtin backend (an
  * embedded seatd) does the same job, including VT switching. When no seat can
@@ -14,8 +14,8 @@
  * Threading: one thread at a time (the pipeline's display thread while
  * running, the main thread before and after); libseat calls the listener
  * inside session_dispatch on that thread, so the flags need no lock. */
-#ifndef TESSERA_SESSION_H
-#define TESSERA_SESSION_H
+#ifndef TESSERA_SEAT_SESSION_H
+#define TESSERA_SEAT_SESSION_H
 
 #include <stdbool.h>
 

@@ -1,4 +1,4 @@
-/* session.c - the seat through libseat (see session.h). */
+/* session.c (seat) - the seat through libseat (see session.h). */
 #include "session.h"
 
 #include <errno.h>

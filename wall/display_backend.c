@@ -1,0 +1,119 @@
+/* display_backend.c (wall) - the table of display backends (display_backend.h). */
+#include "display_backend.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "display.h"
+#include "wall_headless.h"
+
+/* The headless displays' constructors, as the table calls them: their own
+ * create functions report nothing but NULL when out of memory. */
+static image_display *named_or_oom(image_display *d, const char *name, tess_error *err)
+{
+    if (!d)
+        tess_error_set(err, "%s display: out of memory", name);
+    return d;
+}
+
+static image_display *null_create(const display_backend_args *a, tess_error *err)
+{
+    (void)a;
+    return named_or_oom(display_null_create(), "null", err);
+}
+
+static image_display *convert_create(const display_backend_args *a, tess_error *err)
+{
+    (void)a;
+    return named_or_oom(display_convert_create(), "convert", err);
+}
+
+static image_display *convert_tiles_create(const display_backend_args *a, tess_error *err)
+{
+    (void)a;
+    return named_or_oom(display_convert_tiles_create(), "convert-tiles", err);
+}
+
+static image_display *dump_create(const display_backend_args *a, tess_error *err)
+{
+    return display_dump_create(a->out_pattern, a->sequence, err);
+}
+
+static bool dump_create_wall(const wall_config *w, const display_backend_args *a, image_display **displays,
+                             tess_error *err)
+{
+    return wall_headless_displays(w, a->out_pattern, a->sequence, displays, err);
+}
+
+const display_backend display_backends[] = {
+    {"null", "drops each frame (rendering alone)", 0, 0, null_create, NULL},
+    {"convert", "encodes to 8-bit sRGB XRGB8888 as scan-out would, then drops (no device)", 0, 0,
+     convert_create, NULL},
+    {"convert-tiles", "the same, by the render threads tile by tile (as drm does)", 0, 0, convert_tiles_create,
+     NULL},
+    {"dump", "writes each frame to files: --out (.png 8-bit sRGB, .exr linear float)", DISPLAY_OPTION_OUT,
+     DISPLAY_NEEDS_OIIO, dump_create, dump_create_wall},
+    {"drm", "scan-out on the wall's monitors through DRM/KMS (needs --wall; --card)", DISPLAY_OPTION_CARD,
+     DISPLAY_NEEDS_CARD, NULL, NULL},
+};
+const size_t display_backend_count = sizeof display_backends / sizeof display_backends[0];
+_Static_assert(sizeof display_backends / sizeof display_backends[0] <= DISPLAY_BACKENDS_MAX,
+               "DISPLAY_BACKENDS_MAX: room for every backend");
+
+const display_backend *display_backend_by_name(const char *name)
+{
+    for (size_t i = 0; i < display_backend_count; i++)
+        if (!strcmp(display_backends[i].name, name))
+            return &display_backends[i];
+    return NULL;
+}
+
+void display_backend_names(unsigned options, const char *separator, char *out, size_t out_bytes)
+{
+    size_t used = 0;
+    if (out_bytes)
+        out[0] = '\0';
+    for (size_t i = 0; i < display_backend_count && used < out_bytes; i++) {
+        if ((display_backends[i].options & options) != options)
+            continue;
+        int n = snprintf(out + used, out_bytes - used, "%s%s", used ? separator : "", display_backends[i].name);
+        used += n < 0 ? out_bytes - used : (size_t)n;
+    }
+}
+
+image_display *display_create(const char *name, const char *out_pattern, bool sequence, tess_error *err)
+{
+    const display_backend *b = display_backend_by_name(name);
+    if (!b) {
+        char names[256];
+        display_backend_names(0, ", ", names, sizeof names);
+        tess_error_set(err, "unknown display '%s' (known: %s)", name, names);
+        return NULL;
+    }
+    if (!b->create) {
+        tess_error_set(err, "the %s display shows a wall's outputs on a card: it needs --wall", name);
+        return NULL;
+    }
+    display_backend_args a = {out_pattern, sequence};
+    return b->create(&a, err);
+}
+
+bool display_backend_create_wall(const display_backend *b, const wall_config *w, const display_backend_args *a,
+                                 image_display **displays, tess_error *err)
+{
+    if (!b->create)
+        return tess_error_set(err, "the %s display is not headless: its outputs are a card's", b->name);
+    bool ok = true;
+    int made = 0;
+    if (b->create_wall)
+        ok = b->create_wall(w, a, displays, err); /* undoes itself on failure */
+    else
+        for (; ok && made < w->count; made++)
+            ok = (displays[made] = b->create(a, err)) != NULL;
+    for (int i = 0; !ok && i < w->count; i++) {
+        if (i < made)
+            image_display_destroy(displays[i]);
+        displays[i] = NULL;
+    }
+    return ok;
+}
