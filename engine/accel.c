@@ -436,9 +436,7 @@ static uint64_t packet_one_by_one(const accel *a, ray_packet *p, uint64_t mask, 
             hit_here = accel_intersect(a, &one, &h);
         }
         /* the packet's own hit stands unless this one comes first (as the kernels' offer) */
-        if (!hit_here || !(h.t < before.t || (h.t == before.t && (h.geom_id < before.geom_id ||
-                                                                  (h.geom_id == before.geom_id &&
-                                                                   h.prim_id < before.prim_id)))))
+        if (!hit_here || !hit_comes_first(h.t, h.geom_id, h.prim_id, before.t, before.geom_id, before.prim_id))
             continue;
         p->hit_t[i] = h.t;
         p->hit_u[i] = h.u;

@@ -58,6 +58,16 @@ typedef struct ray_derived {
     uint32_t after_geom, after_prim;
 } ray_derived;
 
+/* The closest-hit order: does a hit at t on (geom, prim) come before one at
+ * best_t on (best_geom, best_prim)? Smaller t first, then the lower geometry
+ * id, then the lower primitive id, so a query's answer never depends on the
+ * order in which it meets its candidates. */
+static inline bool hit_comes_first(float t, uint32_t geom, uint32_t prim, float best_t, uint32_t best_geom,
+                                   uint32_t best_prim)
+{
+    return t < best_t || (t == best_t && (geom < best_geom || (geom == best_geom && prim < best_prim)));
+}
+
 /* Whether a hit at t on (geom, prim) comes after the bound of d: t above
  * after_t, or at it with a greater (geom, prim). Only hits with t >= after_t
  * are ever asked (the ray's t_near sees to it). */

@@ -67,12 +67,6 @@ static inline float lane_float(uint32_t bits)
     return f;
 }
 
-/* Does (t, geom, prim) beat the current hit? */
-static inline bool closer(float t, uint32_t geom, uint32_t prim, float best_t, uint32_t best_geom, uint32_t best_prim)
-{
-    return t < best_t || (t == best_t && (geom < best_geom || (geom == best_geom && prim < best_prim)));
-}
-
 /* ------------------------------------------------------------------------
  * Single ray
  * ------------------------------------------------------------------------ */
@@ -147,7 +141,7 @@ static inline float ray_cull_slack(const ray *r, const wbvh *w)
 static inline bool offer1(ray *r, const ray_derived *d, hit *h, float t, float u, float v, uint32_t geom_id,
                           uint32_t prim)
 {
-    if (!closer(t, geom_id, prim, h->t, h->geom_id, h->prim_id) || !ray_hit_after(d, t, geom_id, prim))
+    if (!hit_comes_first(t, geom_id, prim, h->t, h->geom_id, h->prim_id) || !ray_hit_after(d, t, geom_id, prim))
         return false;
     *h = (hit){.t = t, .u = u, .v = v, .prim_id = prim, .geom_id = geom_id};
     r->t_far = t;
@@ -793,7 +787,7 @@ static void node_rays(const packet_ctx *c, const wbvh_node *n, unsigned children
 static inline void offer_packet(packet_ctx *c, uint32_t i, float t, float u, float v, uint32_t prim)
 {
     ray_packet *p = c->p;
-    if (!closer(t, c->geom_id, prim, p->hit_t[i], p->geom_id[i], p->prim_id[i]))
+    if (!hit_comes_first(t, c->geom_id, prim, p->hit_t[i], p->geom_id[i], p->prim_id[i]))
         return;
     if ((p->flags & PACKET_AFTER_HIT) && t == p->after_t[i] &&
         !(c->geom_id > p->after_geom[i] || (c->geom_id == p->after_geom[i] && prim > p->after_prim[i])))
