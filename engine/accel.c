@@ -438,12 +438,7 @@ static uint64_t packet_one_by_one(const accel *a, ray_packet *p, uint64_t mask, 
         /* the packet's own hit stands unless this one comes first (as the kernels' offer) */
         if (!hit_here || !hit_comes_first(h.t, h.geom_id, h.prim_id, before.t, before.geom_id, before.prim_id))
             continue;
-        p->hit_t[i] = h.t;
-        p->hit_u[i] = h.u;
-        p->hit_v[i] = h.v;
-        p->prim_id[i] = h.prim_id;
-        p->geom_id[i] = h.geom_id;
-        p->t_far[i] = h.t;
+        packet_set_hit(p, i, &h);
         found |= 1ull << i;
     }
     return found;

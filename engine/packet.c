@@ -42,6 +42,16 @@ hit packet_get_hit(const ray_packet *p, uint32_t i)
                  .geom_id = p->geom_id[i]};
 }
 
+void packet_set_hit(ray_packet *p, uint32_t i, const hit *h)
+{
+    p->hit_t[i] = h->t;
+    p->hit_u[i] = h->u;
+    p->hit_v[i] = h->v;
+    p->prim_id[i] = h->prim_id;
+    p->geom_id[i] = h->geom_id;
+    p->t_far[i] = h->t;
+}
+
 void packet_set_after(ray_packet *p, uint32_t i, const hit *after)
 {
     if (!(p->flags & PACKET_AFTER_HIT)) {

@@ -105,6 +105,9 @@ void packet_reset(ray_packet *p, uint32_t count, uint32_t fact_flags);
 void packet_set_ray(ray_packet *p, uint32_t i, const ray *r);
 ray packet_get_ray(const ray_packet *p, uint32_t i);
 hit packet_get_hit(const ray_packet *p, uint32_t i);
+/* Ray i's closest hit becomes h (found by a query on the ray alone): its
+ * t_far shrinks to h->t, as the packet kernels leave a ray that hits. */
+void packet_set_hit(ray_packet *p, uint32_t i, const hit *h);
 
 /* Ray i (already set) looks only for hits after `after` (a hit it found
  * before, t finite), in the closest-hit order (t, geom_id, prim_id): the

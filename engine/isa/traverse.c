@@ -944,12 +944,7 @@ static void finish_single(packet_ctx *c, uint32_t ref, uint64_t mask)
             c->done |= 1ull << i;
             continue;
         }
-        p->hit_t[i] = h.t;
-        p->hit_u[i] = h.u;
-        p->hit_v[i] = h.v;
-        p->prim_id[i] = h.prim_id;
-        p->geom_id[i] = h.geom_id;
-        p->t_far[i] = one.t_far;
+        packet_set_hit(p, i, &h); /* one.t_far is h.t: a hit shrinks it to its t */
         c->improved |= 1ull << i;
     }
 }
