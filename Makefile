@@ -3,7 +3,8 @@
 
 CC  ?= gcc
 CXX ?= g++
-PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp libxxhash
+PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp libxxhash libwebsockets \
+        libturbojpeg
 TEST_PKGS := criterion
 
 BUILD := build
@@ -34,6 +35,8 @@ WALL_SRC := $(wildcard wall/*.c)
 SEAT_SRC := $(wildcard seat/*.c)
 WALL_CXX := $(wildcard wall/*.cpp)
 INPUT_SRC := $(wildcard input/*.c)
+# the remote view (remote/README.md): HTTP + WebSocket server, the page, JPEG frames, remote input
+REMOTE_SRC := $(wildcard remote/*.c)
 METRICS_SRC := $(wildcard metrics/*.c)
 # the hard cases of numerical robustness, shared by tests/test_robust.c and `tessera robust`
 ROBUST_SRC := $(wildcard tools/robust/*.c)
@@ -52,7 +55,7 @@ ISA_FLAGS_sse2 := -DTESS_ISA_SSE2
 ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
 
-LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(SEAT_SRC) $(INPUT_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
+LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(SEAT_SRC) $(INPUT_SRC) $(REMOTE_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
@@ -148,14 +151,16 @@ run: deps
 # the whole suite (Criterion prints its summary line), then the DRM/KMS wall end to end in a
 # qemu guest (tests/vm_wall.sh) and input driving it there (tests/vm_input.sh): each its own
 # summary line; SKIPPED, said so, when qemu cannot be installed
-test: deps
+test:
+	@sh tools/deps.sh --test
 	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
-test-asan: deps
+test-asan:
+	@sh tools/deps.sh --test
 	$(MAKE) BUILD=build-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
 	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests build-asan/gen-assembly \
 	    build-asan/ply-replicate
@@ -223,7 +228,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
+HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h remote/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \

@@ -2,15 +2,20 @@
 # deps.sh - make sure the Debian packages tessera builds against are installed.
 # As root: installs what is missing with apt-get (and says so).
 # Otherwise: prints the exact apt-get line and fails.
-# Usage: tools/deps.sh [--bench | --fuzz | --report]   (--bench adds Embree, for the peer
+# Usage: tools/deps.sh [--test | --bench | --fuzz | --report]   (--test adds Chromium, which the
+#        remote view's browser tests drive headless; --bench adds Embree, for the peer
 #        comparison; --fuzz adds clang and its libFuzzer runtime, for make fuzz:
 #        tests/fuzz/README.md; --report adds gnuplot, for make report's plots)
 set -eu
 
 PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libseat-dev libinput-dev libevdev-dev \
-libsystemd-dev libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev libxxhash-dev"
+libsystemd-dev libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev libxxhash-dev \
+libwebsockets-dev libturbojpeg0-dev"
 # test-only: systemd-analyze verifies configs/systemd/ (tests/test_service.c)
 PACKAGES="$PACKAGES systemd"
+if [ "${1:-}" = "--test" ]; then
+    PACKAGES="$PACKAGES chromium"
+fi
 # time: GNU time -v, the peak resident memory of tools/bench_massive.sh's runs
 if [ "${1:-}" = "--bench" ]; then
     PACKAGES="$PACKAGES libembree-dev time"
