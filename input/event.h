@@ -43,6 +43,9 @@ typedef enum input_event_kind {
     INPUT_FRAME,                /* end of a non-touch frame */
     INPUT_DEVICE_ADDED,         /* device (informational: the controller forgets nothing) */
     INPUT_DEVICE_REMOVED,       /* device: its held keys, buttons and touches are released */
+    INPUT_VIEWER_POINTER,       /* a remote viewer's pointer (remote/): slot = the viewer's slot
+                                   (0..INPUT_MAX_VIEWERS-1), pressed = shown, x, y its plane point;
+                                   drawn on the wall and every view in the viewer's colour */
 } input_event_kind;
 
 typedef struct input_event {
@@ -60,5 +63,6 @@ typedef struct input_event {
 } input_event;
 
 #define INPUT_MAX_TOUCHES 10
+#define INPUT_MAX_VIEWERS 8 /* remote viewers at once: their pointers' slots */
 
 #endif
