@@ -64,7 +64,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes bench-pipeline bench-wall scaling-model clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
@@ -283,6 +283,13 @@ bench-ao:
 report-volumes:
 	$(MAKE) tessera
 	sh tools/report_volumes.sh
+
+# the remote view's JPEG frames (tools/report_remote.sh): bytes and encode time against FLIP per
+# quality and chroma subsampling, the "## Remote view" section of REPORT.md
+report-remote:
+	@sh tools/deps.sh --report
+	$(MAKE) tessera $(BUILD)/report_img
+	sh tools/report_remote.sh
 
 # particles against Embree's sphere points alone (tools/bench_particles.sh): the "## Particles"
 # section of BENCHMARKS.md

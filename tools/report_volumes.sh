@@ -22,6 +22,7 @@
 set -eu
 
 cd "$(dirname "$0")/.."
+. tools/report/put_section.sh
 SHARED=${TESSERA_SHARED:-../shared}
 DATA=$SHARED/data/volumes
 OUT=${REPORT_VOLUMES_OUT:-REPORT.md}
@@ -183,13 +184,5 @@ if [ -n "$PLOTS" ]; then
     mkdir -p "$(dirname "$OUT")/report"
     for p in $PLOTS; do cp "$WORK/$p" "$(dirname "$OUT")/report/$p"; done
 fi
-[ -f "$OUT" ] || : > "$OUT"
-awk -v section="$SECTION" '
-BEGIN { while ((getline l < section) > 0) text = text l "\n" }
-/^## Volumes: / { skipping = 1; if (!done) { printf "%s\n", text; done = 1 }; next }
-skipping && /^## / { skipping = 0 }
-skipping { next }
-{ print }
-END { if (!done) printf "\n%s", text }
-' "$OUT" > "$WORK/out.md" && cp "$WORK/out.md" "$OUT"
+report_put_section "$OUT" "Volumes: " "$SECTION" "$WORK"
 echo "report_volumes: $OUT updated" >&2

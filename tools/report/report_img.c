@@ -17,15 +17,32 @@
  *       the SIZE x SIZE region at (X, Y) of each IN, enlarged ZOOM times
  *       (nearest pixel), in rows of COLS cells GAP_PX apart on grey; an IN
  *       of "-" leaves its cell empty. The region must lie inside every IN.
+ *   report_img jpeg IMAGE RUNS QUALITY...
+ *       the remote view's JPEG frames (remote/jpeg.h) of IMAGE: the picture
+ *       as the page would get it without loss (8-bit sRGB, wall/srgb8.h) is
+ *       compressed at each QUALITY with each chroma subsampling (4:4:4,
+ *       4:2:2, 4:2:0), RUNS times; prints one tab-separated line each:
+ *       subsampling, quality, JPEG bytes, the median encode time in ms and
+ *       the mean LDR-FLIP of the decoded picture against the lossless one
+ *       (metrics/flip.h, FLIP's default viewer: 67 pixels per degree) and
+ *       its PSNR in dB over the 8-bit codes (peak 255), after
+ *       a "# convert_ms M" line: the median time of the float-to-8-bit
+ *       conversion a frame needs first (remote display's show()).
  * Exit status 0, 1 for a failure (said on stderr, naming the file), 2 for a
  * bad command line. */
+#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "engine/clock.h"
+#include "engine/srgb.h"
+#include "metrics/flip.h"
+#include "remote/jpeg.h"
 #include "wall/dump.h"
+#include "wall/srgb8.h"
 
 #define GAP_PX 4            /* between montage cells */
 #define GAP_LINEAR 0.2f     /* grey of the gaps and empty cells (linear) */
@@ -230,15 +247,136 @@ done:
     return code;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median_of(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* XRGB8888 words -> linear RGB through the sRGB curve (what a display shows). */
+static void xrgb_to_linear(const uint32_t *xrgb, size_t pixels, float *rgb)
+{
+    static float linear_of_code[256];
+    if (linear_of_code[255] == 0.0f)
+        for (int c = 0; c < 256; c++)
+            linear_of_code[c] = (float)srgb_curve_decode(c / 255.0);
+    for (size_t i = 0; i < pixels; i++) {
+        rgb[3 * i + 0] = linear_of_code[(xrgb[i] >> 16) & 0xff];
+        rgb[3 * i + 1] = linear_of_code[(xrgb[i] >> 8) & 0xff];
+        rgb[3 * i + 2] = linear_of_code[xrgb[i] & 0xff];
+    }
+}
+
+static int cmd_jpeg(int argc, char **argv)
+{
+    if (argc < 5) {
+        fprintf(stderr, "usage: report_img jpeg IMAGE RUNS QUALITY...\n");
+        return 2;
+    }
+    int runs, qualities[32], quality_count = argc - 4;
+    if (quality_count > 32 || !parse_int(argv[3], "RUNS", 1, 1000, &runs))
+        return 2;
+    for (int i = 0; i < quality_count; i++)
+        if (!parse_int(argv[4 + i], "QUALITY", REMOTE_JPEG_QUALITY_MIN, REMOTE_JPEG_QUALITY_MAX, &qualities[i]))
+            return 2;
+    image img;
+    if (!image_read(argv[2], &img))
+        return 1;
+    size_t pixels = (size_t)img.w * (size_t)img.h;
+    uint32_t *lossless = malloc(pixels * sizeof *lossless);
+    float *reference = malloc(pixels * 3 * sizeof *reference), *test = malloc(pixels * 3 * sizeof *test);
+    float *error = malloc(pixels * sizeof *error);
+    double *times_ms = malloc((size_t)runs * sizeof *times_ms);
+    remote_jpeg *j = NULL;
+    tess_error err = {{0}};
+    int status = 1;
+    if (!lossless || !reference || !test || !error || !times_ms) {
+        fprintf(stderr, "report_img: out of memory for %dx%d\n", img.w, img.h);
+        goto done;
+    }
+    for (int r = 0; r < runs; r++) {
+        double t0 = clock_monotonic_s();
+        for (int y = 0; y < img.h; y++)
+            srgb8_encode_xrgb(img.rgb + (size_t)y * (size_t)img.w * 3, 1, img.w, lossless + (size_t)y * (size_t)img.w);
+        times_ms[r] = (clock_monotonic_s() - t0) * 1e3;
+    }
+    printf("# convert_ms %.3f\n", median_of(times_ms, runs));
+    xrgb_to_linear(lossless, pixels, reference);
+    if (!(j = remote_jpeg_create(&err)))
+        goto fail;
+    for (int sub = REMOTE_SUBSAMPLING_444; sub <= REMOTE_SUBSAMPLING_420; sub++) {
+        for (int q = 0; q < quality_count; q++) {
+            const uint8_t *file = NULL;
+            size_t bytes = 0;
+            for (int r = 0; r < runs; r++) {
+                double t0 = clock_monotonic_s();
+                if (!remote_jpeg_encode(j, lossless, img.w, img.h, img.w, qualities[q], (remote_subsampling)sub, &file,
+                                        &bytes, &err))
+                    goto fail;
+                times_ms[r] = (clock_monotonic_s() - t0) * 1e3;
+            }
+            uint32_t *decoded = NULL;
+            int dw = 0, dh = 0;
+            if (!remote_jpeg_decode(file, bytes, &decoded, &dw, &dh, &err))
+                goto fail;
+            bool same_size = dw == img.w && dh == img.h;
+            double squared = 0.0; /* sum of squared code differences over R, G, B */
+            if (same_size) {
+                xrgb_to_linear(decoded, pixels, test);
+                for (size_t i = 0; i < pixels; i++)
+                    for (int shift = 0; shift < 24; shift += 8) {
+                        double d = (double)((lossless[i] >> shift) & 0xff) - (double)((decoded[i] >> shift) & 0xff);
+                        squared += d * d;
+                    }
+            }
+            free(decoded);
+            if (!same_size) {
+                fprintf(stderr, "report_img: the JPEG decoded to %dx%d, not %dx%d\n", dw, dh, img.w, img.h);
+                goto done;
+            }
+            if (!flip_ldr_map(reference, test, img.w, img.h, FLIP_DEFAULT_PPD, 2, error, &err))
+                goto fail;
+            double sum = 0.0;
+            for (size_t i = 0; i < pixels; i++)
+                sum += error[i];
+            double mse = squared / (3.0 * (double)pixels);
+            printf("%s\t%d\t%zu\t%.3f\t%.6f\t%.2f\n", remote_subsampling_name((remote_subsampling)sub), qualities[q],
+                   bytes, median_of(times_ms, runs), sum / (double)pixels,
+                   mse > 0.0 ? 10.0 * log10(255.0 * 255.0 / mse) : 99.0);
+        }
+    }
+    status = 0;
+    goto done;
+fail:
+    fprintf(stderr, "report_img: %s: %s\n", argv[2], err.msg);
+done:
+    remote_jpeg_destroy(j);
+    free(lossless);
+    free(reference);
+    free(test);
+    free(error);
+    free(times_ms);
+    free(img.rgb);
+    return status;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 2 && !strcmp(argv[1], "jpeg"))
+        return cmd_jpeg(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "mean"))
         return cmd_mean(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "region"))
         return cmd_region(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "montage"))
         return cmd_montage(argc, argv);
-    fprintf(stderr, "usage: report_img mean OUT IN... | region SIZE REF TEST |\n"
+    fprintf(stderr, "usage: report_img mean OUT IN... | region SIZE REF TEST | jpeg IMAGE RUNS QUALITY... |\n"
                     "       montage OUT X Y SIZE ZOOM COLS IN...\n");
     return 2;
 }
