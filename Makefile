@@ -56,7 +56,7 @@ ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
 
 LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(SEAT_SRC) $(INPUT_SRC) $(REMOTE_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
-           $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ)
+           $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ) $(BUILD)/remote/page_html.o
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
 TILE_CONTENTION_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TILE_CONTENTION_SRC))
@@ -79,6 +79,14 @@ $(BUILD)/%.o: %.c
 $(BUILD)/engine/isa/traverse_%.o: engine/isa/traverse.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(ISA_FLAGS_$*) -MMD -MP -c $< -o $@
+
+# the remote view's page built into the binary (remote/page.h)
+$(BUILD)/gen/remote/page_html.c: remote/page.html tools/embed_page.sh
+	@mkdir -p $(dir $@)
+	sh tools/embed_page.sh remote/page.html $@
+$(BUILD)/remote/page_html.o: $(BUILD)/gen/remote/page_html.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)

@@ -19,7 +19,8 @@ FZ_BINS := $(addprefix $(FZ)/fuzz_,$(FZ_TARGETS))
 # the whole product but main(), as one archive: a target links what it uses
 FZ_LIB_C := $(wildcard engine/*.c engine/particles/*.c engine/volume/*.c wall/*.c seat/*.c input/*.c remote/*.c metrics/*.c) $(filter-out tools/cli/main.c,$(wildcard tools/cli/*.c))
 FZ_LIB_OBJ := $(patsubst %.c,$(FZ)/%.o,$(FZ_LIB_C)) $(patsubst %.cpp,$(FZ)/%.o,$(wildcard wall/*.cpp)) \
-              $(FZ)/engine/isa/traverse_sse2.o $(FZ)/engine/isa/traverse_avx2.o $(FZ)/engine/isa/traverse_avx512.o
+              $(FZ)/engine/isa/traverse_sse2.o $(FZ)/engine/isa/traverse_avx2.o $(FZ)/engine/isa/traverse_avx512.o \
+              $(FZ)/remote/page_html.o
 FZ_LIB := $(FZ)/libtessera_fuzz.a
 FZ_ISA_sse2 := -DTESS_ISA_SSE2
 FZ_ISA_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
@@ -37,6 +38,13 @@ $(FZ)/%.o: %.c
 $(FZ)/engine/isa/traverse_%.o: engine/isa/traverse.c
 	@mkdir -p $(dir $@)
 	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) $(FZ_ISA_$*) -MMD -MP -c $< -o $@
+
+$(FZ)/gen/remote/page_html.c: remote/page.html tools/embed_page.sh
+	@mkdir -p $(dir $@)
+	sh tools/embed_page.sh remote/page.html $@
+$(FZ)/remote/page_html.o: $(FZ)/gen/remote/page_html.c
+	@mkdir -p $(dir $@)
+	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) -c $< -o $@
 
 $(FZ)/%.o: %.cpp
 	@mkdir -p $(dir $@)
