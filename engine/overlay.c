@@ -4,7 +4,10 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
+
+#include "srgb.h"
 
 /* Printable ASCII 32..126, OVERLAY_GLYPH_H rows each, top row first; bit 4 is
  * the leftmost of the 5 columns. */
@@ -142,6 +145,31 @@ void overlay_set_status(overlay_state *s, const char *text)
             s->status[n] = c >= 32 && c <= 126 ? (char)c : '?';
         }
     s->status[n] = '\0';
+}
+
+/* sRGB codes, chosen to be told apart on any background (and by most colour-blind people in
+ * the first four) */
+static const uint8_t pointer_srgb[OVERLAY_POINTER_COLOURS][3] = {
+    {0xe6, 0x19, 0x4b}, {0x3c, 0xb4, 0x4b}, {0x43, 0x63, 0xd8}, {0xf5, 0x82, 0x31},
+    {0x91, 0x1e, 0xb4}, {0x42, 0xd4, 0xf4}, {0xf0, 0x32, 0xe6}, {0xbf, 0xef, 0x45},
+};
+
+static const uint8_t *pointer_colour(int slot)
+{
+    return pointer_srgb[((slot % OVERLAY_POINTER_COLOURS) + OVERLAY_POINTER_COLOURS) % OVERLAY_POINTER_COLOURS];
+}
+
+void overlay_pointer_colour_hex(int slot, char out[8])
+{
+    const uint8_t *c = pointer_colour(slot);
+    snprintf(out, 8, "#%02x%02x%02x", c[0], c[1], c[2]);
+}
+
+void overlay_pointer_rgb(int slot, float linear_rgb[3])
+{
+    const uint8_t *c = pointer_colour(slot);
+    for (int i = 0; i < 3; i++)
+        linear_rgb[i] = (float)srgb_curve_decode(c[i] / 255.0);
 }
 
 int overlay_scale(int height_px)

@@ -93,6 +93,15 @@ typedef struct overlay_plan {
     overlay_rect cursor; /* its box; the tip is (x0, y0) */
 } overlay_plan;
 
+/* Remote viewers' pointers (remote/): one colour per viewer slot, the same on
+ * the wall, in every view and on the page's swatch. OVERLAY_POINTER_COLOURS
+ * distinct colours; slots past them wrap. */
+#define OVERLAY_POINTER_COLOURS 8
+/* Slot `slot`'s colour as sRGB "#rrggbb" into out (8 bytes with the NUL). */
+void overlay_pointer_colour_hex(int slot, char out[8]);
+/* The same colour as linear RGB (what the overlay composites). */
+void overlay_pointer_rgb(int slot, float linear_rgb[3]);
+
 /* The text a status line shows for `text`: at most OVERLAY_TEXT_BYTES - 1
  * bytes of it (the rest is cut off), every byte outside 32..126 replaced by
  * '?'. NULL is "". */

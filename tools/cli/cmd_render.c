@@ -17,6 +17,7 @@
 #include "engine/scene.h"
 #include "option_check.h"
 #include "pipeline_cli.h"
+#include "remote_cli.h"
 #include "wall/display_backend.h"
 #include "wall/drm.h"
 #include "wall/dump.h"
@@ -183,7 +184,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     pipeline *p = NULL;
     tess_error err = {{0}};
     /* live input steers the camera (a --path becomes its idle tour); a replay steers it alone */
-    bool steered = s->input.enabled == 1 || s->input.replay_file[0];
+    bool steered = s->input.enabled == 1 || s->input.replay_file[0] || s->remote.port >= 0;
     p = cli_pipeline_create(s, &cs);
     if (!p)
         goto done;
@@ -211,6 +212,8 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     if (cli_input_wanted(&s->input) &&
         !(input = cli_input_start(&s->input, p, &cs, &input_files)))
         goto done;
+    if (!cli_remote_start(p)) /* after input: viewers' events go to its runner */
+        goto done;
     if (run_hooks && run_hooks->started && !run_hooks->started(run_hooks->ctx, p, input))
         goto done;
     catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
@@ -218,6 +221,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     catch_stop_signals(NULL);
     if (run_hooks && run_hooks->finished)
         run_hooks->finished(run_hooks->ctx, p, input, ran);
+    cli_remote_stop(); /* before input: the view's source is the input runner's */
     cli_input_finish(input);
     input = NULL;
     if (!ran) {
@@ -270,9 +274,11 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     cli_pipeline_report(p, s);
     code = 0;
 done:
+    cli_remote_stop();
     cli_input_finish(input);
     cli_input_files_free(&input_files);
     pipeline_destroy(p);
+    cli_remote_release(); /* after the pipeline, which owns its display */
     cli_pipeline_release_outputs(); /* a DRM card: the CRTCs as they were */
     camera_path_free(&player.path);
     if (s->record_file[0] && p)

@@ -19,6 +19,7 @@
 #include "input/runner.h"
 #include "input_pick.h"
 #include "pipeline_cli.h"
+#include "remote_cli.h"
 
 #define CLI_TOUR_ORBIT_PERIOD_S 24.0 /* the default tour: one turn around the home view */
 
@@ -33,7 +34,7 @@ void cli_input_spec_default(cli_input_spec *s)
 
 bool cli_input_wanted(const cli_input_spec *s)
 {
-    return s->enabled == 1 || s->record_file[0] || s->replay_file[0];
+    return s->enabled == 1 || s->record_file[0] || s->replay_file[0] || cli_remote_channel() >= 0;
 }
 
 /* ---- options ------------------------------------------------------------------- */
@@ -404,10 +405,22 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.media = cs->scene->medium_count > 0;
     if (cc.media && cs->scene->media[0].ops->colormap)
         snprintf(cc.transfer, sizeof cc.transfer, "%s", cs->scene->media[0].ops->colormap(cs->scene->media[0].data)->name);
-    input_source *devices = input_libinput_open(&sc, cli_pipeline_session(), &err);
-    in->runner = devices ? input_runner_start(&devices, 1, &cc, pick, step_ready, (void *)cs, in->sink,
-                                              cli_pipeline_session(), &err)
-                         : NULL;
+    /* libinput's devices with --input on; the remote view's viewers with --remote */
+    input_source *sources[INPUT_MAX_SOURCES];
+    int source_count = 0;
+    bool ok = true;
+    if (s->enabled == 1)
+        ok = (sources[source_count++] = input_libinput_open(&sc, cli_pipeline_session(), &err)) != NULL;
+    input_source *remote = cli_remote_take_source();
+    if (remote)
+        sources[source_count++] = remote;
+    if (!ok) { /* the remote source is ours now: it goes too */
+        input_source_destroy(remote);
+        source_count = 0;
+    }
+    in->runner = ok && source_count ? input_runner_start(sources, source_count, &cc, pick, step_ready, (void *)cs,
+                                                         in->sink, cli_pipeline_session(), &err)
+                                    : NULL;
     if (!in->runner) {
         cli_error("%s", err.msg);
         return false;
@@ -458,7 +471,7 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
         }
         fprintf(stderr, "tessera: replaying %zu input transactions from %s\n", count, s->replay_file);
     }
-    if (s->enabled == 1 && !start_devices(in, s, p, cs, files))
+    if ((s->enabled == 1 || cli_remote_channel() >= 0) && !start_devices(in, s, p, cs, files))
         goto fail;
     return in;
 fail:

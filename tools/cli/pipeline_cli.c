@@ -2,6 +2,7 @@
  * command-line options, making the pipeline, camera-path playback and
  * recording. The config format is in docs/pipeline-config.md. */
 #include "pipeline_cli.h"
+#include "remote_cli.h"
 
 #include <libgen.h>
 #include <math.h>
@@ -45,6 +46,7 @@ void cli_pipeline_spec_default(cli_pipeline_spec *s, const char *display, const 
     snprintf(s->channels[0].display, sizeof s->channels[0].display, "%s", display);
     snprintf(s->channels[0].out, sizeof s->channels[0].out, "%s", out ? out : "");
     cli_input_spec_default(&s->input);
+    remote_config_default(&s->remote);
     s->render_scale = 1.0;
     s->upscale = UPSCALE_BILINEAR;
     snprintf(s->render_scale_text, sizeof s->render_scale_text, "1");
@@ -417,7 +419,7 @@ bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, c
 {
     static const char *const fields[] = {"threads", "frames", "time", "traverser", "sampler", "renderer", "size",
                                          "camera", "display", "path", "channels", "input", "governor",
-                                         "opacity", "cutting_planes", NULL};
+                                         "opacity", "cutting_planes", "remote", NULL};
     tess_error err = {{0}};
     json_object *root = NULL;
     bool ok = jr_parse(file, text, len, &root, &err);
@@ -432,7 +434,7 @@ bool cli_pipeline_config_parse(const char *file, const char *text, size_t len, c
          opt_size(&c, root, &s->channels[0].width_px, &s->channels[0].height_px) &&
          opt_camera(&c, root, &s->channels[0]) && opt_display(&c, root, &s->channels[0]) &&
          opt_text(&c, root, "path", path, sizeof path) && load_channels(&c, root, s) &&
-         cli_input_config_load(&c, root, file, &s->input);
+         cli_input_config_load(&c, root, file, &s->input) && cli_remote_config_load(&c, root, &s->remote);
     if (ok && path[0] && !resolve_relative(file, path, s->path_file, sizeof s->path_file))
         ok = jr_member_fail(&c, "path", "path too long");
     json_object *given;
@@ -586,6 +588,10 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     } else if (!strcmp(a, "--record")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->record_file, sizeof s->record_file);
     }
+    if (!cli_remote_option(argc, argv, i, &s->remote, handled))
+        return false;
+    if (*handled)
+        return true;
     return cli_input_option(argc, argv, i, &s->input, handled);
 }
 
@@ -622,6 +628,7 @@ void cli_pipeline_usage(FILE *f)
           "                   --out gets the stitched wall with the bezels black\n",
           f);
     cli_input_usage(f);
+    cli_remote_usage(f);
 }
 
 /* ---------------------------------------------------------------- making the pipeline */
@@ -650,7 +657,8 @@ int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_are
         *plane_aspect = active_layout.plane_aspect;
         return n;
     }
-    int n = pipeline_channel_count(p) < max ? pipeline_channel_count(p) : max;
+    int channels = cli_remote_channel() >= 0 ? cli_remote_channel() : pipeline_channel_count(p); /* the view's is last */
+    int n = channels < max ? channels : max;
     for (int i = 0; i < n; i++) {
         snprintf(areas[i].name, sizeof areas[i].name, "channel-%d", i);
         areas[i].window = CAMERA_WINDOW_FULL;
@@ -744,6 +752,8 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
     }
     if (ok && on_device)
         drm_wall_attach(active_card, p, first_channel); /* hotplug switches the outputs' channels */
+    if (ok && !cli_remote_add_channel(p, &s->remote, &cam, wall_plane_aspect(&wall)))
+        return false;
     if (!ok)
         cli_error("%s: %s", s->wall_file, err.msg);
     return ok;
@@ -808,18 +818,34 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
             return NULL;
         }
     }
+    /* the remote view follows the main channel: its camera, its picture's aspect */
+    camera_desc main_cam = pipeline_camera(p, 0);
+    if (!cli_remote_add_channel(p, &s->remote, &main_cam,
+                                (float)s->channels[0].width_px / (float)s->channels[0].height_px)) {
+        pipeline_destroy(p);
+        return NULL;
+    }
     return p;
 }
 
 /* ---------------------------------------------------------------- path playback, recording */
 
+/* A path's or the orbit's camera: channel 0's (every channel's for a wall), and the remote
+ * view's, which follows the main picture (serial section). */
+static void set_main_cameras(pipeline *p, bool all_channels, const camera_desc *c)
+{
+    int channels = all_channels ? pipeline_channel_count(p) : 1;
+    for (int i = 0; i < channels; i++)
+        pipeline_set_camera(p, i, c);
+    if (cli_remote_channel() >= channels)
+        pipeline_set_camera(p, cli_remote_channel(), c);
+}
+
 static void play_path(pipeline *p, void *ctx, const frame_info *fi)
 {
     cli_path_player *pl = ctx;
     camera_desc c = camera_path_eval(&pl->path, fi->time_s + pl->time_offset_s);
-    int channels = pl->all_channels ? pipeline_channel_count(p) : 1;
-    for (int i = 0; i < channels; i++)
-        pipeline_set_camera(p, i, &c);
+    set_main_cameras(p, pl->all_channels, &c);
 }
 
 bool cli_path_player_start(pipeline *p, cli_path_player *player)
@@ -835,9 +861,7 @@ static void orbit_step(pipeline *p, void *ctx, const frame_info *fi)
     vec3 r = v3_sub(c.eye, c.look_at);
     float cs = cosf(angle), sn = sinf(angle);
     c.eye = v3_add(c.look_at, v3(cs * r.x + sn * r.z, r.y, -sn * r.x + cs * r.z));
-    int channels = o->all_channels ? pipeline_channel_count(p) : 1;
-    for (int i = 0; i < channels; i++)
-        pipeline_set_camera(p, i, &c);
+    set_main_cameras(p, o->all_channels, &c);
 }
 
 bool cli_orbit_start(pipeline *p, cli_orbit *orbit, double period_s)

@@ -14,6 +14,7 @@
 #include "engine/pipeline.h"
 #include "engine/upscale.h"
 #include "input_cli.h"
+#include "remote/remote.h"
 #include "input/source.h"
 
 #define CLI_PATTERN_BYTES 4096
@@ -47,6 +48,7 @@ typedef struct cli_pipeline_spec {
     char card_path[CLI_PATTERN_BYTES];   /* --card: the DRM card for display drm, "" = the first connected */
     bool display_given, frames_given, time_given; /* on the command line or in --config */
     cli_input_spec input;        /* --input ..., the config's "input" object */
+    remote_config remote;        /* --remote ..., the config's "remote" object (port -1: none) */
     /* render --scale / --upscale (engine/upscale.h; pipeline.h, RENDER SCALE): every channel
      * renders at render_scale of its size, the same view, and the render threads upscale it
      * with `upscale`; 1 (nothing scaled) for the other commands */
