@@ -152,6 +152,16 @@ void frame_state_set_cursor(frame_state *st, bool on, float sx, float sy)
     st->version++;
 }
 
+void frame_state_set_pointer(frame_state *st, int slot, bool on, float sx, float sy)
+{
+    if (on != st->pointer_visible[slot] || (on && (sx != st->pointer_sx[slot] || sy != st->pointer_sy[slot])))
+        st->overlay_serial++;
+    st->pointer_visible[slot] = on;
+    st->pointer_sx[slot] = sx;
+    st->pointer_sy[slot] = sy;
+    st->version++;
+}
+
 void frame_state_set_governor_status(frame_state *st, bool shown)
 {
     st->governor_status_shown = shown;

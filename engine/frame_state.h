@@ -41,8 +41,9 @@
  *                   (a plane that stays off may change unseen: no bump),
  *                   a crop, value or colour map given or changed, a
  *                   different time step;
- *   overlay_serial  bumped when the overlay changes: the cursor moved,
- *                   shown or hidden (cursor setter), and by the pipeline when
+ *   overlay_serial  bumped when the overlay changes: the cursor or a remote
+ *                   viewer's pointer moved, shown or hidden (their setters),
+ *                   and by the pipeline when
  *                   the status line as drawn changes (frame_state_bump_overlay);
  *   camera_serial[c] bumped by every camera set on channel c, the same or not.
  *
@@ -93,6 +94,8 @@ typedef struct frame_state {
     char status[TXN_TEXT_BYTES]; /* the status text asked for */
     bool cursor_visible;
     float cursor_sx, cursor_sy;
+    bool pointer_visible[TXN_POINTERS]; /* remote viewers' pointers, by viewer slot */
+    float pointer_sx[TXN_POINTERS], pointer_sy[TXN_POINTERS];
     bool governor_status_shown;
 
     /* render options */
@@ -157,6 +160,7 @@ void frame_state_set_active(frame_state *st, int channel, bool on);
 void frame_state_set_threads(frame_state *st, int threads);
 void frame_state_set_status(frame_state *st, const char *text);
 void frame_state_set_cursor(frame_state *st, bool on, float sx, float sy);
+void frame_state_set_pointer(frame_state *st, int slot, bool on, float sx, float sy); /* slot 0..TXN_POINTERS-1 */
 void frame_state_set_governor_status(frame_state *st, bool shown);
 void frame_state_set_shadows(frame_state *st, bool on);
 void frame_state_set_renderer(frame_state *st, const struct renderer *r);

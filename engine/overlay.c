@@ -207,6 +207,7 @@ bool overlay_plan_make(overlay_plan *plan, const overlay_state *s, camera_window
     int scale = overlay_scale(height_px);
     plan->scale = scale;
     plan->band_on = plan->cursor_on = false;
+    plan->pointer_count = 0;
     int len = 0;
     while (len < OVERLAY_TEXT_BYTES - 1 && s->status[len])
         len++;
@@ -231,7 +232,21 @@ bool overlay_plan_make(overlay_plan *plan, const overlay_state *s, camera_window
         plan->cursor = (overlay_rect){x0, y0, x0 + OVERLAY_CURSOR_W * scale, y0 + OVERLAY_CURSOR_H * scale};
         plan->cursor_on = overlaps_image(plan->cursor, width_px, height_px);
     }
-    return plan->band_on || plan->cursor_on;
+    for (int i = 0; i < OVERLAY_POINTERS; i++) {
+        if (!s->pointer_visible[i])
+            continue;
+        double px, py, r = (double)(OVERLAY_POINTER_R * scale);
+        plane_to_pixel(window, width_px, height_px, (double)s->pointer_sx[i], (double)s->pointer_sy[i], &px, &py);
+        overlay_rect box = {(int)floor(px - r), (int)floor(py - r), (int)floor(px + r) + 1, (int)floor(py + r) + 1};
+        if (!overlaps_image(box, width_px, height_px))
+            continue;
+        int k = plan->pointer_count++;
+        plan->pointers[k].box = box;
+        plan->pointers[k].cx = px;
+        plan->pointers[k].cy = py;
+        overlay_pointer_rgb(i, plan->pointers[k].rgb);
+    }
+    return plan->band_on || plan->cursor_on || plan->pointer_count > 0;
 }
 
 /* r clipped to [x0, x1) x [y0, y1); false when nothing is left. */
@@ -295,11 +310,37 @@ static void draw_cursor(const overlay_plan *plan, int width_px, overlay_rect r, 
     }
 }
 
+/* Pointer k's disc: a pixel whose centre lies within the radius takes the
+ * colour, within the outer OVERLAY_POINTER_EDGE font pixels black. */
+static void draw_pointer(const overlay_plan *plan, int k, int width_px, overlay_rect r, float *rgb)
+{
+    double outer = (double)(OVERLAY_POINTER_R * plan->scale), inner = outer - (double)(OVERLAY_POINTER_EDGE * plan->scale);
+    const float *colour = plan->pointers[k].rgb;
+    for (int y = r.y0; y < r.y1; y++) {
+        float *row = rgb + 3 * ((size_t)y * (size_t)width_px);
+        double dy = (double)y + 0.5 - plan->pointers[k].cy;
+        for (int x = r.x0; x < r.x1; x++) {
+            double dx = (double)x + 0.5 - plan->pointers[k].cx, d2 = dx * dx + dy * dy;
+            if (d2 > outer * outer)
+                continue;
+            float *px = row + 3 * (size_t)x;
+            if (d2 > inner * inner)
+                set_pixel(px, 0.f);
+            else
+                for (int c = 0; c < 3; c++)
+                    px[c] = colour[c];
+        }
+    }
+}
+
 void overlay_draw(const overlay_plan *plan, int width_px, int x0, int y0, int x1, int y1, float *rgb)
 {
     overlay_rect r;
     if (plan->band_on && clip(plan->band, x0, y0, x1, y1, &r))
         draw_band(plan, width_px, r, rgb);
+    for (int k = 0; k < plan->pointer_count; k++)
+        if (clip(plan->pointers[k].box, x0, y0, x1, y1, &r))
+            draw_pointer(plan, k, width_px, r, rgb);
     if (plan->cursor_on && clip(plan->cursor, x0, y0, x1, y1, &r))
         draw_cursor(plan, width_px, r, rgb);
 }

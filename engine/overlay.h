@@ -64,6 +64,9 @@
 #define OVERLAY_CURSOR_W 10
 #define OVERLAY_CURSOR_H 17
 #define OVERLAY_SCALE_LINES 360 /* channel lines per unit of scale */
+#define OVERLAY_POINTERS 8        /* remote viewers' pointers (= TXN_POINTERS) */
+#define OVERLAY_POINTER_R 7       /* a pointer's disc radius, font pixels */
+#define OVERLAY_POINTER_EDGE 2    /* its dark outline's width, font pixels */
 
 /* What the overlay shows: part of the pipeline's state (changed only in its
  * serial section). */
@@ -74,6 +77,8 @@ typedef struct overlay_state {
                                         corner itself may lie behind a bezel) */
     bool cursor_visible;
     float cursor_sx, cursor_sy;      /* the tip, a plane point; finite */
+    bool pointer_visible[OVERLAY_POINTERS]; /* remote viewers' pointers by slot: discs in the slot's colour */
+    float pointer_sx[OVERLAY_POINTERS], pointer_sy[OVERLAY_POINTERS]; /* their centres, plane points; finite */
 } overlay_state;
 
 /* Pixels [x0, x1) x [y0, y1) of a channel; may reach outside the image. */
@@ -91,6 +96,12 @@ typedef struct overlay_plan {
     char text[OVERLAY_TEXT_BYTES];
     bool cursor_on;      /* the cursor's box overlaps the image */
     overlay_rect cursor; /* its box; the tip is (x0, y0) */
+    int pointer_count;   /* pointers whose discs overlap the image: */
+    struct {
+        overlay_rect box;  /* the disc's bounding box */
+        double cx, cy;     /* its centre, continuous pixel coordinates */
+        float rgb[3];      /* linear */
+    } pointers[OVERLAY_POINTERS];
 } overlay_plan;
 
 /* Remote viewers' pointers (remote/): one colour per viewer slot, the same on

@@ -242,6 +242,8 @@ struct pipeline {
 };
 
 /* log_divert_thread's target in the serial section: the line is kept for thread 0. */
+_Static_assert(OVERLAY_POINTERS == TXN_POINTERS, "a pointer record's slot is an overlay pointer");
+
 static void keep_barrier_log(void *ctx, const char *line)
 {
     pipeline *p = ctx;
@@ -778,6 +780,13 @@ static bool apply_record(pipeline *p, const txn_record *r)
         p->overlay.cursor_visible = p->state.cursor_visible;
         p->overlay.cursor_sx = p->state.cursor_sx;
         p->overlay.cursor_sy = p->state.cursor_sy;
+        break;
+    case TXN_POINTER:
+        for (int i = 0; i < OVERLAY_POINTERS; i++) {
+            p->overlay.pointer_visible[i] = p->state.pointer_visible[i];
+            p->overlay.pointer_sx[i] = p->state.pointer_sx[i];
+            p->overlay.pointer_sy[i] = p->state.pointer_sy[i];
+        }
         break;
     case TXN_HIDE:
     case TXN_SHOW:

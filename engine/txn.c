@@ -29,7 +29,7 @@ static const char *const kind_names[TXN_KIND_COUNT] = {
     [TXN_OPACITY] = "opacity",       [TXN_CLIP_PLANE] = "clip-plane",
     [TXN_CROP] = "crop",             [TXN_TIME_STEP] = "time-step",
     [TXN_VALUE] = "value",           [TXN_COLORMAP] = "colormap",
-    [TXN_TRANSFER] = "transfer",
+    [TXN_TRANSFER] = "transfer",     [TXN_POINTER] = "pointer",
 };
 
 const char *txn_kind_name(txn_kind k) { return (unsigned)k < TXN_KIND_COUNT ? kind_names[k] : "?"; }
@@ -71,6 +71,16 @@ txn_record txn_camera(int channel, const camera_desc *c)
     txn_record r = blank(TXN_CAMERA);
     r.args.camera.channel = channel;
     r.args.camera.camera = *c;
+    return r;
+}
+
+txn_record txn_pointer(int slot, bool on, float sx, float sy)
+{
+    txn_record r = blank(TXN_POINTER);
+    r.args.pointer.slot = slot;
+    r.args.pointer.on = on;
+    r.args.pointer.sx = sx;
+    r.args.pointer.sy = sy;
     return r;
 }
 
@@ -257,6 +267,14 @@ bool txn_validate(const txn_record *r, tess_error *err)
             return false;
         }
         return true;
+    case TXN_POINTER:
+        if (r->args.pointer.slot < 0 || r->args.pointer.slot >= TXN_POINTERS)
+            return tess_error_set(err, "pointer: slot: %d is not in 0..%d", (int)r->args.pointer.slot,
+                                  TXN_POINTERS - 1);
+        if (!isfinite(r->args.pointer.sx) || !isfinite(r->args.pointer.sy))
+            return tess_error_set(err, "pointer: sx, sy: (%g, %g) is not finite", (double)r->args.pointer.sx,
+                                  (double)r->args.pointer.sy);
+        return true;
     case TXN_CURSOR:
         if (!isfinite(r->args.cursor.sx))
             return tess_error_set(err, "cursor: sx: %g is not finite", (double)r->args.cursor.sx);
@@ -435,6 +453,10 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
     case TXN_CURSOR:
         frame_state_set_cursor(st, r->args.cursor.on, r->args.cursor.sx, r->args.cursor.sy);
         return true;
+    case TXN_POINTER:
+        frame_state_set_pointer(st, r->args.pointer.slot, r->args.pointer.on, r->args.pointer.sx,
+                                r->args.pointer.sy);
+        return true;
     case TXN_STATUS:
         frame_state_set_status(st, r->args.status.text);
         return true;
@@ -612,6 +634,10 @@ size_t txn_encode_text(const txn_record *r, char *buf, size_t size)
     }
     case TXN_CURSOR:
         put(&o, " %d %a %a", r->args.cursor.on ? 1 : 0, (double)r->args.cursor.sx, (double)r->args.cursor.sy);
+        break;
+    case TXN_POINTER:
+        put(&o, " %d %d %a %a", (int)r->args.pointer.slot, r->args.pointer.on ? 1 : 0, (double)r->args.pointer.sx,
+            (double)r->args.pointer.sy);
         break;
     case TXN_STATUS:
         put_quoted(&o, r->args.status.text);
@@ -889,6 +915,12 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
     case TXN_CURSOR:
         return flag(r, &t->args.cursor.on, "cursor visibility") && float_value(r, &t->args.cursor.sx, "cursor x") &&
                float_value(r, &t->args.cursor.sy, "cursor y");
+    case TXN_POINTER:
+        if (!whole(r, 0.0, TXN_POINTERS - 1, &v, "pointer slot", "pointer: the slot must be a whole number in 0..7"))
+            return false;
+        t->args.pointer.slot = (int32_t)v;
+        return flag(r, &t->args.pointer.on, "pointer visibility") && float_value(r, &t->args.pointer.sx, "pointer x") &&
+               float_value(r, &t->args.pointer.sy, "pointer y");
     case TXN_STATUS:
         return quoted(r, t->args.status.text, sizeof t->args.status.text);
     case TXN_GOVERNOR_STATUS:
@@ -1092,6 +1124,12 @@ static void layout(txn_record *t, unsigned char *b, bool write)
         U8(4, t->args.cursor.on);
         F32(8, t->args.cursor.sx);
         F32(12, t->args.cursor.sy);
+        break;
+    case TXN_POINTER:
+        I32(4, t->args.pointer.slot);
+        U8(8, t->args.pointer.on);
+        F32(12, t->args.pointer.sx);
+        F32(16, t->args.pointer.sy);
         break;
     case TXN_STATUS:
         if (write)

@@ -19,6 +19,8 @@
  *   camera           channel (or TXN_ALL_CHANNELS: a channel's camera, or the wall's (every
  *                    the wall), camera_desc           channel's) camera
  *   cursor           on, sx, sy (finite)           the cursor at plane point (sx, sy), or hidden
+ *   pointer          slot (0..TXN_POINTERS-1), on, remote viewer `slot`'s pointer at plane point
+ *                    sx, sy (finite)               (sx, sy) in the viewer's colour, or hidden
  *   status           text (NUL-terminated)         the status line ("" hides it)
  *   governor-status  on                            the governor's line shown after the status
  *   hide / show      first, count                  those geometries hidden / shown again
@@ -83,7 +85,7 @@
  *   clip-plane I ON PX PY PZ NX NY NZ
  *   crop FIRST COUNT ON LO HI                        time-step N
  *   value FIRST COUNT V                              colormap FIRST COUNT NAME
- *   transfer NAME
+ *   transfer NAME                                    pointer SLOT ON SX SY
  * TXN_TEXT_V1 decodes the older input-record lines (record format 1):
  * "camera EX..FOV" (no channel: the wall), "hide GEOM_ID" (count 1),
  * "unhide-all" (show-all), and only the kinds that format had.
@@ -95,6 +97,7 @@
  *   offset 4   the arguments:
  *     camera          i32 channel (-1: all), then f32 eye xyz, look_at xyz, up xyz, fov_deg
  *     cursor          u8 on, 3 zero bytes, f32 sx, f32 sy
+ *     pointer         i32 slot, u8 on, 3 zero bytes, f32 sx, f32 sy
  *     status          TXN_TEXT_BYTES bytes: the text, NUL-padded
  *     renderer        TXN_NAME_BYTES bytes: the name, NUL-padded
  *     governor-status, shadows, tour: u8 on
@@ -131,6 +134,7 @@ struct frame_state;
 #define TXN_CLIP_PLANES 8         /* = CLIP_MAX_PLANES (clip.h, not included: its ray.h names `hit`) */
 #define TXN_MAX_CHANNELS 16       /* = PIPELINE_MAX_CHANNELS */
 #define TXN_MAX_THREADS 256       /* = PIPELINE_MAX_THREADS */
+#define TXN_POINTERS 8            /* remote viewers' pointers (= INPUT_MAX_VIEWERS, input/event.h) */
 #define TXN_BINARY_BYTES (4 + TXN_TEXT_BYTES)
 #define TXN_TEXT_MAX (48 + 4 * TXN_TEXT_BYTES) /* longest text form with its NUL (a status of escapes) */
 
@@ -162,6 +166,7 @@ typedef enum txn_kind {
     TXN_VALUE,
     TXN_COLORMAP,
     TXN_TRANSFER,
+    TXN_POINTER,
     TXN_KIND_COUNT
 } txn_kind;
 
@@ -238,6 +243,11 @@ typedef struct txn_record {
             int32_t channel;
             bool on;
         } channel;
+        struct {
+            int32_t slot;       /* 0..TXN_POINTERS-1: a remote viewer's */
+            bool on;
+            float sx, sy;       /* plane point (camera.h screen coordinates) */
+        } pointer;
     } args;
 } txn_record;
 
@@ -257,6 +267,7 @@ bool txn_kind_input_level(txn_kind k);
  * same change compare equal byte for byte). */
 txn_record txn_camera(int channel, const camera_desc *c);
 txn_record txn_cursor(bool on, float sx, float sy);
+txn_record txn_pointer(int slot, bool on, float sx, float sy);
 txn_record txn_status(const char *text); /* cut at TXN_TEXT_BYTES - 1 bytes; NULL: "" */
 txn_record txn_flag(txn_kind kind, bool on); /* governor-status, shadows, tour */
 txn_record txn_geoms_record(txn_kind kind, uint32_t first, uint32_t count); /* hide, show, isolate */

@@ -38,6 +38,18 @@ struct input_controller {
     bool cam_dirty;            /* changed since the last emitted camera */
     double fly_speed;          /* world units per second */
 
+    /* remote viewers' pointers (plane coordinates), by viewer slot */
+    bool pointer_visible[INPUT_MAX_VIEWERS], pointer_dirty[INPUT_MAX_VIEWERS];
+    double pointer_x[INPUT_MAX_VIEWERS], pointer_y[INPUT_MAX_VIEWERS];
+
+    /* CAMERA HOLDER (controller.h): the device whose camera motion counts, -1 none; it holds
+     * while its drag or touches last and until hold_until_us after its last camera motion */
+    int cam_holder;
+    uint64_t cam_hold_until_us;
+    int event_device;          /* the device of the event being handled; -1 in ticks */
+    uint64_t event_us;         /* its time */
+    uint64_t camera_refused;   /* camera motions of a device that did not hold the camera */
+
     /* cursor (plane coordinates) */
     double cur_x, cur_y;
     bool cursor_visible, cursor_dirty;
@@ -136,6 +148,8 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
     input_controller *c = calloc(1, sizeof *c);
     if (!c)
         return NULL;
+    c->cam_holder = -1;
+    c->event_device = -1;
     c->cfg = *cfg;
     c->hooks = *hooks;
     if (!(c->cfg.scene_size > 0.0) || !isfinite(c->cfg.scene_size))
@@ -260,11 +274,47 @@ static void flush(input_controller *c)
         emit(c, &t);
         c->cursor_dirty = false;
     }
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        if (c->pointer_dirty[i]) {
+            input_txn t = txn_pointer(i, c->pointer_visible[i], (float)c->pointer_x[i], (float)c->pointer_y[i]);
+            emit(c, &t);
+            c->pointer_dirty[i] = false;
+        }
+}
+
+/* Whether `device` has a camera gesture going: a drag, or a finger down. */
+static bool gesture_going(const input_controller *c, int device)
+{
+    if (c->dragging && c->drag_device == device)
+        return true;
+    for (int i = 0; i < TOUCH_SLOTS; i++)
+        if (c->touches[i].active && c->touches[i].device == device)
+            return true;
+    return false;
+}
+
+/* CAMERA HOLDER: may the event being handled move the camera? Takes the
+ * camera for its device when nobody holds it (or the holder's hold ran
+ * out), and extends the hold. Ticks (animations) always may. */
+static bool may_move_camera(input_controller *c)
+{
+    int d = c->event_device;
+    if (d < 0)
+        return true;
+    bool held = c->cam_holder >= 0 && c->cam_holder != d &&
+                (c->event_us < c->cam_hold_until_us || gesture_going(c, c->cam_holder));
+    if (held) {
+        c->camera_refused++;
+        return false;
+    }
+    c->cam_holder = d;
+    c->cam_hold_until_us = c->event_us + (uint64_t)(INPUT_CAMERA_HOLD_S * 1e6);
+    return true;
 }
 
 static void set_camera(input_controller *c, camera_desc next)
 {
-    if (memcmp(&next, &c->cam, sizeof next) != 0) {
+    if (memcmp(&next, &c->cam, sizeof next) != 0 && may_move_camera(c)) {
         c->cam = next;
         c->cam_dirty = true;
     }
@@ -1340,6 +1390,8 @@ static bool event_finite(const input_event *e)
     case INPUT_TOUCH_DOWN:
     case INPUT_TOUCH_MOTION:
         return isfinite(e->x) && isfinite(e->y);
+    case INPUT_VIEWER_POINTER:
+        return !e->pressed || (isfinite(e->x) && isfinite(e->y));
     case INPUT_POINTER_MOTION:
     case INPUT_SWIPE_UPDATE:
         return isfinite(e->dx) && isfinite(e->dy);
@@ -1356,11 +1408,15 @@ void input_controller_event(input_controller *c, const input_event *e)
 {
     if (!event_finite(e))
         return;
+    c->event_device = e->device;
+    c->event_us = e->time_us;
     switch (e->kind) {
     case INPUT_DEVICE_ADDED:
         return;
     case INPUT_DEVICE_REMOVED:
         device_removed(c, e->device);
+        if (c->cam_holder == e->device) /* a holder that went away lets go at once */
+            c->cam_holder = -1;
         return;
     case INPUT_FRAME:
         flush(c);
@@ -1387,6 +1443,17 @@ void input_controller_event(input_controller *c, const input_event *e)
         break;
     case INPUT_POINTER_ABS:
         pointer_moved(c, clamp_plane(e->x), clamp_plane(e->y));
+        break;
+    case INPUT_VIEWER_POINTER:
+        if (e->slot >= 0 && e->slot < INPUT_MAX_VIEWERS) {
+            int s = e->slot;
+            double x = e->pressed ? clamp_plane(e->x) : c->pointer_x[s], y = e->pressed ? clamp_plane(e->y) : c->pointer_y[s];
+            if (c->pointer_visible[s] != e->pressed || x != c->pointer_x[s] || y != c->pointer_y[s])
+                c->pointer_dirty[s] = true;
+            c->pointer_visible[s] = e->pressed;
+            c->pointer_x[s] = x;
+            c->pointer_y[s] = y;
+        }
         break;
     case INPUT_SCROLL: {
         c->animating = false;
@@ -1434,6 +1501,7 @@ void input_controller_event(input_controller *c, const input_event *e)
 
 void input_controller_tick(input_controller *c, uint64_t now_us)
 {
+    c->event_device = -1; /* animations are not arbitrated: the holder started them */
     c->last_tick_us = now_us;
     if (!c->started) { /* the first tick: nobody is there yet */
         c->started = true;

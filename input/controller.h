@@ -96,6 +96,23 @@
  *    (colormap_names order, wrapping; "colormap FIRST COUNT NAME") and
  *    volumes rendered directly (config `media`) the next built-in transfer
  *    function, a built-in with opacity ("transfer NAME");
+ *  - REMOTE VIEWERS' POINTERS: an INPUT_VIEWER_POINTER event (remote/) shows,
+ *    moves or hides viewer `slot`'s pointer: at most one "pointer" record a
+ *    slot an input frame. It counts as someone being there (the idle clock
+ *    restarts), and moves neither the cursor nor the camera;
+ *  - CAMERA HOLDER (two people at once, e.g. one at the wall and one on a
+ *    tablet): the camera has one holder, a device. A device's camera motion
+ *    (a drag, a touch gesture, the wheel, a touchpad gesture) takes the
+ *    camera when nobody holds it; the holder keeps it while its drag lasts or
+ *    a finger of it is down, and for INPUT_CAMERA_HOLD_S after its last
+ *    camera motion. Meanwhile other devices' camera motions are dropped
+ *    (their cursor and pointers still move; picks, hides, planes, opacity and
+ *    other commands still apply). A holder whose device is removed (a viewer
+ *    that left) lets go at once. After the hold ends, the next camera motion
+ *    of any device takes the camera, also in the middle of a drag that
+ *    started while it was held (its pivot is the one picked at its press).
+ *    Animations (flight, fly-to, home, the tour) are not arbitrated: they
+ *    were started by a key or a gesture that was;
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -264,6 +281,9 @@ bool input_controller_touring(const input_controller *c);
 
 /* Time steps played per second unless the config says (TIME STEPS). */
 #define INPUT_TIME_RATE 4.0
+
+/* CAMERA HOLDER: how long the camera stays with a device after its last camera motion. */
+#define INPUT_CAMERA_HOLD_S 0.5
 
 /* Interval between animation ticks (about 60 Hz). */
 #define INPUT_TICK_US 16000

@@ -191,6 +191,110 @@ static const input_txn *last_kind(const rig *r, input_txn_kind k)
     return NULL;
 }
 
+/* ---- remote viewers: pointers and the camera holder (controller.h) ---- */
+
+static void on_device(rig *r, int device, input_event e)
+{
+    e.device = device;
+    send(r, e);
+}
+
+static void device_frame(rig *r, int device)
+{
+    on_device(r, device, (input_event){.kind = INPUT_FRAME});
+    r->now_us += 8000;
+}
+
+/* A viewer's pointer events become one "pointer" record a slot a frame,
+ * and move neither the cursor nor the camera. */
+Test(input, viewer_pointers_become_pointer_records)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    on_device(r, 1003, (input_event){.kind = INPUT_VIEWER_POINTER, .slot = 3, .pressed = true, .x = 0.5, .y = 0.5});
+    on_device(r, 1003, (input_event){.kind = INPUT_VIEWER_POINTER, .slot = 3, .pressed = true, .x = 0.25, .y = -0.5});
+    device_frame(r, 1003);
+    cr_assert_eq(count_kind(r, TXN_POINTER), 1, "coalesced to one record a frame");
+    const input_txn *t = last_kind(r, TXN_POINTER);
+    cr_assert(t->args.pointer.slot == 3 && t->args.pointer.on);
+    cr_assert_float_eq(t->args.pointer.sx, 0.25f, 0.f);
+    cr_assert_float_eq(t->args.pointer.sy, -0.5f, 0.f);
+    device_frame(r, 1003); /* nothing changed: nothing emitted */
+    cr_assert_eq(count_kind(r, TXN_POINTER), 1);
+    on_device(r, 1003, (input_event){.kind = INPUT_VIEWER_POINTER, .slot = 3, .pressed = false});
+    device_frame(r, 1003);
+    cr_assert_eq(count_kind(r, TXN_POINTER), 2);
+    cr_assert_not(last_kind(r, TXN_POINTER)->args.pointer.on);
+    cr_assert_eq(count_kind(r, TXN_CURSOR), 0, "the wall's cursor stays where it was");
+    cr_assert_eq(count_kind(r, TXN_CAMERA), 0);
+    rig_free(r);
+}
+
+/* A mouse drag (device 1) holds the camera: a touch drag (device 2) at the
+ * same time moves nothing; after the mouse lets go and the hold time passes,
+ * the touch's next motion takes the camera. */
+Test(input, one_device_holds_the_camera_at_a_time)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    on_device(r, 1, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.0, .y = 0.0});
+    on_device(r, 1, (input_event){.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = true});
+    device_frame(r, 1);
+    on_device(r, 1, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.1, .y = 0.0});
+    device_frame(r, 1);
+    int cameras = count_kind(r, TXN_CAMERA);
+    cr_assert_eq(cameras, 1, "the holder's drag moves the camera");
+    on_device(r, 2, (input_event){.kind = INPUT_TOUCH_DOWN, .slot = 0, .x = 0.0, .y = 0.0});
+    on_device(r, 2, (input_event){.kind = INPUT_TOUCH_FRAME});
+    for (int i = 1; i <= 5; i++) {
+        on_device(r, 2, (input_event){.kind = INPUT_TOUCH_MOTION, .slot = 0, .x = 0.05 * i, .y = 0.03 * i});
+        on_device(r, 2, (input_event){.kind = INPUT_TOUCH_FRAME});
+        r->now_us += 10000;
+    }
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras, "another device's touch drag while the mouse holds the camera");
+    on_device(r, 1, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.2, .y = 0.0});
+    device_frame(r, 1);
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras + 1, "the holder still steers");
+    on_device(r, 1, (input_event){.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = false});
+    device_frame(r, 1);
+    cameras = count_kind(r, TXN_CAMERA);
+    on_device(r, 2, (input_event){.kind = INPUT_TOUCH_MOTION, .slot = 0, .x = 0.4, .y = 0.2});
+    on_device(r, 2, (input_event){.kind = INPUT_TOUCH_FRAME});
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras, "within the hold time after the release");
+    r->now_us += (uint64_t)(INPUT_CAMERA_HOLD_S * 1e6) + 1000;
+    on_device(r, 2, (input_event){.kind = INPUT_TOUCH_MOTION, .slot = 0, .x = 0.5, .y = 0.3});
+    on_device(r, 2, (input_event){.kind = INPUT_TOUCH_FRAME});
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras + 1, "the hold is over: the touch steers");
+    on_device(r, 1, (input_event){.kind = INPUT_SCROLL, .dy = 1.0});
+    device_frame(r, 1);
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras + 1, "now the mouse's wheel is the one refused");
+    rig_free(r);
+}
+
+/* A holder that goes away (a viewer that disconnected) lets go at once;
+ * commands other than camera motion are never held back. */
+Test(input, a_removed_holder_lets_go_and_commands_still_apply)
+{
+    rig *r = rig_make(1.0, false, 0.0);
+    on_device(r, 1001, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.0, .y = 0.0});
+    on_device(r, 1001, (input_event){.kind = INPUT_BUTTON, .code = BTN_LEFT, .pressed = true});
+    device_frame(r, 1001);
+    on_device(r, 1001, (input_event){.kind = INPUT_POINTER_ABS, .x = 0.1, .y = 0.1});
+    device_frame(r, 1001);
+    int cameras = count_kind(r, TXN_CAMERA);
+    cr_assert_eq(cameras, 1);
+    int before = r->count;
+    on_device(r, 3, (input_event){.kind = INPUT_KEY, .code = KEY_G, .pressed = true}); /* governor-status toggle */
+    device_frame(r, 3);
+    on_device(r, 3, (input_event){.kind = INPUT_KEY, .code = KEY_G, .pressed = false});
+    device_frame(r, 3);
+    cr_assert_gt(r->count, before, "a key command of another device applies while the camera is held");
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras);
+    on_device(r, 1001, (input_event){.kind = INPUT_DEVICE_REMOVED});
+    on_device(r, 3, (input_event){.kind = INPUT_SCROLL, .dy = 1.0});
+    device_frame(r, 3);
+    cr_assert_eq(count_kind(r, TXN_CAMERA), cameras + 1, "the holder left: the wheel steers at once");
+    rig_free(r);
+}
+
 /* Plane coordinates of world point p seen by c (camera_basis_window's basis). */
 static void project(const camera_desc *c, vec3 p, double *sx, double *sy)
 {

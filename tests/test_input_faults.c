@@ -227,6 +227,7 @@ static input_txn sample_record(int i)
     case TXN_VALUE: return txn_value(2, 1, 0.5f * (float)i);
     case TXN_COLORMAP: return txn_colormap(2, 1, i % 2 ? "magma" : "viridis");
     case TXN_TRANSFER: return txn_transfer(i % 2 ? "ct-bone" : "mri-soft");
+    case TXN_POINTER: return txn_pointer(i % TXN_POINTERS, i % 2 == 0, 0.25f * (float)(i % 5), -0.5f);
     case TXN_KIND_COUNT: break;
     }
     return txn_simple(TXN_QUIT);

@@ -951,3 +951,48 @@ Test(overlay, the_status_line_starts_at_the_bottom_left_output_not_behind_a_beze
     }
     fixture_free(&fx);
 }
+
+/* Remote viewers' pointers: a disc in the slot's colour at the point, with
+ * a dark rim, drawn by every channel it falls on at the same plane point,
+ * the same whatever the tiles; hidden ones and ones off the channel draw
+ * nothing (the plan is empty). */
+Test(overlay, viewer_pointers_are_discs_in_their_colour)
+{
+    enum { W = 160, H = 90 };
+    overlay_state st;
+    memset(&st, 0, sizeof st);
+    st.pointer_visible[2] = true;
+    st.pointer_sx[2] = 0.f; /* the plane's centre */
+    st.pointer_sy[2] = 0.f;
+    st.pointer_visible[5] = false;
+    st.pointer_sx[5] = 0.5f;
+    overlay_plan plan;
+    cr_assert(overlay_plan_make(&plan, &st, CAMERA_WINDOW_FULL, W, H));
+    cr_assert_eq(plan.pointer_count, 1);
+    static float whole[W * H * 3], tiled[W * H * 3];
+    for (int i = 0; i < W * H * 3; i++)
+        whole[i] = tiled[i] = 0.5f;
+    overlay_draw(&plan, W, 0, 0, W, H, whole);
+    for (int y0 = 0; y0 < H; y0 += 7)
+        for (int x0 = 0; x0 < W; x0 += 5)
+            overlay_draw(&plan, W, x0, y0, x0 + 5 < W ? x0 + 5 : W, y0 + 7 < H ? y0 + 7 : H, tiled);
+    cr_assert(memcmp(whole, tiled, sizeof whole) == 0, "the tiles draw the same disc");
+    float colour[3];
+    overlay_pointer_rgb(2, colour);
+    const float *centre = whole + 3 * ((H / 2) * W + W / 2);
+    for (int c = 0; c < 3; c++)
+        cr_assert_float_eq(centre[c], colour[c], 0.f, "the disc's centre has slot 2's colour");
+    int rim = W / 2 + OVERLAY_POINTER_R - 1; /* inside the outer radius, in the rim */
+    cr_assert_float_eq(whole[3 * ((H / 2) * W + rim)], 0.f, 0.f, "the rim is dark");
+    cr_assert_float_eq(whole[3 * ((H / 2) * W + W / 2 + OVERLAY_POINTER_R + 2)], 0.5f, 0.f, "outside untouched");
+    char hex[8];
+    overlay_pointer_colour_hex(2, hex);
+    cr_assert_str_eq(hex, "#4363d8");
+    /* a channel showing the right half of the plane: the disc on its left edge */
+    camera_window right = {0.5f, 0.f, 0.5f, 1.f};
+    cr_assert(overlay_plan_make(&plan, &st, right, W, H));
+    cr_assert_eq(plan.pointer_count, 1);
+    cr_assert_float_eq(plan.pointers[0].cx, 0.0, 1e-9);
+    st.pointer_visible[2] = false;
+    cr_assert_not(overlay_plan_make(&plan, &st, CAMERA_WINDOW_FULL, W, H), "nothing shown: no plan");
+}

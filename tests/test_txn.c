@@ -54,6 +54,7 @@ static txn_record sample(txn_kind k)
     case TXN_VALUE: return txn_value(1, 2, -1e-7f);
     case TXN_COLORMAP: return txn_colormap(0, GEOMS, "cool-warm");
     case TXN_TRANSFER: return txn_transfer("ct-bone");
+    case TXN_POINTER: return txn_pointer(7, true, -3.4028235e38f, 1e-7f);
     case TXN_KIND_COUNT: break;
     }
     cr_assert_fail("no sample for kind %d", (int)k);
@@ -242,7 +243,10 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_colormap(0, 1, "jet"), "colormap: name: no built-in map 'jet'"},
         {txn_colormap(0, 0, "magma"), "colormap: count: 0 geometries"},
         {txn_transfer("viridis"), "transfer: name: no built-in transfer function 'viridis' (one with opacity)"},
-        {txn_simple(TXN_KIND_COUNT), "kind: 24 is not a transaction kind"},
+        {txn_pointer(8, true, 0.f, 0.f), "pointer: slot: 8 is not in 0..7"},
+        {txn_pointer(-1, false, 0.f, 0.f), "pointer: slot: -1 is not in 0..7"},
+        {txn_pointer(0, true, NAN, 0.f), "pointer: sx, sy: (nan, 0) is not finite"},
+        {txn_simple(TXN_KIND_COUNT), "kind: 25 is not a transaction kind"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         tess_error err = {{0}};
