@@ -47,10 +47,11 @@ typedef struct viewer {
     uint64_t sent;
 } viewer;
 
-/* What lws keeps per connection: which viewer it is (-1: none), and for
- * the page, how far it is written. */
+/* What lws keeps per connection (zeroed by lws when it starts): which viewer
+ * it is, as slot + 1 (0: none, also for a connection refused before it
+ * became a viewer), and for the page, how far it is written. */
 typedef struct session {
-    int slot;
+    int slot_plus_1;
     size_t page_written;
 } session;
 
@@ -189,7 +190,7 @@ static int viewer_attach(remote_view *v, struct lws *wsi, session *ss)
                                                  &info)
                           ? info.frame
                           : UINT64_MAX;
-    ss->slot = slot;
+    ss->slot_plus_1 = slot + 1;
     if (v->viewer_count++ == 0)
         follow_channel_needed(v, true);
     v->stats.viewers_accepted++;
@@ -222,16 +223,17 @@ static void count_skipped(remote_view *v, const viewer *vw)
 
 static void viewer_detach(remote_view *v, session *ss)
 {
-    if (ss->slot < 0)
+    if (ss->slot_plus_1 <= 0)
         return;
-    viewer *vw = &v->viewers[ss->slot];
+    int slot = ss->slot_plus_1 - 1;
+    viewer *vw = &v->viewers[slot];
     input_event released[REMOTE_EVENTS_MAX];
     push_events(v, released, remote_viewer_input_release(&vw->input, clock_monotonic_us(), released));
     count_skipped(v, vw);
-    log_info("remote view: viewer %d left (%llu frames sent)", ss->slot, (unsigned long long)vw->sent);
+    log_info("remote view: viewer %d left (%llu frames sent)", slot, (unsigned long long)vw->sent);
     vw->used = false;
     vw->wsi = NULL;
-    ss->slot = -1;
+    ss->slot_plus_1 = 0;
     if (--v->viewer_count == 0)
         follow_channel_needed(v, false);
 }
@@ -397,11 +399,13 @@ static int filter_viewer(remote_view *v, struct lws *wsi)
     if (!request_token_ok(v, wsi)) {
         v->stats.refused_token++;
         log_warn("remote view: a viewer with a wrong or missing token was refused");
+        lws_return_http_status(wsi, HTTP_STATUS_FORBIDDEN, "tessera remote view: a wrong or missing token");
         return 1;
     }
     if (v->viewer_count >= v->cfg.max_viewers) {
         v->stats.refused_full++;
         log_warn("remote view: a viewer was refused: %d viewers already (remote.max_viewers)", v->viewer_count);
+        lws_return_http_status(wsi, HTTP_STATUS_SERVICE_UNAVAILABLE, "tessera remote view: too many viewers");
         return 1;
     }
     return 0;
@@ -422,17 +426,17 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
         return filter_viewer(v, wsi);
     case LWS_CALLBACK_ESTABLISHED:
-        ss->slot = -1;
+        ss->slot_plus_1 = 0;
         return viewer_attach(v, wsi, ss);
     case LWS_CALLBACK_CLOSED:
         viewer_detach(v, ss);
         return 0;
     case LWS_CALLBACK_RECEIVE:
-        if (ss->slot >= 0)
-            viewer_receive(v, wsi, &v->viewers[ss->slot], in, len);
+        if (ss->slot_plus_1 > 0)
+            viewer_receive(v, wsi, &v->viewers[ss->slot_plus_1 - 1], in, len);
         return 0;
     case LWS_CALLBACK_SERVER_WRITEABLE:
-        return ss->slot >= 0 ? viewer_writeable(v, &v->viewers[ss->slot]) : 0;
+        return ss->slot_plus_1 > 0 ? viewer_writeable(v, &v->viewers[ss->slot_plus_1 - 1]) : 0;
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED: /* a new frame was encoded (or stop) */
         if (v->viewer_count > 0)
             lws_callback_on_writable_all_protocol(ctx, &protocols[1]);

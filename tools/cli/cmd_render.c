@@ -352,7 +352,7 @@ static void run_usage(FILE *f)
           "out/frame_NNNN.png, and it prints the frame rate.\n"
           "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
           "  --size WxH       image size in pixels (default 1280x720)\n"
-          "  --frames N       frames to render (headless default 48: one turn at 24 Hz; drm: until\n"
+          "  --frames N       frames to render (headless default 48: one turn at 24 Hz; drm, --remote: until\n"
           "                   stopped)\n"
           "  --out PATTERN    frame file pattern (default out/frame_####.png)\n"
           "  --camera ...     start camera, as for 'tessera render'\n"
@@ -389,6 +389,8 @@ int cli_run(int argc, char **argv)
         if (s.input.enabled < 0) /* the kiosk: people steer it */
             s.input.enabled = 1;
     }
+    if (s.remote.port >= 0 && !s.frames_given) /* watched and steered from browsers: until stopped */
+        s.frames = 0;
     if (!check_option_conflicts(&s))
         return 2;
     cli_check_ignored_render_run(&given, &s, "run");

@@ -1,0 +1,536 @@
+/* test_remote_browser.c - the remote view (remote/, docs/remote-protocol.md)
+ * end to end: the kiosk (../tessera run --remote 0) serves its page to
+ * headless Chromium driven over the DevTools protocol (cdp.h) and to a raw
+ * WebSocket client. The page connects with the token and shows frames; a
+ * wrong token is refused (page and socket); a drag on the page orbits the
+ * camera and the wall's last frame equals the native replay of what was
+ * recorded; two pages see each other's pointers in the viewer's colour; a
+ * client that stops reading leaves the wall running (its frames per second
+ * measured and printed, not asserted: tests do not depend on machine speed).
+ * Skipped, saying why, where Chromium cannot be started (the raw-client
+ * tests still run). Every wait is for an event, with a generous cap. */
+#define _DEFAULT_SOURCE
+#include <arpa/inet.h>
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cdp.h"
+#include "support.h"
+#include "wall/dump.h"
+
+#define WAIT_S 60.0
+
+typedef struct kiosk {
+    pid_t pid;
+    char err_path[512];
+    int port;
+    char token[80];
+    char url[256];
+} kiosk;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void pause_ms(int ms)
+{
+    struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};
+    nanosleep(&ts, NULL);
+}
+
+/* Start `tessera run ARGS... --remote 0` with stderr in dir/kiosk.err and
+ * wait for its URL line (the event: the line is written), at most WAIT_S. */
+static void kiosk_start(kiosk *k, const char *dir, const char *const *args)
+{
+    memset(k, 0, sizeof *k);
+    snprintf(k->err_path, sizeof k->err_path, "%s/kiosk.err", dir);
+    unlink(k->err_path); /* never the URL of a run before */
+    const char *argv[48];
+    int n = 0;
+    argv[n++] = support_tessera_bin();
+    argv[n++] = "run";
+    for (int i = 0; args[i] && n < 44; i++)
+        argv[n++] = args[i];
+    argv[n] = NULL;
+    k->pid = fork();
+    cr_assert(k->pid >= 0);
+    if (k->pid == 0) {
+        int e = open(k->err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644), o = open("/dev/null", O_WRONLY);
+        dup2(e, 2);
+        dup2(o, 1);
+        execv(argv[0], (char *const *)argv);
+        _exit(127);
+    }
+    double end = now_s() + WAIT_S;
+    char text[8192];
+    for (;;) {
+        support_read_text(k->err_path, text, sizeof text);
+        const char *u = strstr(text, "tessera: remote view: http://");
+        if (u && strchr(u, '\n')) {
+            cr_assert(sscanf(u, "tessera: remote view: http://127.0.0.1:%d/?token=%79[0-9a-zA-Z_-]", &k->port,
+                             k->token) == 2,
+                      "the URL line: %s", u);
+            snprintf(k->url, sizeof k->url, "http://127.0.0.1:%d/?token=%s", k->port, k->token);
+            return;
+        }
+        int status;
+        if (waitpid(k->pid, &status, WNOHANG) == k->pid) {
+            k->pid = -1;
+            cr_assert_fail("tessera ended before serving the remote view: %s", text);
+        }
+        cr_assert(now_s() < end, "no URL line in %.0f s: %s", WAIT_S, text);
+        pause_ms(10);
+    }
+}
+
+/* Stop it (SIGTERM: the frame in flight is finished and shown) or wait for
+ * its own end; its exit status. */
+static int kiosk_stop(kiosk *k, bool terminate)
+{
+    if (k->pid <= 0)
+        return -1;
+    if (terminate)
+        kill(k->pid, SIGTERM);
+    double end = now_s() + WAIT_S;
+    int status = 0;
+    while (waitpid(k->pid, &status, WNOHANG) == 0) {
+        if (now_s() > end) {
+            kill(k->pid, SIGKILL);
+            waitpid(k->pid, &status, 0);
+            k->pid = -1;
+            cr_assert_fail("tessera did not end within %.0f s", WAIT_S);
+        }
+        pause_ms(10);
+    }
+    k->pid = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+static cdp_browser *browser_or_skip(void)
+{
+    char why[512];
+    cdp_browser *b = cdp_launch(1000, 700, why, sizeof why);
+    if (!b)
+        cr_skip_test("headless Chromium is not available: %s", why);
+    return b;
+}
+
+static cdp_page *open_page(cdp_browser *b, const char *url)
+{
+    char why[512];
+    cdp_page *p = cdp_open_page(b, url, why, sizeof why);
+    cr_assert(p, "opening %s: %s", url, why);
+    return p;
+}
+
+static void wait_js(cdp_page *p, const char *condition)
+{
+    char why[1024];
+    cr_assert(cdp_wait_js(p, condition, WAIT_S, why, sizeof why), "%s", why);
+}
+
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    cr_assert(f, "%s", path);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* The page connects with the token, shows frames of the hello's size; a
+ * wrong token gets neither the page (403) nor a socket. */
+Test(remote_browser, the_page_shows_frames_and_a_wrong_token_is_refused, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-page");
+    char cfg[512];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 640, \"height\": 360}}");
+    const char *args[] = {"--config", cfg, "--display", "null", "--size", "320x180", "--threads", "2",
+                          "--time", "fixed", "--rate", "30", NULL};
+    kiosk k;
+    kiosk_start(&k, dir, args);
+    cdp_browser *b = browser_or_skip();
+    cdp_page *p = open_page(b, k.url);
+    wait_js(p, "window.tessera.connected && window.tessera.framesShown >= 3");
+    cr_assert_eq(cdp_eval_number(p, "document.getElementById('view').width"), 640.0);
+    cr_assert_eq(cdp_eval_number(p, "document.getElementById('view').height"), 360.0);
+    cr_assert(cdp_eval_bool(p, "/^#[0-9a-f]{6}$/.test(window.tessera.colour) && window.tessera.viewer === 0"));
+    cr_assert_gt(cdp_eval_number(p, "window.tessera.bytes"), 3000.0, "JPEG frames arrived");
+    /* the page itself, asked for with a wrong token: 403 */
+    cr_assert_eq(cdp_eval_number(p, "fetch('/?token=wrong').then(r => r.status)"), 403.0);
+    cr_assert_eq(cdp_eval_number(p, "fetch('/?').then(r => r.status)"), 403.0);
+    cr_assert_eq(cdp_eval_number(p, "fetch('/other?token=' + new URLSearchParams(location.search).get('token'))"
+                                    ".then(r => r.status)"),
+                 404.0);
+    /* a socket with a wrong token never opens */
+    cr_assert(cdp_eval_bool(p, "new Promise(done => { const w = new WebSocket('ws://' + location.host + "
+                               "'/ws?token=wrong', 'tessera-remote-1'); let opened = false;"
+                               " w.onopen = () => { opened = true; w.close(); };"
+                               " w.onclose = () => done(!opened); })"),
+              "a WebSocket with a wrong token opened");
+    cdp_close(b);
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    char text[16384];
+    support_read_text(k.err_path, text, sizeof text);
+    cr_assert(strstr(text, "refused: 1 token"), "the refusal is counted: %s", text);
+    support_remove_tmp_dir(dir);
+}
+
+/* The canvas's centre in CSS pixels, and its size. */
+static void canvas_box(cdp_page *p, double *cx, double *cy, double *w, double *h)
+{
+    *cx = cdp_eval_number(p, "(r => r.left + r.width / 2)(document.getElementById('view').getBoundingClientRect())");
+    *cy = cdp_eval_number(p, "(r => r.top + r.height / 2)(document.getElementById('view').getBoundingClientRect())");
+    *w = cdp_eval_number(p, "document.getElementById('view').getBoundingClientRect().width");
+    *h = cdp_eval_number(p, "document.getElementById('view').getBoundingClientRect().height");
+    cr_assert(*w > 100.0 && *h > 50.0, "the canvas is %gx%g CSS pixels", *w, *h);
+}
+
+/* The highest-numbered frame file wall_NNNN.png in dir. */
+static void last_frame(const char *dir, char *out, size_t out_bytes)
+{
+    DIR *d = opendir(dir);
+    cr_assert(d);
+    int best = -1;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        int n;
+        if (sscanf(e->d_name, "wall_%d.png", &n) == 1 && n > best)
+            best = n;
+    }
+    closedir(d);
+    cr_assert_geq(best, 0, "no frames in %s", dir);
+    snprintf(out, out_bytes, "%s/wall_%04d.png", dir, best);
+}
+
+/* A drag on the page orbits the wall's camera; the wall's last frame equals
+ * the native replay of the recorded transactions. */
+Test(remote_browser, a_drag_orbits_the_camera_and_the_wall_equals_the_replay, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-drag");
+    char cfg[512], rec[512], out[512];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    snprintf(rec, sizeof rec, "%s/rec.txt", dir);
+    snprintf(out, sizeof out, "%s/wall_####.png", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 480, \"height\": 270}}");
+    const char *args[] = {"--config", cfg, "--display", "dump", "--out", out, "--size", "160x90", "--threads", "2",
+                          "--time", "fixed", "--rate", "30", "--record-input", rec, NULL};
+    kiosk k;
+    kiosk_start(&k, dir, args);
+    cdp_browser *b = browser_or_skip();
+    cdp_page *p = open_page(b, k.url);
+    wait_js(p, "window.tessera.connected && window.tessera.framesShown >= 2");
+    double serial0 = cdp_eval_number(p, "window.tessera.cameraSerial");
+    double cx, cy, w, h;
+    canvas_box(p, &cx, &cy, &w, &h);
+    cr_assert(cdp_mouse(p, "mouseMoved", cx, cy, "none"));
+    cr_assert(cdp_mouse(p, "mousePressed", cx, cy, "left"));
+    for (int i = 1; i <= 8; i++) {
+        cr_assert(cdp_mouse(p, "mouseMoved", cx + 0.03 * w * i, cy + 0.01 * h * i, "left"));
+        wait_js(p, "true"); /* one round trip: the page has handled the move */
+    }
+    cr_assert(cdp_mouse(p, "mouseReleased", cx + 0.24 * w, cy + 0.08 * h, "left"));
+    char cond[256];
+    snprintf(cond, sizeof cond, "window.tessera.cameraSerial > %.0f", serial0);
+    wait_js(p, cond);
+    /* settle: the record stops growing while frames keep coming */
+    double shown = cdp_eval_number(p, "window.tessera.framesShown");
+    snprintf(cond, sizeof cond, "window.tessera.framesShown >= %.0f", shown + 10);
+    wait_js(p, cond);
+    cdp_close(b);
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    char text[16384];
+    support_read_text(rec, text, sizeof text);
+    cr_assert(strstr(text, " camera all "), "the drag recorded camera transactions: %s", text);
+    cr_assert(strstr(text, " pointer 0 1 "), "the viewer's pointer was recorded: %s", text);
+    char live[600], replay[600], cmd[2048], log[600];
+    last_frame(dir, live, sizeof live);
+    snprintf(replay, sizeof replay, "%s/replay.png", dir);
+    snprintf(log, sizeof log, "%s/replay.log", dir);
+    snprintf(cmd, sizeof cmd, "timeout 120 %s render --size 160x90 --threads 2 --replay-input '%s' --out '%s' > '%s' 2>&1",
+             support_tessera_bin(), rec, replay, log);
+    support_read_text(log, text, sizeof text);
+    cr_assert_eq(support_run(cmd), 0, "the native replay failed: %s", text);
+    tess_error err = {{0}};
+    int lw, lh, rw, rh;
+    uint8_t *a = NULL, *c = NULL;
+    cr_assert(dump_read_rgb8(live, &lw, &lh, &a, &err), "%s", err.msg);
+    cr_assert(dump_read_rgb8(replay, &rw, &rh, &c, &err), "%s", err.msg);
+    cr_assert(lw == rw && lh == rh);
+    size_t differ = 0;
+    for (size_t i = 0; i < (size_t)lw * (size_t)lh * 3; i++)
+        differ += a[i] != c[i];
+    cr_assert_eq(differ, 0, "%zu values of the wall's last frame (%s) differ from the native replay", differ, live);
+    free(a);
+    free(c);
+    support_remove_tmp_dir(dir);
+}
+
+/* Whether the page's canvas shows `colour` (#rrggbb, within a JPEG's
+ * tolerance) near fraction (fx, fy) of the picture. */
+static void pointer_condition(char *out, size_t bytes, const char *colour, double fx, double fy)
+{
+    snprintf(out, bytes,
+             "(() => { const c = document.getElementById('view'), g = c.getContext('2d');"
+             " const want = [1, 3, 5].map(i => parseInt('%s'.substr(i, 2), 16));"
+             " const x0 = Math.round(%f * c.width) - 12, y0 = Math.round(%f * c.height) - 12;"
+             " const d = g.getImageData(x0, y0, 25, 25).data;"
+             " for (let i = 0; i < d.length; i += 4)"
+             "  if (Math.abs(d[i] - want[0]) < 40 && Math.abs(d[i + 1] - want[1]) < 40 && Math.abs(d[i + 2] - want[2]) < 40)"
+             "   return true;"
+             " return false; })()",
+             colour, fx, fy);
+}
+
+/* Two pages see each other's pointers in the other viewer's colour. */
+Test(remote_browser, two_pages_see_each_others_pointers, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-pointers");
+    char cfg[512];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 480, \"height\": 270}}");
+    const char *args[] = {"--config", cfg, "--display", "null", "--size", "160x90", "--threads", "2",
+                          "--time", "fixed", "--rate", "30", NULL};
+    kiosk k;
+    kiosk_start(&k, dir, args);
+    cdp_browser *b = browser_or_skip();
+    cdp_page *a = open_page(b, k.url), *c = open_page(b, k.url);
+    wait_js(a, "window.tessera.connected && window.tessera.framesShown >= 1");
+    wait_js(c, "window.tessera.connected && window.tessera.framesShown >= 1");
+    json_object *v;
+    char why[512], colour_a[16] = "", colour_c[16] = "";
+    cr_assert(cdp_eval(a, "window.tessera.colour", &v, why, sizeof why) && v, "%s", why);
+    snprintf(colour_a, sizeof colour_a, "%s", json_object_get_string(v));
+    json_object_put(v);
+    cr_assert(cdp_eval(c, "window.tessera.colour", &v, why, sizeof why) && v, "%s", why);
+    snprintf(colour_c, sizeof colour_c, "%s", json_object_get_string(v));
+    json_object_put(v);
+    cr_assert_str_neq(colour_a, colour_c, "each viewer its own colour");
+    double cx, cy, w, h;
+    canvas_box(a, &cx, &cy, &w, &h);
+    /* A points at (0.3, 0.4) of the picture, C at (0.7, 0.6) */
+    cr_assert(cdp_mouse(a, "mouseMoved", cx - 0.2 * w, cy - 0.1 * h, "none"));
+    canvas_box(c, &cx, &cy, &w, &h);
+    cr_assert(cdp_mouse(c, "mouseMoved", cx + 0.2 * w, cy + 0.1 * h, "none"));
+    char cond[1024];
+    pointer_condition(cond, sizeof cond, colour_a, 0.3, 0.4);
+    wait_js(c, cond);
+    pointer_condition(cond, sizeof cond, colour_c, 0.7, 0.6);
+    wait_js(a, cond);
+    cdp_close(b);
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    support_remove_tmp_dir(dir);
+}
+
+/* ---- a raw WebSocket client (RFC 6455), for what a browser will not do ---- */
+
+/* Connect with `token` and read the handshake's reply up to its blank line;
+ * the fd, the reply's status code in *status (101: a viewer). */
+static int ws_connect(int port, const char *token, int *status)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    cr_assert(fd >= 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    cr_assert(connect(fd, (struct sockaddr *)&a, sizeof a) == 0, "connecting to port %d", port);
+    struct timeval cap = {30, 0}; /* a read that waits longer fails the test instead of hanging it */
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &cap, sizeof cap);
+    char req[512];
+    int n = snprintf(req, sizeof req,
+                     "GET /ws?token=%s HTTP/1.1\r\nHost: 127.0.0.1:%d\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                     "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+                     "Sec-WebSocket-Protocol: tessera-remote-1\r\n\r\n",
+                     token, port);
+    cr_assert(write(fd, req, (size_t)n) == n);
+    char reply[2048];
+    size_t len = 0;
+    while (len + 1 < sizeof reply) { /* byte by byte: what follows the headers is the first frame's */
+        ssize_t got = read(fd, reply + len, 1);
+        if (got <= 0)
+            break;
+        len++;
+        if (len >= 4 && !memcmp(reply + len - 4, "\r\n\r\n", 4))
+            break;
+    }
+    reply[len] = '\0';
+    *status = 0;
+    sscanf(reply, "HTTP/1.1 %d", status);
+    return fd;
+}
+
+static bool read_exact(int fd, uint8_t *p, size_t n)
+{
+    while (n) {
+        ssize_t got = read(fd, p, n);
+        if (got <= 0)
+            return false;
+        p += got;
+        n -= (size_t)got;
+    }
+    return true;
+}
+
+/* One server frame (unmasked): its opcode and payload (at most cap bytes). */
+static bool ws_read(int fd, int *opcode, uint8_t *payload, size_t cap, size_t *len)
+{
+    uint8_t h[8];
+    if (!read_exact(fd, h, 2))
+        return false;
+    *opcode = h[0] & 0x0f;
+    uint64_t n = h[1] & 0x7f;
+    if (n == 126) {
+        if (!read_exact(fd, h, 2))
+            return false;
+        n = (uint64_t)h[0] << 8 | h[1];
+    } else if (n == 127) {
+        if (!read_exact(fd, h, 8))
+            return false;
+        n = 0;
+        for (int i = 0; i < 8; i++)
+            n = n << 8 | h[i];
+    }
+    cr_assert_leq(n, cap, "a %llu-byte frame", (unsigned long long)n);
+    *len = (size_t)n;
+    return read_exact(fd, payload, (size_t)n);
+}
+
+/* One masked text frame (a client's frames are masked). */
+static void ws_send_text(int fd, const char *text)
+{
+    uint8_t f[256];
+    size_t n = strlen(text);
+    cr_assert(n < 126);
+    const uint8_t mask[4] = {0x12, 0x34, 0x56, 0x78};
+    f[0] = 0x81;
+    f[1] = (uint8_t)(0x80 | n);
+    memcpy(f + 2, mask, 4);
+    for (size_t i = 0; i < n; i++)
+        f[6 + i] = (uint8_t)text[i] ^ mask[i % 4];
+    cr_assert(write(fd, f, 6 + n) == (ssize_t)(6 + n));
+}
+
+/* Read `frames` frames, acknowledging each as the page does; their rate. */
+static double read_frames(int fd, int frames)
+{
+    static uint8_t payload[4 << 20];
+    double t0 = 0.0;
+    for (int got = 0; got < frames;) {
+        int op;
+        size_t len;
+        cr_assert(ws_read(fd, &op, payload, sizeof payload, &len), "the connection ended");
+        if (op != 2)
+            continue; /* the hello */
+        cr_assert_geq(len, 32);
+        uint64_t frame = 0;
+        for (int i = 7; i >= 0; i--)
+            frame = frame << 8 | payload[8 + i];
+        char ack[64];
+        snprintf(ack, sizeof ack, "{\"t\":\"ack\",\"frame\":%llu}", (unsigned long long)frame);
+        ws_send_text(fd, ack);
+        if (got++ == 0)
+            t0 = now_s(); /* from the first frame: the channel was off before */
+    }
+    return (frames - 1) / (now_s() - t0);
+}
+
+/* The frames a client that reads gets per second, with a second client
+ * beside it that did the handshake and never reads (or none). */
+static double frames_per_second(const char *dir, bool stall, unsigned long long *skipped)
+{
+    char cfg[512];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 480, \"height\": 270}}");
+    const char *args[] = {"--config", cfg, "--display", "null", "--size", "320x180", "--threads", "2", NULL};
+    kiosk k;
+    kiosk_start(&k, dir, args);
+    int status, stalled = -1;
+    if (stall) {
+        stalled = ws_connect(k.port, k.token, &status);
+        cr_assert_eq(status, 101, "the stalled client was let in");
+    }
+    int reader = ws_connect(k.port, k.token, &status);
+    cr_assert_eq(status, 101);
+    double fps = read_frames(reader, 120);
+    cr_assert_eq(kiosk_stop(&k, true), 0, "the kiosk ends cleanly with a client that never reads");
+    close(reader);
+    if (stalled >= 0)
+        close(stalled);
+    char text[16384];
+    support_read_text(k.err_path, text, sizeof text);
+    const char *at = strstr(text, " skipped for slow viewers");
+    cr_assert(at, "%s", text);
+    while (at > text && at[-1] >= '0' && at[-1] <= '9')
+        at--;
+    *skipped = strtoull(at, NULL, 10);
+    return fps;
+}
+
+Test(remote_browser, a_client_that_stops_reading_does_not_hold_the_wall, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-stall");
+    unsigned long long skipped_alone, skipped_stalled;
+    double alone = frames_per_second(dir, false, &skipped_alone);
+    double stalled = frames_per_second(dir, true, &skipped_stalled);
+    cr_assert_gt(skipped_stalled, 100, "the client that never read missed the frames it could not take (%llu)",
+                 skipped_stalled);
+    fprintf(stderr,
+            "remote view: a reading client got %.1f frames/s alone, %.1f beside a client that never reads "
+            "(ratio %.2f; frames skipped for slow viewers: %llu, %llu)\n",
+            alone, stalled, stalled / alone, skipped_alone, skipped_stalled);
+    support_remove_tmp_dir(dir);
+}
+
+/* A wrong token, and more viewers than allowed, are refused in the handshake. */
+Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 120)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-refuse");
+    char cfg[512];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 160, \"height\": 90, \"max_viewers\": 2}}");
+    const char *args[] = {"--config", cfg, "--display", "null", "--size", "160x90", "--threads", "2", NULL};
+    kiosk k;
+    kiosk_start(&k, dir, args);
+    int status, fds[3];
+    int bad = ws_connect(k.port, "0123456789abcdef0123456789abcdef", &status);
+    cr_assert_neq(status, 101, "a wrong token was let in");
+    close(bad);
+    for (int i = 0; i < 2; i++) {
+        fds[i] = ws_connect(k.port, k.token, &status);
+        cr_assert_eq(status, 101, "viewer %d", i);
+        read_frames(fds[i], 1); /* it is attached: its first frame came */
+    }
+    fds[2] = ws_connect(k.port, k.token, &status);
+    cr_assert_neq(status, 101, "a third viewer over max_viewers 2 was let in");
+    /* malformed messages are dropped and the connection stays */
+    ws_send_text(fds[0], "not json");
+    ws_send_text(fds[0], "{\"t\":\"warp\"}");
+    ws_send_text(fds[0], "{\"t\":\"down\",\"x\":0.5,\"y\":0.5,\"button\":7}");
+    read_frames(fds[0], 3);
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    for (int i = 0; i < 3; i++)
+        close(fds[i]);
+    char text[16384];
+    support_read_text(k.err_path, text, sizeof text);
+    cr_assert(strstr(text, "refused: 1 token, 1 full"), "%s", text);
+    cr_assert(strstr(text, "3 dropped (not-json 1) (unknown-type 1) (out-of-range 1)"), "%s", text);
+    support_remove_tmp_dir(dir);
+}
