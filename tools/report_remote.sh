@@ -17,7 +17,7 @@
 set -eu
 
 cd "$(dirname "$0")/.."
-. tools/report/put_section.sh
+. tools/bench_lib.sh # replace_section
 SHARED=${TESSERA_SHARED:-../shared}
 OUT=${REPORT_REMOTE_OUT:-REPORT.md}
 RUNS=${REPORT_REMOTE_RUNS:-9}
@@ -107,6 +107,6 @@ if [ -n "$PLOTS" ]; then
     mkdir -p "$(dirname "$OUT")/report"
     for p in $PLOTS; do cp "$WORK/$p" "$(dirname "$OUT")/report/$p"; done
 fi
-report_put_section "$OUT" "Remote view: " "$SECTION" "$WORK"
+replace_section "$OUT" "$(head -n 1 "$SECTION")" "$SECTION" "$WORK/out.md"
 rm -rf "$WORK"
 echo "report_remote: $OUT updated" >&2

@@ -22,7 +22,7 @@
 set -eu
 
 cd "$(dirname "$0")/.."
-. tools/report/put_section.sh
+. tools/bench_lib.sh # replace_section
 SHARED=${TESSERA_SHARED:-../shared}
 DATA=$SHARED/data/volumes
 OUT=${REPORT_VOLUMES_OUT:-REPORT.md}
@@ -184,5 +184,5 @@ if [ -n "$PLOTS" ]; then
     mkdir -p "$(dirname "$OUT")/report"
     for p in $PLOTS; do cp "$WORK/$p" "$(dirname "$OUT")/report/$p"; done
 fi
-report_put_section "$OUT" "Volumes: " "$SECTION" "$WORK"
+replace_section "$OUT" "$(head -n 1 "$SECTION")" "$SECTION" "$WORK/out.md"
 echo "report_volumes: $OUT updated" >&2
