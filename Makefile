@@ -64,7 +64,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-remote bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
@@ -291,6 +291,16 @@ bench-ao:
 report-volumes:
 	$(MAKE) tessera
 	sh tools/report_volumes.sh
+
+# the remote view's latency, frames per second and bytes a frame in headless Chromium
+# (tools/bench_remote.sh): the "## Remote view" section of BENCHMARKS.md. The harness shares the
+# browser tests' DevTools client (tests/cdp.c)
+$(BUILD)/bench-remote: $(BUILD)/tools/bench_remote/bench_remote.o $(BUILD)/tests/cdp.o
+	$(CC) $(LDFLAGS) $(SAN) -o $@ $^ $(shell pkg-config --libs json-c) -lm
+bench-remote:
+	@sh tools/deps.sh --test
+	$(MAKE) tessera $(BUILD)/bench-remote
+	sh tools/bench_remote.sh
 
 # the remote view's JPEG frames (tools/report_remote.sh): bytes and encode time against FLIP per
 # quality and chroma subsampling, the "## Remote view" section of REPORT.md

@@ -183,8 +183,10 @@ cdp_browser *cdp_launch(int width_px, int height_px, char *why, size_t why_bytes
     }
     if (b->pid == 0) {
         setpgid(0, 0);
-        /* its fd 3 reads our commands, its fd 4 writes to us */
-        if (dup2(in[0], 3) < 0 || dup2(out[1], 4) < 0)
+        /* its fd 3 reads our commands, its fd 4 writes to us: through copies above 4 first, since
+         * the pipe's own fds may be 3 or 4 (and dup2 onto itself would keep O_CLOEXEC) */
+        int reads = fcntl(in[0], F_DUPFD, 5), writes = fcntl(out[1], F_DUPFD, 5);
+        if (reads < 0 || writes < 0 || dup2(reads, 3) < 0 || dup2(writes, 4) < 0)
             _exit(126);
         int devnull = open("/dev/null", O_RDWR);
         if (devnull >= 0) {
