@@ -71,6 +71,9 @@ struct remote_view {
     pthread_t thread;
     bool started;
     atomic_bool stop;
+    bool stopping;                     /* remote_view_stop is closing the connections: the run is
+                                          over, nothing more goes to input (so a recording ends
+                                          with what the wall showed) */
     viewer viewers[INPUT_MAX_VIEWERS]; /* server thread */
     int viewer_count;                  /* server thread */
     uint8_t *send_buf;                 /* server thread: LWS_PRE + header + JPEG */
@@ -228,7 +231,9 @@ static void viewer_detach(remote_view *v, session *ss)
     int slot = ss->slot_plus_1 - 1;
     viewer *vw = &v->viewers[slot];
     input_event released[REMOTE_EVENTS_MAX];
-    push_events(v, released, remote_viewer_input_release(&vw->input, clock_monotonic_us(), released));
+    int n = remote_viewer_input_release(&vw->input, clock_monotonic_us(), released);
+    if (!v->stopping)
+        push_events(v, released, n);
     count_skipped(v, vw);
     log_info("remote view: viewer %d left (%llu frames sent)", slot, (unsigned long long)vw->sent);
     vw->used = false;
@@ -610,7 +615,8 @@ void remote_view_stop(remote_view *v)
         if (v->viewers[i].used)
             count_skipped(v, &v->viewers[i]);
     /* the context goes with its connections: CLOSED callbacks run here, on this thread (the
-     * server thread is gone), and push their release events to the source, still alive */
+     * server thread is gone); the run is over, so they give input nothing more */
+    v->stopping = true;
     pthread_mutex_lock(&v->context_lock);
     struct lws_context *ctx = v->context;
     v->context = NULL;
