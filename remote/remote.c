@@ -239,7 +239,7 @@ static void viewer_detach(remote_view *v, session *ss)
     vw->used = false;
     vw->wsi = NULL;
     ss->slot_plus_1 = 0;
-    if (--v->viewer_count == 0)
+    if (--v->viewer_count == 0 && !v->stopping) /* stopping: the pipeline has stopped */
         follow_channel_needed(v, false);
 }
 

@@ -280,6 +280,8 @@ cdp_page *cdp_open_page(cdp_browser *b, const char *url, char *why, size_t why_b
     b->pages[b->page_count++] = p;
     json_object *params = json_object_new_object(), *r = NULL;
     json_object_object_add(params, "url", json_object_new_string("about:blank"));
+    /* a window of its own: a second tab of one window hides the first, which then stops drawing */
+    json_object_object_add(params, "newWindow", json_object_new_boolean(1));
     if (!cdp_call(b, NULL, "Target.createTarget", params, &r, 30.0, why, why_bytes))
         return NULL;
     snprintf(p->target, sizeof p->target, "%s", string_member(r, "targetId") ? string_member(r, "targetId") : "");
