@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -183,6 +184,7 @@ cdp_browser *cdp_launch(int width_px, int height_px, char *why, size_t why_bytes
     }
     if (b->pid == 0) {
         setpgid(0, 0);
+        prctl(PR_SET_PDEATHSIG, SIGKILL); /* the test process gone (a failed assertion): so is the browser */
         /* its fd 3 reads our commands, its fd 4 writes to us: through copies above 4 first, since
          * the pipe's own fds may be 3 or 4 (and dup2 onto itself would keep O_CLOEXEC) */
         int reads = fcntl(in[0], F_DUPFD, 5), writes = fcntl(out[1], F_DUPFD, 5);

@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <sys/wait.h>
@@ -69,6 +70,7 @@ static void kiosk_start(kiosk *k, const char *dir, const char *const *args)
     k->pid = fork();
     cr_assert(k->pid >= 0);
     if (k->pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGKILL); /* a test that stops early (a failed assertion) takes it along */
         int e = open(k->err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644), o = open("/dev/null", O_WRONLY);
         dup2(e, 2);
         dup2(o, 1);
@@ -162,9 +164,9 @@ Test(remote_browser, the_page_shows_frames_and_a_wrong_token_is_refused, .timeou
     write_file(cfg, "{\"remote\": {\"width\": 640, \"height\": 360}}");
     const char *args[] = {"--config", cfg, "--display", "null", "--size", "320x180", "--threads", "2",
                           "--time", "fixed", "--rate", "30", NULL};
+    cdp_browser *b = browser_or_skip(); /* before the kiosk: a skip leaves nothing running */
     kiosk k;
     kiosk_start(&k, dir, args);
-    cdp_browser *b = browser_or_skip();
     cdp_page *p = open_page(b, k.url);
     wait_js(p, "window.tessera.connected && window.tessera.framesShown >= 3");
     cr_assert_eq(cdp_eval_number(p, "document.getElementById('view').width"), 640.0);
@@ -231,9 +233,9 @@ Test(remote_browser, a_drag_orbits_the_camera_and_the_wall_equals_the_replay, .t
     write_file(cfg, "{\"remote\": {\"width\": 480, \"height\": 270}}");
     const char *args[] = {"--config", cfg, "--display", "dump", "--out", out, "--size", "160x90", "--threads", "2",
                           "--time", "fixed", "--rate", "30", "--record-input", rec, NULL};
+    cdp_browser *b = browser_or_skip(); /* before the kiosk: a skip leaves nothing running */
     kiosk k;
     kiosk_start(&k, dir, args);
-    cdp_browser *b = browser_or_skip();
     cdp_page *p = open_page(b, k.url);
     wait_js(p, "window.tessera.connected && window.tessera.framesShown >= 2");
     double serial0 = cdp_eval_number(p, "window.tessera.cameraSerial");
@@ -309,9 +311,9 @@ Test(remote_browser, two_pages_see_each_others_pointers, .timeout = 300)
     write_file(cfg, "{\"remote\": {\"width\": 480, \"height\": 270}}");
     const char *args[] = {"--config", cfg, "--display", "null", "--size", "160x90", "--threads", "2",
                           "--time", "fixed", "--rate", "30", NULL};
+    cdp_browser *b = browser_or_skip(); /* before the kiosk: a skip leaves nothing running */
     kiosk k;
     kiosk_start(&k, dir, args);
-    cdp_browser *b = browser_or_skip();
     cdp_page *a = open_page(b, k.url), *c = open_page(b, k.url);
     wait_js(a, "window.tessera.connected && window.tessera.framesShown >= 1");
     wait_js(c, "window.tessera.connected && window.tessera.framesShown >= 1");
