@@ -48,7 +48,6 @@ struct input_controller {
     uint64_t cam_hold_until_us;
     int event_device;          /* the device of the event being handled; -1 in ticks */
     uint64_t event_us;         /* its time */
-    uint64_t camera_refused;   /* camera motions of a device that did not hold the camera */
 
     /* cursor (plane coordinates) */
     double cur_x, cur_y;
@@ -303,10 +302,8 @@ static bool may_move_camera(input_controller *c)
         return true;
     bool held = c->cam_holder >= 0 && c->cam_holder != d &&
                 (c->event_us < c->cam_hold_until_us || gesture_going(c, c->cam_holder));
-    if (held) {
-        c->camera_refused++;
+    if (held)
         return false;
-    }
     c->cam_holder = d;
     c->cam_hold_until_us = c->event_us + (uint64_t)(INPUT_CAMERA_HOLD_S * 1e6);
     return true;
