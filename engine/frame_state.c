@@ -90,7 +90,14 @@ int frame_state_add_channel(frame_state *st, const camera_desc *c)
     st->cameras[i] = *c;
     st->camera_serials[i] = 0;
     st->active[i] = true;
+    st->private_view[i] = false;
     return i;
+}
+
+void frame_state_set_private(frame_state *st, int channel)
+{
+    if (channel >= 0 && channel < st->channel_count)
+        st->private_view[channel] = true;
 }
 
 bool frame_state_adopt_hidden(frame_state *st, const struct accel *a)

@@ -47,6 +47,12 @@
  *                   the status line as drawn changes (frame_state_bump_overlay);
  *   camera_serial[c] bumped by every camera set on channel c, the same or not.
  *
+ * PRIVATE CHANNELS. A channel made private before the run (a remote viewer's
+ * own camera: remote/) is not the wall's: a camera record for all channels
+ * leaves it, and it draws neither the cursor nor viewers' pointers (plane
+ * points of the wall's view). Everything else (visibility, planes, ...) it
+ * shares.
+ *
  * MEMORY. Nothing per geometry is allocated until a scene uses the feature:
  * the hidden, highlight and colour arrays are each NULL until the first
  * record that needs one (a hide, a highlight on, a colour override, a part
@@ -87,6 +93,9 @@ typedef struct frame_state {
     camera_desc cameras[FRAME_STATE_MAX_CHANNELS];
     uint64_t camera_serials[FRAME_STATE_MAX_CHANNELS]; /* cameras set so far */
     bool active[FRAME_STATE_MAX_CHANNELS];             /* rendered and displayed */
+    bool private_view[FRAME_STATE_MAX_CHANNELS];       /* fixed before the run: a camera "all" record
+                                                          (the wall's camera) passes it by; only
+                                                          records naming it set its camera */
 
     int threads;             /* render threads wanted, 1..TXN_MAX_THREADS */
 
@@ -149,6 +158,8 @@ void frame_state_finish(frame_state *st);
 /* Add a channel with its camera (active, serial 0); its index, or -1 when
  * FRAME_STATE_MAX_CHANNELS exist. Before the pipeline runs. */
 int frame_state_add_channel(frame_state *st, const camera_desc *c);
+/* Make channel `channel` private (private_view). Before the pipeline runs. */
+void frame_state_set_private(frame_state *st, int channel);
 
 /* Take over the accel's hidden flags (a pipeline made over an accel whose
  * geometries an earlier user hid): allocates `hidden` only if some are. */

@@ -63,7 +63,10 @@ typedef struct termination_callback {
 enum { BUFFER_COUNT = 3 };
 
 typedef struct frame_buffer {
-    float *rgb;       /* width * height * 3 */
+    float *rgb;       /* width * height * 3, 64-byte aligned inside rgb_block */
+    void *rgb_block;  /* what calloc gave (freed): zeroed pages the kernel maps only when first
+                         written, so a channel that never renders (a remote view's private
+                         channel nobody uses) costs address space, not memory */
     frame_image meta; /* what is (being) rendered into rgb */
     bool rendered;    /* the frame in meta was rendered (its channel was on); serial section */
 } frame_buffer;
@@ -526,7 +529,7 @@ pipeline *pipeline_create(const pipeline_config *cfg, tess_error *err)
 static void channel_free(pipe_channel *c)
 {
     for (int b = 0; b < BUFFER_COUNT; b++)
-        free(c->buffers[b].rgb);
+        free(c->buffers[b].rgb_block);
     free(c->accum);
     free(c->lowres);
     for (int r = 0; r < GOVERNOR_RUNGS; r++)
@@ -582,12 +585,10 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     size_t floats = (size_t)width_px * (size_t)height_px * 3;
     /* cache-line aligned, so a tile row shares lines with a neighbour tile only where the
      * image width makes it (16-pixel float RGB rows are whole lines) */
-    size_t bytes = (floats * sizeof(float) + 63) & ~(size_t)63;
-    for (int b = 0; b < BUFFER_COUNT; b++) {
-        c->buffers[b].rgb = aligned_alloc(64, bytes);
-        if (c->buffers[b].rgb)
-            memset(c->buffers[b].rgb, 0, bytes);
-    }
+    size_t bytes = floats * sizeof(float) + 64;
+    for (int b = 0; b < BUFFER_COUNT; b++)
+        if ((c->buffers[b].rgb_block = calloc(1, bytes)))
+            c->buffers[b].rgb = (float *)(((uintptr_t)c->buffers[b].rgb_block + 63) & ~(uintptr_t)63);
     bool have_memory = true;
     for (int b = 0; b < BUFFER_COUNT; b++)
         have_memory = have_memory && c->buffers[b].rgb != NULL;
@@ -603,6 +604,23 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     c->on_screen = 2;
     frame_state_add_channel(&p->state, camera); /* its index is channel_count: both stop at the same maximum */
     return p->channel_count++;
+}
+
+bool pipeline_set_channel_private(pipeline *p, int channel, tess_error *err)
+{
+    if (p->ran || atomic_load(&p->running))
+        return tess_error_set(err, "pipeline: a channel can be made private only before the pipeline runs");
+    if (channel < 1 || channel >= p->channel_count)
+        return tess_error_set(err, "pipeline: channel %d cannot be private (channels 1..%d may be; channel 0 is "
+                                   "the wall's)",
+                              channel, p->channel_count - 1);
+    frame_state_set_private(&p->state, channel);
+    return true;
+}
+
+bool pipeline_channel_private(const pipeline *p, int channel)
+{
+    return channel >= 0 && channel < p->channel_count && p->state.private_view[channel];
 }
 
 /* ---------------------------------------------------------------- queueing */
@@ -1288,6 +1306,10 @@ static void freeze_frame(pipeline *p)
     const double scale = p->rung_scale[plan->rung];
     const frame_state *st = &p->state; /* the frame's snapshot: unchanged until the next barrier */
     p->frame_renderer = st->renderer;
+    /* private channels: the status line alone (the cursor and pointers are the wall's plane points) */
+    overlay_state private_overlay = p->overlay;
+    private_overlay.cursor_visible = false;
+    memset(private_overlay.pointer_visible, 0, sizeof private_overlay.pointer_visible);
     uint32_t bands = 0;
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
@@ -1309,7 +1331,8 @@ static void freeze_frame(pipeline *p)
                                                                   : p->cfg.sampler.k * p->cfg.sampler.k};
         b->rendered = active;
         image_display *sink = c->display->ops->write_tile ? c->display : NULL;
-        c->overlay_on = overlay_plan_make(&c->overlay, &p->overlay, c->window, c->width_px, c->height_px);
+        c->overlay_on = overlay_plan_make(&c->overlay, st->private_view[i] ? &private_overlay : &p->overlay,
+                                          c->window, c->width_px, c->height_px);
         if (p->reduced) {
             int w = upscale_low_res_px(c->width_px, scale), h = upscale_low_res_px(c->height_px, scale);
             c->lowres_view = c->view;

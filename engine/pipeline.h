@@ -250,6 +250,14 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
  * always displayed before returning. Runs once per pipeline. */
 bool pipeline_run(pipeline *p, tess_error *err);
 
+/* Make channel `channel` private (frame_state.h, PRIVATE CHANNELS): a camera
+ * record for all channels (the wall's camera) leaves it and it draws no
+ * cursor or pointers; a remote viewer's own view (remote/). Only before
+ * pipeline_run. False with err. */
+bool pipeline_set_channel_private(pipeline *p, int channel, tess_error *err);
+/* Whether channel `channel` is private (fixed once the pipeline runs: any thread). */
+bool pipeline_channel_private(const pipeline *p, int channel);
+
 /* Free the pipeline, its channels and their displays. Only when it is not
  * running (never run, or pipeline_run has returned: stop it with
  * pipeline_stop and wait for that); while running it logs and refuses. */

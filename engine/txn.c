@@ -440,9 +440,10 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
     switch (r->kind) {
     case TXN_CAMERA: {
         int ch = r->args.camera.channel;
-        if (ch == TXN_ALL_CHANNELS) {
+        if (ch == TXN_ALL_CHANNELS) { /* the wall's camera: every channel but the private ones */
             for (int i = 0; i < st->channel_count; i++)
-                frame_state_set_camera(st, i, &r->args.camera.camera);
+                if (!st->private_view[i])
+                    frame_state_set_camera(st, i, &r->args.camera.camera);
             return true;
         }
         if (!channel_in(st, name, ch, err))

@@ -17,7 +17,7 @@
  *
  *   kind             arguments                     effect on the frame state
  *   camera           channel (or TXN_ALL_CHANNELS: a channel's camera, or the wall's (every
- *                    the wall), camera_desc           channel's) camera
+ *                    the wall), camera_desc           channel's but the private ones': frame_state.h)
  *   cursor           on, sx, sy (finite)           the cursor at plane point (sx, sy), or hidden
  *   pointer          slot (0..TXN_POINTERS-1), on, remote viewer `slot`'s pointer at plane point
  *                    sx, sy (finite)               (sx, sy) in the viewer's colour, or hidden

@@ -996,3 +996,70 @@ Test(overlay, viewer_pointers_are_discs_in_their_colour)
     st.pointer_visible[2] = false;
     cr_assert_not(overlay_plan_make(&plan, &st, CAMERA_WINDOW_FULL, W, H), "nothing shown: no plan");
 }
+
+/* PRIVATE CHANNELS (frame_state.h): a remote viewer's own view keeps its
+ * camera when the wall's ("all") changes, and draws the status line but not
+ * the wall's cursor or the viewers' pointers. */
+static void make_private_and_move_the_wall(pipeline *p, void *ctx)
+{
+    const camera_desc *other = ctx;
+    tess_error err = {{0}};
+    cr_assert(pipeline_set_channel_private(p, 1, &err), "%s", err.msg);
+    txn_record pointer = txn_pointer(3, true, 0.25f, -0.2f);
+    txn_record wall = txn_camera(TXN_ALL_CHANNELS, other);
+    cr_assert(pipeline_apply(p, &pointer));
+    cr_assert(pipeline_apply(p, &wall));
+    cr_assert(pipeline_channel_private(p, 1) && !pipeline_channel_private(p, 0));
+    camera_desc kept = pipeline_camera(p, 1), moved = pipeline_camera(p, 0);
+    cr_assert(memcmp(&moved, other, sizeof moved) == 0, "the wall's channel takes the wall's camera");
+    cr_assert(memcmp(&kept, other, sizeof kept) != 0, "the private channel keeps its own");
+    cr_assert_eq(pipeline_camera_serial(p, 1), 0, "no camera was set on the private channel");
+}
+
+Test(overlay, a_private_channel_keeps_its_camera_and_draws_the_status_line_without_cursor_or_pointers,
+     .timeout = 120)
+{
+    fixture fx = fixture_default();
+    const int w = 96, h = 64;
+    camera_desc other = fx.camera;
+    other.eye = v3_add(other.eye, v3(1.5f, 0.5f, 0.f));
+    channel_spec specs[2] = {full_channel(w, h), full_channel(w, h)};
+    grabbed out[2];
+    overlay_setup ov = {"private", true, 0.1f, 0.1f};
+    run_channels(&fx, config(&fx, 2), specs, 2, ov, make_private_and_move_the_wall, &other, out);
+    cr_assert_eq(out[0].count, 1);
+    cr_assert_eq(out[1].count, 1);
+    /* the private channel: its own camera, the status line, nothing else */
+    overlay_setup status_only = {"private", false, 0.f, 0.f};
+    float *expected_private = one_frame(&fx, config(&fx, 2), w, h, status_only);
+    cr_assert(same_image(out[1].frames[0], expected_private, w, h),
+              "the private channel shows its camera with the status line, no cursor, no pointer");
+    /* the wall's channel: the other camera, with the cursor and the pointer */
+    fixture moved = fx;
+    moved.camera = other;
+    float *wall_plain = one_frame(&moved, config(&moved, 2), w, h, status_only);
+    cr_assert_not(same_image(out[0].frames[0], wall_plain, w, h), "the wall draws the cursor and the pointer");
+    int differing = 0;
+    for (int i = 0; i < w * h; i++)
+        differing += !same_pixel(out[0].frames[0] + 3 * i, wall_plain + 3 * i);
+    cr_assert_lt(differing, w * h / 4, "only the cursor and the disc differ: the wall has the other camera");
+    /* channel 0 (the wall's) or a channel that does not exist: refused, naming why */
+    tess_error err = {{0}};
+    pipeline_config cfg = config(&fx, 1);
+    pipeline *p = pipeline_create(&cfg, &err);
+    cr_assert(p, "%s", err.msg);
+    grabbed unused[2];
+    memset(unused, 0, sizeof unused);
+    cr_assert_eq(pipeline_add_channel(p, &fx.camera, w, h, grab_create(&unused[0]), &err), 0);
+    cr_assert_eq(pipeline_add_channel(p, &fx.camera, w, h, grab_create(&unused[1]), &err), 1);
+    cr_assert_not(pipeline_set_channel_private(p, 0, &err));
+    cr_assert(strstr(err.msg, "channel 0 is the wall's"), "%s", err.msg);
+    cr_assert_not(pipeline_set_channel_private(p, 2, &err));
+    cr_assert(pipeline_set_channel_private(p, 1, &err), "%s", err.msg);
+    pipeline_destroy(p);
+    free(expected_private);
+    free(wall_plain);
+    grabbed_free(&out[0]);
+    grabbed_free(&out[1]);
+    fixture_free(&fx);
+}
