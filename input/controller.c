@@ -151,6 +151,12 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
     c->event_device = -1;
     c->cfg = *cfg;
     c->hooks = *hooks;
+    if (c->cfg.private_channel < 0)
+        c->cfg.private_channel = 0;
+    if (c->cfg.private_channel > 0) { /* a private view: no tour of its own (the wall's plays on) */
+        c->cfg.have_tour = false;
+        c->cfg.idle_timeout_s = 0.0;
+    }
     if (!(c->cfg.scene_size > 0.0) || !isfinite(c->cfg.scene_size))
         c->cfg.scene_size = 1.0;
     if (!(c->cfg.plane_aspect > 0.f))
@@ -196,13 +202,34 @@ input_controller *input_controller_create(const input_controller_config *cfg, co
 
 void input_controller_destroy(input_controller *c) { free(c); }
 
+
 camera_desc input_controller_camera(const input_controller *c) { return c->cam; }
 double input_controller_fly_speed(const input_controller *c) { return c->fly_speed; }
 bool input_controller_touring(const input_controller *c) { return c->touring; }
 
 /* ---- output -------------------------------------------------------------- */
 
-static void emit(input_controller *c, input_txn *t) { c->hooks.emit(c->hooks.ctx, t); }
+/* Every record goes out here. A private view's controller (cfg.private_channel)
+ * says only where its channel's camera goes: the rest of what it would say
+ * (cursor, status, scene commands) belongs to the shared view. */
+static void emit(input_controller *c, input_txn *t)
+{
+    if (c->cfg.private_channel > 0) {
+        if (t->kind != TXN_CAMERA)
+            return;
+        t->args.camera.channel = c->cfg.private_channel;
+    }
+    c->hooks.emit(c->hooks.ctx, t);
+}
+
+void input_controller_jump(input_controller *c, camera_desc cam)
+{
+    c->animating = false;
+    c->cam = cam;
+    input_txn t = txn_camera(TXN_ALL_CHANNELS, &c->cam);
+    emit(c, &t);
+    c->cam_dirty = false;
+}
 
 static void emit_status(input_controller *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 static void emit_status(input_controller *c, const char *fmt, ...)
@@ -1409,6 +1436,7 @@ void input_controller_event(input_controller *c, const input_event *e)
     c->event_us = e->time_us;
     switch (e->kind) {
     case INPUT_DEVICE_ADDED:
+    case INPUT_PRIVATE_VIEW: /* the runner's (runner.h) */
         return;
     case INPUT_DEVICE_REMOVED:
         device_removed(c, e->device);
@@ -1442,7 +1470,7 @@ void input_controller_event(input_controller *c, const input_event *e)
         pointer_moved(c, clamp_plane(e->x), clamp_plane(e->y));
         break;
     case INPUT_VIEWER_POINTER:
-        if (e->slot >= 0 && e->slot < INPUT_MAX_VIEWERS) {
+        if (e->slot >= 0 && e->slot < INPUT_MAX_VIEWERS && c->cfg.private_channel == 0) {
             int s = e->slot;
             double x = e->pressed ? clamp_plane(e->x) : c->pointer_x[s], y = e->pressed ? clamp_plane(e->y) : c->pointer_y[s];
             if (c->pointer_visible[s] != e->pressed || x != c->pointer_x[s] || y != c->pointer_y[s])

@@ -113,6 +113,13 @@
  *    started while it was held (its pivot is the one picked at its press).
  *    Animations (flight, fly-to, home, the tour) are not arbitrated: they
  *    were started by a key or a gesture that was;
+ *  - PRIVATE VIEW (cfg.private_channel > 0: a remote viewer with a camera of
+ *    its own, made by the runner for that viewer's device): the same
+ *    gestures, keys and animations steer that channel's camera ("camera
+ *    CHANNEL" records) and nothing else: it emits no cursor, status,
+ *    pointer or scene record (hide, planes, opacity, time, ...: those act on
+ *    what everybody sees, so they are the shared view's), has no tour and
+ *    no camera holder to share with;
  *  - the quit chord (all its keys held together);
  *  - kiosk: after idle_timeout_s without input it starts the attract tour
  *    (TXN_TOUR on; the tour player eases into the path); the first
@@ -237,6 +244,7 @@ typedef struct input_controller_config {
                                     function too (the built-ins with opacity) */
     char transfer[TXN_NAME_BYTES]; /* the one they start with ("" or custom: the first built-in) */
     double time_rate;            /* steps per second while playing; 0: INPUT_TIME_RATE */
+    int private_channel;         /* 0: the wall's controller; > 0: a PRIVATE VIEW's, steering that channel */
 } input_controller_config;
 
 /* Defaults for the fields a caller need not set (bindings = the defaults). */
@@ -273,6 +281,10 @@ void input_controller_tick(input_controller *c, uint64_t now_us);
 /* When tick must next be called: an absolute time_us, or UINT64_MAX when
  * nothing waits (no animation, no tour pending). */
 uint64_t input_controller_deadline_us(const input_controller *c, uint64_t now_us);
+
+/* Put the camera at `cam` at once (an animation stops) and emit it: a
+ * private view starting from the wall's camera. */
+void input_controller_jump(input_controller *c, camera_desc cam);
 
 /* The camera the controller steers, the flight speed, whether touring. */
 camera_desc input_controller_camera(const input_controller *c);

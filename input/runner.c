@@ -20,11 +20,22 @@
 
 #define SEAT_CHECK_MS 200 /* with a seat: how often the input thread looks whether it is still ours */
 
+/* A remote viewer's private view: its device's events go to a controller of its own. */
+typedef struct private_view {
+    bool used;
+    int device;
+    int channel;
+    input_controller *controller;
+} private_view;
+
 struct input_runner {
     struct session *sn;       /* the seat (NULL: none): its devices are revoked on a VT switch */
     input_source *sources[INPUT_MAX_SOURCES]; /* owned; polled through their interface alone */
     int source_count;
-    input_controller *controller;
+    input_controller *controller;      /* the wall's: every device not in `privates` */
+    input_controller_config controller_cfg; /* its config, the start of a private view's */
+    input_controller_hooks hooks;      /* every controller's */
+    private_view privates[INPUT_MAX_VIEWERS];
     input_sink *sink;
     input_pick_fn pick;
     input_step_ready_fn step_ready;
@@ -59,10 +70,93 @@ static camera_desc hook_current_camera(void *ctx)
     return input_sink_current_camera(r->sink);
 }
 
+static private_view *private_of(input_runner *r, int device)
+{
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        if (r->privates[i].used && r->privates[i].device == device)
+            return &r->privates[i];
+    return NULL;
+}
+
+static void private_end(input_runner *r, private_view *pv)
+{
+    input_txn off = txn_channel_active(pv->channel, false);
+    input_sink_emit(r->sink, &off);
+    input_controller_destroy(pv->controller);
+    log_info("input: device %d's private view (channel %d) ends", pv->device, pv->channel);
+    memset(pv, 0, sizeof *pv);
+}
+
+/* INPUT_PRIVATE_VIEW: the device steers channel e->code with a controller of
+ * its own, starting from the wall's camera; the channel is switched on after
+ * its camera is set, so its first frame already shows that camera. */
+static void private_start(input_runner *r, const input_event *e)
+{
+    private_view *pv = private_of(r, e->device);
+    if (pv)
+        private_end(r, pv);
+    for (int i = 0; i < INPUT_MAX_VIEWERS && !pv; i++)
+        if (!r->privates[i].used)
+            pv = &r->privates[i];
+    if (!pv || e->code <= 0) {
+        log_warn("input: device %d: a private view of channel %d refused (%s)", e->device, e->code,
+                 pv ? "channel 0 is the wall's" : "too many private views");
+        return;
+    }
+    input_controller_config cfg = r->controller_cfg;
+    cfg.private_channel = e->code;
+    input_controller *c = input_controller_create(&cfg, &r->hooks);
+    if (!c) {
+        log_error("input: device %d: no private view: out of memory", e->device);
+        return;
+    }
+    *pv = (private_view){.used = true, .device = e->device, .channel = e->code, .controller = c};
+    input_controller_tick(c, e->time_us);
+    input_controller_jump(c, input_sink_current_camera(r->sink));
+    input_txn on = txn_channel_active(pv->channel, true);
+    input_sink_emit(r->sink, &on);
+    log_info("input: device %d steers channel %d (a private view)", e->device, e->code);
+}
+
+/* Events of a device with a private view go to its controller (its removal
+ * ends the view); the rest to the wall's. */
 static void on_event(void *ctx, const input_event *e)
 {
     input_runner *r = ctx;
-    input_controller_event(r->controller, e);
+    if (e->kind == INPUT_PRIVATE_VIEW) {
+        private_start(r, e);
+        return;
+    }
+    private_view *pv = private_of(r, e->device);
+    if (!pv) {
+        input_controller_event(r->controller, e);
+        return;
+    }
+    input_controller_event(pv->controller, e);
+    if (e->kind == INPUT_DEVICE_REMOVED)
+        private_end(r, pv);
+}
+
+/* The earliest deadline of every controller. */
+static uint64_t deadline_us(const input_runner *r, uint64_t now)
+{
+    uint64_t d = input_controller_deadline_us(r->controller, now);
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        if (r->privates[i].used) {
+            uint64_t p = input_controller_deadline_us(r->privates[i].controller, now);
+            d = p < d ? p : d;
+        }
+    return d;
+}
+
+/* Tick every controller whose deadline has come. */
+static void tick_due(input_runner *r, uint64_t now)
+{
+    if (input_controller_deadline_us(r->controller, now) <= now)
+        input_controller_tick(r->controller, now);
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        if (r->privates[i].used && input_controller_deadline_us(r->privates[i].controller, now) <= now)
+            input_controller_tick(r->privates[i].controller, now);
 }
 
 static void *input_main(void *arg)
@@ -73,7 +167,7 @@ static void *input_main(void *arg)
     bool said_devices = false;
     while (!atomic_load(&r->stop)) {
         uint64_t now = clock_monotonic_us();
-        uint64_t deadline = input_controller_deadline_us(r->controller, now);
+        uint64_t deadline = deadline_us(r, now);
         int timeout_ms = 1000; /* also how often missing path devices are tried again */
         bool seat = r->sn && session_has_seat(r->sn);
         if (seat)
@@ -121,7 +215,7 @@ static void *input_main(void *arg)
         }
         now = clock_monotonic_us();
         if (now >= deadline) /* the deadline asked for before the wait has come */
-            input_controller_tick(r->controller, now);
+            tick_due(r, now);
     }
     return NULL;
 }
@@ -148,10 +242,12 @@ input_runner *input_runner_start(input_source *const *sources, int source_count,
     r->pick_ctx = pick_ctx;
     r->wake_fd = -1;
     atomic_init(&r->stop, false);
-    input_controller_hooks hooks = {
+    r->hooks = (input_controller_hooks){
         .ctx = r, .pick = hook_pick, .emit = hook_emit, .current_camera = hook_current_camera,
         .step_ready = hook_step_ready};
-    r->controller = input_controller_create(controller, &hooks);
+    r->controller_cfg = *controller;
+    r->controller_cfg.private_channel = 0;
+    r->controller = input_controller_create(&r->controller_cfg, &r->hooks);
     r->wake_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
     if (!r->controller || r->wake_fd < 0) {
         tess_error_set(err, "input: out of memory or file descriptors");
@@ -182,6 +278,8 @@ void input_runner_stop(input_runner *r)
     }
     for (int i = 0; i < r->source_count; i++)
         input_source_destroy(r->sources[i]);
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        input_controller_destroy(r->privates[i].controller); /* the run is over: their channels stay */
     input_controller_destroy(r->controller);
     if (r->wake_fd >= 0)
         close(r->wake_fd);

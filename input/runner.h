@@ -7,7 +7,17 @@
  * with the controller's deadline as time-out (animation ticks at ~60 Hz while
  * something moves, the idle deadline otherwise; at least once a second, when
  * every source is dispatched for its own timers). On a VT switch (the seat
- * no longer ours) it suspends every source, and resumes them on return. */
+ * no longer ours) it suspends every source, and resumes them on return.
+ *
+ * PRIVATE VIEWS. An INPUT_PRIVATE_VIEW event (a remote viewer asking for a
+ * camera of its own: remote/) gives its device a controller of its own
+ * (controller.h, PRIVATE VIEW; up to INPUT_MAX_VIEWERS at once) that steers
+ * channel `code`: the runner emits that channel's camera (the wall's camera
+ * as it is then) and then switches the channel on. From then on the
+ * device's events go to that controller alone (the wall's never sees them),
+ * until the device is removed: its removal ends the view and switches the
+ * channel off. The source releases what the device held in the wall's
+ * controller before it asks (remote_viewer_input_release). */
 #ifndef TESSERA_INPUT_RUNNER_H
 #define TESSERA_INPUT_RUNNER_H
 

@@ -173,7 +173,7 @@ static void queue(input_sink *s, const input_txn *t)
     }
     switch (t->kind) {
     case TXN_CAMERA:
-        if (t->args.camera.channel != TXN_ALL_CHANNELS) { /* one channel's (a replayed record) */
+        if (t->args.camera.channel != TXN_ALL_CHANNELS) { /* one channel's (a private view's, or replayed) */
             count_refused(s, pipeline_submit(s->p, t));
             break;
         }
@@ -201,10 +201,19 @@ static void queue(input_sink *s, const input_txn *t)
     }
 }
 
+/* A record that concerns only a private channel (a remote viewer's own view):
+ * not what the wall showed, so not recorded. */
+static bool names_private_channel(const input_sink *s, const input_txn *t)
+{
+    if (t->kind == TXN_CAMERA)
+        return t->args.camera.channel != TXN_ALL_CHANNELS && pipeline_channel_private(s->p, t->args.camera.channel);
+    return t->kind == TXN_CHANNEL_ACTIVE && pipeline_channel_private(s->p, t->args.channel.channel);
+}
+
 void input_sink_emit(input_sink *s, const input_txn *t)
 {
     atomic_fetch_add(&s->emitted, 1);
-    if (s->record) {
+    if (s->record && !names_private_channel(s, t)) {
         pthread_mutex_lock(&s->record_lock);
         if (s->record && !input_record_write(s->record, clock_monotonic_s() - s->t0_s, t)) {
             log_error("--record-input %s: write failed; recording stopped", s->cfg.record_file);

@@ -20,6 +20,11 @@
  * the tour left it. input_sink_current_camera tells the input thread which
  * camera the wall shows, for the hand-over.
  *
+ * RECORDING. Every record emitted goes to the record file but those that
+ * name a private channel (engine/frame_state.h: a remote viewer's own view's
+ * camera and its switching on and off): a recording holds what the wall
+ * showed, and plays back without a remote view.
+ *
  * Threading: input_sink_emit from one thread at a time besides the pipeline
  * (the input thread, or the replay thread); `lock` guards the mailbox and
  * the shown camera and is never held across anything that blocks; the

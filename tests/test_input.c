@@ -18,6 +18,7 @@
 #include "engine/accel.h"
 #include "engine/camera.h"
 #include "engine/camera_path.h"
+#include "engine/clock.h"
 #include "engine/pipeline.h"
 #include "engine/scene.h"
 #include "input/controller.h"
@@ -26,6 +27,7 @@
 #include "input/runner.h"
 #include "input/sink.h"
 #include "input/source.h"
+#include "remote/source.h"
 #include "support.h"
 #include "wall/display_backend.h"
 #include "wall/wall_config.h"
@@ -1323,3 +1325,166 @@ Test(input, runner_polls_every_source_through_the_interface)
     live_free(&l);
 }
 
+
+/* ---- private views: a remote viewer's device steers a channel of its own ---------------- */
+
+typedef struct view_watch {
+    pthread_mutex_t lock;
+    uint64_t serial[2];
+    bool active1;
+    camera_desc cam[2];
+    uint64_t frames;
+} view_watch;
+
+static void watch_views(pipeline *p, void *ctx, const frame_info *fi)
+{
+    (void)fi;
+    view_watch *w = ctx;
+    pthread_mutex_lock(&w->lock);
+    for (int c = 0; c < 2; c++) {
+        w->serial[c] = pipeline_camera_serial(p, c);
+        w->cam[c] = pipeline_camera(p, c);
+    }
+    w->active1 = pipeline_channel_active(p, 1);
+    w->frames++;
+    pthread_mutex_unlock(&w->lock);
+}
+
+static view_watch watched(view_watch *w)
+{
+    pthread_mutex_lock(&w->lock);
+    view_watch copy = *w;
+    pthread_mutex_unlock(&w->lock);
+    return copy;
+}
+
+/* Wait (for frames, not for a time: the cap only keeps a broken runner from
+ * hanging the suite) until pred holds for the watched state. */
+static bool wait_views(view_watch *w, bool (*pred)(const view_watch *s, const void *arg), const void *arg)
+{
+    for (int i = 0; i < 6000; i++) {
+        view_watch s = watched(w);
+        if (pred(&s, arg))
+            return true;
+        sleep_ms(5);
+    }
+    return false;
+}
+
+static bool private_steered(const view_watch *s, const void *arg)
+{
+    (void)arg;
+    return s->active1 && s->serial[1] >= 3; /* the start (the wall's camera) and two drag steps */
+}
+static bool wall_moved(const view_watch *s, const void *arg)
+{
+    return s->serial[0] > *(const uint64_t *)arg;
+}
+static bool private_off(const view_watch *s, const void *arg)
+{
+    (void)arg;
+    return !s->active1;
+}
+
+static void push_all(remote_source *src, const input_event *events, int n)
+{
+    cr_assert(remote_source_push(src, events, n));
+}
+
+Test(input, a_private_view_steers_its_own_channel_and_the_wall_never_sees_it, .timeout = 120)
+{
+    char dir[256], file[300];
+    support_make_tmp_dir(dir, sizeof dir, "input-private");
+    snprintf(file, sizeof file, "%s/rec.txt", dir);
+    live l = live_make(file, 0);
+    tess_error err = {{0}};
+    camera_desc home = home_camera(3.0);
+    image_display *d = display_create("null", NULL, false, &err);
+    cr_assert(d, "%s", err.msg);
+    cr_assert_eq(pipeline_add_channel(l.p, &home, 32, 18, d, &err), 1, "%s", err.msg);
+    cr_assert(pipeline_set_channel_private(l.p, 1, &err), "%s", err.msg);
+    cr_assert(pipeline_set_channel_active(l.p, 1, false));
+    view_watch w = {.lock = PTHREAD_MUTEX_INITIALIZER};
+    cr_assert(pipeline_add_serial_animation(l.p, "watch views", watch_views, &w));
+    remote_source *src = remote_source_create(&err);
+    cr_assert(src, "%s", err.msg);
+    input_source *sources[1] = {remote_source_input(src)};
+    input_controller_config cc;
+    input_controller_config_default(&cc);
+    cc.plane_aspect = 32.f / 18.f;
+    cc.home = home;
+    cc.scene_size = 8.0;
+    input_runner *r = input_runner_start(sources, 1, &cc, drive_pick, NULL, NULL, l.sink, NULL, &err);
+    cr_assert(r, "%s", err.msg);
+    run_args ra = {.p = l.p};
+    pthread_t th;
+    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+
+    const int viewer = 1000, wall_mouse = 7;
+    uint64_t t = clock_monotonic_us();
+    input_event start[] = {{.kind = INPUT_DEVICE_ADDED, .device = viewer, .time_us = t},
+                           {.kind = INPUT_PRIVATE_VIEW, .device = viewer, .code = 1, .time_us = t}};
+    push_all(src, start, 2);
+    input_event drag[] = {
+        {.kind = INPUT_POINTER_ABS, .device = viewer, .x = 0.0, .y = 0.0, .time_us = t},
+        {.kind = INPUT_BUTTON, .device = viewer, .code = BTN_LEFT, .pressed = true, .time_us = t},
+        {.kind = INPUT_FRAME, .device = viewer, .time_us = t},
+        {.kind = INPUT_POINTER_ABS, .device = viewer, .x = 0.2, .y = 0.1, .time_us = t + 10000},
+        {.kind = INPUT_FRAME, .device = viewer, .time_us = t + 10000},
+        {.kind = INPUT_POINTER_ABS, .device = viewer, .x = 0.4, .y = 0.1, .time_us = t + 20000},
+        {.kind = INPUT_FRAME, .device = viewer, .time_us = t + 20000},
+        {.kind = INPUT_BUTTON, .device = viewer, .code = BTN_LEFT, .pressed = false, .time_us = t + 30000},
+        {.kind = INPUT_FRAME, .device = viewer, .time_us = t + 30000},
+        /* its pointer and a hide at the cursor: the shared view's business, not a private view's */
+        {.kind = INPUT_VIEWER_POINTER, .device = viewer, .slot = 0, .pressed = true, .x = 0.1, .y = 0.1,
+         .time_us = t + 40000},
+        {.kind = INPUT_KEY, .device = viewer, .code = KEY_H, .pressed = true, .time_us = t + 40000},
+        {.kind = INPUT_FRAME, .device = viewer, .time_us = t + 40000},
+        {.kind = INPUT_KEY, .device = viewer, .code = KEY_H, .pressed = false, .time_us = t + 50000},
+        {.kind = INPUT_FRAME, .device = viewer, .time_us = t + 50000},
+    };
+    push_all(src, drag, (int)(sizeof drag / sizeof drag[0]));
+    cr_assert(wait_views(&w, private_steered, NULL), "the private view's channel never took the drag");
+    view_watch s = watched(&w);
+    cr_assert_eq(s.serial[0], 0, "the wall's camera was not touched by the private view");
+    cr_assert(memcmp(&s.cam[0], &home, sizeof home) == 0);
+    cr_assert(memcmp(&s.cam[1], &home, sizeof home) != 0, "the private camera moved");
+    camera_desc private_cam = s.cam[1];
+    uint64_t private_serial = s.serial[1];
+    /* the wall's mouse dollies the wall: the private channel keeps its camera */
+    input_event wheel[] = {{.kind = INPUT_POINTER_ABS, .device = wall_mouse, .x = 0.0, .y = 0.0, .time_us = t + 60000},
+                           {.kind = INPUT_SCROLL, .device = wall_mouse, .dy = 1.0, .time_us = t + 60000},
+                           {.kind = INPUT_FRAME, .device = wall_mouse, .time_us = t + 60000}};
+    push_all(src, wheel, 3);
+    uint64_t zero = 0;
+    cr_assert(wait_views(&w, wall_moved, &zero), "the wall's wheel never moved the wall");
+    s = watched(&w);
+    cr_assert(memcmp(&s.cam[1], &private_cam, sizeof private_cam) == 0 && s.serial[1] == private_serial,
+              "the wall's camera reached the private channel");
+    /* the viewer goes: its view ends and the channel goes off */
+    input_event gone = {.kind = INPUT_DEVICE_REMOVED, .device = viewer, .time_us = t + 70000};
+    push_all(src, &gone, 1);
+    cr_assert(wait_views(&w, private_off, NULL), "the private channel stayed on after its viewer left");
+    pipeline_stop(l.p);
+    pthread_join(th, NULL);
+    cr_assert(ra.ok, "%s", ra.err.msg);
+    input_runner_stop(r);
+    cr_assert_eq(pipeline_hidden(l.p, 0) || pipeline_hidden(l.p, 1), false, "a private view hid a part");
+    live_free(&l);
+    /* the recording holds the wall's cameras only: it replays without the private channel */
+    input_record rec;
+    cr_assert(input_record_load(file, &rec, &err), "%s", err.msg);
+    int wall_cameras = 0;
+    for (size_t i = 0; i < rec.count; i++) {
+        const input_txn *x = &rec.entries[i].txn;
+        cr_assert(x->kind != TXN_CHANNEL_ACTIVE && x->kind != TXN_POINTER && x->kind != TXN_HIDE,
+                  "entry %zu: a %s record of the private view was recorded", i, txn_kind_name(x->kind));
+        if (x->kind == TXN_CAMERA) {
+            cr_assert_eq(x->args.camera.channel, TXN_ALL_CHANNELS, "entry %zu: a private camera was recorded", i);
+            wall_cameras++;
+        }
+    }
+    cr_assert_geq(wall_cameras, 1, "the wall's wheel is in the recording");
+    input_record_free(&rec);
+    support_remove_tmp_dir(dir);
+}
