@@ -19,6 +19,7 @@ typedef struct frame8 {
     size_t capacity_px;
     int width_px, height_px;
     uint64_t frame, camera_serial;
+    uint64_t shown_us; /* when the display was shown it (clock_monotonic_us) */
 } frame8;
 
 /* A channel: the display thread fills `back`, swaps it with `mailbox` under
@@ -53,6 +54,7 @@ struct remote_encoder {
     channel channels[REMOTE_CHANNELS_MAX];
     remote_encoder_stats stats; /* lock (medians computed when asked) */
     times show_times, encode_times; /* lock */
+    int next_channel; /* encoder thread: where its search for a full mailbox starts (round robin) */
     pthread_t thread;
     bool started;
 };
@@ -103,6 +105,7 @@ static bool display_show(image_display *d, const frame_image *img, tess_error *e
     remote_encoder *e = rd->e;
     channel *c = &e->channels[rd->index];
     double t0 = clock_monotonic_s();
+    c->back.shown_us = clock_monotonic_us();
     if (!frame8_fit(&c->back, img->width_px, img->height_px))
         return tess_error_set(err, "remote view: out of memory for a %dx%d frame", img->width_px, img->height_px);
     for (int y = 0; y < img->height_px; y++)
@@ -174,7 +177,8 @@ static void encode_one(remote_encoder *e, int i)
                                                   .camera_serial = c->work.camera_serial,
                                                   .width_px = c->work.width_px,
                                                   .height_px = c->work.height_px,
-                                                  .jpeg_bytes = bytes};
+                                                  .jpeg_bytes = bytes,
+                                                  .shown_us = c->work.shown_us};
         c->have_published = true;
         e->stats.frames_encoded++;
         e->stats.jpeg_bytes += bytes;
@@ -193,10 +197,12 @@ static void *encoder_main(void *arg)
     thread_name_set("tess-remote-enc");
     pthread_mutex_lock(&e->lock);
     for (;;) {
-        int full = -1;
-        for (int i = 0; i < e->channel_count && full < 0; i++)
+        int full = -1; /* the next full mailbox after the last one encoded: every channel gets its turn */
+        for (int j = 0; j < e->channel_count && full < 0; j++) {
+            int i = (e->next_channel + j) % e->channel_count;
             if (e->channels[i].mailbox_full)
                 full = i;
+        }
         if (e->stop)
             break;
         if (full < 0) {
@@ -208,6 +214,7 @@ static void *encoder_main(void *arg)
         c->work = c->mailbox;
         c->mailbox = swap;
         c->mailbox_full = false;
+        e->next_channel = (full + 1) % e->channel_count;
         pthread_mutex_unlock(&e->lock);
         encode_one(e, full);
         if (e->ready)
@@ -274,15 +281,16 @@ void remote_encoder_destroy(remote_encoder *e)
     free(e);
 }
 
-bool remote_encoder_copy_newest(remote_encoder *e, int index, uint64_t after_frame, uint8_t **out,
-                                size_t *out_capacity, size_t out_offset, remote_encoded_info *info)
+bool remote_encoder_copy_newest(remote_encoder *e, int index, uint64_t after_frame, uint64_t shown_after_us,
+                                uint8_t **out, size_t *out_capacity, size_t out_offset, remote_encoded_info *info)
 {
     if (index < 0 || index >= e->channel_count)
         return false;
     channel *c = &e->channels[index];
     bool copied = false;
     pthread_mutex_lock(&e->lock);
-    if (c->have_published && (after_frame == UINT64_MAX || c->published_info.frame > after_frame)) {
+    if (c->have_published && (after_frame == UINT64_MAX || c->published_info.frame > after_frame) &&
+        c->published_info.shown_us >= shown_after_us) {
         size_t need = out_offset + c->published_info.jpeg_bytes;
         if (need > *out_capacity) {
             uint8_t *grown = realloc(*out, need);

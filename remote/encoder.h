@@ -21,9 +21,11 @@
 
 #include "engine/display.h"
 #include "engine/err.h"
+#include "input/event.h"
 #include "remote/jpeg.h"
 
-#define REMOTE_CHANNELS_MAX 8 /* channels one encoder serves (the follow channel and private ones) */
+#define REMOTE_CHANNELS_MAX (1 + INPUT_MAX_VIEWERS) /* channels one encoder serves: the follow channel and
+                                                      one private channel a viewer at most */
 
 typedef struct remote_encoder remote_encoder;
 
@@ -43,16 +45,18 @@ void remote_encoder_destroy(remote_encoder *e);
 image_display *remote_encoder_display(remote_encoder *e, int index);
 
 /* The newest encoded frame of channel `index` newer than `after_frame`
- * (UINT64_MAX: any): its frame number, camera serial, size and JPEG copied
- * to out + out_offset (grown with realloc as needed: *out, *out_capacity).
- * False when there is none newer. */
+ * (UINT64_MAX: any) and shown to the display at or after `shown_after_us`
+ * (clock_monotonic_us; 0: any): its frame number, camera serial, size and
+ * JPEG copied to out + out_offset (grown with realloc as needed: *out,
+ * *out_capacity). False when there is no such frame. */
 typedef struct remote_encoded_info {
     uint64_t frame, camera_serial;
     int width_px, height_px;
     size_t jpeg_bytes;
+    uint64_t shown_us;
 } remote_encoded_info;
-bool remote_encoder_copy_newest(remote_encoder *e, int index, uint64_t after_frame, uint8_t **out,
-                                size_t *out_capacity, size_t out_offset, remote_encoded_info *info);
+bool remote_encoder_copy_newest(remote_encoder *e, int index, uint64_t after_frame, uint64_t shown_after_us,
+                                uint8_t **out, size_t *out_capacity, size_t out_offset, remote_encoded_info *info);
 
 typedef struct remote_encoder_stats {
     uint64_t frames_shown;    /* frames the displays were shown */

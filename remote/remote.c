@@ -42,9 +42,14 @@ typedef struct viewer {
     int text_count;
     int in_flight;                     /* frames sent, not acknowledged */
     uint64_t last_sent;                /* frame number; UINT64_MAX: none yet */
-    uint64_t first_frame;              /* the channel's newest frame when it connected (UINT64_MAX: none) */
-    uint64_t first_sent;               /* the first frame sent to it (UINT64_MAX: none yet) */
-    uint64_t sent;
+    int view;                          /* the encoder channel it is sent: 0 the follow channel, 1 + k
+                                          private channel k */
+    int private_k;                     /* its private channel, -1: it follows the wall */
+    uint64_t since_us;                 /* frames shown before this (its last switch) are not sent */
+    uint64_t first_frame;              /* its view's newest frame when it came to it (UINT64_MAX: none) */
+    uint64_t first_sent;               /* the first frame of its view sent to it (UINT64_MAX: none yet) */
+    uint64_t sent_here;                /* frames of its view sent to it */
+    uint64_t sent;                     /* frames sent to it */
 } viewer;
 
 /* What lws keeps per connection (zeroed by lws when it starts): which viewer
@@ -62,8 +67,11 @@ struct remote_view {
     remote_source *source;
     bool source_taken, display_taken;
     image_display *display; /* until taken */
+    int private_count;      /* private channels made for (encoder channels 1..private_count) */
+    image_display *private_displays[INPUT_MAX_VIEWERS]; /* until taken */
     struct pipeline *p;
-    int channel, width_px, height_px;
+    remote_channels channels;
+    int width_px, height_px;
     camera_window area;
     pthread_mutex_t context_lock; /* guards `context` against the encoder thread's wake-ups while it goes */
     struct lws_context *context;  /* context_lock for the encoder thread; the server thread's while it runs */
@@ -76,6 +84,8 @@ struct remote_view {
                                           with what the wall showed) */
     viewer viewers[INPUT_MAX_VIEWERS]; /* server thread */
     int viewer_count;                  /* server thread */
+    int following;                     /* server thread: viewers following the wall */
+    bool private_lent[INPUT_MAX_VIEWERS]; /* server thread: private channel k is some viewer's */
     uint8_t *send_buf;                 /* server thread: LWS_PRE + header + JPEG */
     size_t send_capacity;
     remote_stats stats;                /* server thread; read after stop (or racily, for a glance) */
@@ -89,6 +99,7 @@ void remote_config_default(remote_config *c)
     c->port = -1;
     snprintf(c->bind, sizeof c->bind, "127.0.0.1");
     c->max_viewers = REMOTE_DEFAULT_VIEWERS;
+    c->private_views = -1;
     c->width_px = REMOTE_DEFAULT_WIDTH;
     c->height_px = REMOTE_DEFAULT_HEIGHT;
     c->quality = REMOTE_DEFAULT_QUALITY;
@@ -118,6 +129,8 @@ bool remote_config_validate(const remote_config *c, tess_error *err)
     }
     if (c->max_viewers < 1 || c->max_viewers > INPUT_MAX_VIEWERS)
         return tess_error_set(err, "remote.max_viewers: %d (1..%d)", c->max_viewers, INPUT_MAX_VIEWERS);
+    if (c->private_views < -1 || c->private_views > c->max_viewers)
+        return tess_error_set(err, "remote.private_views: %d (0..max_viewers = %d)", c->private_views, c->max_viewers);
     if (c->width_px < 16 || c->width_px > 4096 || c->height_px < 16 || c->height_px > 4096)
         return tess_error_set(err, "remote.width/height: %dx%d (16..4096 each)", c->width_px, c->height_px);
     if (c->quality < REMOTE_JPEG_QUALITY_MIN || c->quality > REMOTE_JPEG_QUALITY_MAX)
@@ -161,11 +174,30 @@ static void push_events(remote_view *v, const input_event *events, int count)
         v->stats.input_overflow++;
 }
 
-/* The follow channel on while anybody watches, off when nobody does. */
-static void follow_channel_needed(remote_view *v, bool needed)
+/* The follow channel on while anybody follows the wall, off when nobody does. */
+static void following_changed(remote_view *v, int delta)
 {
-    if (!pipeline_queue_channel_active(v->p, v->channel, needed))
+    int before = v->following;
+    v->following += delta;
+    if ((before == 0) == (v->following == 0) || v->stopping) /* stopping: the pipeline has stopped */
+        return;
+    bool needed = v->following > 0;
+    if (!pipeline_queue_channel_active(v->p, v->channels.follow, needed))
         log_warn("remote view: switching the view's channel %s was refused", needed ? "on" : "off");
+}
+
+/* The viewer starts watching encoder channel `view` now: nothing shown before goes to it. */
+static void viewer_watch(remote_view *v, viewer *vw, int view)
+{
+    remote_encoded_info info;
+    vw->view = view;
+    vw->since_us = clock_monotonic_us();
+    vw->last_sent = vw->first_sent = UINT64_MAX;
+    vw->sent_here = 0;
+    vw->first_frame = remote_encoder_copy_newest(v->encoder, view, UINT64_MAX, 0, &v->send_buf, &v->send_capacity,
+                                                 LWS_PRE, &info)
+                          ? info.frame
+                          : UINT64_MAX;
 }
 
 /* ---- viewers ------------------------------------------------------------------- */
@@ -184,26 +216,23 @@ static int viewer_attach(remote_view *v, struct lws *wsi, session *ss)
     memset(vw, 0, sizeof *vw);
     vw->used = true;
     vw->wsi = wsi;
-    vw->last_sent = vw->first_sent = UINT64_MAX;
+    vw->private_k = -1;
     uint64_t now = clock_monotonic_us();
     remote_viewer_input_init(&vw->input, slot);
     remote_rate_init(&vw->rate, now);
-    remote_encoded_info info;
-    vw->first_frame = remote_encoder_copy_newest(v->encoder, 0, UINT64_MAX, &v->send_buf, &v->send_capacity, LWS_PRE,
-                                                 &info)
-                          ? info.frame
-                          : UINT64_MAX;
+    viewer_watch(v, vw, 0);
     ss->slot_plus_1 = slot + 1;
-    if (v->viewer_count++ == 0)
-        follow_channel_needed(v, true);
+    v->viewer_count++;
+    following_changed(v, +1);
     v->stats.viewers_accepted++;
     input_event added = {.kind = INPUT_DEVICE_ADDED, .time_us = now, .device = vw->input.device};
     push_events(v, &added, 1);
     char colour[8], hello[TEXT_MAX];
     overlay_pointer_colour_hex(slot, colour);
     snprintf(hello, sizeof hello,
-             "{\"type\":\"hello\",\"viewer\":%d,\"colour\":\"%s\",\"width\":%d,\"height\":%d,\"policy\":\"%s\"}", slot,
-             colour, v->width_px, v->height_px, POLICY_TEXT);
+             "{\"type\":\"hello\",\"viewer\":%d,\"colour\":\"%s\",\"width\":%d,\"height\":%d,\"private_views\":%d,"
+             "\"policy\":\"%s\"}",
+             slot, colour, v->width_px, v->height_px, v->channels.private_count, POLICY_TEXT);
     queue_text(vw, hello);
     log_info("remote view: viewer %d connected", slot);
     return 0;
@@ -216,12 +245,12 @@ static void count_skipped(remote_view *v, const viewer *vw)
     /* the first frame it could have had: the one after the newest when it came, else (the
      * channel was off until it came) the first one it was sent */
     uint64_t from = vw->first_frame != UINT64_MAX ? vw->first_frame + 1 : vw->first_sent;
-    if (from == UINT64_MAX ||
-        !remote_encoder_copy_newest(v->encoder, 0, UINT64_MAX, &v->send_buf, &v->send_capacity, LWS_PRE, &info))
+    if (from == UINT64_MAX || !remote_encoder_copy_newest(v->encoder, vw->view, UINT64_MAX, 0, &v->send_buf,
+                                                          &v->send_capacity, LWS_PRE, &info))
         return;
     uint64_t available = info.frame >= from ? info.frame - from + 1 : 0;
-    if (available > vw->sent)
-        v->stats.frames_skipped += available - vw->sent;
+    if (available > vw->sent_here)
+        v->stats.frames_skipped += available - vw->sent_here;
 }
 
 static void viewer_detach(remote_view *v, session *ss)
@@ -236,11 +265,64 @@ static void viewer_detach(remote_view *v, session *ss)
         push_events(v, released, n);
     count_skipped(v, vw);
     log_info("remote view: viewer %d left (%llu frames sent)", slot, (unsigned long long)vw->sent);
+    if (vw->private_k >= 0) /* its removal (above) ended the view in the input runner */
+        v->private_lent[vw->private_k] = false;
+    else
+        following_changed(v, -1);
     vw->used = false;
     vw->wsi = NULL;
     ss->slot_plus_1 = 0;
-    if (--v->viewer_count == 0 && !v->stopping) /* stopping: the pipeline has stopped */
-        follow_channel_needed(v, false);
+    v->viewer_count--;
+}
+
+/* {"t":"view"}: a camera of its own (a free private channel) or the wall's again. */
+static void viewer_switch_view(remote_view *v, viewer *vw, bool want_private)
+{
+    char text[TEXT_MAX];
+    if (want_private == (vw->private_k >= 0))
+        goto tell;
+    int k = -1;
+    for (int i = 0; i < v->channels.private_count && k < 0 && want_private; i++)
+        if (!v->private_lent[i])
+            k = i;
+    if (want_private && k < 0) {
+        v->stats.private_refused++;
+        snprintf(text, sizeof text,
+                 "{\"type\":\"error\",\"text\":\"no private view is free (%d, all in use; remote.private_views): "
+                 "this view follows the wall\"}",
+                 v->channels.private_count);
+        queue_text(vw, text);
+        goto tell;
+    }
+    /* what it holds is let go where it was steering (the wall's controller, or its private
+     * one, whose removal ends the view), then it comes back as a device of its new view */
+    uint64_t now = clock_monotonic_us();
+    input_event events[REMOTE_EVENTS_MAX + 2];
+    int n = remote_viewer_input_release(&vw->input, now, events);
+    events[n++] = (input_event){.kind = INPUT_DEVICE_ADDED, .time_us = now, .device = vw->input.device};
+    if (want_private)
+        events[n++] = (input_event){.kind = INPUT_PRIVATE_VIEW, .time_us = now, .device = vw->input.device,
+                                    .code = v->channels.private_first + k};
+    push_events(v, events, n);
+    count_skipped(v, vw);
+    if (want_private) {
+        v->private_lent[k] = true;
+        vw->private_k = k;
+        v->stats.private_views++;
+        following_changed(v, -1);
+        viewer_watch(v, vw, 1 + k);
+        log_info("remote view: viewer %d has a private view (channel %d)", vw->input.slot,
+                 v->channels.private_first + k);
+    } else {
+        v->private_lent[vw->private_k] = false;
+        vw->private_k = -1;
+        following_changed(v, +1);
+        viewer_watch(v, vw, 0);
+        log_info("remote view: viewer %d follows the wall again", vw->input.slot);
+    }
+tell:
+    snprintf(text, sizeof text, "{\"type\":\"view\",\"private\":%s}", vw->private_k >= 0 ? "true" : "false");
+    queue_text(vw, text);
 }
 
 static void viewer_message(remote_view *v, viewer *vw)
@@ -267,12 +349,7 @@ parsed:
         return;
     }
     if (m.kind == REMOTE_MSG_VIEW) {
-        if (m.private_view) {
-            v->stats.private_refused++;
-            queue_text(vw, "{\"type\":\"error\",\"text\":\"private views are not available yet: this view follows "
-                           "the wall\"}");
-        }
-        queue_text(vw, "{\"type\":\"view\",\"private\":false}");
+        viewer_switch_view(v, vw, m.private_view);
         return;
     }
     input_event events[REMOTE_EVENTS_MAX];
@@ -320,8 +397,8 @@ static int viewer_writeable(remote_view *v, viewer *vw)
     if (vw->in_flight >= REMOTE_IN_FLIGHT_MAX)
         return 0; /* its next ack asks again */
     remote_encoded_info info;
-    if (!remote_encoder_copy_newest(v->encoder, 0, vw->last_sent, &v->send_buf, &v->send_capacity,
-                                    LWS_PRE + REMOTE_FRAME_HEADER_BYTES, &info))
+    if (!remote_encoder_copy_newest(v->encoder, vw->view, vw->last_sent, vw->since_us, &v->send_buf,
+                                    &v->send_capacity, LWS_PRE + REMOTE_FRAME_HEADER_BYTES, &info))
         return 0; /* the encoder's next frame asks again */
     remote_frame_header(v->send_buf + LWS_PRE, info.frame, info.camera_serial, info.width_px, info.height_px,
                         (uint32_t)info.jpeg_bytes);
@@ -333,6 +410,7 @@ static int viewer_writeable(remote_view *v, viewer *vw)
         vw->first_sent = info.frame;
     vw->in_flight++;
     vw->sent++;
+    vw->sent_here++;
     v->stats.frames_sent++;
     v->stats.bytes_sent += n;
     return 0;
@@ -514,8 +592,13 @@ remote_view *remote_view_create(const remote_config *c, tess_error *err)
         for (int i = 0; i < 16; i++)
             snprintf(v->token + 2 * i, 3, "%02x", random[i]);
     }
-    if (!(v->encoder = remote_encoder_create(1, c->quality, c->subsampling, encoded, v, err)) ||
-        !(v->source = remote_source_create(err)) || !(v->display = remote_encoder_display(v->encoder, 0))) {
+    v->private_count = c->private_views < 0 ? c->max_viewers : c->private_views;
+    bool ok = (v->encoder = remote_encoder_create(1 + v->private_count, c->quality, c->subsampling, encoded, v,
+                                                  err)) &&
+              (v->source = remote_source_create(err)) && (v->display = remote_encoder_display(v->encoder, 0));
+    for (int k = 0; k < v->private_count && ok; k++)
+        ok = (v->private_displays[k] = remote_encoder_display(v->encoder, 1 + k)) != NULL;
+    if (!ok) {
         if (!err->msg[0])
             tess_error_set(err, "remote view: out of memory");
         remote_view_destroy(v);
@@ -528,6 +611,17 @@ image_display *remote_view_display(remote_view *v)
 {
     image_display *d = v->display_taken ? NULL : v->display;
     v->display_taken = true;
+    return d;
+}
+
+int remote_view_private_count(const remote_view *v) { return v->private_count; }
+
+image_display *remote_view_private_display(remote_view *v, int k)
+{
+    if (k < 0 || k >= v->private_count)
+        return NULL;
+    image_display *d = v->private_displays[k];
+    v->private_displays[k] = NULL;
     return d;
 }
 
@@ -557,16 +651,22 @@ static void url_host(const char *bind, char *out, size_t out_bytes)
     freeifaddrs(list);
 }
 
-bool remote_view_start(remote_view *v, struct pipeline *p, int channel, int width_px, int height_px,
+bool remote_view_start(remote_view *v, struct pipeline *p, const remote_channels *ch, int width_px, int height_px,
                        camera_window area, tess_error *err)
 {
     v->p = p;
-    v->channel = channel;
+    v->channels = *ch;
+    if (v->channels.private_count > v->private_count)
+        v->channels.private_count = v->private_count;
     v->width_px = width_px;
     v->height_px = height_px;
     v->area = area;
-    if (!pipeline_set_channel_active(p, channel, false))
-        return tess_error_set(err, "remote view: its channel %d could not be switched off before the run", channel);
+    for (int i = -1; i < v->channels.private_count; i++) {
+        int channel = i < 0 ? ch->follow : ch->private_first + i;
+        if (!pipeline_set_channel_active(p, channel, false))
+            return tess_error_set(err, "remote view: its channel %d could not be switched off before the run",
+                                  channel);
+    }
     lws_set_log_level(LLL_ERR | LLL_WARN, lws_log);
     struct lws_context_creation_info info;
     memset(&info, 0, sizeof info);
@@ -631,6 +731,8 @@ void remote_view_destroy(remote_view *v)
     remote_view_stop(v);
     if (!v->display_taken)
         image_display_destroy(v->display);
+    for (int k = 0; k < v->private_count; k++)
+        image_display_destroy(v->private_displays[k]);
     remote_encoder_destroy(v->encoder);
     if (!v->source_taken && v->source)
         input_source_destroy(remote_source_input(v->source));
@@ -665,5 +767,8 @@ void remote_view_print_stats(remote_view *v, FILE *out)
             fprintf(out, " (%s %llu)", remote_drop_reason_name((remote_drop_reason)r), (unsigned long long)s.dropped[r]);
     if (s.input_overflow)
         fprintf(out, ", %llu over the input queue", (unsigned long long)s.input_overflow);
+    if (s.private_views || s.private_refused)
+        fprintf(out, "; %llu private views (%llu refused: none free)", (unsigned long long)s.private_views,
+                (unsigned long long)s.private_refused);
     fprintf(out, "\n");
 }

@@ -4,8 +4,21 @@
  * (docs/remote-protocol.md). Its parts:
  *   - one FOLLOW CHANNEL of the pipeline shows the wall's whole plane through
  *     the wall's camera at the view's size; it is rendered only while a
- *     viewer is connected (switched on and off by transactions); its display
- *     is remote_view_display (remote/encoder.h: JPEG off the render path);
+ *     viewer follows the wall (switched on and off by transactions); its
+ *     display is remote_view_display (remote/encoder.h: JPEG off the render
+ *     path);
+ *   - PRIVATE VIEWS: up to private_views PRIVATE CHANNELS of the same size
+ *     (engine/frame_state.h: the wall's camera passes them by, they draw no
+ *     cursor or pointers), each lent to one viewer that asked for a camera
+ *     of its own ({"t":"view","private":true}). The viewer's held input is
+ *     released in the wall's controller, then its device is given a private
+ *     view's controller steering that channel (input/runner.h, PRIVATE
+ *     VIEWS), which starts from the wall's camera and switches the channel
+ *     on; following the wall again (or leaving) removes the device, which
+ *     ends the view and switches the channel off. A private view's scene
+ *     commands (hide, planes, ...) are not carried out: they are the shared
+ *     view's (input/controller.h, PRIVATE VIEW). Frames shown before a
+ *     switch are never sent after it;
  *   - the server sends each viewer the newest encoded frame when its
  *     connection can take it and fewer than REMOTE_IN_FLIGHT_MAX frames are
  *     unacknowledged, so a slow viewer gets fewer frames and never slows the
@@ -53,6 +66,7 @@ typedef struct remote_config {
     char bind[64];                 /* the address to listen on: "127.0.0.1" unless configured */
     char token[REMOTE_TOKEN_BYTES]; /* "": a random one (32 hex digits) */
     int max_viewers;               /* 1..INPUT_MAX_VIEWERS */
+    int private_views;             /* private channels, 0..max_viewers; -1 (default): max_viewers */
     int width_px, height_px;       /* the largest frame; the follow channel fits the plane's aspect in it */
     int quality;                   /* JPEG quality, REMOTE_JPEG_QUALITY_MIN..MAX */
     remote_subsampling subsampling;
@@ -69,15 +83,28 @@ typedef struct remote_view remote_view;
 remote_view *remote_view_create(const remote_config *c, tess_error *err);
 /* The follow channel's display, to add to the pipeline (it owns it). Once. */
 image_display *remote_view_display(remote_view *v);
+/* Private channels the view was made for (private_views resolved). */
+int remote_view_private_count(const remote_view *v);
+/* Private channel k's display (0..remote_view_private_count-1), to add to the
+ * pipeline as a private channel (it owns it). Once each; NULL after. */
+image_display *remote_view_private_display(remote_view *v, int k);
+
+/* The view's channels in the pipeline: the follow channel, and the private
+ * channels first .. first + count - 1 (count: how many were added, maybe
+ * fewer than remote_view_private_count when the pipeline had no room). */
+typedef struct remote_channels {
+    int follow;
+    int private_first, private_count;
+} remote_channels;
 /* The input source, handed to the input runner (which destroys it). Once. */
 input_source *remote_view_take_source(remote_view *v);
 
-/* Start serving: the follow channel is `channel` of p (width_px x
- * height_px; switched off here, before the run: call while no loop runs),
- * viewers' input events carry plane points over `area` (the whole plane).
- * Prints "tessera: remote view: http://HOST:PORT/?token=TOKEN" on stderr.
- * False with err (a port in use names the port). */
-bool remote_view_start(remote_view *v, struct pipeline *p, int channel, int width_px, int height_px,
+/* Start serving over the channels `ch` of p (each width_px x height_px;
+ * switched off here, before the run: call while no loop runs); viewers'
+ * input events carry plane points over `area` (the whole plane). Prints
+ * "tessera: remote view: http://HOST:PORT/?token=TOKEN" on stderr. False
+ * with err (a port in use names the port). */
+bool remote_view_start(remote_view *v, struct pipeline *p, const remote_channels *ch, int width_px, int height_px,
                        camera_window area, tess_error *err);
 
 /* Stop serving (viewers disconnected, the server thread joined).
@@ -97,7 +124,8 @@ typedef struct remote_stats {
     uint64_t messages;         /* accepted */
     uint64_t dropped[REMOTE_DROP_REASONS];
     uint64_t input_overflow;   /* messages whose events did not fit the input queue */
-    uint64_t private_refused;
+    uint64_t private_views;    /* private views started */
+    uint64_t private_refused;  /* asked for when every private channel was lent */
 } remote_stats;
 
 /* The counts so far (exact after remote_view_stop). */

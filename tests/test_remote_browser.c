@@ -537,3 +537,142 @@ Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 1
     cr_assert(strstr(text, "3 dropped (not-json 1) (unknown-type 1) (out-of-range 1)"), "%s", text);
     support_remove_tmp_dir(dir);
 }
+
+/* A 16x9 thumbnail of the page's canvas: the mean green of each cell. */
+#define THUMB_CELLS (16 * 9)
+static void thumbnail(cdp_page *p, int out[THUMB_CELLS])
+{
+    json_object *v;
+    char why[512];
+    cr_assert(cdp_eval(p,
+                       "(() => { const c = document.getElementById('view'), g = c.getContext('2d');"
+                       " const d = g.getImageData(0, 0, c.width, c.height).data, out = [];"
+                       " for (let ty = 0; ty < 9; ty++) for (let tx = 0; tx < 16; tx++) {"
+                       "  let s = 0, n = 0;"
+                       "  for (let y = Math.floor(ty * c.height / 9); y < Math.floor((ty + 1) * c.height / 9); y++)"
+                       "   for (let x = Math.floor(tx * c.width / 16); x < Math.floor((tx + 1) * c.width / 16); x++)"
+                       "    { s += d[4 * (y * c.width + x) + 1]; n++; }"
+                       "  out.push(Math.round(s / n)); }"
+                       " return out.join(','); })()",
+                       &v, why, sizeof why) &&
+                  v,
+              "%s", why);
+    const char *s = json_object_get_string(v);
+    for (int i = 0; i < THUMB_CELLS; i++) {
+        char *end;
+        out[i] = (int)strtol(s, &end, 10);
+        cr_assert(end != s, "thumbnail: %s", json_object_get_string(v));
+        s = *end == ',' ? end + 1 : end;
+    }
+    json_object_put(v);
+}
+
+static int thumbnail_max_difference(const int a[THUMB_CELLS], const int b[THUMB_CELLS])
+{
+    int worst = 0;
+    for (int i = 0; i < THUMB_CELLS; i++)
+        worst = abs(a[i] - b[i]) > worst ? abs(a[i] - b[i]) : worst;
+    return worst;
+}
+
+/* Page A asks for a private view and orbits it with a one-finger touch
+ * drag: A's picture turns, the wall and page B (following) do not move, and
+ * nothing of it is recorded; back to following, A shows the wall's picture
+ * again. */
+Test(remote_browser, a_private_view_turns_alone_and_following_again_shows_the_wall, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-private");
+    char cfg[512], rec[512], out[512];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    snprintf(rec, sizeof rec, "%s/rec.txt", dir);
+    snprintf(out, sizeof out, "%s/wall_####.png", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 480, \"height\": 270, \"max_viewers\": 3, \"private_views\": 1}}");
+    const char *args[] = {"--config", cfg, "--display", "dump", "--out", out, "--size", "160x90", "--threads", "2",
+                          "--time", "fixed", "--rate", "30", "--record-input", rec, NULL};
+    cdp_browser *b = browser_or_skip(); /* before the kiosk: a skip leaves nothing running */
+    kiosk k;
+    kiosk_start(&k, dir, args);
+    cdp_page *a = open_page(b, k.url), *c = open_page(b, k.url);
+    wait_js(a, "window.tessera.connected && window.tessera.framesShown >= 2");
+    wait_js(c, "window.tessera.connected && window.tessera.framesShown >= 2");
+    cr_assert_eq(cdp_eval_number(a, "window.tessera.privateViews"), 1.0, "the hello says how many private views");
+    int wall_before[THUMB_CELLS], a_private[THUMB_CELLS], a_turned[THUMB_CELLS], c_after[THUMB_CELLS],
+        a_back[THUMB_CELLS];
+    thumbnail(c, wall_before);
+    double c_serial = cdp_eval_number(c, "window.tessera.cameraSerial");
+
+    /* A: private; its first frames show the wall's camera */
+    cr_assert(cdp_eval_bool(a, "(document.getElementById('private').click(), true)"));
+    wait_js(a, "window.tessera.private && window.tessera.framesSinceView >= 2");
+    thumbnail(a, a_private);
+    cr_assert_leq(thumbnail_max_difference(a_private, wall_before), 2,
+                  "a private view starts from the wall's camera");
+    /* C asks too: the only private view is lent, so C is told and keeps following */
+    cr_assert(cdp_eval_bool(c, "(document.getElementById('private').click(), true)"));
+    wait_js(c, "window.tessera.views >= 1 && !window.tessera.private");
+    wait_js(c, "document.getElementById('note').textContent.includes('no private view is free')");
+
+    /* A orbits with one finger */
+    double a_serial = cdp_eval_number(a, "window.tessera.cameraSerial");
+    double cx, cy, w, h;
+    canvas_box(a, &cx, &cy, &w, &h);
+    double xy[2] = {cx, cy};
+    cr_assert(cdp_touch(a, "touchStart", xy, 1));
+    for (int i = 1; i <= 8; i++) {
+        xy[0] = cx + 0.04 * w * i;
+        xy[1] = cy + 0.01 * h * i;
+        cr_assert(cdp_touch(a, "touchMove", xy, 1));
+        wait_js(a, "true"); /* one round trip: the page has handled the move */
+    }
+    cr_assert(cdp_touch(a, "touchEnd", xy, 0));
+    char cond[256];
+    snprintf(cond, sizeof cond, "window.tessera.cameraSerial > %.0f", a_serial);
+    wait_js(a, cond);
+    double shown = cdp_eval_number(a, "window.tessera.framesShown");
+    snprintf(cond, sizeof cond, "window.tessera.framesShown >= %.0f", shown + 5);
+    wait_js(a, cond);
+    thumbnail(a, a_turned);
+    cr_assert_gt(thumbnail_max_difference(a_turned, a_private), 20, "the touch drag turned A's private view");
+    /* the wall did not move: C's frames go on with the same camera and picture */
+    shown = cdp_eval_number(c, "window.tessera.framesShown");
+    snprintf(cond, sizeof cond, "window.tessera.framesShown >= %.0f", shown + 5);
+    wait_js(c, cond);
+    cr_assert_eq(cdp_eval_number(c, "window.tessera.cameraSerial"), c_serial, "the wall's camera was set");
+    thumbnail(c, c_after);
+    cr_assert_leq(thumbnail_max_difference(c_after, wall_before), 2, "the wall's picture changed");
+
+    /* A follows the wall again: its picture is the wall's */
+    cr_assert(cdp_eval_bool(a, "(document.getElementById('private').click(), true)"));
+    wait_js(a, "!window.tessera.private && window.tessera.framesSinceView >= 2");
+    thumbnail(a, a_back);
+    cr_assert_leq(thumbnail_max_difference(a_back, wall_before), 2, "following again shows the wall's picture");
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    cdp_close(b);
+
+    char text[16384];
+    support_read_text(k.err_path, text, sizeof text);
+    cr_assert(strstr(text, "viewer 0 has a private view") || strstr(text, "viewer 1 has a private view"), "%s", text);
+    cr_assert(strstr(text, "1 private views (1 refused: none free)"), "the counts at exit: %s", text);
+    support_read_text(rec, text, sizeof text);
+    cr_assert_null(strstr(text, "channel-active"), "the private view's channel switches were recorded: %s", text);
+    for (int ch = 1; ch < 8; ch++) {
+        char camera[32];
+        snprintf(camera, sizeof camera, " camera %d ", ch);
+        cr_assert_null(strstr(text, camera), "a private camera was recorded: %s", text);
+    }
+    /* the wall's first and last frames are the same picture */
+    char first[600], last[600];
+    snprintf(first, sizeof first, "%s/wall_0000.png", dir);
+    last_frame(dir, last, sizeof last);
+    tess_error err = {{0}};
+    int fw, fh, lw, lh;
+    uint8_t *f0 = NULL, *f1 = NULL;
+    cr_assert(dump_read_rgb8(first, &fw, &fh, &f0, &err), "%s", err.msg);
+    cr_assert(dump_read_rgb8(last, &lw, &lh, &f1, &err), "%s", err.msg);
+    cr_assert(fw == lw && fh == lh && memcmp(f0, f1, (size_t)fw * (size_t)fh * 3) == 0,
+              "the wall's last frame (%s) is not its first: the private view moved the wall", last);
+    free(f0);
+    free(f1);
+    support_remove_tmp_dir(dir);
+}

@@ -657,7 +657,7 @@ int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_are
         *plane_aspect = active_layout.plane_aspect;
         return n;
     }
-    int channels = cli_remote_channel() >= 0 ? cli_remote_channel() : pipeline_channel_count(p); /* the view's is last */
+    int channels = cli_remote_channel() >= 0 ? cli_remote_channel() : pipeline_channel_count(p); /* the view's are last */
     int n = channels < max ? channels : max;
     for (int i = 0; i < n; i++) {
         snprintf(areas[i].name, sizeof areas[i].name, "channel-%d", i);
@@ -836,7 +836,8 @@ static void set_main_cameras(pipeline *p, bool all_channels, const camera_desc *
 {
     int channels = all_channels ? pipeline_channel_count(p) : 1;
     for (int i = 0; i < channels; i++)
-        pipeline_set_camera(p, i, c);
+        if (!pipeline_channel_private(p, i)) /* a remote viewer's own view */
+            pipeline_set_camera(p, i, c);
     if (cli_remote_channel() >= channels)
         pipeline_set_camera(p, cli_remote_channel(), c);
 }

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "engine/log.h"
 #include "engine/pipeline.h"
 
 /* The view of the running command (one a process). */
@@ -12,9 +13,9 @@ static struct {
     remote_view *view;
     bool started; /* serving */
     bool stopped; /* serving ended and the counts printed */
-    int channel;
+    remote_channels channels; /* follow -1: none */
     int width_px, height_px;
-} active = {NULL, false, false, -1, 0, 0};
+} active = {NULL, false, false, {-1, -1, 0}, 0, 0};
 
 bool cli_remote_option(int argc, char **argv, int *i, remote_config *c, bool *handled)
 {
@@ -73,8 +74,8 @@ static bool opt_text_in(jr_ctx *jc, json_object *obj, const char *key, char *out
 
 bool cli_remote_config_load(jr_ctx *jc, json_object *root, remote_config *c)
 {
-    static const char *const fields[] = {"port",  "bind",    "token",      "max_viewers", "width",
-                                         "height", "quality", "subsampling", NULL};
+    static const char *const fields[] = {"port",   "bind",    "token",       "max_viewers",   "width",
+                                         "height", "quality", "subsampling", "private_views", NULL};
     static const char *const subsamplings[] = {"444", "422", "420", NULL};
     json_object *m;
     if (!jr_get_member(root, "remote", &m))
@@ -87,6 +88,7 @@ bool cli_remote_config_load(jr_ctx *jc, json_object *root, remote_config *c)
               opt_int_in(jc, m, "port", 0, 65535, &c->port) && opt_text_in(jc, m, "bind", c->bind, sizeof c->bind) &&
               opt_text_in(jc, m, "token", c->token, sizeof c->token) &&
               opt_int_in(jc, m, "max_viewers", 1, INPUT_MAX_VIEWERS, &c->max_viewers) &&
+              opt_int_in(jc, m, "private_views", 0, INPUT_MAX_VIEWERS, &c->private_views) &&
               opt_int_in(jc, m, "width", 16, 4096, &c->width_px) && opt_int_in(jc, m, "height", 16, 4096, &c->height_px) &&
               opt_int_in(jc, m, "quality", REMOTE_JPEG_QUALITY_MIN, REMOTE_JPEG_QUALITY_MAX, &c->quality) &&
               jr_opt_choice(jc, m, "subsampling", subsamplings, &sub);
@@ -120,15 +122,35 @@ bool cli_remote_add_channel(struct pipeline *p, const remote_config *c, const ca
         remote_view_destroy(v);
         return false;
     }
+    /* the private channels: the same size and plane, made private; as many as the pipeline has room for */
+    int room = PIPELINE_MAX_CHANNELS - pipeline_channel_count(p), privates = remote_view_private_count(v);
+    if (privates > room) {
+        log_warn("remote view: %d private views, not %d: the pipeline has room for %d channels more "
+                 "(remote.private_views)",
+                 room, privates, room);
+        privates = room;
+    }
+    int first = pipeline_channel_count(p);
+    for (int k = 0; k < privates && channel >= 0; k++) {
+        int added = pipeline_add_channel_window(p, camera, plane_aspect, CAMERA_WINDOW_FULL, w, h,
+                                                remote_view_private_display(v, k), &err);
+        if (added < 0 || !pipeline_set_channel_private(p, added, &err))
+            channel = -1;
+    }
+    if (channel < 0) {
+        cli_error("%s", err.msg);
+        remote_view_destroy(v);
+        return false;
+    }
     active.view = v;
     active.started = active.stopped = false;
-    active.channel = channel;
+    active.channels = (remote_channels){.follow = channel, .private_first = first, .private_count = privates};
     active.width_px = w;
     active.height_px = h;
     return true;
 }
 
-int cli_remote_channel(void) { return active.view ? active.channel : -1; }
+int cli_remote_channel(void) { return active.view ? active.channels.follow : -1; }
 
 input_source *cli_remote_take_source(void) { return active.view ? remote_view_take_source(active.view) : NULL; }
 
@@ -137,7 +159,7 @@ bool cli_remote_start(struct pipeline *p)
     if (!active.view)
         return true;
     tess_error err = {{0}};
-    if (!remote_view_start(active.view, p, active.channel, active.width_px, active.height_px, CAMERA_WINDOW_FULL,
+    if (!remote_view_start(active.view, p, &active.channels, active.width_px, active.height_px, CAMERA_WINDOW_FULL,
                            &err)) {
         cli_error("%s", err.msg);
         return false;
@@ -160,5 +182,5 @@ void cli_remote_release(void)
 {
     remote_view_destroy(active.view);
     active.view = NULL;
-    active.channel = -1;
+    active.channels = (remote_channels){-1, -1, 0};
 }

@@ -24,7 +24,8 @@ void cli_remote_usage(FILE *f);
 bool cli_remote_config_load(jr_ctx *jc, json_object *root, remote_config *c);
 
 /* With c->port >= 0: create the view and add its follow channel to p, the
- * whole plane of `camera` at plane_aspect, sized to fit c's width x height.
+ * whole plane of `camera` at plane_aspect, sized to fit c's width x height,
+ * then its private channels (the same; as many as the pipeline has room for).
  * True (doing nothing) when off. False after printing an error. */
 bool cli_remote_add_channel(struct pipeline *p, const remote_config *c, const camera_desc *camera,
                             float plane_aspect);
