@@ -676,3 +676,47 @@ Test(remote_browser, a_private_view_turns_alone_and_following_again_shows_the_wa
     free(f1);
     support_remove_tmp_dir(dir);
 }
+
+/* A broken "remote" object or option: the run refuses to start, naming the
+ * file, the field and the problem. */
+Test(remote_config, bad_remote_settings_are_named, .timeout = 120)
+{
+    static const struct {
+        const char *config, *expect;
+    } cases[] = {
+        {"{\"remote\": 5}", "field 'remote': expected an object"},
+        {"{\"remote\": {\"port\": 70000}}", "field 'remote.port': must be in [0, 65535], got 70000"},
+        {"{\"remote\": {\"bind\": \"localhost\"}}", "remote.bind: 'localhost' is not an IPv4 address"},
+        {"{\"remote\": {\"token\": \"short\"}}", "remote.token: 5 characters (8..64)"},
+        {"{\"remote\": {\"token\": \"abc$defgh12\"}}", "remote.token: character 4 '$'"},
+        {"{\"remote\": {\"max_viewers\": 9}}", "field 'remote.max_viewers': must be in [1, 8], got 9"},
+        {"{\"remote\": {\"max_viewers\": 2, \"private_views\": 5}}", "remote.private_views: 5 (0..max_viewers = 2)"},
+        {"{\"remote\": {\"width\": 8}}", "field 'remote.width': must be in [16, 4096], got 8"},
+        {"{\"remote\": {\"quality\": 0}}", "field 'remote.quality': must be in [1, 100], got 0"},
+        {"{\"remote\": {\"subsampling\": \"411\"}}", "field 'remote.subsampling': unknown value '411'"},
+        {"{\"remote\": {\"colour\": 1}}", "field 'remote.colour': unknown field"},
+    };
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-config");
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char cfg[512], log[512], cmd[2048], text[4096];
+        snprintf(cfg, sizeof cfg, "%s/cfg%zu.json", dir, i);
+        snprintf(log, sizeof log, "%s/log%zu.txt", dir, i);
+        write_file(cfg, cases[i].config);
+        snprintf(cmd, sizeof cmd, "timeout 60 %s run --config '%s' --display null --frames 1 > '%s' 2>&1",
+                 support_tessera_bin(), cfg, log);
+        int status = support_run(cmd);
+        support_read_text(log, text, sizeof text);
+        cr_expect(status != 0 && status != 124, "case %zu (%s) ran (status %d): %s", i, cases[i].config, status, text);
+        cr_expect(strstr(text, cfg) && strstr(text, cases[i].expect), "case %zu: '%s' does not name '%s' and '%s'",
+                  i, text, cfg, cases[i].expect);
+    }
+    char log[512], cmd[1024], text[4096];
+    snprintf(log, sizeof log, "%s/option.txt", dir);
+    snprintf(cmd, sizeof cmd, "timeout 60 %s run --remote 70000 --display null --frames 1 > '%s' 2>&1",
+             support_tessera_bin(), log);
+    cr_expect_neq(support_run(cmd), 0);
+    support_read_text(log, text, sizeof text);
+    cr_expect(strstr(text, "--remote: expected a whole number from 0 to 65535, got '70000'"), "%s", text);
+    support_remove_tmp_dir(dir);
+}
