@@ -27,7 +27,8 @@
 #define TEXT_MAX 512 /* a server->page text message */
 #define POLICY_TEXT                                                                                               \
     "One person steers the camera at a time: whoever starts a drag, touch or wheel first holds it until the "     \
-    "gesture ends; other gestures meanwhile only move their pointer."
+    "gesture ends; other gestures meanwhile only move their pointer. A private view has a camera of its own "   \
+    "that only its viewer steers."
 
 /* One connected viewer: the server thread's alone. */
 typedef struct viewer {

@@ -247,7 +247,7 @@ Test(service, without_notify_socket_there_is_no_notifier)
 {
     unsetenv("NOTIFY_SOCKET");
     cr_expect_null(service_notifier_create());
-    cr_expect(service_notifier_attach(NULL, NULL));
+    cr_expect(service_notifier_attach(NULL, NULL, -1));
     service_notifier_paused(NULL, "nothing");
     cr_expect_eq(service_notifier_watchdog_s(NULL), 0.0);
     setenv("NOTIFY_SOCKET", "", 1);
@@ -394,7 +394,7 @@ Test(service, a_stuck_frame_loop_stops_the_pings_and_a_pause_feeds_them, .timeou
         cam = camera_frame_bounds(lo, hi, CAMERA_DEFAULT_VIEW_DIR, CAMERA_DEFAULT_FOV_DEG, 48, 27);
     }
     cr_assert(pipeline_add_channel(p, &cam, 48, 27, &s->base, &err) == 0, "%s", err.msg);
-    cr_assert(service_notifier_attach(sn, p));
+    cr_assert(service_notifier_attach(sn, p, -1));
     pthread_t runner;
     cr_assert(pthread_create(&runner, NULL, run_pipeline, p) == 0);
 

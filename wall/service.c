@@ -32,6 +32,7 @@ struct service_notifier {
     double last_ping_s;      /* when WATCHDOG=1 was last posted; -1: never */
     double last_status_s;    /* when STATUS= was last posted; -1: never */
     uint64_t status_frame;   /* the frame of the last running STATUS (frames/s since then) */
+    int output_channels;     /* channels 0 .. output_channels-1 are the outputs (attach) */
     int outputs_up, outputs; /* channels switched on / all, as the last STATUS said */
     bool paused;             /* the last STATUS said paused */
     /* the sender thread: sd_notify is a socket, a sendmsg and a close (tens of us, more
@@ -175,7 +176,7 @@ static void on_frame(pipeline *p, void *ctx, const frame_info *fi)
 {
     service_notifier *sn = ctx;
     double now = clock_monotonic_s();
-    int outputs = pipeline_channel_count(p), up = 0;
+    int outputs = sn->output_channels, up = 0;
     for (int i = 0; i < outputs; i++)
         up += pipeline_channel_active(p, i);
     char status[SERVICE_STATUS_BYTES];
@@ -207,10 +208,12 @@ static void on_termination(pipeline *p, void *ctx)
     post(sn, false, false, true, status);
 }
 
-bool service_notifier_attach(service_notifier *sn, pipeline *p)
+bool service_notifier_attach(service_notifier *sn, pipeline *p, int outputs)
 {
     if (!sn)
         return true;
+    int channels = pipeline_channel_count(p);
+    sn->output_channels = outputs < 0 || outputs > channels ? channels : outputs;
     return pipeline_add_serial_animation(p, "service notifier", on_frame, sn) &&
            pipeline_add_termination(p, "service notifier", on_termination, sn);
 }

@@ -61,8 +61,11 @@ void service_notifier_destroy(service_notifier *sn); /* NULL is fine */
 double service_notifier_watchdog_s(const service_notifier *sn);
 
 /* Report on the pipeline's frames (a serial animation and a termination
- * callback). Before pipeline_run. sn NULL: does nothing, returns true. */
-bool service_notifier_attach(service_notifier *sn, struct pipeline *p);
+ * callback); its channels 0 .. outputs-1 are the outputs STATUS counts (the
+ * rest, e.g. a remote view's, are not; -1: every channel). After the
+ * channels are added, before pipeline_run. sn NULL: does nothing, returns
+ * true. */
+bool service_notifier_attach(service_notifier *sn, struct pipeline *p, int outputs);
 
 /* The frame loop is paused for a healthy reason and waits (why, e.g.
  * "switched away from our VT"): call at least every interval / 4 while it

@@ -203,7 +203,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     }
     if (s->record_file[0])
         cli_recorder_start(p, &recorder, s->record_file);
-    if (!service_notifier_attach(service, p)) {
+    if (!service_notifier_attach(service, p, cli_remote_channel())) { /* -1: no remote view, every channel */
         cli_error("service notifier: too many pipeline callbacks");
         goto done;
     }
