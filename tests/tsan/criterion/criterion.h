@@ -85,6 +85,7 @@ static inline void shim_check(bool ok, const char *file, int line, const char *e
 #define cr_expect_geq(a, b, ...) cr_assert_geq(a, b, __VA_ARGS__)
 #define cr_assert_gt(a, b, ...) shim_check((a) > (b), __FILE__, __LINE__, #a " > " #b, " " __VA_ARGS__)
 #define cr_assert_leq(a, b, ...) shim_check((a) <= (b), __FILE__, __LINE__, #a " <= " #b, " " __VA_ARGS__)
+#define cr_assert_lt(a, b, ...) shim_check((a) < (b), __FILE__, __LINE__, #a " < " #b, " " __VA_ARGS__)
 #define cr_assert_not_null(x, ...) shim_check((x) != NULL, __FILE__, __LINE__, #x " != NULL", " " __VA_ARGS__)
 #define cr_expect_null(x, ...) cr_assert_null(x, __VA_ARGS__)
 #define cr_assert_str_eq(a, b, ...) cr_expect_str_eq(a, b, __VA_ARGS__)
