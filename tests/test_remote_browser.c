@@ -14,6 +14,8 @@
 #include <criterion/criterion.h>
 #include <dirent.h>
 #include <fcntl.h>
+#include <ifaddrs.h>
+#include <net/if.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <stdio.h>
@@ -35,6 +37,7 @@
 typedef struct kiosk {
     pid_t pid;
     char err_path[512];
+    char host[64];
     int port;
     char token[80];
     char url[256];
@@ -83,10 +86,10 @@ static void kiosk_start(kiosk *k, const char *dir, const char *const *args)
         support_read_text(k->err_path, text, sizeof text);
         const char *u = strstr(text, "tessera: remote view: http://");
         if (u && strchr(u, '\n')) {
-            cr_assert(sscanf(u, "tessera: remote view: http://127.0.0.1:%d/?token=%79[0-9a-zA-Z_-]", &k->port,
-                             k->token) == 2,
+            cr_assert(sscanf(u, "tessera: remote view: http://%63[0-9.]:%d/?token=%79[0-9a-zA-Z_-]", k->host, &k->port,
+                             k->token) == 3,
                       "the URL line: %s", u);
-            snprintf(k->url, sizeof k->url, "http://127.0.0.1:%d/?token=%s", k->port, k->token);
+            snprintf(k->url, sizeof k->url, "http://%s:%d/?token=%s", k->host, k->port, k->token);
             return;
         }
         int status;
@@ -718,5 +721,77 @@ Test(remote_config, bad_remote_settings_are_named, .timeout = 120)
     cr_expect_neq(support_run(cmd), 0);
     support_read_text(log, text, sizeof text);
     cr_expect(strstr(text, "--remote: expected a whole number from 0 to 65535, got '70000'"), "%s", text);
+    support_remove_tmp_dir(dir);
+}
+
+/* This machine's first IPv4 address that is not loopback, or false. */
+static bool network_address(char *out, size_t bytes)
+{
+    struct ifaddrs *list;
+    bool found = false;
+    if (getifaddrs(&list) != 0)
+        return false;
+    for (struct ifaddrs *i = list; i && !found; i = i->ifa_next)
+        if (i->ifa_addr && i->ifa_addr->sa_family == AF_INET && !(i->ifa_flags & IFF_LOOPBACK) &&
+            (i->ifa_flags & IFF_UP))
+            found = inet_ntop(AF_INET, &((struct sockaddr_in *)(void *)i->ifa_addr)->sin_addr, out,
+                              (socklen_t)bytes) != NULL;
+    freeifaddrs(list);
+    return found;
+}
+
+static bool tcp_connects(const char *host, int port)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    cr_assert(fd >= 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    cr_assert_eq(inet_pton(AF_INET, host, &a.sin_addr), 1, "%s", host);
+    bool ok = connect(fd, (struct sockaddr *)&a, sizeof a) == 0;
+    close(fd);
+    return ok;
+}
+
+/* The tablet's way in: by default the view is reachable on loopback only;
+ * with --remote-bind 0.0.0.0 the printed URL names the machine's network
+ * address, and a page opened there shows frames and steers. */
+Test(remote_browser, the_network_reaches_the_view_only_when_bound_to_it, .timeout = 300)
+{
+    char address[64];
+    if (!network_address(address, sizeof address))
+        cr_skip_test("this machine has no network address besides loopback");
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-network");
+    const char *local_args[] = {"--display", "null", "--size", "160x90", "--threads", "2", "--time", "fixed",
+                                "--rate", "30", "--remote", "0", "--remote-token", "network-test-token", NULL};
+    kiosk k;
+    kiosk_start(&k, dir, local_args);
+    cr_assert_str_eq(k.host, "127.0.0.1", "bound to loopback unless told otherwise");
+    cr_assert(tcp_connects("127.0.0.1", k.port));
+    cr_assert_not(tcp_connects(address, k.port), "the view answered on %s without --remote-bind", address);
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+
+    cdp_browser *b = browser_or_skip(); /* before the kiosk: a skip leaves nothing running */
+    const char *network_args[] = {"--display", "null", "--size", "160x90", "--threads", "2", "--time", "fixed",
+                                  "--rate", "30", "--remote", "0", "--remote-bind", "0.0.0.0",
+                                  "--remote-token", "network-test-token", NULL};
+    kiosk_start(&k, dir, network_args);
+    cr_assert_str_eq(k.host, address, "the URL names the machine's network address");
+    cdp_page *p = open_page(b, k.url);
+    wait_js(p, "window.tessera.connected && window.tessera.framesShown >= 2");
+    double serial0 = cdp_eval_number(p, "window.tessera.cameraSerial");
+    double cx, cy, w, h;
+    canvas_box(p, &cx, &cy, &w, &h);
+    cr_assert(cdp_mouse(p, "mouseMoved", cx, cy, "none"));
+    cr_assert(cdp_mouse(p, "mousePressed", cx, cy, "left"));
+    for (int i = 1; i <= 4; i++) {
+        cr_assert(cdp_mouse(p, "mouseMoved", cx + 0.05 * w * i, cy, "left"));
+        wait_js(p, "true");
+    }
+    cr_assert(cdp_mouse(p, "mouseReleased", cx + 0.2 * w, cy, "left"));
+    char cond[128];
+    snprintf(cond, sizeof cond, "window.tessera.cameraSerial > %.0f", serial0);
+    wait_js(p, cond);
+    cdp_close(b);
+    cr_assert_eq(kiosk_stop(&k, true), 0);
     support_remove_tmp_dir(dir);
 }
