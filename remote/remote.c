@@ -304,7 +304,11 @@ static void viewer_switch_view(remote_view *v, viewer *vw, bool want_private)
     if (want_private)
         events[n++] = (input_event){.kind = INPUT_PRIVATE_VIEW, .time_us = now, .device = vw->input.device,
                                     .code = v->channels.private_first + k};
-    push_events(v, events, n);
+    if (!remote_source_push(v->source, events, n)) { /* the input queue is full: no switch half made */
+        v->stats.input_overflow++;
+        queue_text(vw, "{\"type\":\"error\",\"text\":\"the kiosk is busy: the view was not switched, try again\"}");
+        goto tell;
+    }
     count_skipped(v, vw);
     if (want_private) {
         v->private_lent[k] = true;
