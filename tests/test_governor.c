@@ -348,9 +348,15 @@ Test(governor, a_sleeping_renderer_settles_on_the_budget_and_every_wall_output_s
             cr_expect(out[i]->count == n && out[i]->scale[f] == out[0]->scale[f],
                       "frame %d: output %d at scale %g, output 0 at %g", f, i, out[i]->scale[f], out[0]->scale[f]);
     cr_expect_eq(out[0]->scale[0], 1.0, "the first frame, with nothing measured, is at full size");
+    /* A sleep lasts at least what was asked, so a frame costs at least its nominal time and 5/8
+     * (25.6 ms) never fits the 24 ms budget: the scale settles at 1/2 or below (5/8 tolerated:
+     * the cost model is an average of what frames measured). How far below
+     * depends on how late a loaded machine wakes the sleeper, so no lower bound is asserted here;
+     * that the governor takes the largest rung that fits is checked with exact synthetic costs
+     * (settles_on_the_budget_within_a_few_frames_and_then_moves_one_rung_at_most). */
     int settled_from = 4;
     for (int f = settled_from; f < n; f++) {
-        cr_expect(out[0]->scale[f] <= 0.625 && out[0]->scale[f] >= 0.375,
+        cr_expect(out[0]->scale[f] <= 0.625,
                   "frame %d at scale %g: the budget (24 ms) fits 1/2 (16.4 ms), not 5/8 (25.6 ms)", f,
                   out[0]->scale[f]);
         cr_expect(out[0]->samples[f] == 1, "moving frames take one ray per pixel");
