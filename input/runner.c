@@ -26,6 +26,7 @@ typedef struct private_view {
     int device;
     int channel;
     input_controller *controller;
+    uint64_t due_us;       /* its deadline as asked before the wait (UINT64_MAX: none) */
 } private_view;
 
 struct input_runner {
@@ -36,6 +37,7 @@ struct input_runner {
     input_controller_config controller_cfg; /* its config, the start of a private view's */
     input_controller_hooks hooks;      /* every controller's */
     private_view privates[INPUT_MAX_VIEWERS];
+    uint64_t due_us;                   /* the wall's controller's deadline as asked before the wait */
     input_sink *sink;
     input_pick_fn pick;
     input_step_ready_fn step_ready;
@@ -110,7 +112,7 @@ static void private_start(input_runner *r, const input_event *e)
         log_error("input: device %d: no private view: out of memory", e->device);
         return;
     }
-    *pv = (private_view){.used = true, .device = e->device, .channel = e->code, .controller = c};
+    *pv = (private_view){.used = true, .device = e->device, .channel = e->code, .controller = c, .due_us = UINT64_MAX};
     input_controller_tick(c, e->time_us);
     input_controller_jump(c, input_sink_current_camera(r->sink));
     input_txn on = txn_channel_active(pv->channel, true);
@@ -137,25 +139,27 @@ static void on_event(void *ctx, const input_event *e)
         private_end(r, pv);
 }
 
-/* The earliest deadline of every controller. */
-static uint64_t deadline_us(const input_runner *r, uint64_t now)
+/* Ask every controller for its deadline before the wait (kept: a deadline asked
+ * again once it has passed may lie ahead, e.g. the idle tour's, which says "a
+ * second from now" when asked late); the earliest. */
+static uint64_t deadline_us(input_runner *r, uint64_t now)
 {
-    uint64_t d = input_controller_deadline_us(r->controller, now);
+    uint64_t d = r->due_us = input_controller_deadline_us(r->controller, now);
     for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
         if (r->privates[i].used) {
-            uint64_t p = input_controller_deadline_us(r->privates[i].controller, now);
+            uint64_t p = r->privates[i].due_us = input_controller_deadline_us(r->privates[i].controller, now);
             d = p < d ? p : d;
         }
     return d;
 }
 
-/* Tick every controller whose deadline has come. */
+/* Tick every controller whose deadline, as asked before the wait, has come. */
 static void tick_due(input_runner *r, uint64_t now)
 {
-    if (input_controller_deadline_us(r->controller, now) <= now)
+    if (r->due_us <= now)
         input_controller_tick(r->controller, now);
     for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
-        if (r->privates[i].used && input_controller_deadline_us(r->privates[i].controller, now) <= now)
+        if (r->privates[i].used && r->privates[i].due_us <= now)
             input_controller_tick(r->privates[i].controller, now);
 }
 

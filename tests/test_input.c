@@ -1488,3 +1488,74 @@ Test(input, a_private_view_steers_its_own_channel_and_the_wall_never_sees_it, .t
     input_record_free(&rec);
     support_remove_tmp_dir(dir);
 }
+
+/* ---- the input thread's clock: the idle tour comes back (runner.h, its deadlines) ---------- */
+
+static bool tour_playing(const view_watch *s, const void *arg)
+{
+    return s->serial[0] >= *(const uint64_t *)arg + 3; /* the tour sets the camera every frame */
+}
+
+/* Still: the camera serial unchanged over 10 frames. */
+static bool camera_still(view_watch *w)
+{
+    for (int i = 0; i < 6000; i++) {
+        view_watch a = watched(w);
+        for (int j = 0; j < 2000; j++) {
+            view_watch b = watched(w);
+            if (b.frames >= a.frames + 10) {
+                if (b.serial[0] == a.serial[0])
+                    return true;
+                break;
+            }
+            sleep_ms(1);
+        }
+    }
+    return false;
+}
+
+Test(input, the_runner_brings_the_idle_tour_back_after_input_stops, .timeout = 120)
+{
+    camera_path path = {0};
+    tess_error err = {{0}};
+    camera_desc k0 = {v3(10.f, 2.f, 0.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    camera_desc k1 = {v3(0.f, 2.f, 10.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
+    path.interp = CAMERA_PATH_LINEAR;
+    cr_assert(camera_path_append(&path, 0.0, &k0, &err) && camera_path_append(&path, 1.0, &k1, &err), "%s", err.msg);
+    live l = live_make_tour(NULL, 0, &path, 0.1);
+    view_watch w = {.lock = PTHREAD_MUTEX_INITIALIZER};
+    cr_assert(pipeline_add_serial_animation(l.p, "watch views", watch_views, &w));
+    remote_source *src = remote_source_create(&err);
+    cr_assert(src, "%s", err.msg);
+    input_source *sources[1] = {remote_source_input(src)};
+    input_controller_config cc;
+    input_controller_config_default(&cc);
+    cc.plane_aspect = 32.f / 18.f;
+    cc.home = home_camera(3.0);
+    cc.scene_size = 8.0;
+    cc.have_tour = true;
+    cc.idle_timeout_s = 0.3;
+    input_runner *r = input_runner_start(sources, 1, &cc, drive_pick, NULL, NULL, l.sink, NULL, &err);
+    cr_assert(r, "%s", err.msg);
+    run_args ra = {.p = l.p};
+    pthread_t th;
+    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+    uint64_t zero = 0;
+    cr_assert(wait_views(&w, tour_playing, &zero), "nobody there: the tour never started");
+    uint64_t t = clock_monotonic_us();
+    input_event key[] = {{.kind = INPUT_DEVICE_ADDED, .device = 3, .time_us = t},
+                         {.kind = INPUT_KEY, .device = 3, .code = KEY_LEFTSHIFT, .pressed = true, .time_us = t},
+                         {.kind = INPUT_FRAME, .device = 3, .time_us = t},
+                         {.kind = INPUT_KEY, .device = 3, .code = KEY_LEFTSHIFT, .pressed = false, .time_us = t},
+                         {.kind = INPUT_FRAME, .device = 3, .time_us = t}};
+    push_all(src, key, 5);
+    cr_assert(camera_still(&w), "a key did not stop the tour");
+    uint64_t stopped = watched(&w).serial[0];
+    cr_assert(wait_views(&w, tour_playing, &stopped), "the tour did not come back after the idle timeout");
+    pipeline_stop(l.p);
+    pthread_join(th, NULL);
+    cr_assert(ra.ok, "%s", ra.err.msg);
+    input_runner_stop(r);
+    live_free(&l);
+    camera_path_free(&path);
+}
