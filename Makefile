@@ -4,7 +4,7 @@
 CC  ?= gcc
 CXX ?= g++
 PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp libxxhash libwebsockets \
-        libturbojpeg
+        libturbojpeg ompi-c
 TEST_PKGS := criterion
 
 BUILD := build
@@ -37,6 +37,8 @@ WALL_CXX := $(wildcard wall/*.cpp)
 INPUT_SRC := $(wildcard input/*.c)
 # the remote view (remote/README.md): HTTP + WebSocket server, the page, JPEG frames, remote input
 REMOTE_SRC := $(wildcard remote/*.c)
+# a wall of several machines (cluster/cluster.h): OpenMPI, the frame and display syncs
+CLUSTER_SRC := $(wildcard cluster/*.c)
 METRICS_SRC := $(wildcard metrics/*.c)
 # the hard cases of numerical robustness, shared by tests/test_robust.c and `tessera robust`
 ROBUST_SRC := $(wildcard tools/robust/*.c)
@@ -55,7 +57,7 @@ ISA_FLAGS_sse2 := -DTESS_ISA_SSE2
 ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
 
-LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(SEAT_SRC) $(INPUT_SRC) $(REMOTE_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
+LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(SEAT_SRC) $(INPUT_SRC) $(REMOTE_SRC) $(CLUSTER_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
            $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ) $(BUILD)/remote/page_html.o
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
@@ -236,7 +238,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h remote/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
+HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 check-headers:
 	@for h in $(HEADERS); do \

@@ -9,6 +9,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <xxhash.h>
 
 #include "bvh.h"
 #include "intersect.h"
@@ -524,4 +525,43 @@ bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
     wbvh_refit_stale(&a->top, a->instance_bounds);
     pthread_mutex_unlock(&a->refit_lock);
     return ok;
+}
+
+/* Each node's boxes, children and slots as built (not child_mask, which hiding
+ * changes, nor padding). */
+static void hash_tree(XXH3_state_t *st, const wbvh *w)
+{
+    XXH3_64bits_update(st, &w->node_count, sizeof w->node_count);
+    XXH3_64bits_update(st, &w->block_count, sizeof w->block_count);
+    for (uint32_t i = 0; i < w->node_count; i++) {
+        const wbvh_node *n = &w->nodes[i];
+        XXH3_64bits_update(st, n->lo_x, sizeof n->lo_x);
+        XXH3_64bits_update(st, n->hi_x, sizeof n->hi_x);
+        XXH3_64bits_update(st, n->lo_y, sizeof n->lo_y);
+        XXH3_64bits_update(st, n->hi_y, sizeof n->hi_y);
+        XXH3_64bits_update(st, n->lo_z, sizeof n->lo_z);
+        XXH3_64bits_update(st, n->hi_z, sizeof n->hi_z);
+        XXH3_64bits_update(st, n->child, sizeof n->child);
+        XXH3_64bits_update(st, n->leaf_blocks, sizeof n->leaf_blocks);
+        XXH3_64bits_update(st, &n->slot_mask, sizeof n->slot_mask);
+    }
+}
+
+uint64_t accel_checksum(const accel *a)
+{
+    XXH3_state_t *st = XXH3_createState();
+    if (!st)
+        return 0;
+    XXH3_64bits_reset(st);
+    XXH3_64bits_update(st, &a->geom_count, sizeof a->geom_count);
+    XXH3_64bits_update(st, &a->instance_count, sizeof a->instance_count);
+    for (uint32_t g = 0; g < a->geom_count; g++)
+        hash_tree(st, &a->geoms[g]);
+    for (uint32_t i = 0; i < a->instance_count; i++) {
+        const aabb *b = &a->instance_bounds[i];
+        XXH3_64bits_update(st, b, sizeof *b);
+    }
+    uint64_t h = XXH3_64bits_digest(st);
+    XXH3_freeState(st);
+    return h;
 }

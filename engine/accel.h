@@ -155,4 +155,11 @@ const char *accel_isa_name(const accel *a);
  * are bit-identical for every instruction set. Not while rays are traced. */
 bool accel_use_isa(accel *a, const char *isa_name);
 
+/* A 64-bit checksum (XXH3) of the trees as built: every geometry's and the
+ * instance boxes. Equal on two processes that built the same scene the same
+ * way (the build is deterministic, whatever the thread count), so processes
+ * rendering one picture compare it before they start (cluster/). Hiding and
+ * moving change what it reads: take it before either. 0 when out of memory. */
+uint64_t accel_checksum(const accel *a);
+
 #endif

@@ -150,6 +150,13 @@ struct pipeline {
     int channel_count;
     image_traverser *traverser; /* made by pipeline_run, when the channels are known */
     bool displays_every_stage;  /* some channel's display has an end_stage hook; set by pipeline_run */
+    /* the cluster hooks (pipeline.h): fixed once the loop runs */
+    pipeline_record_fn record_observer;
+    void *record_observer_ctx;
+    pipeline_sync_fn frame_sync;
+    void *frame_sync_ctx;
+    pipeline_display_sync_fn display_sync;
+    void *display_sync_ctx;
 
     /* transaction queue (ring) and one-shots: guarded by queue_lock */
     pthread_mutex_t queue_lock;
@@ -606,6 +613,42 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     return p->channel_count++;
 }
 
+static bool may_set_hook(const pipeline *p, const void *current)
+{
+    if (p->ran || atomic_load(&p->running)) {
+        log_error("pipeline: a cluster hook can be set only before the pipeline runs");
+        return false;
+    }
+    return current == NULL;
+}
+
+bool pipeline_set_record_observer(pipeline *p, pipeline_record_fn fn, void *ctx)
+{
+    if (!may_set_hook(p, (const void *)p->record_observer))
+        return false;
+    p->record_observer = fn;
+    p->record_observer_ctx = ctx;
+    return true;
+}
+
+bool pipeline_set_frame_sync(pipeline *p, pipeline_sync_fn fn, void *ctx)
+{
+    if (!may_set_hook(p, (const void *)p->frame_sync))
+        return false;
+    p->frame_sync = fn;
+    p->frame_sync_ctx = ctx;
+    return true;
+}
+
+bool pipeline_set_display_sync(pipeline *p, pipeline_display_sync_fn fn, void *ctx)
+{
+    if (!may_set_hook(p, (const void *)p->display_sync))
+        return false;
+    p->display_sync = fn;
+    p->display_sync_ctx = ctx;
+    return true;
+}
+
 bool pipeline_set_channel_private(pipeline *p, int channel, tess_error *err)
 {
     if (p->ran || atomic_load(&p->running))
@@ -789,6 +832,8 @@ static bool apply_record(pipeline *p, const txn_record *r)
         log_error("pipeline: %s refused: %s", txn_kind_name(r->kind), err.msg);
         return false;
     }
+    if (p->record_observer)
+        p->record_observer(p->record_observer_ctx, r);
     switch (r->kind) {
     case TXN_STATUS:
     case TXN_GOVERNOR_STATUS:
@@ -1512,6 +1557,8 @@ static int serial_section_steps(pipeline *p)
         run_serial_animation(p);
         stop = atomic_load(&p->stop_requested);
     }
+    if (p->frame_sync) /* where processes meet: the leader's time, records and stop (cluster/) */
+        p->frame_sync(p->frame_sync_ctx, p, &s->info, &stop);
     /* visibility changed by this barrier's records reaches the accel: one pass over the ids
      * they touched, accel_set_hidden only where a flag differs */
     frame_state_sync_accel(&p->state, p->cfg.accel);
@@ -1526,7 +1573,7 @@ static int serial_section_steps(pipeline *p)
     /* displays with an end_stage hook are served every step, frames or not (a wall
      * whose monitors are all unplugged still has to notice one coming back) */
     s->frames_queued = any_queued;
-    s->display = (any_queued || (!stop && p->displays_every_stage)) && !p->display_failed;
+    s->display = (any_queued || (!stop && p->displays_every_stage) || p->display_sync) && !p->display_failed;
     if (stop) {
         s->render = s->animate_parallel = false;
         p->exit_after_step = true;
@@ -1604,6 +1651,19 @@ static void display_stage(pipeline *p)
         tess_error err = {{0}};
         if (!c->display->ops->show(c->display, &c->buffers[c->queued].meta, &err))
             display_failed(p, c->display, &err);
+    }
+    if (p->display_sync && !p->display_failed) { /* the frame lock: every process here before a flip */
+        uint64_t shown = UINT64_MAX;
+        for (int i = 0; i < p->channel_count && shown == UINT64_MAX; i++)
+            if (p->channels[i].queued_valid)
+                shown = p->channels[i].buffers[p->channels[i].queued].meta.frame;
+        tess_error err = {{0}};
+        if (!p->display_sync(p->display_sync_ctx, shown, &err)) {
+            if (!tess_error_is_set(&err))
+                tess_error_set(&err, "the display sync failed without a reason");
+            p->display_error = err;
+            p->display_failed = true;
+        }
     }
     for (int i = 0; i < p->channel_count && !p->display_failed; i++) {
         image_display *d = p->channels[i].display;

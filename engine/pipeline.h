@@ -355,6 +355,32 @@ typedef struct frame_info {
     int threads;           /* render threads for this frame */
 } frame_info;
 
+/* ---- one picture over several processes (cluster/: a wall of many machines) ----
+ * Three hooks, each set once before pipeline_run (false when the pipeline
+ * runs or one is set already), none of which a pipeline without them pays
+ * for:
+ *   - the RECORD OBSERVER sees every record applied to the frame state
+ *     (through a transaction, a setter or pipeline_apply, in the serial
+ *     section), right after it applied: what a leading process sends;
+ *   - the FRAME SYNC runs once every loop step in the serial section, after
+ *     the step's transactions, one-shots and serial animations (or in their
+ *     place when the step stops): it may change the step's time and whether
+ *     the loop stops after it, and apply records (pipeline_apply). It is the
+ *     one serial callback that may block: it is where processes meet, once a
+ *     frame;
+ *   - the DISPLAY SYNC runs on the display thread in every display stage,
+ *     after the show() calls and before the end_stage hooks (where a DRM wall
+ *     flips): the frame lock. With it the loop runs a display stage every
+ *     step, the stopping one included, so every process calls it equally
+ *     often. `frame`: the frame the stage showed (UINT64_MAX: none). It may
+ *     block; false with err stops the run. */
+typedef void (*pipeline_record_fn)(void *ctx, const txn_record *r);
+typedef void (*pipeline_sync_fn)(void *ctx, pipeline *p, frame_info *info, bool *stop);
+typedef bool (*pipeline_display_sync_fn)(void *ctx, uint64_t frame, tess_error *err);
+bool pipeline_set_record_observer(pipeline *p, pipeline_record_fn fn, void *ctx);
+bool pipeline_set_frame_sync(pipeline *p, pipeline_sync_fn fn, void *ctx);
+bool pipeline_set_display_sync(pipeline *p, pipeline_display_sync_fn fn, void *ctx);
+
 /* Serial animation: once per frame in the serial section, after transactions. */
 typedef void (*pipeline_serial_fn)(pipeline *p, void *ctx, const frame_info *fi);
 /* Parallel animation: once per frame on every render thread, after the barrier. */

@@ -396,7 +396,7 @@ Test(wall_config, unknown_field)
                           "wall.json: field 'outputs[0].scale': unknown field (expected one of: connector, edid, "
                           "mode, rotation, grid, position_mm, position_px, size_mm, bezel_mm)");
     expect_failure("{" HEADER "\"name\": \"x\", \"outputs\": [" OUT(1, "\"grid\": [0, 0]") "]}",
-                   "wall.json: field 'name': unknown field (expected one of: format, version, units, outputs)");
+                   "wall.json: field 'name': unknown field (expected one of: format, version, units, outputs, nodes)");
 }
 
 Test(wall_config, header_fields)
@@ -596,4 +596,75 @@ Test(wall_config, headless_needs_explicit_modes)
     cr_assert_not(wall_config_headless_sizes(&w, &err));
     cr_expect_str_eq(err.msg, "outputs[1] (Virtual-2): mode 'preferred' needs a device; give an explicit mode "
                               "such as 1920x1080 for headless runs");
+}
+
+/* ---- nodes: a wall of several machines ---------------------------------------------- */
+
+#define FOUR OUT(1, "\"grid\": [0, 0]") "," OUT(2, "\"grid\": [1, 0]") "," OUT(3, "\"grid\": [0, 1]") "," \
+    OUT(4, "\"grid\": [1, 1]")
+
+Test(wall_config, nodes_by_rank_and_by_host)
+{
+    wall_config w = parse_ok("{" HEADER "\"outputs\": [" FOUR "], \"nodes\": ["
+                             "{\"rank\": 1, \"outputs\": [\"Virtual-2\", \"Virtual-4\"]},"
+                             "{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-3\"]}]}");
+    cr_assert_eq(w.node_count, 2);
+    cr_assert(w.nodes[0].rank == 1 && w.nodes[0].outputs[1] && w.nodes[0].outputs[3] && !w.nodes[0].outputs[0]);
+    cr_assert(w.nodes[1].rank == 0 && w.nodes[1].outputs[0] && w.nodes[1].outputs[2]);
+    tess_error err = {{0}};
+    const char *hosts[2] = {"a", "a"};
+    cr_assert_eq(wall_config_node_of(&w, 0, 2, hosts, &err), 1);
+    cr_assert_eq(wall_config_node_of(&w, 1, 2, hosts, &err), 0);
+    cr_assert_eq(wall_config_node_of(&w, 0, 3, hosts, &err), -1);
+    cr_assert(strstr(err.msg, "the wall has 2 nodes and 3 processes were started"), "%s", err.msg);
+    /* by host: two nodes on one host take its ranks in file order */
+    w = parse_ok("{" HEADER "\"outputs\": [" FOUR "], \"nodes\": ["
+                 "{\"host\": \"left\", \"outputs\": [\"Virtual-1\"]},"
+                 "{\"host\": \"right\", \"outputs\": [\"Virtual-2\", \"Virtual-4\"]},"
+                 "{\"host\": \"left\", \"outputs\": [\"Virtual-3\"]}]}");
+    const char *where[3] = {"right", "left", "left"};
+    cr_assert_eq(wall_config_node_of(&w, 0, 3, where, &err), 1);
+    cr_assert_eq(wall_config_node_of(&w, 1, 3, where, &err), 0);
+    cr_assert_eq(wall_config_node_of(&w, 2, 3, where, &err), 2);
+    const char *elsewhere[3] = {"right", "left", "middle"};
+    err = (tess_error){{0}};
+    cr_assert_eq(wall_config_node_of(&w, 2, 3, elsewhere, &err), -1);
+    cr_assert(strstr(err.msg, "on host 'middle'"), "%s", err.msg);
+    /* without nodes: none */
+    w = parse_ok("{" HEADER "\"outputs\": [" FOUR "]}");
+    cr_assert_eq(w.node_count, 0);
+}
+
+Test(wall_config, bad_nodes_are_named)
+{
+    static const struct {
+        const char *nodes, *want;
+    } cases[] = {
+        {"5", "field 'nodes': expected an array"},
+        {"[]", "field 'nodes': has 0 nodes: 1..4"},
+        {"[{\"rank\": 0, \"host\": \"a\", \"outputs\": [\"Virtual-1\"]}]", "field 'nodes[0]': give exactly one of rank and host"},
+        {"[{\"outputs\": [\"Virtual-1\"]}]", "field 'nodes[0]': give exactly one of rank and host"},
+        {"[{\"rank\": 0.5, \"outputs\": [\"Virtual-1\"]}]", "field 'nodes[0].rank': must be a whole number"},
+        {"[{\"rank\": 0}]", "field 'nodes[0].outputs': required field is missing"},
+        {"[{\"rank\": 0, \"outputs\": []}]", "field 'nodes[0].outputs': a node drives at least 1 output"},
+        {"[{\"rank\": 0, \"outputs\": [\"HDMI-A-9\"]}]", "field 'nodes[0].outputs[0]': 'HDMI-A-9' is not one of the wall's outputs"},
+        {"[{\"rank\": 0, \"outputs\": [3]}]", "field 'nodes[0].outputs[0]': expected a connector name, got"},
+        {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\", \"Virtual-3\"]},"
+         " {\"rank\": 1, \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",
+         "field 'nodes[1].outputs[0]': output 'Virtual-3' is driven by another node already"},
+        {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\"]}, {\"rank\": 0, \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",
+         "field 'nodes[1]': rank 0 is nodes[0]'s already"},
+        {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\"]}, {\"rank\": 2, \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",
+         "field 'nodes[1]': rank 2: with 2 nodes the ranks are 0..1"},
+        {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\"]}, {\"host\": \"b\", \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",
+         "field 'nodes': name every node by rank or every node by host"},
+        {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\", \"Virtual-3\"]}]",
+         "field 'nodes': output 'Virtual-4' (outputs[3]) is in no node"},
+        {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\"], \"gpu\": 1}]", "field 'nodes[0].gpu': unknown field"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char text[4096];
+        snprintf(text, sizeof text, "{" HEADER "\"outputs\": [" FOUR "], \"nodes\": %s}", cases[i].nodes);
+        expect_failure(text, cases[i].want);
+    }
 }

@@ -10,7 +10,7 @@ set -eu
 
 PACKAGES="gcc g++ make pkg-config libdrm-dev libudev-dev libseat-dev libinput-dev libevdev-dev \
 libsystemd-dev libopenimageio-dev libjson-c-dev libcriterion-dev libassimp-dev libxxhash-dev \
-libwebsockets-dev libturbojpeg0-dev"
+libwebsockets-dev libturbojpeg0-dev libopenmpi-dev openmpi-bin"
 # test-only: systemd-analyze verifies configs/systemd/ (tests/test_service.c)
 PACKAGES="$PACKAGES systemd"
 if [ "${1:-}" = "--test" ]; then

@@ -42,7 +42,7 @@ static image_display *dump_create(const display_backend_args *a, tess_error *err
 static bool dump_create_wall(const wall_config *w, const display_backend_args *a, image_display **displays,
                              tess_error *err)
 {
-    return wall_headless_displays(w, a->out_pattern, a->sequence, displays, err);
+    return wall_headless_displays(w, a->out_pattern, a->sequence, a->present, displays, err);
 }
 
 const display_backend display_backends[] = {
@@ -94,7 +94,7 @@ image_display *display_create(const char *name, const char *out_pattern, bool se
         tess_error_set(err, "the %s display shows a wall's outputs on a card: it needs --wall", name);
         return NULL;
     }
-    display_backend_args a = {out_pattern, sequence};
+    display_backend_args a = {out_pattern, sequence, NULL};
     return b->create(&a, err);
 }
 
@@ -108,8 +108,11 @@ bool display_backend_create_wall(const display_backend *b, const wall_config *w,
     if (b->create_wall)
         ok = b->create_wall(w, a, displays, err); /* undoes itself on failure */
     else
-        for (; ok && made < w->count; made++)
-            ok = (displays[made] = b->create(a, err)) != NULL;
+        for (; ok && made < w->count; made++) { /* only the outputs this process drives */
+            bool mine = !a->present || a->present[made];
+            displays[made] = mine ? b->create(a, err) : NULL;
+            ok = !mine || displays[made] != NULL;
+        }
     for (int i = 0; !ok && i < w->count; i++) {
         if (i < made)
             image_display_destroy(displays[i]);

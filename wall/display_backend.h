@@ -30,6 +30,8 @@ enum {
 typedef struct display_backend_args {
     const char *out_pattern; /* DISPLAY_OPTION_OUT: file pattern (dump_frame_path rules); else unused */
     bool sequence;           /* frame numbers in the file names */
+    const bool *present;     /* a headless wall: the outputs this process drives (a wall of several
+                                machines: cluster/); NULL: all. The stitched image needs them all */
 } display_backend_args;
 
 typedef struct display_backend {

@@ -600,9 +600,115 @@ static bool check_duplicates(jr_ctx *c, const wall_config *w)
     return true;
 }
 
+/* nodes[i] (the current field). */
+static bool read_node(jr_ctx *c, json_object *v, wall_config *w, wall_node *n, bool *taken)
+{
+    static const char *const fields[] = {"rank", "host", "outputs", NULL};
+    *n = (wall_node){.rank = -1};
+    if (!jr_expect_object(c, v) || !jr_check_fields(c, v, fields))
+        return false;
+    double rank = -1.0;
+    const char *host = NULL;
+    if (!jr_opt_double(c, v, "rank", (jr_range){0.0, WALL_MAX_OUTPUTS - 1, false, false}, &rank) ||
+        !jr_opt_string(c, v, "host", &host))
+        return false;
+    bool has_rank = jr_get_member(v, "rank", NULL);
+    if (has_rank == (host != NULL))
+        return jr_field_fail(c, "give exactly one of rank and host");
+    if (has_rank && rank != floor(rank))
+        return jr_member_fail(c, "rank", "must be a whole number");
+    if (host && strlen(host) >= WALL_HOST_BYTES)
+        return jr_member_fail(c, "host", "longer than 63 characters");
+    n->rank = has_rank ? (int)rank : -1;
+    if (host)
+        snprintf(n->host, sizeof n->host, "%s", host);
+    json_object *list;
+    if (!jr_require_member(c, v, "outputs") || !jr_get_member(v, "outputs", &list))
+        return false;
+    size_t saved = jr_field_key(c, "outputs");
+    bool ok = jr_expect_array(c, list);
+    size_t count = ok ? json_object_array_length(list) : 0;
+    if (ok && count == 0)
+        ok = jr_field_fail(c, "a node drives at least 1 output");
+    for (size_t i = 0; ok && i < count; i++) {
+        size_t inner = jr_field_index(c, i);
+        json_object *name = json_object_array_get_idx(list, i);
+        if (!json_object_is_type(name, json_type_string))
+            ok = jr_field_fail(c, "expected a connector name, got %s", jr_kind(name));
+        int found = -1;
+        for (int k = 0; ok && k < w->count && found < 0; k++)
+            if (!strcmp(w->outputs[k].connector, json_object_get_string(name)))
+                found = k;
+        if (ok && found < 0)
+            ok = jr_field_fail(c, "'%s' is not one of the wall's outputs", json_object_get_string(name));
+        if (ok && taken[found])
+            ok = jr_field_fail(c, "output '%s' is driven by another node already", w->outputs[found].connector);
+        if (ok)
+            taken[found] = n->outputs[found] = true;
+        jr_field_leave(c, inner);
+    }
+    jr_field_leave(c, saved);
+    return ok;
+}
+
+static bool read_nodes(jr_ctx *c, json_object *root, wall_config *w)
+{
+    json_object *all;
+    if (!jr_get_member(root, "nodes", &all))
+        return true;
+    size_t outer = jr_field_key(c, "nodes");
+    bool ok = jr_expect_array(c, all), taken[WALL_MAX_OUTPUTS] = {false};
+    size_t n = ok ? json_object_array_length(all) : 0;
+    if (ok && (n == 0 || n > (size_t)w->count))
+        ok = jr_field_fail(c, "has %zu nodes: 1..%d (a node drives at least one output)", n, w->count);
+    bool by_rank = false, by_host = false;
+    for (size_t i = 0; ok && i < n; i++) {
+        size_t saved = jr_field_index(c, i);
+        ok = read_node(c, json_object_array_get_idx(all, i), w, &w->nodes[i], taken);
+        if (ok) {
+            by_rank = by_rank || w->nodes[i].rank >= 0;
+            by_host = by_host || w->nodes[i].rank < 0;
+        }
+        for (size_t k = 0; ok && k < i; k++)
+            if (w->nodes[i].rank >= 0 && w->nodes[k].rank == w->nodes[i].rank)
+                ok = jr_field_fail(c, "rank %d is nodes[%zu]'s already", w->nodes[i].rank, k);
+        if (ok && w->nodes[i].rank >= (int)n)
+            ok = jr_field_fail(c, "rank %d: with %zu nodes the ranks are 0..%zu", w->nodes[i].rank, n, n - 1);
+        jr_field_leave(c, saved);
+    }
+    if (ok && by_rank && by_host)
+        ok = jr_field_fail(c, "name every node by rank or every node by host, not some of each");
+    for (int k = 0; ok && k < w->count; k++)
+        if (!taken[k])
+            ok = jr_field_fail(c, "output '%s' (outputs[%d]) is in no node", w->outputs[k].connector, k);
+    jr_field_leave(c, outer);
+    w->node_count = ok ? (int)n : 0;
+    return ok;
+}
+
+int wall_config_node_of(const wall_config *w, int rank, int size, const char *const *hosts, tess_error *err)
+{
+    if (w->node_count != size) {
+        tess_error_set(err, "the wall has %d nodes and %d processes were started (mpirun -np %d)", w->node_count,
+                       size, w->node_count);
+        return -1;
+    }
+    for (int i = 0; i < w->node_count; i++)
+        if (w->nodes[i].rank == rank)
+            return i;
+    int before = 0; /* lower ranks on this host */
+    for (int r = 0; r < rank; r++)
+        before += strcmp(hosts[r], hosts[rank]) == 0;
+    for (int i = 0; i < w->node_count; i++)
+        if (w->nodes[i].rank < 0 && !strcmp(w->nodes[i].host, hosts[rank]) && before-- == 0)
+            return i;
+    tess_error_set(err, "no node of the wall is rank %d or (the next one) on host '%s'", rank, hosts[rank]);
+    return -1;
+}
+
 static bool read_wall(jr_ctx *c, json_object *root, wall_config *w)
 {
-    static const char *const fields[] = {"format", "version", "units", "outputs", NULL};
+    static const char *const fields[] = {"format", "version", "units", "outputs", "nodes", NULL};
     placement places[WALL_MAX_OUTPUTS];
     if (!json_object_is_type(root, json_type_object))
         return tess_error_set(c->err, "%s: expected a JSON object at the top level, got %s", c->path,
@@ -614,7 +720,7 @@ static bool read_wall(jr_ctx *c, json_object *root, wall_config *w)
     for (int i = 0; i < w->count; i++)
         place_output(&w->outputs[i], &places[i]);
     normalise(w);
-    return check_duplicates(c, w) && check_overlaps(c, w);
+    return check_duplicates(c, w) && check_overlaps(c, w) && read_nodes(c, root, w);
 }
 
 bool wall_config_parse(const char *name, const char *text, size_t len, wall_config *out, tess_error *err)

@@ -37,7 +37,15 @@
  *      "bezel_mm": {"left": 0, "top": 0, "right": 0, "bottom": 0}
  *                                      as mounted; each optional (default 0), >= 0
  *     }, ...
- *   ]
+ *   ],
+ *   "nodes": [                         optional: a wall of several machines (cluster/),
+ *     {"rank": 0,                      one process each (mpirun -np N): exactly one of
+ *      "host": "wall-a",               rank (0..WALL_MAX_OUTPUTS-1, the MPI rank) and host
+ *                                      (the machine's host name, 1..63 chars; nodes on one
+ *                                      host take its ranks in file order)
+ *      "outputs": ["HDMI-A-1", ...]},  the connectors of the outputs it drives: each
+ *     ...                              output is in exactly one node, a node has >= 1
+ *   ]                                  Ranks given must be 0..count-1, each once.
  *
  * Placement (all give the top-left corner of the output's active area):
  *  - position_mm: [x, y] in wall millimetres (any finite values; see below).
@@ -103,11 +111,28 @@ typedef struct wall_output {
     int device_connector, device_mode;    /* indices chosen by wall_config_match_device, -1 until then */
 } wall_output;
 
+#define WALL_HOST_BYTES 64
+
+/* One machine of a wall of several (the file's "nodes"). */
+typedef struct wall_node {
+    int rank;                             /* the MPI rank, or -1: by host */
+    char host[WALL_HOST_BYTES];           /* "" when by rank */
+    bool outputs[WALL_MAX_OUTPUTS];       /* the outputs it drives */
+} wall_node;
+
 typedef struct wall_config {
     wall_output outputs[WALL_MAX_OUTPUTS];
     int count;                            /* 1..WALL_MAX_OUTPUTS */
     double width_mm, height_mm;           /* bounding box of all tiles (active + bezels) */
+    wall_node nodes[WALL_MAX_OUTPUTS];    /* node_count of them; 0: one machine drives every output */
+    int node_count;
 } wall_config;
+
+/* Which node of w the process of MPI rank `rank` (of `size`) on host `host`
+ * is: the node naming that rank, else the k-th node naming this host where
+ * k is how many lower ranks' hosts (hosts[0..rank)) are this host. -1 with
+ * err when none is. hosts: every rank's host name (size of them). */
+int wall_config_node_of(const wall_config *w, int rank, int size, const char *const *hosts, tess_error *err);
 
 /* Read and check a wall file; *out is fully written (zeroed on failure). */
 bool wall_config_load(const char *file, wall_config *out, tess_error *err);

@@ -65,6 +65,7 @@ typedef struct wall_state {
     char pattern[4096];
     bool sequence;
     int alive;                /* displays not yet destroyed */
+    int last;                 /* the output whose show completes a stitched frame; -1: none is written */
 } wall_state;
 
 typedef struct wall_display {
@@ -93,7 +94,7 @@ static bool wall_show(image_display *d, const frame_image *img, tess_error *err)
     const uint32_t *dest = ws->dest[wd->index], *source = ws->source[wd->index];
     for (size_t i = 0; i < ws->count[wd->index]; i++)
         memcpy(ws->rgb + 3 * (size_t)dest[i], img->rgb + 3 * (size_t)source[i], 3 * sizeof(float));
-    if (wd->index != ws->outputs - 1) /* the last output completes the frame */
+    if (wd->index != ws->last) /* the last output completes the frame */
         return true;
     char path[4096];
     if (img->frame > (uint64_t)INT32_MAX)
@@ -144,8 +145,8 @@ static bool map_sources(const wall_config *w, wall_state *ws)
     return true;
 }
 
-bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequence, image_display **displays,
-                            tess_error *err)
+bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequence, const bool *present,
+                            image_display **displays, tess_error *err)
 {
     wall_state *ws = calloc(1, sizeof *ws);
     if (!ws)
@@ -157,6 +158,10 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
     snprintf(ws->pattern, sizeof ws->pattern, "%s", pattern);
     ws->sequence = sequence;
     ws->outputs = w->count;
+    ws->last = w->count - 1;
+    for (int i = 0; present && i < w->count; i++)
+        if (!present[i])
+            ws->last = -1; /* part of the wall: its outputs' own files only */
     wall_stitched_size(w, &ws->width_px, &ws->height_px);
     size_t pixels = (size_t)ws->width_px * (size_t)ws->height_px;
     ws->rgb = calloc(pixels * 3, sizeof *ws->rgb); /* bezels stay black */
@@ -170,7 +175,11 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
         wall_state_free(ws);
         return false;
     }
+    int made = 0;
     for (int i = 0; i < w->count; i++) {
+        displays[i] = NULL;
+        if (present && !present[i])
+            continue;
         char own[4096];
         wall_display *wd = calloc(1, sizeof *wd);
         bool ok = wd && wall_output_pattern(pattern, w->outputs[i].connector, own, sizeof own);
@@ -178,9 +187,11 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
             wd->dump = display_dump_create(own, sequence, err);
         if (!ok || !wd->dump) {
             free(wd);
-            for (int k = 0; k < i; k++) /* undo: the last destroy frees the shared state */
+            for (int k = 0; k < i; k++) { /* undo: the last destroy frees the shared state */
                 image_display_destroy(displays[k]);
-            if (i == 0)
+                displays[k] = NULL;
+            }
+            if (made == 0)
                 wall_state_free(ws);
             if (!tess_error_is_set(err))
                 tess_error_set(err, "wall: out of memory");
@@ -190,7 +201,12 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
         wd->wall = ws;
         wd->index = i;
         ws->alive++;
+        made++;
         displays[i] = &wd->base;
+    }
+    if (made == 0) {
+        wall_state_free(ws);
+        return tess_error_set(err, "wall: no output of the wall is this process's");
     }
     return true;
 }

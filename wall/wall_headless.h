@@ -27,10 +27,13 @@ void wall_stitched_size(const wall_config *w, int *width_px, int *height_px);
 /* One display per output (displays[i] for output i, in channel order 0..n-1,
  * every output's pixel size resolved). Output i's frames go to `pattern` with
  * "-CONNECTOR" before the extension; the stitched wall to `pattern` itself.
- * `sequence`: frame numbers in the names (dump_frame_path). The displays
+ * `sequence`: frame numbers in the names (dump_frame_path). `present` (NULL:
+ * every output): the outputs this process drives (one machine of several:
+ * cluster/); displays[i] is NULL for the others, and without all of them no
+ * stitched image is written (it would be part of the wall). The displays
  * share state: destroy all of them (the pipeline does). False with err. */
-bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequence, image_display **displays,
-                            tess_error *err);
+bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequence, const bool *present,
+                            image_display **displays, tess_error *err);
 
 /* `pattern` with "-name" inserted before the extension (or at the end). */
 bool wall_output_pattern(const char *pattern, const char *name, char *out, size_t out_bytes);

@@ -62,7 +62,7 @@ static image_display *kind_display(const display_backend *kind, const char *out_
             return NULL;
         }
     }
-    display_backend_args args = {pattern, false};
+    display_backend_args args = {pattern, false, NULL};
     return kind->create(&args, err);
 }
 

@@ -17,6 +17,7 @@
 #include "engine/scene.h"
 #include "option_check.h"
 #include "pipeline_cli.h"
+#include "cluster_cli.h"
 #include "remote_cli.h"
 #include "wall/display_backend.h"
 #include "wall/drm.h"
@@ -167,6 +168,8 @@ static void wall_paused(void *ctx, bool paused)
 static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, service_notifier *service)
 {
     cli_input_files input_files; /* with input on, a --path is the tour */
+    if (!cli_cluster_begin(s)) /* mpirun: this process's part of the wall (cluster_cli.h) */
+        return 1;
     if (!check_outputs(s) || !cli_input_load_files(&s->input, s->input.enabled == 1 ? s->path_file : NULL,
                                                    &input_files))
         return 1;
@@ -185,11 +188,13 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     tess_error err = {{0}};
     /* live input steers the camera (a --path becomes its idle tour); a replay steers it alone */
     bool steered = s->input.enabled == 1 || s->input.replay_file[0] || s->remote.port >= 0;
+    if (!cli_cluster_agree(cs.accel)) /* the same scene, built the same way, on every machine */
+        goto done;
     p = cli_pipeline_create(s, &cs);
     if (!p)
         goto done;
-    if (steered) {
-        /* the camera moves only by input transactions (and the tour) */
+    if (steered || cli_cluster_follower()) {
+        /* the camera moves only by input transactions (and the tour), or by the leader's records */
     } else if (s->path_file[0]) {
         if (!camera_path_load(s->path_file, &player.path, &err)) {
             cli_error("%s", err.msg);
@@ -216,6 +221,8 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
         goto done;
     if (run_hooks && run_hooks->started && !run_hooks->started(run_hooks->ctx, p, input))
         goto done;
+    if (!cli_cluster_attach(p)) /* last: the syncs meet the other processes from the first frame on */
+        goto done;
     catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
     bool ran = pipeline_run(p, &err);
     catch_stop_signals(NULL);
@@ -224,6 +231,10 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     cli_remote_stop(); /* before input: the view's source is the input runner's */
     cli_input_finish(input);
     input = NULL;
+    if (cli_cluster_report()) { /* a process died or stopped answering: said above */
+        code = 3;
+        goto done;
+    }
     if (!ran) {
         cli_error("%s", err.msg);
         goto done;
@@ -331,7 +342,9 @@ int cli_render(int argc, char **argv)
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
     cli_check_ignored_render_run(&given, &s, "render");
-    return run_job(&s, scene_path, false, NULL);
+    int done = run_job(&s, scene_path, false, NULL);
+    cli_cluster_end();
+    return done;
 }
 
 int cli_run_with(int argc, char **argv, const cli_run_hooks *hooks)
@@ -405,5 +418,6 @@ int cli_run(int argc, char **argv)
     service_notifier *service = service_notifier_create(); /* NULL unless started by systemd */
     code = run_job(&s, scene_path, true, service);
     service_notifier_destroy(service);
+    cli_cluster_end();
     return code;
 }

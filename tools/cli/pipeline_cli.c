@@ -2,6 +2,7 @@
  * command-line options, making the pipeline, camera-path playback and
  * recording. The config format is in docs/pipeline-config.md. */
 #include "pipeline_cli.h"
+#include "cluster_cli.h"
 #include "remote_cli.h"
 
 #include <libgen.h>
@@ -587,6 +588,8 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->wall_file, sizeof s->wall_file);
     } else if (!strcmp(a, "--record")) {
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->record_file, sizeof s->record_file);
+    } else if (!strcmp(a, "--sync-timeout")) {
+        return (val = cli_option_value(argc, argv, i)) && cli_parse_double(a, val, 0.1, 3600.0, &s->sync_timeout_s);
     }
     if (!cli_remote_option(argc, argv, i, &s->remote, handled))
         return false;
@@ -629,6 +632,10 @@ void cli_pipeline_usage(FILE *f)
           f);
     cli_input_usage(f);
     cli_remote_usage(f);
+    fputs("a wall of several machines (mpirun -np N; the wall file's \"nodes\"; cluster/cluster.h):\n"
+          "  --sync-timeout S how long a process waits for the others once a frame before it gives up\n"
+          "                   (0.1..3600 s, default 10): a process that died or hangs ends the run\n",
+          f);
 }
 
 /* ---------------------------------------------------------------- making the pipeline */
@@ -728,18 +735,21 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
             image_display_destroy(displays[i]);
         return false;
     }
-    display_backend_args args = {main_ch->out, s->frames != 1};
+    /* a wall of several machines: this process's outputs only (cluster_cli.h) */
+    display_backend_args args = {main_ch->out, s->frames != 1, cli_cluster_outputs()};
     ok = on_device || display_backend_create_wall(backend, &wall, &args, displays, &err);
-    /* the pipeline owns each display from pipeline_add_channel_window on, also on failure */
-    int added = 0, first_channel = -1;
-    for (int i = 0; ok && i < wall.count; i++, added++) {
+    int first_channel = -1;
+    for (int i = 0; ok && i < wall.count; i++) {
+        if (!displays[i]) /* another process's output */
+            continue;
         int channel = pipeline_add_channel_window(p, &cam, wall_plane_aspect(&wall), wall_output_window(&wall, i),
                                                   wall.outputs[i].width_px, wall.outputs[i].height_px, displays[i],
                                                   &err);
+        displays[i] = NULL; /* the pipeline's from pipeline_add_channel_window on, also on failure */
         ok = channel >= 0;
-        first_channel = i == 0 ? channel : first_channel;
+        first_channel = first_channel < 0 ? channel : first_channel;
     }
-    for (int i = added + (ok ? 0 : 1); i < wall.count; i++)
+    for (int i = 0; i < wall.count; i++) /* what a failure left */
         image_display_destroy(displays[i]);
     if (ok) {
         active_layout.valid = true;
@@ -830,15 +840,19 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
 
 /* ---------------------------------------------------------------- path playback, recording */
 
-/* A path's or the orbit's camera: channel 0's (every channel's for a wall), and the remote
- * view's, which follows the main picture (serial section). */
+/* A path's or the orbit's camera (serial section): for a wall the wall's camera, one record
+ * for all channels (every output, the remote view's follow channel, not a private view: and
+ * on a wall of several machines, what the leader sends: cluster/); else channel 0's and the
+ * remote view's, which follows the main picture. */
 static void set_main_cameras(pipeline *p, bool all_channels, const camera_desc *c)
 {
-    int channels = all_channels ? pipeline_channel_count(p) : 1;
-    for (int i = 0; i < channels; i++)
-        if (!pipeline_channel_private(p, i)) /* a remote viewer's own view */
-            pipeline_set_camera(p, i, c);
-    if (cli_remote_channel() >= channels)
+    if (all_channels) {
+        txn_record wall = txn_camera(TXN_ALL_CHANNELS, c);
+        pipeline_apply(p, &wall);
+        return;
+    }
+    pipeline_set_camera(p, 0, c);
+    if (cli_remote_channel() >= 1)
         pipeline_set_camera(p, cli_remote_channel(), c);
 }
 

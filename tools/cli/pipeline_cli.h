@@ -58,6 +58,7 @@ typedef struct cli_pipeline_spec {
     /* --budget-ms, --refine-k, --still-s (pipeline.h, GOVERNOR): budget 0 is no governor;
      * `upscale` is then its filter */
     double budget_ms;
+    double sync_timeout_s;       /* --sync-timeout: mpirun, how long a process waits for the others (0: 10 s) */
     int refine_k;
     double still_s;
     /* inspection (the config's renderer.transparency, renderer.caps, renderer.ao, opacity,

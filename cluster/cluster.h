@@ -1,0 +1,99 @@
+/* cluster.h (cluster) - one wall over several processes, one a machine
+ * (OpenMPI: `mpirun -np N tessera run --wall W.json`, the wall file's
+ * "nodes" saying which outputs each drives). Every process loads the scene
+ * and builds its accel itself and renders its own outputs with its own
+ * threads; they meet twice a frame:
+ *
+ *   FRAME SYNC (the serial section, pipeline.h: the frame sync hook). The
+ *   LEADER (rank 0: it reads input) sends what changed its frame state this
+ *   step as data records (txn.h, binary form) with the step's time; every
+ *   other process (a FOLLOWER) applies the same records at the same frame,
+ *   so all render the same state. Whether the loop stops after the step is
+ *   decided together: any process that stops (quit on the leader, SIGTERM,
+ *   a display that failed) stops all of them at the same step. Records that
+ *   name a channel (a camera or a switch of one channel: an output's
+ *   hotplug, a remote viewer's private view) are the process's own and are
+ *   not sent. Followers run no camera path or tour of their own: the
+ *   leader's cameras arrive as records.
+ *
+ *   DISPLAY SYNC (the display thread, before the flips: pipeline.h: the
+ *   display sync hook). A barrier, so every process flips the same frame at
+ *   the same time (Tide's software swap sync).
+ *
+ * FAILURE. Every collective is started non-blocking and waited for with a
+ * time-out (cluster_config.timeout_s): a process that dies or stops
+ * answering makes the others stop the run with an error naming what they
+ * waited for and the frame, never hang. MPI_Init has no time-out of its own:
+ * a watchdog thread ends the process (status 3) when starting takes longer. After a failure MPI cannot be
+ * finalised (a collective is left open): cluster_finish says so and the
+ * process exits with the error.
+ *
+ * START. cluster_agree compares one value (the accel's checksum) across the
+ * processes before the run: a mismatch (a different scene file, a different
+ * build) refuses to run, naming the ranks that differ.
+ *
+ * Threading: MPI is initialised for MPI_THREAD_SERIALIZED: the frame sync
+ * runs on whichever render thread runs the serial section, the display sync
+ * on the display thread, start and finish on the main thread, never two at
+ * once (the frame barrier orders them). The stats are written by those and
+ * read after the run. */
+#ifndef TESSERA_CLUSTER_CLUSTER_H
+#define TESSERA_CLUSTER_CLUSTER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "engine/err.h"
+
+struct pipeline;
+
+#define CLUSTER_DEFAULT_TIMEOUT_S 10.0
+#define CLUSTER_HOST_BYTES 64
+
+typedef struct cluster cluster;
+
+typedef struct cluster_config {
+    double timeout_s; /* how long a process waits for the others at a sync point; 0: the default */
+} cluster_config;
+
+/* Whether this process was started by mpirun (OpenMPI or PMIx set the
+ * environment). Pure: no MPI call. */
+bool cluster_launched(void);
+
+/* MPI_Init_thread (MPI_THREAD_SERIALIZED), errors returned rather than
+ * aborting, every rank's host name gathered. NULL with err. Once a process. */
+cluster *cluster_start(int *argc, char ***argv, const cluster_config *cfg, tess_error *err);
+
+int cluster_rank(const cluster *c);
+int cluster_size(const cluster *c);
+/* Every rank's host name (cluster_size of them), as gethostname said. */
+const char *const *cluster_hosts(const cluster *c);
+
+/* Whether every process passed the same `value`: false with err naming
+ * `what`, the values and the ranks when they differ (or when one does not
+ * answer in time). A collective: every process calls it. */
+bool cluster_agree(cluster *c, uint64_t value, const char *what, tess_error *err);
+
+/* Put the frame and display syncs on p (and on the leader the record
+ * observer), before pipeline_run. False with err. */
+bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err);
+
+/* What the run cost: per frame, the frame sync (the collectives and the
+ * records) and the display barrier, in microseconds (medians of the last
+ * 1024), records and bytes the leader sent. */
+typedef struct cluster_stats {
+    uint64_t frames;            /* frame syncs */
+    uint64_t records, bytes;    /* sent (leader) or applied (follower) */
+    double sync_us_median, sync_us_max;
+    double barrier_us_median, barrier_us_max;
+    bool failed;                /* a sync point timed out or MPI failed */
+} cluster_stats;
+cluster_stats cluster_get_stats(const cluster *c);
+void cluster_print_stats(const cluster *c, FILE *out);
+
+/* MPI_Finalize (skipped after a failure: it would wait for the dead), free.
+ * NULL is fine. */
+void cluster_finish(cluster *c);
+
+#endif

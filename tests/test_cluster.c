@@ -1,0 +1,291 @@
+/* test_cluster.c - a wall of several machines (cluster/), on one machine:
+ * `mpirun --oversubscribe -np 4`, each process one output of a 2x2 headless
+ * wall (dump display), against the same wall rendered by one process: every
+ * output's every frame equal byte for byte, for an orbit and for a replayed
+ * input session; a process that stops answering ends the run within the
+ * sync time-out with a message naming what was waited for; processes built
+ * over different scenes refuse to start; a process count that does not
+ * match the wall's nodes is named. Skipped, saying why, where mpirun is
+ * missing (tools/deps.sh installs it). */
+#define _DEFAULT_SOURCE
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cluster/cluster.h"
+#include "engine/accel.h"
+#include "engine/scene.h"
+#include "engine/txn.h"
+#include "input/record.h"
+#include "support.h"
+#include "wall/wall_config.h"
+
+#define RUN_TIMEOUT_S 300 /* a hang guard, not a speed limit */
+/* as root (CI), OpenMPI wants to be told; the environment reaches every process */
+#define MPIRUN "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 mpirun"
+
+static const char *wall_text =
+    "{\"format\": \"tessera-wall\", \"version\": 1, \"units\": \"mm\", \"outputs\": [\n"
+    " {\"connector\": \"Virtual-1\", \"mode\": \"96x54\", \"grid\": [0, 0], \"size_mm\": [160, 90], "
+    "\"bezel_mm\": {\"right\": 5, \"bottom\": 5}},\n"
+    " {\"connector\": \"Virtual-2\", \"mode\": \"96x54\", \"grid\": [1, 0], \"size_mm\": [160, 90], "
+    "\"bezel_mm\": {\"right\": 5, \"bottom\": 5}},\n"
+    " {\"connector\": \"Virtual-3\", \"mode\": \"96x54\", \"grid\": [0, 1], \"size_mm\": [160, 90], "
+    "\"bezel_mm\": {\"right\": 5, \"bottom\": 5}},\n"
+    " {\"connector\": \"Virtual-4\", \"mode\": \"96x54\", \"grid\": [1, 1], \"size_mm\": [160, 90], "
+    "\"bezel_mm\": {\"right\": 5, \"bottom\": 5}}],\n"
+    " \"nodes\": [{\"rank\": 0, \"outputs\": [\"Virtual-1\"]}, {\"rank\": 1, \"outputs\": [\"Virtual-2\"]},\n"
+    "           {\"rank\": 2, \"outputs\": [\"Virtual-3\"]}, {\"rank\": 3, \"outputs\": [\"Virtual-4\"]}]}\n";
+
+static void need_mpirun(void)
+{
+    if (support_run("command -v mpirun > /dev/null 2>&1") != 0)
+        cr_skip_test("mpirun is not installed (tools/deps.sh installs openmpi-bin)");
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Run a shell command under a hang guard; its status; its output in dir/NAME.log (and *log). */
+static int run_logged(const char *dir, const char *name, const char *command, char *log, size_t log_bytes)
+{
+    char cmd[8192], path[512];
+    snprintf(path, sizeof path, "%s/%s.log", dir, name);
+    snprintf(cmd, sizeof cmd, "timeout %d sh -c '%s' > '%s' 2>&1", RUN_TIMEOUT_S, command, path);
+    int status = support_run(cmd);
+    support_read_text(path, log, log_bytes);
+    return status;
+}
+
+/* Every per-output file (NAME-Virtual-N.png) in dir a equals the one of that name in b; how many. */
+static int same_output_files(const char *a, const char *b)
+{
+    DIR *d = opendir(a);
+    cr_assert(d, "%s", a);
+    int compared = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (!strstr(e->d_name, "-Virtual-"))
+            continue;
+        char pa[1024], pb[1024];
+        snprintf(pa, sizeof pa, "%s/%s", a, e->d_name);
+        snprintf(pb, sizeof pb, "%s/%s", b, e->d_name);
+        tess_error err = {{0}};
+        int wa, ha, wb, hb;
+        uint8_t *ia = NULL, *ib = NULL;
+        cr_assert(dump_read_rgb8(pa, &wa, &ha, &ia, &err), "%s", err.msg);
+        cr_assert(dump_read_rgb8(pb, &wb, &hb, &ib, &err), "%s (the one-process reference)", err.msg);
+        cr_assert(wa == wb && ha == hb && memcmp(ia, ib, (size_t)wa * (size_t)ha * 3) == 0,
+                  "%s differs from the one-process wall's", e->d_name);
+        free(ia);
+        free(ib);
+        compared++;
+    }
+    closedir(d);
+    return compared;
+}
+
+/* No stitched image from a process that drives part of the wall. */
+static bool has_stitched(const char *dir)
+{
+    DIR *d = opendir(dir);
+    cr_assert(d);
+    bool found = false;
+    struct dirent *e;
+    while ((e = readdir(d)))
+        found = found || (strstr(e->d_name, ".png") && !strstr(e->d_name, "-Virtual-"));
+    closedir(d);
+    return found;
+}
+
+/* The same wall rendered by 4 processes and by 1; `args`: the rest of the command line. */
+static void four_equal_one(const char *name, const char *command, const char *args, int frames)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[16384];
+    support_make_tmp_dir(dir, sizeof dir, name);
+    support_write_file(dir, "wall.json", wall_text);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s/four %s/one", dir, dir);
+    cr_assert_eq(support_run(cmd), 0);
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 4 %s %s --wall %s/wall.json --display dump --out %s/four/f_####.png --threads 1 %s",
+             support_tessera_bin(), command, dir, dir, args);
+    int status = run_logged(dir, "four", cmd, log, sizeof log);
+    cr_assert_eq(status, 0, "4 processes: status %d: %s", status, log);
+    for (int r = 0; r < 4; r++) {
+        char line[64];
+        snprintf(line, sizeof line, "cluster: rank %d of 4", r);
+        cr_assert(strstr(log, line), "no counts from rank %d: %s", r, log);
+    }
+    cr_assert_null(strstr(log, "FAILED"), "%s", log);
+    snprintf(cmd, sizeof cmd, "%s %s --wall %s/wall.json --display dump --out %s/one/f_####.png --threads 2 %s",
+             support_tessera_bin(), command, dir, dir, args);
+    status = run_logged(dir, "one", cmd, log, sizeof log);
+    cr_assert_eq(status, 0, "1 process: status %d: %s", status, log);
+    char four[300], one[300];
+    snprintf(four, sizeof four, "%s/four", dir);
+    snprintf(one, sizeof one, "%s/one", dir);
+    int compared = same_output_files(four, one);
+    cr_assert_eq(compared, 4 * frames, "%d output frames compared, %d expected", compared, 4 * frames);
+    cr_assert_not(has_stitched(four), "a process driving one output wrote a stitched image");
+    cr_assert(has_stitched(one));
+    support_remove_tmp_dir(dir);
+}
+
+Test(cluster, four_processes_render_the_orbit_of_one_bit_for_bit, .timeout = 900)
+{
+    four_equal_one("cluster-orbit", "run", "--frames 6", 6);
+}
+
+/* A recorded session (cameras, a hide) replayed on the leader, one record a
+ * frame: every process shows what one process shows. */
+Test(cluster, a_replayed_input_session_reaches_every_process, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-record");
+    /* the records, written as input does */
+    tess_error err = {{0}};
+    scene *s = scene_create_default(&err);
+    cr_assert(s, "%s", err.msg);
+    camera_desc c = s->camera;
+    char text[8192] = INPUT_RECORD_HEADER "\n";
+    size_t used = strlen(text);
+    for (int i = 0; i < 5; i++) {
+        camera_desc k = c;
+        k.eye.x += 0.4f * (float)(i + 1);
+        k.eye.y += 0.1f * (float)i;
+        txn_record r = txn_camera(TXN_ALL_CHANNELS, &k);
+        char line[TXN_TEXT_BYTES * 2];
+        cr_assert(txn_encode_text(&r, line, sizeof line));
+        used += (size_t)snprintf(text + used, sizeof text - used, "%.6f %s\n", 0.1 * i, line);
+    }
+    txn_record hide = txn_geoms_record(TXN_HIDE, 0, 1);
+    char line[TXN_TEXT_BYTES * 2];
+    cr_assert(txn_encode_text(&hide, line, sizeof line));
+    snprintf(text + used, sizeof text - used, "0.600000 %s\n", line);
+    scene_destroy(s);
+    support_write_file(dir, "rec.txt", text);
+    char args[600];
+    snprintf(args, sizeof args, "--frames 8 --replay-input %s/rec.txt --replay-speed frames", dir);
+    four_equal_one("cluster-replay", "render", args, 8);
+    support_remove_tmp_dir(dir);
+}
+
+/* A process that stops answering (SIGSTOP) while the wall runs ends the run on the others
+ * within the sync time-out (2 s here) plus a frame: they say what they waited for and exit
+ * with status 3; mpirun then ends the job. */
+Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[32768], pids[512];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-stop");
+    support_write_file(dir, "wall.json", wall_text);
+    /* until stopped; the PIDs written by the shell that starts each process */
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 4 sh -c \"echo \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json --display dump "
+             "--out %s/f_####.png --frames 100000000 --threads 1 --sync-timeout 2\" > %s/run.log 2>&1",
+             dir, support_tessera_bin(), dir, dir, dir);
+    pid_t job = fork();
+    cr_assert(job >= 0);
+    if (job == 0) {
+        execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
+        _exit(127);
+    }
+    /* wait (for events: the four PIDs and frames in step) */
+    snprintf(cmd, sizeof cmd, "%s/pids", dir);
+    double end = now_s() + RUN_TIMEOUT_S;
+    int lines = 0;
+    while (lines < 4 && now_s() < end) {
+        support_read_text(cmd, pids, sizeof pids);
+        lines = 0;
+        for (const char *p = pids; *p; p++)
+            lines += *p == '\n';
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    }
+    cr_assert_eq(lines, 4, "the processes did not start: %s", pids);
+    /* the third process stops answering once the wall runs: frame 3 of its output is written */
+    char frame3[400];
+    snprintf(frame3, sizeof frame3, "%s/f_0003-Virtual-3.png", dir);
+    while (access(frame3, F_OK) != 0 && now_s() < end)
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    cr_assert_eq(access(frame3, F_OK), 0, "the wall never ran");
+    int victim = 0;
+    const char *p = pids;
+    for (int i = 0; i < 2; i++)
+        p = strchr(p, '\n') + 1;
+    victim = atoi(p);
+    cr_assert_gt(victim, 0);
+    cr_assert_eq(kill(victim, SIGSTOP), 0);
+    double stopped = now_s();
+    int status = 0;
+    while (waitpid(job, &status, WNOHANG) == 0 && now_s() < end)
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    double took = now_s() - stopped;
+    kill(victim, SIGKILL);
+    snprintf(cmd, sizeof cmd, "%s/run.log", dir);
+    support_read_text(cmd, log, sizeof log);
+    cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
+    cr_assert(strstr(log, "no answer from the other processes within 2.0 s"), "%s", log);
+    cr_assert(strstr(log, "FAILED"), "%s", log);
+    cr_log_info("cluster: the run ended %.2f s after a process stopped answering (time-out 2 s)", took);
+    support_remove_tmp_dir(dir);
+}
+
+/* Different scenes on different processes: the accel checksums differ and none runs. */
+Test(cluster, processes_over_different_scenes_refuse_to_run, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[16384];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-scenes");
+    support_write_file(dir, "wall.json",
+                       "{\"format\": \"tessera-wall\", \"version\": 1, \"units\": \"mm\", \"outputs\": ["
+                       "{\"connector\": \"Virtual-1\", \"mode\": \"96x54\", \"grid\": [0, 0], \"size_mm\": [160, 90]},"
+                       "{\"connector\": \"Virtual-2\", \"mode\": \"96x54\", \"grid\": [1, 0], \"size_mm\": [160, 90]}],"
+                       "\"nodes\": [{\"rank\": 0, \"outputs\": [\"Virtual-1\"]}, {\"rank\": 1, \"outputs\": "
+                       "[\"Virtual-2\"]}]}");
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 1 %s run --wall %s/wall.json --display null --frames 2 : -np 1 %s run --wall %s/wall.json "
+                    "--display null --frames 2 --scene ../configs/scenes/cornell_like.json",
+             support_tessera_bin(), dir, support_tessera_bin(), dir);
+    int status = run_logged(dir, "scenes", cmd, log, sizeof log);
+    cr_assert_neq(status, 0, "%s", log);
+    cr_assert(strstr(log, "cluster: the acceleration structure's checksum differs: rank 0"), "%s", log);
+    /* three processes for a wall of four nodes */
+    support_write_file(dir, "four.json", wall_text);
+    snprintf(cmd, sizeof cmd, MPIRUN " -np 3 %s run --wall %s/four.json --display null --frames 2",
+             support_tessera_bin(), dir);
+    status = run_logged(dir, "count", cmd, log, sizeof log);
+    cr_assert_neq(status, 0, "%s", log);
+    cr_assert(strstr(log, "the wall has 4 nodes and 3 processes were started (mpirun -np 4)"), "%s", log);
+    support_remove_tmp_dir(dir);
+}
+
+/* The checksum is the build's: the same scene built with 1 and 2 threads agrees, another
+ * scene does not. */
+Test(cluster, the_accel_checksum_is_the_same_for_the_same_scene)
+{
+    tess_error err = {{0}};
+    scene *s = scene_create_default(&err), *t = scene_load("../configs/scenes/cornell_like.json", &err);
+    cr_assert(s && t, "%s", err.msg);
+    accel *a1 = accel_build(s, 1, &err), *a2 = accel_build(s, 2, &err), *b = accel_build(t, 2, &err);
+    cr_assert(a1 && a2 && b, "%s", err.msg);
+    cr_assert_eq(accel_checksum(a1), accel_checksum(a2), "one scene, built by 1 and by 2 threads");
+    cr_assert_neq(accel_checksum(a1), 0u);
+    cr_assert_neq(accel_checksum(a1), accel_checksum(b), "another scene");
+    accel_destroy(a1);
+    accel_destroy(a2);
+    accel_destroy(b);
+    scene_destroy(s);
+    scene_destroy(t);
+}

@@ -1,0 +1,115 @@
+/* cluster_cli.c - a wall of several machines on the command line (cluster_cli.h). */
+#include "cluster_cli.h"
+
+#include <string.h>
+
+#include "cli.h"
+#include "cluster/cluster.h"
+#include "wall/display_backend.h"
+#include "engine/pipeline.h"
+#include "wall/wall_config.h"
+
+/* The cluster of this process (one a process). */
+static struct {
+    cluster *c;
+    int node;
+    bool outputs[WALL_MAX_OUTPUTS];
+    bool ended;
+} active = {NULL, -1, {false}, false};
+
+bool cli_cluster_begin(cli_pipeline_spec *s)
+{
+    if (!cluster_launched() || active.c)
+        return true;
+    tess_error err = {{0}};
+    if (!s->wall_file[0]) {
+        cli_error("started by mpirun: give --wall FILE whose \"nodes\" say which outputs each process drives");
+        return false;
+    }
+    wall_config wall;
+    if (!wall_config_load(s->wall_file, &wall, &err)) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    if (wall.node_count == 0) {
+        cli_error("%s: started by mpirun, but the wall has no \"nodes\" (which outputs each process drives)",
+                  s->wall_file);
+        return false;
+    }
+    if (display_backend_by_name(s->channels[0].display)->needs & DISPLAY_NEEDS_CARD) {
+        cli_error("--display %s: a wall of several machines runs headless so far (dump, null, convert)",
+                  s->channels[0].display);
+        return false;
+    }
+    if (s->budget_ms > 0.0) {
+        cli_error("--budget-ms: the governor decides per process, so the machines of a wall would render at "
+                  "different scales; not with mpirun yet");
+        return false;
+    }
+    cluster_config cfg = {.timeout_s = s->sync_timeout_s};
+    if (!(active.c = cluster_start(NULL, NULL, &cfg, &err))) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    int rank = cluster_rank(active.c);
+    active.node = wall_config_node_of(&wall, rank, cluster_size(active.c), cluster_hosts(active.c), &err);
+    if (active.node < 0) {
+        cli_error("%s: %s", s->wall_file, err.msg);
+        return false;
+    }
+    memcpy(active.outputs, wall.nodes[active.node].outputs, sizeof active.outputs);
+    if (rank != 0) { /* a follower: what changes the picture comes from the leader */
+        s->input.enabled = 0;
+        s->input.replay_file[0] = '\0';
+        s->input.record_file[0] = '\0';
+        s->remote.port = -1;
+        s->path_file[0] = '\0';
+        s->record_file[0] = '\0';
+    }
+    return true;
+}
+
+bool cli_cluster_active(void) { return active.c != NULL; }
+bool cli_cluster_follower(void) { return active.c && cluster_rank(active.c) != 0; }
+const bool *cli_cluster_outputs(void) { return active.c ? active.outputs : NULL; }
+
+bool cli_cluster_agree(const accel *a)
+{
+    if (!active.c)
+        return true;
+    tess_error err = {{0}};
+    if (!cluster_agree(active.c, accel_checksum(a), "the acceleration structure's checksum", &err)) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    return true;
+}
+
+bool cli_cluster_attach(struct pipeline *p)
+{
+    if (!active.c)
+        return true;
+    tess_error err = {{0}};
+    if (!cluster_attach(active.c, p, &err)) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    return true;
+}
+
+bool cli_cluster_report(void)
+{
+    if (!active.c)
+        return false;
+    cluster_print_stats(active.c, stderr);
+    return cluster_get_stats(active.c).failed;
+}
+
+void cli_cluster_end(void)
+{
+    if (active.ended)
+        return;
+    active.ended = true;
+    cluster_finish(active.c);
+    active.c = NULL;
+}
