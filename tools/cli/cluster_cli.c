@@ -61,6 +61,7 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
     if (rank != 0) { /* a follower: what changes the picture comes from the leader */
         s->input.enabled = 0;
         s->input.replay_file[0] = '\0';
+        s->input.replay_speed_given = false;
         s->input.record_file[0] = '\0';
         s->remote.port = -1;
         s->path_file[0] = '\0';
