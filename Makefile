@@ -187,11 +187,21 @@ TSAN_BIN := build-tsan/tessera_tsan_tests
 test-tsan: deps
 	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)
 	cd tests && TSAN_OPTIONS="halt_on_error=1 exitcode=66 second_deadlock_stack=1" ../$(TSAN_BIN)
+	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" tessera-tsan
+	$(MAKE) $(TEST_BIN)
+	cd tests && TESSERA_BIN=../tessera-tsan \
+	    TSAN_OPTIONS="halt_on_error=1 exitcode=66 suppressions=$(CURDIR)/tests/tsan_mpi.supp" \
+	    ../$(TEST_BIN) --filter 'cluster/*'
 
 build-tsan/tessera_tsan_tests: $(TSAN_TESTS) $(LIB)
 	$(CC) -Itests/tsan $(CPPFLAGS) $(CFLAGS) -o $@ $(TSAN_TESTS) $(LIB) $(LDLIBS) -lstdc++
 
 tessera-asan: $(CLI_OBJ) $(LIB)
+	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
+
+# the binary under ThreadSanitizer, for what runs as processes (make test-tsan: the cluster's
+# mpirun runs, tests/test_cluster.c with TESSERA_BIN=../tessera-tsan)
+tessera-tsan: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
 # the soak (tests/soak.sh, README: Soak): the kiosk (run --wall, headless) under random
@@ -346,7 +356,7 @@ report:
 	sh tools/report/report.sh
 
 clean:
-	rm -rf build build-asan build-tsan build-unrobust tessera tessera-asan out
+	rm -rf build build-asan build-tsan build-unrobust tessera tessera-asan tessera-tsan out
 
 # dependency files are only read, never remade (else make's built-in rules try)
 %.d: ;
