@@ -17,6 +17,7 @@
 
 #define LEADER 0
 #define TIMES_KEPT 1024
+#define FLIPS_KEPT 4096
 #define SPINS_BEFORE_SLEEP 200 /* MPI_Test calls before the waiter starts sleeping between them */
 
 /* What the leader sends every frame before its records. */
@@ -48,7 +49,13 @@ struct cluster {
     size_t in_capacity;
     bool failed;
     cluster_stats stats;
-    times sync, barrier;
+    times vote, send, barrier; /* the stop vote (it waits for the slowest process), the leader's
+                                  header and records (everybody is there), the barrier before the flip */
+    /* the display sync: when each of the last FLIPS_KEPT frames passed the barrier
+     * (CLOCK_REALTIME us: one clock on one machine, NTP-close across machines) */
+    uint64_t flip_frame[FLIPS_KEPT];
+    int64_t flip_us[FLIPS_KEPT];
+    uint64_t flips;
 };
 
 bool cluster_launched(void)
@@ -161,7 +168,7 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
 {
     cluster *c = ctx;
     tess_error err = {{0}};
-    if (c->failed) {
+    if (c->failed) { /* the frame with the message was rendered: now the loop stops */
         *stop = true;
         return;
     }
@@ -178,6 +185,7 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
     if (!wait_for(c, &req, MPI_Iallreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD, &req), "the stop vote",
                   info->frame, &err))
         goto failed;
+    double t1 = clock_monotonic_s();
     /* the leader's time and records */
     sync_header h = {0};
     if (leader)
@@ -224,24 +232,40 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
     c->stats.frames++;
     c->stats.records += h.records;
     c->stats.bytes += sizeof h + bytes;
-    times_add(&c->sync, (clock_monotonic_s() - t0) * 1e6);
+    times_add(&c->vote, (t1 - t0) * 1e6);
+    times_add(&c->send, (clock_monotonic_s() - t1) * 1e6);
     *stop = any != 0;
     return;
 failed:
+    /* the others are gone or stuck: no more syncs. This step renders one more frame, on this
+     * process's own, with the reason in the status line, so the wall says why it stops; the
+     * next step stops */
     log_error("%s", err.msg);
-    *stop = true;
+    char text[TXN_TEXT_BYTES];
+    snprintf(text, sizeof text, "cluster: no answer from the other machines (frame %" PRIu64 "): this wall stops",
+             info->frame);
+    txn_record why = txn_status(text);
+    pipeline_apply(p, &why);
+    *stop = false;
 }
 
 static bool display_sync(void *ctx, uint64_t frame, tess_error *err)
 {
     cluster *c = ctx;
-    if (c->failed)
-        return tess_error_set(err, "cluster: rank %d: the cluster failed before (see above)", c->rank);
+    if (c->failed) /* nobody to wait for: the frame with the message is shown alone */
+        return true;
     double t0 = clock_monotonic_s();
     MPI_Request req;
     if (!wait_for(c, &req, MPI_Ibarrier(MPI_COMM_WORLD, &req), "the barrier before the flip", frame, err))
         return false;
     times_add(&c->barrier, (clock_monotonic_s() - t0) * 1e6);
+    if (frame != UINT64_MAX) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        c->flip_frame[c->flips % FLIPS_KEPT] = frame;
+        c->flip_us[c->flips % FLIPS_KEPT] = (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+        c->flips++;
+    }
     return true;
 }
 
@@ -374,8 +398,10 @@ bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err)
 cluster_stats cluster_get_stats(const cluster *c)
 {
     cluster_stats s = c->stats;
-    s.sync_us_median = times_median(&c->sync);
-    s.sync_us_max = c->sync.max;
+    s.vote_us_median = times_median(&c->vote);
+    s.vote_us_max = c->vote.max;
+    s.send_us_median = times_median(&c->send);
+    s.send_us_max = c->send.max;
     s.barrier_us_median = times_median(&c->barrier);
     s.barrier_us_max = c->barrier.max;
     s.failed = c->failed;
@@ -387,10 +413,78 @@ void cluster_print_stats(const cluster *c, FILE *out)
     cluster_stats s = cluster_get_stats(c);
     fprintf(out,
             "tessera: cluster: rank %d of %d (%s): %" PRIu64 " frames in step, %" PRIu64 " records %s (%" PRIu64
-            " bytes); frame sync %.0f us median (max %.0f), barrier before the flip %.0f us median (max %.0f)%s\n",
+            " bytes); us a frame, median (max): stop vote %.0f (%.0f), leader's records %.0f (%.0f), barrier "
+            "before the flip %.0f (%.0f)%s\n",
             c->rank, c->size, c->hosts ? c->hosts[c->rank] : "?", s.frames, s.records,
-            c->rank == LEADER ? "sent" : "applied", s.bytes, s.sync_us_median, s.sync_us_max, s.barrier_us_median,
-            s.barrier_us_max, s.failed ? "; FAILED" : "");
+            c->rank == LEADER ? "sent" : "applied", s.bytes, s.vote_us_median, s.vote_us_max, s.send_us_median,
+            s.send_us_max, s.barrier_us_median, s.barrier_us_max, s.failed ? "; FAILED" : "");
+}
+
+bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
+{
+    *out = (cluster_skew){0};
+    if (c->failed)
+        return tess_error_set(err, "cluster: failed before: no skew to measure");
+    /* the frames every process kept: the last min(flips, FLIPS_KEPT) of each; rank 0 compares */
+    uint64_t kept = c->flips < FLIPS_KEPT ? c->flips : FLIPS_KEPT, fewest = kept;
+    MPI_Request req;
+    if (!wait_for(c, &req, MPI_Iallreduce(&kept, &fewest, 1, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &req),
+                  "the skew's frame count", 0, err))
+        return false;
+    size_t n = (size_t)fewest;
+    int64_t *mine = malloc((n ? n : 1) * sizeof *mine), *all = NULL;
+    uint64_t *frames = malloc((n ? n : 1) * sizeof *frames), *all_frames = NULL;
+    bool ok = mine && frames;
+    for (size_t i = 0; ok && i < n; i++) { /* oldest first */
+        uint64_t k = (c->flips - n + i) % FLIPS_KEPT;
+        mine[i] = c->flip_us[k];
+        frames[i] = c->flip_frame[k];
+    }
+    if (ok && c->rank == LEADER) {
+        all = malloc((n ? n : 1) * (size_t)c->size * sizeof *all);
+        all_frames = malloc((n ? n : 1) * (size_t)c->size * sizeof *all_frames);
+        ok = all && all_frames;
+    }
+    /* every process takes part in both gathers, also one out of memory (its count is then 0:
+     * the leader sees frames that do not match and says so) */
+    ok = wait_for(c, &req,
+                  MPI_Igather(frames, (int)n, MPI_UINT64_T, all_frames, (int)n, MPI_UINT64_T, LEADER, MPI_COMM_WORLD,
+                              &req),
+                  "the flip frames", 0, err) &&
+         wait_for(c, &req, MPI_Igather(mine, (int)n, MPI_INT64_T, all, (int)n, MPI_INT64_T, LEADER, MPI_COMM_WORLD, &req),
+                  "the flip times", 0, err) &&
+         ok;
+    if (ok && c->rank == LEADER && n > 0) {
+        double *skews = malloc(n * sizeof *skews);
+        size_t m = 0;
+        for (size_t i = 0; skews && i < n; i++) {
+            int64_t lo = all[i], hi = all[i];
+            bool same = true;
+            for (int r = 1; r < c->size; r++) {
+                same = same && all_frames[(size_t)r * n + i] == all_frames[i];
+                int64_t t = all[(size_t)r * n + i];
+                lo = t < lo ? t : lo;
+                hi = t > hi ? t : hi;
+            }
+            if (same)
+                skews[m++] = (double)(hi - lo);
+            else
+                out->frames_out_of_step++;
+        }
+        if (skews && m) {
+            qsort(skews, m, sizeof *skews, cmp_double);
+            out->frames = m;
+            out->median_us = m % 2 ? skews[m / 2] : 0.5 * (skews[m / 2 - 1] + skews[m / 2]);
+            out->p95_us = skews[(size_t)((double)(m - 1) * 0.95)];
+            out->max_us = skews[m - 1];
+        }
+        free(skews);
+    }
+    free(mine);
+    free(frames);
+    free(all);
+    free(all_frames);
+    return ok;
 }
 
 void cluster_finish(cluster *c)

@@ -23,7 +23,9 @@
  * FAILURE. Every collective is started non-blocking and waited for with a
  * time-out (cluster_config.timeout_s): a process that dies or stops
  * answering makes the others stop the run with an error naming what they
- * waited for and the frame, never hang. MPI_Init has no time-out of its own:
+ * waited for and the frame, never hang: it renders one more frame on its own
+ * with the reason in the status line ("cluster: no answer from the other
+ * machines (frame F): this wall stops"), shows it, and the run ends. MPI_Init has no time-out of its own:
  * a watchdog thread ends the process (status 3) when starting takes longer. After a failure MPI cannot be
  * finalised (a collective is left open): cluster_finish says so and the
  * process exits with the error.
@@ -79,18 +81,32 @@ bool cluster_agree(cluster *c, uint64_t value, const char *what, tess_error *err
  * observer), before pipeline_run. False with err. */
 bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err);
 
-/* What the run cost: per frame, the frame sync (the collectives and the
- * records) and the display barrier, in microseconds (medians of the last
- * 1024), records and bytes the leader sent. */
+/* What the run cost: per frame, the frame sync (its first collective, which
+ * waits for the slowest process, apart from the leader's broadcast, which
+ * starts when everybody is there) and the display barrier, in microseconds
+ * (medians of the last 1024), records and bytes the leader sent. */
 typedef struct cluster_stats {
     uint64_t frames;            /* frame syncs */
     uint64_t records, bytes;    /* sent (leader) or applied (follower) */
-    double sync_us_median, sync_us_max;
+    double vote_us_median, vote_us_max; /* the stop vote: it also waits for the slowest process */
+    double send_us_median, send_us_max; /* the leader's header and records, everybody there: the broadcast's cost */
     double barrier_us_median, barrier_us_max;
     bool failed;                /* a sync point timed out or MPI failed */
 } cluster_stats;
 cluster_stats cluster_get_stats(const cluster *c);
 void cluster_print_stats(const cluster *c, FILE *out);
+
+/* FLIP SKEW: how far apart the processes passed the barrier before the flip
+ * of one frame (CLOCK_REALTIME, so on one machine exact; across machines as
+ * close as their clocks), over the last frames each kept. A collective after
+ * the run: every process calls it; the figures are the leader's (zero on the
+ * others). False with err after a failure. */
+typedef struct cluster_skew {
+    uint64_t frames;                /* frames every process flipped */
+    uint64_t frames_out_of_step;    /* frames where the processes' frame numbers differed (should be 0) */
+    double median_us, p95_us, max_us;
+} cluster_skew;
+bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err);
 
 /* MPI_Finalize (skipped after a failure: it would wait for the dead), free.
  * NULL is fine. */

@@ -661,6 +661,15 @@ bool pipeline_set_channel_private(pipeline *p, int channel, tess_error *err)
     return true;
 }
 
+bool pipeline_set_status_anchor(pipeline *p, float sx, float sy)
+{
+    if (p->ran || atomic_load(&p->running) || !isfinite(sx) || !isfinite(sy))
+        return false;
+    p->overlay.anchor_sx = sx;
+    p->overlay.anchor_sy = sy;
+    return true;
+}
+
 bool pipeline_channel_private(const pipeline *p, int channel)
 {
     return channel >= 0 && channel < p->channel_count && p->state.private_view[channel];

@@ -255,6 +255,12 @@ bool pipeline_run(pipeline *p, tess_error *err);
  * cursor or pointers; a remote viewer's own view (remote/). Only before
  * pipeline_run. False with err. */
 bool pipeline_set_channel_private(pipeline *p, int channel, tess_error *err);
+/* Put the status line's bottom-left corner at plane point (sx, sy) instead of
+ * the bottom-left corner of the channels' windows (a process that drives part
+ * of a wall: cluster/, where the line must sit where the whole wall has it).
+ * Only before pipeline_run; false when running or not finite. */
+bool pipeline_set_status_anchor(pipeline *p, float sx, float sy);
+
 /* Whether channel `channel` is private (fixed once the pipeline runs: any thread). */
 bool pipeline_channel_private(const pipeline *p, int channel);
 

@@ -147,7 +147,7 @@ Test(cluster, four_processes_render_the_orbit_of_one_bit_for_bit, .timeout = 900
     four_equal_one("cluster-orbit", "run", "--frames 6", 6);
 }
 
-/* A recorded session (cameras, a hide) replayed on the leader, one record a
+/* A recorded session (cameras, a hide, a status line) replayed on the leader, one record a
  * frame: every process shows what one process shows. */
 Test(cluster, a_replayed_input_session_reaches_every_process, .timeout = 900)
 {
@@ -170,10 +170,13 @@ Test(cluster, a_replayed_input_session_reaches_every_process, .timeout = 900)
         cr_assert(txn_encode_text(&r, line, sizeof line));
         used += (size_t)snprintf(text + used, sizeof text - used, "%.6f %s\n", 0.1 * i, line);
     }
-    txn_record hide = txn_geoms_record(TXN_HIDE, 0, 1);
-    char line[TXN_TEXT_BYTES * 2];
-    cr_assert(txn_encode_text(&hide, line, sizeof line));
-    snprintf(text + used, sizeof text - used, "0.600000 %s\n", line);
+    /* a hide, and a status line (drawn where the whole wall has it: on the bottom-left output) */
+    txn_record more[2] = {txn_geoms_record(TXN_HIDE, 0, 1), txn_status("status from the leader")};
+    for (int i = 0; i < 2; i++) {
+        char line[TXN_TEXT_BYTES * 2];
+        cr_assert(txn_encode_text(&more[i], line, sizeof line));
+        used += (size_t)snprintf(text + used, sizeof text - used, "%.6f %s\n", 0.6 + 0.1 * i, line);
+    }
     scene_destroy(s);
     support_write_file(dir, "rec.txt", text);
     char args[600];
@@ -183,8 +186,8 @@ Test(cluster, a_replayed_input_session_reaches_every_process, .timeout = 900)
 }
 
 /* A process that stops answering (SIGSTOP) while the wall runs ends the run on the others
- * within the sync time-out (5 s here, generous for sanitizer builds) plus a frame: they say what they waited for and exit
- * with status 3; mpirun then ends the job. */
+ * within the sync time-out (5 s here, generous for sanitizer builds) plus a frame: they say
+ * what they waited for, and the first to exit (status 3) makes mpirun end the job. */
 Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .timeout = 900)
 {
     need_mpirun();
@@ -193,7 +196,7 @@ Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .
     support_write_file(dir, "wall.json", wall_text);
     /* until stopped; the PIDs written by the shell that starts each process */
     snprintf(cmd, sizeof cmd,
-             MPIRUN " -np 4 sh -c \"echo \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json --display dump "
+             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s render --wall %s/wall.json --display dump "
              "--out %s/f_####.png --frames 100000000 --threads 1 --sync-timeout 5\" > %s/run.log 2>&1",
              dir, support_tessera_bin(), dir, dir, dir);
     pid_t job = fork();
@@ -214,17 +217,18 @@ Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .
         nanosleep(&(struct timespec){0, 20000000}, NULL);
     }
     cr_assert_eq(lines, 4, "the processes did not start: %s", pids);
-    /* the third process stops answering once the wall runs: frame 3 of its output is written */
+    /* rank 1 (Virtual-2) stops answering once the wall runs: frame 3 of Virtual-3 is written */
     char frame3[400];
     snprintf(frame3, sizeof frame3, "%s/f_0003-Virtual-3.png", dir);
     while (access(frame3, F_OK) != 0 && now_s() < end)
         nanosleep(&(struct timespec){0, 20000000}, NULL);
     cr_assert_eq(access(frame3, F_OK), 0, "the wall never ran");
     int victim = 0;
-    const char *p = pids;
-    for (int i = 0; i < 2; i++)
-        p = strchr(p, '\n') + 1;
-    victim = atoi(p);
+    for (const char *p = pids; *p && !victim; p = strchr(p, '\n') + 1) {
+        int rank = -1, pid = 0;
+        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 1)
+            victim = pid;
+    }
     cr_assert_gt(victim, 0);
     cr_assert_eq(kill(victim, SIGSTOP), 0);
     double stopped = now_s();
@@ -238,7 +242,7 @@ Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
     cr_assert(strstr(log, "no answer from the other processes within 5.0 s"), "%s", log);
     cr_assert(strstr(log, "FAILED"), "%s", log);
-    cr_log_info("cluster: the run ended %.2f s after a process stopped answering (time-out 5 s)", took);
+    cr_log_info("cluster: the job ended %.2f s after a process stopped answering (time-out 5 s)", took);
     support_remove_tmp_dir(dir);
 }
 

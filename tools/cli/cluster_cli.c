@@ -103,7 +103,21 @@ bool cli_cluster_report(void)
     if (!active.c)
         return false;
     cluster_print_stats(active.c, stderr);
-    return cluster_get_stats(active.c).failed;
+    if (cluster_get_stats(active.c).failed)
+        return true;
+    cluster_skew k;
+    tess_error err = {{0}};
+    if (!cluster_flip_skew(active.c, &k, &err)) {
+        cli_error("%s", err.msg);
+        return true;
+    }
+    if (cluster_rank(active.c) == 0)
+        fprintf(stderr,
+                "tessera: cluster: flip skew over %llu frames: median %.0f us, p95 %.0f us, max %.0f us (frames out "
+                "of step: %llu)\n",
+                (unsigned long long)k.frames, k.median_us, k.p95_us, k.max_us,
+                (unsigned long long)k.frames_out_of_step);
+    return k.frames_out_of_step > 0;
 }
 
 void cli_cluster_end(void)

@@ -764,6 +764,18 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
         drm_wall_attach(active_card, p, first_channel); /* hotplug switches the outputs' channels */
     if (ok && !cli_remote_add_channel(p, &s->remote, &cam, wall_plane_aspect(&wall)))
         return false;
+    /* the status line at the bottom-left corner of the wall's outputs, whatever this process
+     * drives (part of the wall: cluster/) and whatever else it renders (a remote view's
+     * channels, which show the whole plane) */
+    float left = 1.f, bottom = 1.f;
+    for (int i = 0; i < wall.count; i++) {
+        camera_window w = wall_output_window(&wall, i);
+        left = fminf(left, w.center_x - w.half_width);
+        bottom = fminf(bottom, w.center_y - w.half_height);
+    }
+    if (ok && !pipeline_set_status_anchor(p, left, bottom))
+        ok = tess_error_set(&err, "the status line's corner (%g, %g) is not a plane point", (double)left,
+                            (double)bottom);
     if (!ok)
         cli_error("%s: %s", s->wall_file, err.msg);
     return ok;
