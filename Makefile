@@ -66,7 +66,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-remote bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
+.PHONY: all deps run test test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
@@ -313,6 +313,11 @@ bench-remote:
 	@sh tools/deps.sh --test
 	$(MAKE) tessera $(BUILD)/bench-remote
 	sh tools/bench_remote.sh
+
+# a wall of several processes on this machine (cluster/): BENCHMARKS.md "## Cluster"
+bench-cluster: deps
+	$(MAKE) tessera
+	sh tools/bench_cluster.sh
 
 # the remote view's JPEG frames (tools/report_remote.sh): bytes and encode time against FLIP per
 # quality and chroma subsampling, the "## Remote view" section of REPORT.md

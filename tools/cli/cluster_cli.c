@@ -1,11 +1,14 @@
 /* cluster_cli.c - a wall of several machines on the command line (cluster_cli.h). */
+#define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT */
 #include "cluster_cli.h"
 
+#include <sched.h>
 #include <string.h>
 
 #include "cli.h"
 #include "cluster/cluster.h"
 #include "wall/display_backend.h"
+#include "engine/log.h"
 #include "engine/pipeline.h"
 #include "wall/wall_config.h"
 
@@ -58,6 +61,11 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
         return false;
     }
     memcpy(active.outputs, wall.nodes[active.node].outputs, sizeof active.outputs);
+    cpu_set_t cpus; /* mpirun binds each process to one core unless told otherwise */
+    if (sched_getaffinity(0, sizeof cpus, &cpus) == 0 && CPU_COUNT(&cpus) < s->threads)
+        log_warn("cluster: rank %d may run on %d CPU%s but renders with %d threads: mpirun binds a process to a "
+                 "core unless given --bind-to none (or --map-by node:PE=%d)",
+                 rank, CPU_COUNT(&cpus), CPU_COUNT(&cpus) == 1 ? "" : "s", s->threads, s->threads);
     if (rank != 0) { /* a follower: what changes the picture comes from the leader */
         s->input.enabled = 0;
         s->input.replay_file[0] = '\0';
