@@ -242,7 +242,7 @@ failed:
      * next step stops */
     log_error("%s", err.msg);
     char text[TXN_TEXT_BYTES];
-    snprintf(text, sizeof text, "cluster: no answer from the other machines (frame %" PRIu64 "): this wall stops",
+    snprintf(text, sizeof text, "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops",
              info->frame);
     txn_record why = txn_status(text);
     pipeline_apply(p, &why);

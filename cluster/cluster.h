@@ -24,8 +24,8 @@
  * time-out (cluster_config.timeout_s): a process that dies or stops
  * answering makes the others stop the run with an error naming what they
  * waited for and the frame, never hang: it renders one more frame on its own
- * with the reason in the status line ("cluster: no answer from the other
- * machines (frame F): this wall stops"), shows it, and the run ends. MPI_Init has no time-out of its own:
+ * with the reason in the status line ("cluster: out of step with the other
+ * machines at frame F: this wall stops"), shows it, and the run ends. MPI_Init has no time-out of its own:
  * a watchdog thread ends the process (status 3) when starting takes longer. After a failure MPI cannot be
  * finalised (a collective is left open): cluster_finish says so and the
  * process exits with the error.
