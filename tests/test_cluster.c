@@ -25,6 +25,7 @@
 #include "input/record.h"
 #include "support.h"
 #include "wall/wall_config.h"
+#include "ws_client.h"
 
 #define RUN_TIMEOUT_S 300 /* a hang guard, not a speed limit */
 /* as root (CI), OpenMPI wants to be told; the environment reaches every process */
@@ -292,4 +293,120 @@ Test(cluster, the_accel_checksum_is_the_same_for_the_same_scene)
     accel_destroy(b);
     scene_destroy(s);
     scene_destroy(t);
+}
+
+/* The highest frame number of dir/f_NNNN-CONNECTOR.png, -1 for none. */
+static int last_frame_of(const char *dir, const char *connector)
+{
+    DIR *d = opendir(dir);
+    cr_assert(d, "%s", dir);
+    char pattern[64];
+    snprintf(pattern, sizeof pattern, "f_%%d-%s.png", connector);
+    int last = -1;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        int n;
+        char tail[8];
+        if (sscanf(e->d_name, pattern, &n) == 1 && sscanf(e->d_name, "f_%*d-%*[^.].%3s", tail) == 1 && n > last)
+            last = n;
+    }
+    closedir(d);
+    return last;
+}
+
+/* Live input on the leader steers every process: a remote viewer (a raw WebSocket client) on
+ * rank 0 drags the wall; rank 0 is then stopped (SIGTERM to it alone: the others stop at the
+ * same frame through the stop vote); every output's last frame equals one process's replay of
+ * what the leader recorded. */
+Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[16384], pids[512], path[512];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-live");
+    support_write_file(dir, "wall.json", wall_text);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s/four %s/one", dir, dir);
+    cr_assert_eq(support_run(cmd), 0);
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json "
+             "--display dump --out %s/four/f_####.png --threads 1 --time fixed --rate 30 --remote 0 --remote-token "
+             "cluster-live-token --record-input %s/rec.txt\" > %s/run.log 2>&1",
+             dir, support_tessera_bin(), dir, dir, dir, dir);
+    pid_t job = fork();
+    cr_assert(job >= 0);
+    if (job == 0) {
+        execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
+        _exit(127);
+    }
+    /* the leader's URL line (an event), then a viewer */
+    double end = now_s() + RUN_TIMEOUT_S;
+    int port = 0;
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    while (!port && now_s() < end) {
+        support_read_text(path, log, sizeof log);
+        const char *u = strstr(log, "tessera: remote view: http://127.0.0.1:");
+        if (!u || sscanf(u, "tessera: remote view: http://127.0.0.1:%d/", &port) != 1)
+            nanosleep(&(struct timespec){0, 20000000}, NULL);
+    }
+    cr_assert_gt(port, 0, "the leader served no remote view: %s", log);
+    int status = 0, fd = ws_connect(port, "cluster-live-token", &status);
+    cr_assert_eq(status, 101);
+    ws_send_text(fd, "{\"t\":\"down\",\"x\":0.5,\"y\":0.5,\"button\":0}");
+    for (int i = 1; i <= 8; i++) {
+        char move[96];
+        snprintf(move, sizeof move, "{\"t\":\"move\",\"x\":%.3f,\"y\":%.3f}", 0.5 + 0.04 * i, 0.5 + 0.01 * i);
+        ws_send_text(fd, move);
+    }
+    ws_send_text(fd, "{\"t\":\"up\",\"x\":0.82,\"y\":0.58,\"button\":0}");
+    /* the drag reached the record, then ten more frames on the last process's output */
+    snprintf(path, sizeof path, "%s/rec.txt", dir);
+    char rec[65536] = "";
+    while (!strstr(rec, " camera all ") && now_s() < end) {
+        support_read_text(path, rec, sizeof rec);
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    }
+    cr_assert(strstr(rec, " camera all "), "the drag recorded no camera");
+    char four[300];
+    snprintf(four, sizeof four, "%s/four", dir);
+    int settled = last_frame_of(four, "Virtual-4") + 10;
+    while (last_frame_of(four, "Virtual-4") < settled && now_s() < end)
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    /* the leader alone is stopped */
+    snprintf(path, sizeof path, "%s/pids", dir);
+    support_read_text(path, pids, sizeof pids);
+    int leader = 0;
+    for (const char *p = pids; *p && !leader; p = strchr(p, '\n') + 1) {
+        int rank = -1, pid = 0;
+        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 0)
+            leader = pid;
+    }
+    cr_assert_gt(leader, 0, "%s", pids);
+    cr_assert_eq(kill(leader, SIGTERM), 0);
+    while (waitpid(job, &status, WNOHANG) == 0 && now_s() < end)
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    close(fd);
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    support_read_text(path, log, sizeof log);
+    cr_assert(WIFEXITED(status) && WEXITSTATUS(status) == 0, "the job ended with status %d: %s", status, log);
+    /* one process replays the record: every output's last frame is its picture */
+    snprintf(cmd, sizeof cmd, "%s render --wall %s/wall.json --display dump --out %s/one/r.png --replay-input %s/rec.txt",
+             support_tessera_bin(), dir, dir, dir);
+    int replay = run_logged(dir, "replay", cmd, log, sizeof log);
+    cr_assert_eq(replay, 0, "%s", log);
+    const char *outputs[4] = {"Virtual-1", "Virtual-2", "Virtual-3", "Virtual-4"};
+    int last = last_frame_of(four, "Virtual-1");
+    for (int i = 0; i < 4; i++) {
+        cr_assert_eq(last_frame_of(four, outputs[i]), last, "%s stopped at another frame", outputs[i]);
+        char live[400], one[400];
+        snprintf(live, sizeof live, "%s/f_%04d-%s.png", four, last, outputs[i]);
+        snprintf(one, sizeof one, "%s/one/r-%s.png", dir, outputs[i]);
+        tess_error err = {{0}};
+        int wa, ha, wb, hb;
+        uint8_t *a = NULL, *b = NULL;
+        cr_assert(dump_read_rgb8(live, &wa, &ha, &a, &err) && dump_read_rgb8(one, &wb, &hb, &b, &err), "%s", err.msg);
+        cr_assert(wa == wb && ha == hb && memcmp(a, b, (size_t)wa * (size_t)ha * 3) == 0,
+                  "%s: the live frame %d differs from the one-process replay", outputs[i], last);
+        free(a);
+        free(b);
+    }
+    support_remove_tmp_dir(dir);
 }
