@@ -15,7 +15,6 @@
 #include "engine/pipeline.h"
 #include "engine/txn.h"
 
-#define LEADER 0
 #define TIMES_KEPT 1024
 #define FLIPS_KEPT 4096
 #define SPINS_BEFORE_SLEEP 200 /* MPI_Test calls before the waiter starts sleeping between them */
@@ -36,6 +35,7 @@ typedef struct times {
 
 struct cluster {
     int rank, size;
+    int leader; /* the rank that reads input and sends its records (cluster_config.leader) */
     double timeout_s;
     char (*host_names)[CLUSTER_HOST_BYTES]; /* size of them */
     const char **hosts;
@@ -57,6 +57,8 @@ struct cluster {
     int64_t flip_us[FLIPS_KEPT];
     uint64_t flips;
 };
+
+int cluster_leader(const cluster *c) { return c->leader; }
 
 bool cluster_launched(void)
 {
@@ -173,7 +175,7 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
         return;
     }
     double t0 = clock_monotonic_s();
-    bool leader = c->rank == LEADER;
+    bool leader = c->rank == c->leader;
     if (leader && c->out_overflow) {
         log_error("cluster: out of memory for the frame's records: the run stops (the other processes would "
                   "render something else)");
@@ -190,7 +192,7 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
     sync_header h = {0};
     if (leader)
         h = (sync_header){.frame = info->frame, .time_s = info->time_s, .records = (uint32_t)c->out_records};
-    if (!wait_for(c, &req, MPI_Ibcast(&h, (int)sizeof h, MPI_BYTE, LEADER, MPI_COMM_WORLD, &req), "the frame header",
+    if (!wait_for(c, &req, MPI_Ibcast(&h, (int)sizeof h, MPI_BYTE, c->leader, MPI_COMM_WORLD, &req), "the frame header",
                   info->frame, &err))
         goto failed;
     size_t bytes = (size_t)h.records * TXN_BINARY_BYTES;
@@ -205,7 +207,7 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
         c->in_capacity = bytes;
     }
     if (bytes && !wait_for(c, &req,
-                           MPI_Ibcast(leader ? c->outbox : c->inbox, (int)bytes, MPI_BYTE, LEADER, MPI_COMM_WORLD, &req),
+                           MPI_Ibcast(leader ? c->outbox : c->inbox, (int)bytes, MPI_BYTE, c->leader, MPI_COMM_WORLD, &req),
                            "the frame's records", info->frame, &err))
         goto failed;
     if (!leader) {
@@ -334,6 +336,13 @@ cluster *cluster_start(int *argc, char ***argv, const cluster_config *cfg, tess_
     c->timeout_s = cfg && cfg->timeout_s > 0.0 ? cfg->timeout_s : CLUSTER_DEFAULT_TIMEOUT_S;
     MPI_Comm_rank(MPI_COMM_WORLD, &c->rank);
     MPI_Comm_size(MPI_COMM_WORLD, &c->size);
+    c->leader = cfg ? cfg->leader : 0;
+    if (c->leader < 0 || c->leader >= c->size) {
+        tess_error_set(err, "cluster: the input rank %d is not one of the %d processes (0..%d)", c->leader, c->size,
+                       c->size - 1);
+        cluster_finish(c);
+        return NULL;
+    }
     if (provided < MPI_THREAD_SERIALIZED) {
         tess_error_set(err, "cluster: this MPI gives thread level %d, below MPI_THREAD_SERIALIZED (the frame and "
                             "display syncs run on different threads)",
@@ -391,7 +400,7 @@ bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err)
 {
     c->p = p;
     bool ok = pipeline_set_frame_sync(p, frame_sync, c) && pipeline_set_display_sync(p, display_sync, c) &&
-              (c->rank != LEADER || pipeline_set_record_observer(p, observe, c));
+              (c->rank != c->leader || pipeline_set_record_observer(p, observe, c));
     return ok || tess_error_set(err, "cluster: the pipeline's sync hooks are taken, or it runs already");
 }
 
@@ -416,7 +425,7 @@ void cluster_print_stats(const cluster *c, FILE *out)
             " bytes); us a frame, median (max): stop vote %.0f (%.0f), leader's records %.0f (%.0f), barrier "
             "before the flip %.0f (%.0f)%s\n",
             c->rank, c->size, c->hosts ? c->hosts[c->rank] : "?", s.frames, s.records,
-            c->rank == LEADER ? "sent" : "applied", s.bytes, s.vote_us_median, s.vote_us_max, s.send_us_median,
+            c->rank == c->leader ? "sent" : "applied", s.bytes, s.vote_us_median, s.vote_us_max, s.send_us_median,
             s.send_us_max, s.barrier_us_median, s.barrier_us_max, s.failed ? "; FAILED" : "");
 }
 
@@ -440,7 +449,7 @@ bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
         mine[i] = c->flip_us[k];
         frames[i] = c->flip_frame[k];
     }
-    if (ok && c->rank == LEADER) {
+    if (ok && c->rank == c->leader) {
         all = malloc((n ? n : 1) * (size_t)c->size * sizeof *all);
         all_frames = malloc((n ? n : 1) * (size_t)c->size * sizeof *all_frames);
         ok = all && all_frames;
@@ -448,13 +457,13 @@ bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
     /* every process takes part in both gathers, also one out of memory (its count is then 0:
      * the leader sees frames that do not match and says so) */
     ok = wait_for(c, &req,
-                  MPI_Igather(frames, (int)n, MPI_UINT64_T, all_frames, (int)n, MPI_UINT64_T, LEADER, MPI_COMM_WORLD,
+                  MPI_Igather(frames, (int)n, MPI_UINT64_T, all_frames, (int)n, MPI_UINT64_T, c->leader, MPI_COMM_WORLD,
                               &req),
                   "the flip frames", 0, err) &&
-         wait_for(c, &req, MPI_Igather(mine, (int)n, MPI_INT64_T, all, (int)n, MPI_INT64_T, LEADER, MPI_COMM_WORLD, &req),
+         wait_for(c, &req, MPI_Igather(mine, (int)n, MPI_INT64_T, all, (int)n, MPI_INT64_T, c->leader, MPI_COMM_WORLD, &req),
                   "the flip times", 0, err) &&
          ok;
-    if (ok && c->rank == LEADER && n > 0) {
+    if (ok && c->rank == c->leader && n > 0) {
         double *skews = malloc(n * sizeof *skews);
         size_t m = 0;
         for (size_t i = 0; skews && i < n; i++) {

@@ -5,7 +5,7 @@
  * threads; they meet twice a frame:
  *
  *   FRAME SYNC (the serial section, pipeline.h: the frame sync hook). The
- *   LEADER (rank 0: it reads input) sends what changed its frame state this
+ *   LEADER (rank 0 unless configured: it reads input) sends what changed its frame state this
  *   step as data records (txn.h, binary form) with the step's time; every
  *   other process (a FOLLOWER) applies the same records at the same frame,
  *   so all render the same state. Whether the loop stops after the step is
@@ -57,6 +57,7 @@ typedef struct cluster cluster;
 
 typedef struct cluster_config {
     double timeout_s; /* how long a process waits for the others at a sync point; 0: the default */
+    int leader;       /* the rank that reads input and leads (0..size-1; default 0) */
 } cluster_config;
 
 /* Whether this process was started by mpirun (OpenMPI or PMIx set the
@@ -68,6 +69,8 @@ bool cluster_launched(void);
 cluster *cluster_start(int *argc, char ***argv, const cluster_config *cfg, tess_error *err);
 
 int cluster_rank(const cluster *c);
+/* The LEADER: the rank that reads input (cluster_config.leader). */
+int cluster_leader(const cluster *c);
 int cluster_size(const cluster *c);
 /* Every rank's host name (cluster_size of them), as gethostname said. */
 const char *const *cluster_hosts(const cluster *c);

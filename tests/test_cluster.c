@@ -273,6 +273,12 @@ Test(cluster, processes_over_different_scenes_refuse_to_run, .timeout = 900)
     status = run_logged(dir, "count", cmd, log, sizeof log);
     cr_assert_neq(status, 0, "%s", log);
     cr_assert(strstr(log, "the wall has 4 nodes and 3 processes were started (mpirun -np 4)"), "%s", log);
+    /* an input rank that is not one of them */
+    snprintf(cmd, sizeof cmd, MPIRUN " -np 4 %s run --wall %s/four.json --display null --frames 2 --input-rank 5",
+             support_tessera_bin(), dir);
+    status = run_logged(dir, "input-rank", cmd, log, sizeof log);
+    cr_assert_neq(status, 0, "%s", log);
+    cr_assert(strstr(log, "the input rank 5 is not one of the 4 processes (0..3)"), "%s", log);
     support_remove_tmp_dir(dir);
 }
 
@@ -314,10 +320,10 @@ static int last_frame_of(const char *dir, const char *connector)
     return last;
 }
 
-/* Live input on the leader steers every process: a remote viewer (a raw WebSocket client) on
- * rank 0 drags the wall; rank 0 is then stopped (SIGTERM to it alone: the others stop at the
- * same frame through the stop vote); every output's last frame equals one process's replay of
- * what the leader recorded. */
+/* Live input on the leader steers every process: with --input-rank 2 a remote viewer (a raw
+ * WebSocket client) on rank 2 drags the wall; rank 2 is then stopped (SIGTERM to it alone: the
+ * others stop at the same frame through the stop vote); every output's last frame equals one
+ * process's replay of what the leader recorded. */
 Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
 {
     need_mpirun();
@@ -329,7 +335,7 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
     snprintf(cmd, sizeof cmd,
              MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json "
              "--display dump --out %s/four/f_####.png --threads 1 --time fixed --rate 30 --remote 0 --remote-token "
-             "cluster-live-token --record-input %s/rec.txt\" > %s/run.log 2>&1",
+             "cluster-live-token --record-input %s/rec.txt --input-rank 2\" > %s/run.log 2>&1",
              dir, support_tessera_bin(), dir, dir, dir, dir);
     pid_t job = fork();
     cr_assert(job >= 0);
@@ -370,13 +376,13 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
     int settled = last_frame_of(four, "Virtual-4") + 10;
     while (last_frame_of(four, "Virtual-4") < settled && now_s() < end)
         nanosleep(&(struct timespec){0, 20000000}, NULL);
-    /* the leader alone is stopped */
+    /* the leader (rank 2) alone is stopped */
     snprintf(path, sizeof path, "%s/pids", dir);
     support_read_text(path, pids, sizeof pids);
     int leader = 0;
     for (const char *p = pids; *p && !leader; p = strchr(p, '\n') + 1) {
         int rank = -1, pid = 0;
-        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 0)
+        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 2)
             leader = pid;
     }
     cr_assert_gt(leader, 0, "%s", pids);
@@ -408,5 +414,49 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
         free(a);
         free(b);
     }
+    support_remove_tmp_dir(dir);
+}
+
+/* A process killed outright (SIGKILL, a machine gone): the job ends, never hangs, with a
+ * failing status. */
+Test(cluster, a_killed_process_ends_the_job, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[16384], pids[512], path[512];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-kill");
+    support_write_file(dir, "wall.json", wall_text);
+    snprintf(cmd, sizeof cmd,
+             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json "
+             "--display dump --out %s/f_####.png --frames 100000000 --threads 1 --sync-timeout 5\" > %s/run.log 2>&1",
+             dir, support_tessera_bin(), dir, dir, dir);
+    pid_t job = fork();
+    cr_assert(job >= 0);
+    if (job == 0) {
+        execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
+        _exit(127);
+    }
+    double end = now_s() + RUN_TIMEOUT_S;
+    snprintf(path, sizeof path, "%s/f_0003-Virtual-4.png", dir);
+    while (access(path, F_OK) != 0 && now_s() < end)
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    cr_assert_eq(access(path, F_OK), 0, "the wall never ran");
+    snprintf(path, sizeof path, "%s/pids", dir);
+    support_read_text(path, pids, sizeof pids);
+    int victim = 0;
+    for (const char *p = pids; *p && !victim; p = strchr(p, '\n') + 1) {
+        int rank = -1, pid = 0;
+        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 3)
+            victim = pid;
+    }
+    cr_assert_gt(victim, 0, "%s", pids);
+    cr_assert_eq(kill(victim, SIGKILL), 0);
+    double killed = now_s();
+    int status = 0;
+    while (waitpid(job, &status, WNOHANG) == 0 && now_s() < end)
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    support_read_text(path, log, sizeof log);
+    cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
+    cr_log_info("cluster: the job ended %.2f s after a process was killed", now_s() - killed);
     support_remove_tmp_dir(dir);
 }

@@ -49,7 +49,7 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
                   "different scales; not with mpirun yet");
         return false;
     }
-    cluster_config cfg = {.timeout_s = s->sync_timeout_s};
+    cluster_config cfg = {.timeout_s = s->sync_timeout_s, .leader = s->input_rank};
     if (!(active.c = cluster_start(NULL, NULL, &cfg, &err))) {
         cli_error("%s", err.msg);
         return false;
@@ -66,7 +66,7 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
         log_warn("cluster: rank %d may run on %d CPU%s but renders with %d threads: mpirun binds a process to a "
                  "core unless given --bind-to none (or --map-by node:PE=%d)",
                  rank, CPU_COUNT(&cpus), CPU_COUNT(&cpus) == 1 ? "" : "s", s->threads, s->threads);
-    if (rank != 0) { /* a follower: what changes the picture comes from the leader */
+    if (rank != cluster_leader(active.c)) { /* a follower: what changes the picture comes from the leader */
         s->input.enabled = 0;
         s->input.replay_file[0] = '\0';
         s->input.replay_speed_given = false;
@@ -79,7 +79,7 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
 }
 
 bool cli_cluster_active(void) { return active.c != NULL; }
-bool cli_cluster_follower(void) { return active.c && cluster_rank(active.c) != 0; }
+bool cli_cluster_follower(void) { return active.c && cluster_rank(active.c) != cluster_leader(active.c); }
 const bool *cli_cluster_outputs(void) { return active.c ? active.outputs : NULL; }
 
 bool cli_cluster_agree(const accel *a)
@@ -119,7 +119,7 @@ bool cli_cluster_report(void)
         cli_error("%s", err.msg);
         return true;
     }
-    if (cluster_rank(active.c) == 0)
+    if (cluster_rank(active.c) == cluster_leader(active.c))
         fprintf(stderr,
                 "tessera: cluster: flip skew over %llu frames: median %.0f us, p95 %.0f us, max %.0f us (frames out "
                 "of step: %llu)\n",

@@ -255,7 +255,11 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
         snprintf(what, sizeof what, "wall of %d outputs (%.2f Mpixels)", channels, pixels * 1e-6);
     else
         snprintf(what, sizeof what, "%dx%d%s", ch->width_px, ch->height_px, channels > 1 ? " (+ more channels)" : "");
-    if (display_backend_by_name(ch->display)->options & DISPLAY_OPTION_OUT) {
+    if ((display_backend_by_name(ch->display)->options & DISPLAY_OPTION_OUT) && cli_cluster_active()) {
+        /* part of a wall: its outputs' own files, no stitched image */
+        printf("wrote %llu frames of this process's %d output%s (%s with -CONNECTOR added)\n",
+               (unsigned long long)st.frames_displayed, channels, channels == 1 ? "" : "s", ch->out);
+    } else if (display_backend_by_name(ch->display)->options & DISPLAY_OPTION_OUT) {
         char first[4096], last[4096];
         uint64_t n = st.frames_displayed;
         bool sequence = s->frames != 1;

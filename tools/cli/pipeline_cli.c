@@ -590,6 +590,8 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
         return (val = cli_option_value(argc, argv, i)) && copy_value(a, val, s->record_file, sizeof s->record_file);
     } else if (!strcmp(a, "--sync-timeout")) {
         return (val = cli_option_value(argc, argv, i)) && cli_parse_double(a, val, 0.1, 3600.0, &s->sync_timeout_s);
+    } else if (!strcmp(a, "--input-rank")) {
+        return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 0, WALL_MAX_OUTPUTS - 1, &s->input_rank);
     }
     if (!cli_remote_option(argc, argv, i, &s->remote, handled))
         return false;
@@ -634,7 +636,9 @@ void cli_pipeline_usage(FILE *f)
     cli_remote_usage(f);
     fputs("a wall of several machines (mpirun -np N; the wall file's \"nodes\"; cluster/cluster.h):\n"
           "  --sync-timeout S how long a process waits for the others once a frame before it gives up\n"
-          "                   (0.1..3600 s, default 10): a process that died or hangs ends the run\n",
+          "                   (0.1..3600 s, default 10): a process that died or hangs ends the run\n"
+          "  --input-rank R   the process that reads input, plays the path, serves a remote view and\n"
+          "                   sends every frame's changes to the others (default 0)\n",
           f);
 }
 
