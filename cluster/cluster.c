@@ -12,10 +12,10 @@
 
 #include "engine/clock.h"
 #include "engine/log.h"
+#include "engine/sample_ring.h"
 #include "engine/pipeline.h"
 #include "engine/txn.h"
 
-#define TIMES_KEPT 1024
 #define FLIPS_KEPT 4096
 #define SPINS_BEFORE_SLEEP 200 /* MPI_Test calls before the waiter starts sleeping between them */
 
@@ -27,11 +27,6 @@ typedef struct sync_header {
     uint32_t reserved;
 } sync_header;
 
-typedef struct times {
-    double us[TIMES_KEPT];
-    uint64_t count;
-    double max;
-} times;
 
 struct cluster {
     int rank, size;
@@ -49,7 +44,7 @@ struct cluster {
     size_t in_capacity;
     bool failed;
     cluster_stats stats;
-    times vote, send, barrier; /* the stop vote (it waits for the slowest process), the leader's
+    sample_ring vote, send, barrier; /* the stop vote (it waits for the slowest process), the leader's
                                   header and records (everybody is there), the barrier before the flip */
     /* the display sync: when each of the last FLIPS_KEPT frames passed the barrier
      * (CLOCK_REALTIME us: one clock on one machine, NTP-close across machines) */
@@ -63,33 +58,6 @@ int cluster_leader(const cluster *c) { return c->leader; }
 bool cluster_launched(void)
 {
     return getenv("OMPI_COMM_WORLD_SIZE") || getenv("PMIX_RANK") || getenv("PMI_SIZE");
-}
-
-static void times_add(times *t, double us)
-{
-    t->us[t->count++ % TIMES_KEPT] = us;
-    t->max = us > t->max ? us : t->max;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double times_median(const times *t)
-{
-    size_t n = t->count < TIMES_KEPT ? (size_t)t->count : TIMES_KEPT;
-    if (n == 0)
-        return 0.0;
-    double *sorted = malloc(n * sizeof *sorted);
-    if (!sorted)
-        return 0.0;
-    memcpy(sorted, t->us, n * sizeof *sorted);
-    qsort(sorted, n, sizeof *sorted, cmp_double);
-    double m = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-    free(sorted);
-    return m;
 }
 
 static void mpi_text(int code, char *out, size_t bytes)
@@ -234,8 +202,8 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
     c->stats.frames++;
     c->stats.records += h.records;
     c->stats.bytes += sizeof h + bytes;
-    times_add(&c->vote, (t1 - t0) * 1e6);
-    times_add(&c->send, (clock_monotonic_s() - t1) * 1e6);
+    sample_ring_add(&c->vote, (t1 - t0) * 1e6);
+    sample_ring_add(&c->send, (clock_monotonic_s() - t1) * 1e6);
     *stop = any != 0;
     return;
 failed:
@@ -260,7 +228,7 @@ static bool display_sync(void *ctx, uint64_t frame, tess_error *err)
     MPI_Request req;
     if (!wait_for(c, &req, MPI_Ibarrier(MPI_COMM_WORLD, &req), "the barrier before the flip", frame, err))
         return false;
-    times_add(&c->barrier, (clock_monotonic_s() - t0) * 1e6);
+    sample_ring_add(&c->barrier, (clock_monotonic_s() - t0) * 1e6);
     if (frame != UINT64_MAX) {
         struct timespec ts;
         clock_gettime(CLOCK_REALTIME, &ts);
@@ -407,11 +375,11 @@ bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err)
 cluster_stats cluster_get_stats(const cluster *c)
 {
     cluster_stats s = c->stats;
-    s.vote_us_median = times_median(&c->vote);
+    s.vote_us_median = sample_ring_median(&c->vote);
     s.vote_us_max = c->vote.max;
-    s.send_us_median = times_median(&c->send);
+    s.send_us_median = sample_ring_median(&c->send);
     s.send_us_max = c->send.max;
-    s.barrier_us_median = times_median(&c->barrier);
+    s.barrier_us_median = sample_ring_median(&c->barrier);
     s.barrier_us_max = c->barrier.max;
     s.failed = c->failed;
     return s;
@@ -481,9 +449,8 @@ bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
                 out->frames_out_of_step++;
         }
         if (skews && m) {
-            qsort(skews, m, sizeof *skews, cmp_double);
             out->frames = m;
-            out->median_us = m % 2 ? skews[m / 2] : 0.5 * (skews[m / 2 - 1] + skews[m / 2]);
+            out->median_us = median_sorting(skews, m); /* sorts them */
             out->p95_us = skews[(size_t)((double)(m - 1) * 0.95)];
             out->max_us = skews[m - 1];
         }

@@ -8,10 +8,10 @@
 
 #include "engine/clock.h"
 #include "engine/log.h"
+#include "engine/sample_ring.h"
 #include "engine/thread_name.h"
 #include "wall/srgb8.h"
 
-#define TIMES_KEPT 1024 /* durations kept for the medians */
 
 /* One 8-bit frame and what the page is told about it. */
 typedef struct frame8 {
@@ -36,10 +36,6 @@ typedef struct channel {
     bool have_published;   /* lock */
 } channel;
 
-typedef struct times {
-    double ms[TIMES_KEPT];
-    uint64_t count;
-} times;
 
 struct remote_encoder {
     int channel_count;
@@ -53,7 +49,7 @@ struct remote_encoder {
     bool stop;           /* lock */
     channel channels[REMOTE_CHANNELS_MAX];
     remote_encoder_stats stats; /* lock (medians computed when asked) */
-    times show_times, encode_times; /* lock */
+    sample_ring show_times, encode_times; /* lock: ms */
     int next_channel; /* encoder thread: where its search for a full mailbox starts (round robin) */
     pthread_t thread;
     bool started;
@@ -80,25 +76,6 @@ static bool frame8_fit(frame8 *f, int w, int h)
     return true;
 }
 
-static void times_add(times *t, double ms) { t->ms[t->count++ % TIMES_KEPT] = ms; }
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double times_median(const times *t)
-{
-    size_t n = t->count < TIMES_KEPT ? (size_t)t->count : TIMES_KEPT;
-    if (n == 0)
-        return 0.0;
-    double sorted[TIMES_KEPT];
-    memcpy(sorted, t->ms, n * sizeof sorted[0]);
-    qsort(sorted, n, sizeof sorted[0], cmp_double);
-    return n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-}
-
 static bool display_show(image_display *d, const frame_image *img, tess_error *err)
 {
     remote_display *rd = (remote_display *)d;
@@ -122,7 +99,7 @@ static bool display_show(image_display *d, const frame_image *img, tess_error *e
         e->stats.frames_skipped++;
     c->mailbox_full = true;
     e->stats.frames_shown++;
-    times_add(&e->show_times, ms);
+    sample_ring_add(&e->show_times, ms);
     pthread_cond_signal(&e->wake);
     pthread_mutex_unlock(&e->lock);
     return true;
@@ -182,7 +159,7 @@ static void encode_one(remote_encoder *e, int i)
         c->have_published = true;
         e->stats.frames_encoded++;
         e->stats.jpeg_bytes += bytes;
-        times_add(&e->encode_times, ms);
+        sample_ring_add(&e->encode_times, ms);
     } else {
         e->stats.encode_failures++;
     }
@@ -313,8 +290,8 @@ remote_encoder_stats remote_encoder_get_stats(remote_encoder *e)
 {
     pthread_mutex_lock(&e->lock);
     remote_encoder_stats s = e->stats;
-    s.show_ms_median = times_median(&e->show_times);
-    s.encode_ms_median = times_median(&e->encode_times);
+    s.show_ms_median = sample_ring_median(&e->show_times);
+    s.encode_ms_median = sample_ring_median(&e->encode_times);
     pthread_mutex_unlock(&e->lock);
     return s;
 }

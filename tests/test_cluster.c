@@ -186,60 +186,105 @@ Test(cluster, a_replayed_input_session_reaches_every_process, .timeout = 900)
     support_remove_tmp_dir(dir);
 }
 
-/* A process that stops answering (SIGSTOP) while the wall runs ends the run on the others
- * within the sync time-out (5 s here, generous for sanitizer builds) plus a frame: they say
- * what they waited for, and the first to exit (status 3) makes mpirun end the job. */
-Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .timeout = 900)
+/* ---- a job in the background: mpirun over `sh -c "echo RANK PID >> DIR/pids; exec tessera ..."` ---- */
+
+/* The command line that starts 4 processes each writing "RANK PID" to dir/pids before it
+ * becomes `tessera ARGS` (stdout and stderr to dir/run.log). */
+static void job_command(char *cmd, size_t bytes, const char *dir, const char *args)
 {
-    need_mpirun();
-    char dir[256], cmd[4096], log[32768], pids[512];
-    support_make_tmp_dir(dir, sizeof dir, "cluster-stop");
-    support_write_file(dir, "wall.json", wall_text);
-    /* until stopped; the PIDs written by the shell that starts each process */
-    snprintf(cmd, sizeof cmd,
-             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s render --wall %s/wall.json --display dump "
-             "--out %s/f_####.png --frames 100000000 --threads 1 --sync-timeout 5\" > %s/run.log 2>&1",
-             dir, support_tessera_bin(), dir, dir, dir);
+    snprintf(cmd, bytes,
+             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s %s\" > %s/run.log 2>&1",
+             dir, support_tessera_bin(), args, dir);
+}
+
+static pid_t start_job(const char *cmd)
+{
     pid_t job = fork();
     cr_assert(job >= 0);
     if (job == 0) {
         execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
         _exit(127);
     }
-    /* wait (for events: the four PIDs and frames in step) */
-    snprintf(cmd, sizeof cmd, "%s/pids", dir);
-    double end = now_s() + RUN_TIMEOUT_S;
-    int lines = 0;
-    while (lines < 4 && now_s() < end) {
-        support_read_text(cmd, pids, sizeof pids);
-        lines = 0;
-        for (const char *p = pids; *p; p++)
-            lines += *p == '\n';
+    return job;
+}
+
+/* Until `end`: wait for `path` to exist (an event: a frame written); whether it does. */
+static bool wait_file(const char *path, double end)
+{
+    while (access(path, F_OK) != 0 && now_s() < end)
         nanosleep(&(struct timespec){0, 20000000}, NULL);
+    return access(path, F_OK) == 0;
+}
+
+/* The PID of rank `rank` as dir/pids says (0: not there). */
+static int rank_pid(const char *dir, int rank)
+{
+    char path[400], pids[512];
+    snprintf(path, sizeof path, "%s/pids", dir);
+    support_read_text(path, pids, sizeof pids);
+    for (const char *p = pids; *p; ) {
+        int r = -1, pid = 0;
+        if (sscanf(p, "%d %d", &r, &pid) == 2 && r == rank)
+            return pid;
+        const char *next = strchr(p, '\n');
+        if (!next)
+            break;
+        p = next + 1;
     }
-    cr_assert_eq(lines, 4, "the processes did not start: %s", pids);
-    /* rank 1 (Virtual-2) stops answering once the wall runs: frame 3 of Virtual-3 is written */
-    char frame3[400];
-    snprintf(frame3, sizeof frame3, "%s/f_0003-Virtual-3.png", dir);
-    while (access(frame3, F_OK) != 0 && now_s() < end)
-        nanosleep(&(struct timespec){0, 20000000}, NULL);
-    cr_assert_eq(access(frame3, F_OK), 0, "the wall never ran");
-    int victim = 0;
-    for (const char *p = pids; *p && !victim; p = strchr(p, '\n') + 1) {
-        int rank = -1, pid = 0;
-        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 1)
-            victim = pid;
-    }
-    cr_assert_gt(victim, 0);
-    cr_assert_eq(kill(victim, SIGSTOP), 0);
-    double stopped = now_s();
+    return 0;
+}
+
+/* Until `end`: wait for the job to end; its wait status (0 when it did not). */
+static int wait_job(pid_t job, double end)
+{
     int status = 0;
     while (waitpid(job, &status, WNOHANG) == 0 && now_s() < end)
         nanosleep(&(struct timespec){0, 20000000}, NULL);
-    double took = now_s() - stopped;
-    kill(victim, SIGKILL);
-    snprintf(cmd, sizeof cmd, "%s/run.log", dir);
-    support_read_text(cmd, log, sizeof log);
+    return status;
+}
+
+/* Run `command` (run or render) on the 4-output wall in dir until stopped, wait until the
+ * wall runs (frame 3 of every output written), send `sig` to rank `rank` alone and wait for
+ * the job to end: its wait status; *took the seconds from the signal to the end; the job's
+ * log in log. */
+static int signal_a_running_wall(const char *dir, const char *command, int rank, int sig, double *took, char *log,
+                                 size_t log_bytes)
+{
+    char cmd[4096], args[1024], path[400];
+    snprintf(args, sizeof args,
+             "%s --wall %s/wall.json --display dump --out %s/f_####.png --frames 100000000 --threads 1 "
+             "--sync-timeout 5",
+             command, dir, dir);
+    job_command(cmd, sizeof cmd, dir, args);
+    pid_t job = start_job(cmd);
+    double end = now_s() + RUN_TIMEOUT_S;
+    for (int i = 1; i <= 4; i++) {
+        snprintf(path, sizeof path, "%s/f_0003-Virtual-%d.png", dir, i);
+        cr_assert(wait_file(path, end), "the wall never ran (%s)", path);
+    }
+    int pid = rank_pid(dir, rank);
+    cr_assert_gt(pid, 0);
+    cr_assert_eq(kill(pid, sig), 0);
+    double signalled = now_s();
+    int status = wait_job(job, end);
+    *took = now_s() - signalled;
+    kill(pid, SIGKILL); /* a stopped one: what a dead machine is */
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    support_read_text(path, log, log_bytes);
+    return status;
+}
+
+/* A process that stops answering (SIGSTOP) while the wall runs ends the run on the others
+ * within the sync time-out (5 s here, generous for sanitizer builds) plus a frame: they say
+ * what they waited for, and the first to exit (status 3) makes mpirun end the job. */
+Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], log[32768];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-stop");
+    support_write_file(dir, "wall.json", wall_text);
+    double took;
+    int status = signal_a_running_wall(dir, "render", 1, SIGSTOP, &took, log, sizeof log);
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
     cr_assert(strstr(log, "no answer from the other processes within 5.0 s"), "%s", log);
     cr_assert(strstr(log, "FAILED"), "%s", log);
@@ -327,22 +372,18 @@ static int last_frame_of(const char *dir, const char *connector)
 Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
 {
     need_mpirun();
-    char dir[256], cmd[4096], log[16384], pids[512], path[512];
+    char dir[256], cmd[4096], log[16384], path[512];
     support_make_tmp_dir(dir, sizeof dir, "cluster-live");
     support_write_file(dir, "wall.json", wall_text);
     snprintf(cmd, sizeof cmd, "mkdir -p %s/four %s/one", dir, dir);
     cr_assert_eq(support_run(cmd), 0);
-    snprintf(cmd, sizeof cmd,
-             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json "
-             "--display dump --out %s/four/f_####.png --threads 1 --time fixed --rate 30 --remote 0 --remote-token "
-             "cluster-live-token --record-input %s/rec.txt --input-rank 2\" > %s/run.log 2>&1",
-             dir, support_tessera_bin(), dir, dir, dir, dir);
-    pid_t job = fork();
-    cr_assert(job >= 0);
-    if (job == 0) {
-        execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
-        _exit(127);
-    }
+    char args[1024];
+    snprintf(args, sizeof args,
+             "run --wall %s/wall.json --display dump --out %s/four/f_####.png --threads 1 --time fixed --rate 30 "
+             "--remote 0 --remote-token cluster-live-token --record-input %s/rec.txt --input-rank 2",
+             dir, dir, dir);
+    job_command(cmd, sizeof cmd, dir, args);
+    pid_t job = start_job(cmd);
     /* the leader's URL line (an event), then a viewer */
     double end = now_s() + RUN_TIMEOUT_S;
     int port = 0;
@@ -377,18 +418,10 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
     while (last_frame_of(four, "Virtual-4") < settled && now_s() < end)
         nanosleep(&(struct timespec){0, 20000000}, NULL);
     /* the leader (rank 2) alone is stopped */
-    snprintf(path, sizeof path, "%s/pids", dir);
-    support_read_text(path, pids, sizeof pids);
-    int leader = 0;
-    for (const char *p = pids; *p && !leader; p = strchr(p, '\n') + 1) {
-        int rank = -1, pid = 0;
-        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 2)
-            leader = pid;
-    }
-    cr_assert_gt(leader, 0, "%s", pids);
+    int leader = rank_pid(dir, 2);
+    cr_assert_gt(leader, 0);
     cr_assert_eq(kill(leader, SIGTERM), 0);
-    while (waitpid(job, &status, WNOHANG) == 0 && now_s() < end)
-        nanosleep(&(struct timespec){0, 20000000}, NULL);
+    status = wait_job(job, end);
     close(fd);
     snprintf(path, sizeof path, "%s/run.log", dir);
     support_read_text(path, log, sizeof log);
@@ -422,41 +455,12 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
 Test(cluster, a_killed_process_ends_the_job, .timeout = 900)
 {
     need_mpirun();
-    char dir[256], cmd[4096], log[16384], pids[512], path[512];
+    char dir[256], log[16384];
     support_make_tmp_dir(dir, sizeof dir, "cluster-kill");
     support_write_file(dir, "wall.json", wall_text);
-    snprintf(cmd, sizeof cmd,
-             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s run --wall %s/wall.json "
-             "--display dump --out %s/f_####.png --frames 100000000 --threads 1 --sync-timeout 5\" > %s/run.log 2>&1",
-             dir, support_tessera_bin(), dir, dir, dir);
-    pid_t job = fork();
-    cr_assert(job >= 0);
-    if (job == 0) {
-        execl("/bin/sh", "sh", "-c", cmd, (char *)NULL);
-        _exit(127);
-    }
-    double end = now_s() + RUN_TIMEOUT_S;
-    snprintf(path, sizeof path, "%s/f_0003-Virtual-4.png", dir);
-    while (access(path, F_OK) != 0 && now_s() < end)
-        nanosleep(&(struct timespec){0, 20000000}, NULL);
-    cr_assert_eq(access(path, F_OK), 0, "the wall never ran");
-    snprintf(path, sizeof path, "%s/pids", dir);
-    support_read_text(path, pids, sizeof pids);
-    int victim = 0;
-    for (const char *p = pids; *p && !victim; p = strchr(p, '\n') + 1) {
-        int rank = -1, pid = 0;
-        if (sscanf(p, "%d %d", &rank, &pid) == 2 && rank == 3)
-            victim = pid;
-    }
-    cr_assert_gt(victim, 0, "%s", pids);
-    cr_assert_eq(kill(victim, SIGKILL), 0);
-    double killed = now_s();
-    int status = 0;
-    while (waitpid(job, &status, WNOHANG) == 0 && now_s() < end)
-        nanosleep(&(struct timespec){0, 20000000}, NULL);
-    snprintf(path, sizeof path, "%s/run.log", dir);
-    support_read_text(path, log, sizeof log);
+    double took;
+    int status = signal_a_running_wall(dir, "run", 3, SIGKILL, &took, log, sizeof log);
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
-    cr_log_info("cluster: the job ended %.2f s after a process was killed", now_s() - killed);
+    cr_log_info("cluster: the job ended %.2f s after a process was killed", took);
     support_remove_tmp_dir(dir);
 }

@@ -1391,6 +1391,44 @@ static void push_all(remote_source *src, const input_event *events, int n)
     cr_assert(remote_source_push(src, events, n));
 }
 
+/* A running pipeline (l) watched by w, with an input runner over one remote source:
+ * what the runner tests drive. tour: the controller has one (idle after idle_s). */
+typedef struct runner_rig {
+    remote_source *src;
+    input_runner *runner;
+    run_args run;
+    pthread_t thread;
+} runner_rig;
+
+static void runner_rig_start(runner_rig *g, live *l, view_watch *w, bool tour, double idle_s)
+{
+    tess_error err = {{0}};
+    cr_assert(pipeline_add_serial_animation(l->p, "watch views", watch_views, w));
+    g->src = remote_source_create(&err);
+    cr_assert(g->src, "%s", err.msg);
+    input_source *sources[1] = {remote_source_input(g->src)};
+    input_controller_config cc;
+    input_controller_config_default(&cc);
+    cc.plane_aspect = 32.f / 18.f;
+    cc.home = home_camera(3.0);
+    cc.scene_size = 8.0;
+    cc.have_tour = tour;
+    cc.idle_timeout_s = idle_s;
+    g->runner = input_runner_start(sources, 1, &cc, drive_pick, NULL, NULL, l->sink, NULL, &err);
+    cr_assert(g->runner, "%s", err.msg);
+    g->run = (run_args){.p = l->p};
+    cr_assert_eq(pthread_create(&g->thread, NULL, run_pipeline, &g->run), 0);
+}
+
+/* Stop the pipeline, then the runner (which destroys the source). */
+static void runner_rig_stop(runner_rig *g)
+{
+    pipeline_stop(g->run.p);
+    pthread_join(g->thread, NULL);
+    cr_assert(g->run.ok, "%s", g->run.err.msg);
+    input_runner_stop(g->runner);
+}
+
 Test(input, a_private_view_steers_its_own_channel_and_the_wall_never_sees_it, .timeout = 120)
 {
     char dir[256], file[300];
@@ -1405,20 +1443,9 @@ Test(input, a_private_view_steers_its_own_channel_and_the_wall_never_sees_it, .t
     cr_assert(pipeline_set_channel_private(l.p, 1, &err), "%s", err.msg);
     cr_assert(pipeline_set_channel_active(l.p, 1, false));
     view_watch w = {.lock = PTHREAD_MUTEX_INITIALIZER};
-    cr_assert(pipeline_add_serial_animation(l.p, "watch views", watch_views, &w));
-    remote_source *src = remote_source_create(&err);
-    cr_assert(src, "%s", err.msg);
-    input_source *sources[1] = {remote_source_input(src)};
-    input_controller_config cc;
-    input_controller_config_default(&cc);
-    cc.plane_aspect = 32.f / 18.f;
-    cc.home = home;
-    cc.scene_size = 8.0;
-    input_runner *r = input_runner_start(sources, 1, &cc, drive_pick, NULL, NULL, l.sink, NULL, &err);
-    cr_assert(r, "%s", err.msg);
-    run_args ra = {.p = l.p};
-    pthread_t th;
-    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+    runner_rig g;
+    runner_rig_start(&g, &l, &w, false, 0.0);
+    remote_source *src = g.src;
 
     const int viewer = 1000, wall_mouse = 7;
     uint64_t t = clock_monotonic_us();
@@ -1465,10 +1492,7 @@ Test(input, a_private_view_steers_its_own_channel_and_the_wall_never_sees_it, .t
     input_event gone = {.kind = INPUT_DEVICE_REMOVED, .device = viewer, .time_us = t + 70000};
     push_all(src, &gone, 1);
     cr_assert(wait_views(&w, private_off, NULL), "the private channel stayed on after its viewer left");
-    pipeline_stop(l.p);
-    pthread_join(th, NULL);
-    cr_assert(ra.ok, "%s", ra.err.msg);
-    input_runner_stop(r);
+    runner_rig_stop(&g);
     cr_assert_eq(pipeline_hidden(l.p, 0) || pipeline_hidden(l.p, 1), false, "a private view hid a part");
     live_free(&l);
     /* the recording holds the wall's cameras only: it replays without the private channel */
@@ -1524,22 +1548,9 @@ Test(input, the_runner_brings_the_idle_tour_back_after_input_stops, .timeout = 1
     cr_assert(camera_path_append(&path, 0.0, &k0, &err) && camera_path_append(&path, 1.0, &k1, &err), "%s", err.msg);
     live l = live_make_tour(NULL, 0, &path, 0.1);
     view_watch w = {.lock = PTHREAD_MUTEX_INITIALIZER};
-    cr_assert(pipeline_add_serial_animation(l.p, "watch views", watch_views, &w));
-    remote_source *src = remote_source_create(&err);
-    cr_assert(src, "%s", err.msg);
-    input_source *sources[1] = {remote_source_input(src)};
-    input_controller_config cc;
-    input_controller_config_default(&cc);
-    cc.plane_aspect = 32.f / 18.f;
-    cc.home = home_camera(3.0);
-    cc.scene_size = 8.0;
-    cc.have_tour = true;
-    cc.idle_timeout_s = 0.3;
-    input_runner *r = input_runner_start(sources, 1, &cc, drive_pick, NULL, NULL, l.sink, NULL, &err);
-    cr_assert(r, "%s", err.msg);
-    run_args ra = {.p = l.p};
-    pthread_t th;
-    cr_assert_eq(pthread_create(&th, NULL, run_pipeline, &ra), 0);
+    runner_rig g;
+    runner_rig_start(&g, &l, &w, true, 0.3);
+    remote_source *src = g.src;
     uint64_t zero = 0;
     cr_assert(wait_views(&w, tour_playing, &zero), "nobody there: the tour never started");
     uint64_t t = clock_monotonic_us();
@@ -1552,10 +1563,7 @@ Test(input, the_runner_brings_the_idle_tour_back_after_input_stops, .timeout = 1
     cr_assert(camera_still(&w), "a key did not stop the tour");
     uint64_t stopped = watched(&w).serial[0];
     cr_assert(wait_views(&w, tour_playing, &stopped), "the tour did not come back after the idle timeout");
-    pipeline_stop(l.p);
-    pthread_join(th, NULL);
-    cr_assert(ra.ok, "%s", ra.err.msg);
-    input_runner_stop(r);
+    runner_rig_stop(&g);
     live_free(&l);
     camera_path_free(&path);
 }

@@ -231,14 +231,14 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     cli_remote_stop(); /* before input: the view's source is the input runner's */
     cli_input_finish(input);
     input = NULL;
+    if (!ran) /* e.g. the cluster's barrier before the flip timed out: its display sync's error */
+        cli_error("%s", err.msg);
     if (cli_cluster_report()) { /* a process died or stopped answering: said above */
         code = 3;
         goto done;
     }
-    if (!ran) {
-        cli_error("%s", err.msg);
+    if (!ran)
         goto done;
-    }
     if (s->record_file[0] && recorder.failed)
         goto done;
     pipeline_stats st = pipeline_get_stats(p);

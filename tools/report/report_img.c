@@ -38,6 +38,7 @@
 #include <string.h>
 
 #include "engine/clock.h"
+#include "engine/sample_ring.h"
 #include "engine/srgb.h"
 #include "metrics/flip.h"
 #include "remote/jpeg.h"
@@ -247,17 +248,6 @@ done:
     return code;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median_of(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* XRGB8888 words -> linear RGB through the sRGB curve (what a display shows). */
 static void xrgb_to_linear(const uint32_t *xrgb, size_t pixels, float *rgb)
@@ -306,7 +296,7 @@ static int cmd_jpeg(int argc, char **argv)
             srgb8_encode_xrgb(img.rgb + (size_t)y * (size_t)img.w * 3, 1, img.w, lossless + (size_t)y * (size_t)img.w);
         times_ms[r] = (clock_monotonic_s() - t0) * 1e3;
     }
-    printf("# convert_ms %.3f\n", median_of(times_ms, runs));
+    printf("# convert_ms %.3f\n", median_sorting(times_ms, (size_t)runs));
     xrgb_to_linear(lossless, pixels, reference);
     if (!(j = remote_jpeg_create(&err)))
         goto fail;
@@ -347,7 +337,7 @@ static int cmd_jpeg(int argc, char **argv)
                 sum += error[i];
             double mse = squared / (3.0 * (double)pixels);
             printf("%s\t%d\t%zu\t%.3f\t%.6f\t%.2f\n", remote_subsampling_name((remote_subsampling)sub), qualities[q],
-                   bytes, median_of(times_ms, runs), sum / (double)pixels,
+                   bytes, median_sorting(times_ms, (size_t)runs), sum / (double)pixels,
                    mse > 0.0 ? 10.0 * log10(255.0 * 255.0 / mse) : 99.0);
         }
     }
