@@ -175,7 +175,8 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
         c->in_capacity = bytes;
     }
     if (bytes && !wait_for(c, &req,
-                           MPI_Ibcast(leader ? c->outbox : c->inbox, (int)bytes, MPI_BYTE, c->leader, MPI_COMM_WORLD, &req),
+                           MPI_Ibcast(leader ? c->outbox : c->inbox, (int)bytes, MPI_BYTE, c->leader, MPI_COMM_WORLD,
+                                      &req),
                            "the frame's records", info->frame, &err))
         goto failed;
     if (!leader) {
@@ -428,7 +429,8 @@ bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
                   MPI_Igather(frames, (int)n, MPI_UINT64_T, all_frames, (int)n, MPI_UINT64_T, c->leader, MPI_COMM_WORLD,
                               &req),
                   "the flip frames", 0, err) &&
-         wait_for(c, &req, MPI_Igather(mine, (int)n, MPI_INT64_T, all, (int)n, MPI_INT64_T, c->leader, MPI_COMM_WORLD, &req),
+         wait_for(c, &req,
+                  MPI_Igather(mine, (int)n, MPI_INT64_T, all, (int)n, MPI_INT64_T, c->leader, MPI_COMM_WORLD, &req),
                   "the flip times", 0, err) &&
          ok;
     if (ok && c->rank == c->leader && n > 0) {

@@ -427,7 +427,8 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
     support_read_text(path, log, sizeof log);
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) == 0, "the job ended with status %d: %s", status, log);
     /* one process replays the record: every output's last frame is its picture */
-    snprintf(cmd, sizeof cmd, "%s render --wall %s/wall.json --display dump --out %s/one/r.png --replay-input %s/rec.txt",
+    snprintf(cmd, sizeof cmd,
+             "%s render --wall %s/wall.json --display dump --out %s/one/r.png --replay-input %s/rec.txt",
              support_tessera_bin(), dir, dir, dir);
     int replay = run_logged(dir, "replay", cmd, log, sizeof log);
     cr_assert_eq(replay, 0, "%s", log);

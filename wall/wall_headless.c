@@ -91,6 +91,8 @@ static bool wall_show(image_display *d, const frame_image *img, tess_error *err)
     wall_state *ws = wd->wall;
     if (!wd->dump->ops->show(wd->dump, img, err))
         return false;
+    if (ws->last < 0) /* part of a wall: no stitched image */
+        return true;
     const uint32_t *dest = ws->dest[wd->index], *source = ws->source[wd->index];
     for (size_t i = 0; i < ws->count[wd->index]; i++)
         memcpy(ws->rgb + 3 * (size_t)dest[i], img->rgb + 3 * (size_t)source[i], 3 * sizeof(float));
@@ -164,8 +166,8 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
             ws->last = -1; /* part of the wall: its outputs' own files only */
     wall_stitched_size(w, &ws->width_px, &ws->height_px);
     size_t pixels = (size_t)ws->width_px * (size_t)ws->height_px;
-    ws->rgb = calloc(pixels * 3, sizeof *ws->rgb); /* bezels stay black */
-    if (!ws->rgb || !map_sources(w, ws)) {
+    /* the stitched image and its maps only when it is written (part of a wall pays nothing) */
+    if (ws->last >= 0 && (!(ws->rgb = calloc(pixels * 3, sizeof *ws->rgb)) || !map_sources(w, ws))) { /* bezels black */
         tess_error_set(err, "wall: out of memory for a %dx%d stitched image", ws->width_px, ws->height_px);
         wall_state_free(ws);
         return false;

@@ -243,7 +243,7 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
         goto done;
     pipeline_stats st = pipeline_get_stats(p);
     const cli_channel_spec *ch = &s->channels[0];
-    double pixels = 0.0; /* per frame, over the outputs' channels (not the remote view's: rendered only while watched) */
+    double pixels = 0.0; /* per frame, over the outputs' channels (not the remote view's: rendered while watched) */
     char what[128];
     /* the wall's or the picture's channels: the remote view's come last and are not outputs */
     int channels = cli_remote_channel() >= 0 ? cli_remote_channel() : pipeline_channel_count(p);
