@@ -613,18 +613,19 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     return p->channel_count++;
 }
 
-static bool may_set_hook(const pipeline *p, const void *current)
+/* A cluster hook may be set once, before the run. */
+static bool may_set_hook(const pipeline *p, bool already_set)
 {
     if (p->ran || atomic_load(&p->running)) {
         log_error("pipeline: a cluster hook can be set only before the pipeline runs");
         return false;
     }
-    return current == NULL;
+    return !already_set;
 }
 
 bool pipeline_set_record_observer(pipeline *p, pipeline_record_fn fn, void *ctx)
 {
-    if (!may_set_hook(p, (const void *)p->record_observer))
+    if (!may_set_hook(p, p->record_observer != NULL))
         return false;
     p->record_observer = fn;
     p->record_observer_ctx = ctx;
@@ -633,7 +634,7 @@ bool pipeline_set_record_observer(pipeline *p, pipeline_record_fn fn, void *ctx)
 
 bool pipeline_set_frame_sync(pipeline *p, pipeline_sync_fn fn, void *ctx)
 {
-    if (!may_set_hook(p, (const void *)p->frame_sync))
+    if (!may_set_hook(p, p->frame_sync != NULL))
         return false;
     p->frame_sync = fn;
     p->frame_sync_ctx = ctx;
@@ -642,7 +643,7 @@ bool pipeline_set_frame_sync(pipeline *p, pipeline_sync_fn fn, void *ctx)
 
 bool pipeline_set_display_sync(pipeline *p, pipeline_display_sync_fn fn, void *ctx)
 {
-    if (!may_set_hook(p, (const void *)p->display_sync))
+    if (!may_set_hook(p, p->display_sync != NULL))
         return false;
     p->display_sync = fn;
     p->display_sync_ctx = ctx;
@@ -1360,10 +1361,17 @@ static void freeze_frame(pipeline *p)
     const double scale = p->rung_scale[plan->rung];
     const frame_state *st = &p->state; /* the frame's snapshot: unchanged until the next barrier */
     p->frame_renderer = st->renderer;
-    /* private channels: the status line alone (the cursor and pointers are the wall's plane points) */
-    overlay_state private_overlay = p->overlay;
-    private_overlay.cursor_visible = false;
-    memset(private_overlay.pointer_visible, 0, sizeof private_overlay.pointer_visible);
+    /* private channels: the status line alone (the cursor and pointers are the wall's plane
+     * points); made only when some channel is private and on */
+    overlay_state private_overlay;
+    bool any_private = false;
+    for (int i = 0; i < p->channel_count && !any_private; i++)
+        any_private = st->private_view[i] && st->active[i];
+    if (any_private) {
+        private_overlay = p->overlay;
+        private_overlay.cursor_visible = false;
+        memset(private_overlay.pointer_visible, 0, sizeof private_overlay.pointer_visible);
+    }
     uint32_t bands = 0;
     for (int i = 0; i < p->channel_count; i++) {
         pipe_channel *c = &p->channels[i];
@@ -1385,7 +1393,7 @@ static void freeze_frame(pipeline *p)
                                                                   : p->cfg.sampler.k * p->cfg.sampler.k};
         b->rendered = active;
         image_display *sink = c->display->ops->write_tile ? c->display : NULL;
-        c->overlay_on = overlay_plan_make(&c->overlay, st->private_view[i] ? &private_overlay : &p->overlay,
+        c->overlay_on = overlay_plan_make(&c->overlay, any_private && st->private_view[i] ? &private_overlay : &p->overlay,
                                           c->window, c->width_px, c->height_px);
         if (p->reduced) {
             int w = upscale_low_res_px(c->width_px, scale), h = upscale_low_res_px(c->height_px, scale);

@@ -286,6 +286,17 @@ bool remote_encoder_copy_newest(remote_encoder *e, int index, uint64_t after_fra
     return copied;
 }
 
+uint64_t remote_encoder_newest_frame(remote_encoder *e, int index)
+{
+    if (index < 0 || index >= e->channel_count)
+        return UINT64_MAX;
+    pthread_mutex_lock(&e->lock);
+    const channel *c = &e->channels[index];
+    uint64_t frame = c->have_published ? c->published_info.frame : UINT64_MAX;
+    pthread_mutex_unlock(&e->lock);
+    return frame;
+}
+
 remote_encoder_stats remote_encoder_get_stats(remote_encoder *e)
 {
     pthread_mutex_lock(&e->lock);

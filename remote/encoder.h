@@ -58,6 +58,10 @@ typedef struct remote_encoded_info {
 bool remote_encoder_copy_newest(remote_encoder *e, int index, uint64_t after_frame, uint64_t shown_after_us,
                                 uint8_t **out, size_t *out_capacity, size_t out_offset, remote_encoded_info *info);
 
+/* The frame number of channel `index`'s newest encoded frame, or UINT64_MAX
+ * when it has none (no copy). */
+uint64_t remote_encoder_newest_frame(remote_encoder *e, int index);
+
 typedef struct remote_encoder_stats {
     uint64_t frames_shown;    /* frames the displays were shown */
     uint64_t frames_encoded;

@@ -190,15 +190,11 @@ static void following_changed(remote_view *v, int delta)
 /* The viewer starts watching encoder channel `view` now: nothing shown before goes to it. */
 static void viewer_watch(remote_view *v, viewer *vw, int view)
 {
-    remote_encoded_info info;
     vw->view = view;
     vw->since_us = clock_monotonic_us();
     vw->last_sent = vw->first_sent = UINT64_MAX;
     vw->sent_here = 0;
-    vw->first_frame = remote_encoder_copy_newest(v->encoder, view, UINT64_MAX, 0, &v->send_buf, &v->send_capacity,
-                                                 LWS_PRE, &info)
-                          ? info.frame
-                          : UINT64_MAX;
+    vw->first_frame = remote_encoder_newest_frame(v->encoder, view);
 }
 
 /* ---- viewers ------------------------------------------------------------------- */
@@ -242,14 +238,13 @@ static int viewer_attach(remote_view *v, struct lws *wsi, session *ss)
 /* Frames of the channel this viewer could have had and did not get. */
 static void count_skipped(remote_view *v, const viewer *vw)
 {
-    remote_encoded_info info;
     /* the first frame it could have had: the one after the newest when it came, else (the
      * channel was off until it came) the first one it was sent */
     uint64_t from = vw->first_frame != UINT64_MAX ? vw->first_frame + 1 : vw->first_sent;
-    if (from == UINT64_MAX || !remote_encoder_copy_newest(v->encoder, vw->view, UINT64_MAX, 0, &v->send_buf,
-                                                          &v->send_capacity, LWS_PRE, &info))
+    uint64_t newest = remote_encoder_newest_frame(v->encoder, vw->view);
+    if (from == UINT64_MAX || newest == UINT64_MAX)
         return;
-    uint64_t available = info.frame >= from ? info.frame - from + 1 : 0;
+    uint64_t available = newest >= from ? newest - from + 1 : 0;
     if (available > vw->sent_here)
         v->stats.frames_skipped += available - vw->sent_here;
 }

@@ -1100,7 +1100,8 @@ static void tour_off(pipeline *p, void *args)
     input_sink_emit(*(input_sink **)args, &t);
 }
 
-Test(input, the_tour_eases_in_from_the_shown_camera_loops_and_stops_where_it_is, .timeout = 60)
+/* A tour of two keys, (10, 2, 0) at 1 s and (0, 2, 10) at 2 s, both looking at the origin. */
+static camera_path two_key_tour(void)
 {
     camera_path path = {0};
     tess_error err = {{0}};
@@ -1108,6 +1109,13 @@ Test(input, the_tour_eases_in_from_the_shown_camera_loops_and_stops_where_it_is,
     camera_desc k1 = {v3(0.f, 2.f, 10.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
     path.interp = CAMERA_PATH_LINEAR;
     cr_assert(camera_path_append(&path, 1.0, &k0, &err) && camera_path_append(&path, 2.0, &k1, &err), "%s", err.msg);
+    return path;
+}
+
+Test(input, the_tour_eases_in_from_the_shown_camera_loops_and_stops_where_it_is, .timeout = 60)
+{
+    camera_path path = two_key_tour();
+    tess_error err = {{0}};
     /* 30 Hz fixed: frame f at f/30 s; ease over 0.5 s; the tour starts at frame 0, stops at 31 */
     live l = live_make_tour(NULL, TOUR_FRAMES, &path, 0.5);
     tour_watch w = {.sink = l.sink};
@@ -1540,12 +1548,7 @@ static bool camera_still(view_watch *w)
 
 Test(input, the_runner_brings_the_idle_tour_back_after_input_stops, .timeout = 120)
 {
-    camera_path path = {0};
-    tess_error err = {{0}};
-    camera_desc k0 = {v3(10.f, 2.f, 0.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
-    camera_desc k1 = {v3(0.f, 2.f, 10.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
-    path.interp = CAMERA_PATH_LINEAR;
-    cr_assert(camera_path_append(&path, 0.0, &k0, &err) && camera_path_append(&path, 1.0, &k1, &err), "%s", err.msg);
+    camera_path path = two_key_tour();
     live l = live_make_tour(NULL, 0, &path, 0.1);
     view_watch w = {.lock = PTHREAD_MUTEX_INITIALIZER};
     runner_rig g;
