@@ -277,8 +277,9 @@ static void *watch_start(void *arg)
 
 cluster *cluster_start(int *argc, char ***argv, const cluster_config *cfg, tess_error *err)
 {
+    double sync_s = cfg && cfg->timeout_s > 0.0 ? cfg->timeout_s : CLUSTER_DEFAULT_TIMEOUT_S;
     start_watchdog w = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false,
-                        cfg && cfg->timeout_s > 0.0 ? cfg->timeout_s : CLUSTER_DEFAULT_TIMEOUT_S};
+                        sync_s > CLUSTER_START_TIMEOUT_S ? sync_s : CLUSTER_START_TIMEOUT_S};
     pthread_t watchdog;
     bool watching = pthread_create(&watchdog, NULL, watch_start, &w) == 0;
     int provided = 0, rc = MPI_Init_thread(argc, argv, MPI_THREAD_SERIALIZED, &provided);

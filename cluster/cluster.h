@@ -25,10 +25,12 @@
  * answering makes the others stop the run with an error naming what they
  * waited for and the frame, never hang: it renders one more frame on its own
  * with the reason in the status line ("cluster: out of step with the other
- * machines at frame F: this wall stops"), shows it, and the run ends. MPI_Init has no time-out of its own:
- * a watchdog thread ends the process (status 3) when starting takes longer. After a failure MPI cannot be
- * finalised (a collective is left open): cluster_finish says so and the
- * process exits with the error.
+ * machines at frame F: this wall stops"), shows it, and the run ends.
+ * MPI_Init has no time-out of its own: a watchdog thread ends the process
+ * (status 3) when starting takes longer than CLUSTER_START_TIMEOUT_S (or the
+ * sync time-out, when longer). After a failure MPI cannot be finalised (a
+ * collective is left open): cluster_finish skips it and the process exits
+ * with the error.
  *
  * START. cluster_agree compares one value (the accel's checksum) across the
  * processes before the run: a mismatch (a different scene file, a different
@@ -51,6 +53,9 @@
 struct pipeline;
 
 #define CLUSTER_DEFAULT_TIMEOUT_S 10.0
+/* MPI_Init's watchdog: at least this long (starting many processes on a loaded or slow machine,
+ * under a sanitizer, takes seconds), or the sync time-out when that is longer */
+#define CLUSTER_START_TIMEOUT_S 60.0
 #define CLUSTER_HOST_BYTES 64
 
 typedef struct cluster cluster;

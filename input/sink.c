@@ -48,6 +48,7 @@ struct input_sink {
     atomic_uint_fast64_t queued;          /* pipeline transactions queued (accepted) */
     atomic_uint_fast64_t camera_changes;  /* cameras put into the mailbox */
     atomic_uint_fast64_t camera_applied;  /* mailbox transactions that applied a camera */
+    atomic_uint_fast64_t tour_starts, tour_stops; /* the tour started / stopped at a barrier */
 };
 
 /* ---- serial section: applying ------------------------------------------------------ */
@@ -95,6 +96,8 @@ static void apply_tour(pipeline *p, void *args)
         return;
     if (a->on && !a->s->tour_on)
         a->s->tour_fresh = true;
+    if (a->on != a->s->tour_on)
+        atomic_fetch_add(a->on ? &a->s->tour_starts : &a->s->tour_stops, 1);
     a->s->tour_on = a->on;
 }
 
@@ -236,8 +239,9 @@ camera_desc input_sink_current_camera(input_sink *s)
 input_sink_stats input_sink_get_stats(input_sink *s)
 {
     uint64_t changes = atomic_load(&s->camera_changes), applied = atomic_load(&s->camera_applied);
-    return (input_sink_stats){atomic_load(&s->emitted), atomic_load(&s->refused), changes, applied,
-                              atomic_load(&s->replayed), atomic_load(&s->queued)};
+    return (input_sink_stats){atomic_load(&s->emitted),     atomic_load(&s->refused), changes, applied,
+                              atomic_load(&s->replayed),    atomic_load(&s->queued),
+                              atomic_load(&s->tour_starts), atomic_load(&s->tour_stops)};
 }
 
 /* ---- life ------------------------------------------------------------------------------ */

@@ -82,11 +82,13 @@ bool input_sink_replay(input_sink *s, const input_record *rec, input_replay_spee
  * transactions played back from a record (counted apart from emitted); and
  * pipeline transactions queued (accepted): a camera or cursor change that
  * rides on a waiting mailbox transaction queues none, so emitted + replayed
- * = queued + refused + changes coalesced into a waiting mailbox. */
+ * = queued + refused + changes coalesced into a waiting mailbox. The tour's
+ * starts and stops as they happened at a barrier (with a tour). */
 typedef struct input_sink_stats {
     uint64_t emitted, refused;
     uint64_t camera_changes, camera_applied;
     uint64_t replayed, queued;
+    uint64_t tour_starts, tour_stops;
 } input_sink_stats;
 input_sink_stats input_sink_get_stats(input_sink *s);
 
