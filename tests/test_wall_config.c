@@ -358,9 +358,21 @@ Test(wall_config, bezel_and_size_ranges)
 {
     expect_output_failure("{\"connector\": \"DP-1\", \"grid\": [0, 0], \"size_mm\": [10, 10], "
                           "\"bezel_mm\": {\"left\": -3}}",
-                          "wall.json: field 'outputs[0].bezel_mm.left': must be >= 0, got -3");
+                          "wall.json: field 'outputs[0].bezel_mm.left': must be in [0, 1e+06], got -3");
     expect_output_failure("{\"connector\": \"DP-1\", \"grid\": [0, 0], \"size_mm\": [10, 0]}",
-                          "field 'outputs[0].size_mm[1]': must be > 0, got 0");
+                          "field 'outputs[0].size_mm[1]': must be in [0.1, 1e+06], got 0");
+    expect_output_failure("{\"connector\": \"DP-1\", \"grid\": [0, 0], \"size_mm\": [2e6, 10]}",
+                          "field 'outputs[0].size_mm[0]': must be in [0.1, 1e+06], got 2e+06");
+    expect_output_failure("{\"connector\": \"DP-1\", \"grid\": [0, 0], \"size_mm\": [10, 10], "
+                          "\"bezel_mm\": {\"top\": 1e7}}",
+                          "field 'outputs[0].bezel_mm.top': must be in [0, 1e+06], got 1e+07");
+    expect_output_failure("{\"connector\": \"DP-1\", \"position_mm\": [0, -3e6], \"size_mm\": [10, 10]}",
+                          "field 'outputs[0].position_mm[1]': must be in [-1e+06, 1e+06], got -3e+06");
+    /* found by fuzz_wall_config: 5.6e18 px down made a 339 mm tall output 0 mm tall */
+    expect_output_failure("{\"connector\": \"HDMI-A-1\", \"mode\": \"2560x1440@59.95\", "
+                          "\"position_px\": [0, 5555555555555555550], \"size_mm\": [597, 339]}",
+                          "field 'outputs[0].position_px[1]': 5.55556e+18 px at this output's 0.235417 mm pixels "
+                          "is 1.30787e+18 mm from the origin; a wall spans at most 1e+06 mm");
     expect_output_failure("{\"connector\": \"DP-1\", \"grid\": [0, 0]}",
                           "field 'outputs[0].size_mm': required field is missing");
     expect_output_failure("{\"connector\": \"DP-1\", \"grid\": [0, 0], \"size_mm\": [10, 10], "

@@ -17,6 +17,12 @@
 #define MODE_MAX_PX 32767   /* DRM keeps mode sizes in 16 bits */
 #define REFRESH_MAX_HZ 1000.0
 #define GRID_MAX_CELL 255
+/* Lengths and placed corners stay within 1 km of the wall's origin and an active
+ * area is at least 0.1 mm: the fit and overlap checks (1e-6 relative, 0.5 mm)
+ * mean something only while positions are not many orders above the sizes.
+ * (A position_px of 5e18 once made a 339 mm tall output 0 mm tall.) */
+#define WALL_MAX_LENGTH_MM 1e6
+#define WALL_MIN_SIZE_MM 0.1
 #define MODE_TEXT_BYTES 48  /* "32767x32767@1000.00" with room to spare */
 #define LIST_TEXT_BYTES 320 /* the "(the card has: ...)" part of a message */
 
@@ -314,6 +320,10 @@ static bool read_rotation(jr_ctx *c, json_object *obj, wall_output *o)
 
 /* ---- one output: geometry ---------------------------------------------- */
 
+static const jr_range size_range = {WALL_MIN_SIZE_MM, WALL_MAX_LENGTH_MM, false, false};
+static const jr_range bezel_range = {0.0, WALL_MAX_LENGTH_MM, false, false};
+static const jr_range position_range = {-WALL_MAX_LENGTH_MM, WALL_MAX_LENGTH_MM, false, false};
+
 /* The current field as an array of exactly 2 numbers in r. */
 static bool read_pair(jr_ctx *c, json_object *v, jr_range r, double out[2])
 {
@@ -339,7 +349,7 @@ static bool read_size(jr_ctx *c, json_object *obj, wall_output *o)
     if (!jr_require_member(c, obj, "size_mm") || !jr_get_member(obj, "size_mm", &v))
         return false;
     size_t saved = jr_field_key(c, "size_mm");
-    bool ok = read_pair(c, v, jr_range_positive, wh);
+    bool ok = read_pair(c, v, size_range, wh);
     jr_field_leave(c, saved);
     o->width_mm = wh[0];
     o->height_mm = ok ? wh[1] : 0.0;
@@ -354,10 +364,10 @@ static bool read_bezel(jr_ctx *c, json_object *obj, wall_output *o)
         return true;
     size_t saved = jr_field_key(c, "bezel_mm");
     bool ok = jr_expect_object(c, v) && jr_check_fields(c, v, fields) &&
-              jr_opt_double(c, v, "left", jr_range_nonneg, &o->bezel_left_mm) &&
-              jr_opt_double(c, v, "top", jr_range_nonneg, &o->bezel_top_mm) &&
-              jr_opt_double(c, v, "right", jr_range_nonneg, &o->bezel_right_mm) &&
-              jr_opt_double(c, v, "bottom", jr_range_nonneg, &o->bezel_bottom_mm);
+              jr_opt_double(c, v, "left", bezel_range, &o->bezel_left_mm) &&
+              jr_opt_double(c, v, "top", bezel_range, &o->bezel_top_mm) &&
+              jr_opt_double(c, v, "right", bezel_range, &o->bezel_right_mm) &&
+              jr_opt_double(c, v, "bottom", bezel_range, &o->bezel_bottom_mm);
     jr_field_leave(c, saved);
     return ok;
 }
@@ -370,6 +380,25 @@ static bool check_grid_cell(jr_ctx *c, const double cell[2])
             continue;
         size_t saved = jr_field_index(c, i);
         jr_field_fail(c, "must be a whole number from 0 to %d, got %g", GRID_MAX_CELL, cell[i]);
+        jr_field_leave(c, saved);
+        return false;
+    }
+    return true;
+}
+
+/* position_px [x, y] (read, the current field) in wall mm lies within
+ * WALL_MAX_LENGTH_MM of the origin at this output's pixel pitch. */
+static bool check_px_position(jr_ctx *c, const wall_output *o, const double xy[2])
+{
+    int w_px, h_px;
+    mounted_px(o, o->mode_w_px, o->mode_h_px, &w_px, &h_px);
+    const double pitch_mm[2] = {o->width_mm / w_px, o->height_mm / h_px};
+    for (size_t i = 0; i < 2; i++) {
+        if (fabs(xy[i] * pitch_mm[i]) <= WALL_MAX_LENGTH_MM)
+            continue;
+        size_t saved = jr_field_index(c, i);
+        jr_field_fail(c, "%g px at this output's %g mm pixels is %g mm from the origin; a wall spans at most "
+                         "%g mm", xy[i], pitch_mm[i], xy[i] * pitch_mm[i], WALL_MAX_LENGTH_MM);
         jr_field_leave(c, saved);
         return false;
     }
@@ -399,11 +428,16 @@ static bool read_placement(jr_ctx *c, json_object *obj, const wall_output *o, pl
         return jr_field_fail(c, "give only one of grid, position_mm and position_px, got %s", given);
     size_t saved = jr_field_key(c, keys[which]);
     double ab[2];
-    jr_range r = kinds[which] == PLACE_GRID ? jr_range_nonneg : jr_range_float;
+    /* position_px is checked in mm once read (check_px_position) */
+    jr_range r = kinds[which] == PLACE_GRID ? jr_range_nonneg
+                 : kinds[which] == PLACE_MM ? position_range
+                                            : jr_range_float;
     bool ok = read_pair(c, found, r, ab) && (kinds[which] != PLACE_GRID || check_grid_cell(c, ab));
     if (ok && kinds[which] == PLACE_PX && o->mode_preferred)
         ok = jr_field_fail(c, "needs an explicit mode such as \"1920x1080\" (a wall pixel is this output's "
                               "pixel), got mode 'preferred'");
+    if (ok && kinds[which] == PLACE_PX)
+        ok = check_px_position(c, o, ab);
     jr_field_leave(c, saved);
     *p = (placement){kinds[which], ab[0], ab[1]};
     return ok;

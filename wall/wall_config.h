@@ -33,7 +33,7 @@
  *      "grid": [column, row],          exactly one of grid, position_mm and
  *      "position_mm": [x, y],          position_px places the output; see below
  *      "position_px": [x, y],
- *      "size_mm": [width, height],     required: the ACTIVE area as mounted, > 0
+ *      "size_mm": [width, height],     required: the ACTIVE area as mounted, 0.1..1e6
  *      "bezel_mm": {"left": 0, "top": 0, "right": 0, "bottom": 0}
  *                                      as mounted; each optional (default 0), >= 0
  *     }, ...
@@ -48,7 +48,7 @@
  *   ]                                  Ranks given must be 0..count-1, each once.
  *
  * Placement (all give the top-left corner of the output's active area):
- *  - position_mm: [x, y] in wall millimetres (any finite values; see below).
+ *  - position_mm: [x, y] in wall millimetres (within +-1e6; see below).
  *  - position_px: [x, y] in wall pixels, where one wall pixel is this output's
  *    pixel as mounted: x_mm = x * width_mm / width_px and y_mm likewise, with
  *    width_px, height_px the mode's pixels after rotation. Needs an explicit mode.
