@@ -19,33 +19,73 @@
 #define FLIPS_KEPT 4096
 #define SPINS_BEFORE_SLEEP 200 /* MPI_Test calls before the waiter starts sleeping between them */
 
+/* The messages of a frame, each to or from the leader (a star: the leader knows who is there). */
+enum {
+    TAG_VOTE = 1,  /* follower -> leader: vote_msg, in the serial section */
+    TAG_FRAME,     /* leader -> follower: frame_msg then its records, in the serial section */
+    TAG_READY,     /* follower -> leader: step_msg, before the flip */
+    TAG_GO,        /* leader -> follower: step_msg, before the flip */
+    TAG_DROPPED,   /* leader -> a follower it gave up on: step_msg; the follower must stop */
+    TAG_COUNT
+};
+
+typedef struct vote_msg {
+    uint64_t frame;
+    uint32_t stop; /* 1: this process stops after the step */
+    uint32_t reserved;
+} vote_msg;
+
 /* What the leader sends every frame before its records. */
-typedef struct sync_header {
+typedef struct frame_msg {
     uint64_t frame;
     double time_s;
-    uint32_t records; /* TXN_BINARY_BYTES each follow */
+    uint32_t records;    /* TXN_BINARY_BYTES each follow in the same message */
+    uint32_t flags;      /* FRAME_STOP, FRAME_FAILED */
+    uint32_t nodes_lost; /* machines the leader has given up on so far */
     uint32_t reserved;
-} sync_header;
+} frame_msg;
+#define FRAME_STOP 1u   /* every process stops after this step */
+#define FRAME_FAILED 2u /* a node was lost and the wall stops: render this frame (its status line says why), then stop */
 
+typedef struct step_msg {
+    uint64_t step; /* display syncs so far (READY, GO) or the frame (DROPPED) */
+} step_msg;
+
+/* One message in flight to a peer: its own copy of the bytes until MPI is done with them. */
+typedef struct send_slot {
+    MPI_Request req;
+    unsigned char *buf;
+    size_t capacity;
+} send_slot;
+
+typedef struct peer {
+    bool lost;                  /* stopped answering, or out of step: no more messages to or from it */
+    bool pending;               /* gather: its message has not come yet */
+    send_slot slots[TAG_COUNT]; /* by tag */
+} peer;
 
 struct cluster {
     int rank, size;
     int leader; /* the rank that reads input and sends its records (cluster_config.leader) */
     double timeout_s;
+    cluster_on_loss on_loss;
     char (*host_names)[CLUSTER_HOST_BYTES]; /* size of them */
     const char **hosts;
+    peer *peers;                            /* size of them (this process's own unused) */
     struct pipeline *p;
     /* leader: what its frame state took since the last frame sync (the record observer, in the
      * serial section; sent by the frame sync, in the serial section: no lock) */
     unsigned char *outbox;
     size_t out_records, out_capacity;
     bool out_overflow; /* out of memory for a record: the followers would differ, so the run stops */
-    unsigned char *inbox; /* follower: the records of one frame */
+    unsigned char *inbox; /* follower: one frame's message */
     size_t in_capacity;
-    bool failed;
+    bool failed;       /* this process stops: it renders one more frame with the reason, then the loop ends */
+    bool alone;        /* a follower that lost its leader and carries on (CLUSTER_CARRY_ON): no more syncs */
+    int newly_lost;    /* leader: followers lost since the last frame sync (said in the status line then) */
+    uint64_t display_steps; /* display syncs so far: READY and GO carry it */
     cluster_stats stats;
-    sample_ring vote, send, barrier; /* the stop vote (it waits for the slowest process), the leader's
-                                  header and records (everybody is there), the barrier before the flip */
+    sample_ring vote, send, barrier; /* see cluster_stats */
     /* the display sync: when each of the last FLIPS_KEPT frames passed the barrier
      * (CLOCK_REALTIME us: one clock on one machine, NTP-close across machines) */
     uint64_t flip_frame[FLIPS_KEPT];
@@ -69,8 +109,14 @@ static void mpi_text(int code, char *out, size_t bytes)
     snprintf(out, bytes, "%.*s", len, text);
 }
 
-/* Wait for a started collective at most timeout_s; false (failed, err says
- * what was waited for) when it does not complete or MPI fails. */
+static void pause_after(int spins)
+{
+    if (spins > SPINS_BEFORE_SLEEP)
+        nanosleep(&(struct timespec){0, 20000}, NULL);
+}
+
+/* Wait for a started collective (start, agree, skew) at most timeout_s; false
+ * (failed, err says what was waited for) when it does not complete or MPI fails. */
 static bool wait_for(cluster *c, MPI_Request *req, int started, const char *what, uint64_t frame, tess_error *err)
 {
     if (started != MPI_SUCCESS) {
@@ -97,8 +143,172 @@ static bool wait_for(cluster *c, MPI_Request *req, int started, const char *what
                                   "%" PRIu64 "): one of them died or stopped",
                                   c->rank, c->timeout_s, what, frame);
         }
-        if (spins > SPINS_BEFORE_SLEEP)
-            nanosleep(&(struct timespec){0, 20000}, NULL);
+        pause_after(spins);
+    }
+}
+
+/* ---- messages to and from peers -------------------------------------------------------- */
+
+/* Give up on peer r: no more messages to or from it. Its sends in flight are
+ * left to MPI with their buffers (never freed: MPI may still read them). */
+static void lose_peer(cluster *c, int r, const char *what, uint64_t frame)
+{
+    peer *q = &c->peers[r];
+    if (q->lost)
+        return;
+    q->lost = true;
+    for (int t = 0; t < TAG_COUNT; t++)
+        if (q->slots[t].req != MPI_REQUEST_NULL) {
+            MPI_Request_free(&q->slots[t].req);
+            q->slots[t].buf = NULL; /* in MPI's hands */
+            q->slots[t].capacity = 0;
+        }
+    c->stats.nodes_lost++;
+    log_error("cluster: rank %d lost rank %d (%s) at frame %" PRIu64 " (%s; time-out %.1f s): %s", c->rank, r,
+              c->hosts[r], frame, what, c->timeout_s,
+              c->rank != c->leader             ? "the leader is gone"
+              : c->on_loss == CLUSTER_CARRY_ON ? "the wall carries on without its outputs"
+                                               : "the wall stops");
+    if (c->rank != c->leader)
+        return;
+    c->newly_lost++;
+    /* if it was only stopped or slow, it reads this when it comes back and stops rather than
+     * show a stale picture; the bytes stay MPI's (one small block a lost machine) */
+    step_msg *note = malloc(sizeof *note);
+    MPI_Request req;
+    if (note) {
+        note->step = frame;
+        if (MPI_Isend(note, (int)sizeof *note, MPI_BYTE, r, TAG_DROPPED, MPI_COMM_WORLD, &req) == MPI_SUCCESS)
+            MPI_Request_free(&req);
+    }
+}
+
+/* Send len bytes to peer r (tag), copied: the caller's buffer is free again on
+ * return. The slot's previous message must have left within the time-out, or
+ * the peer is lost (false). */
+static bool post(cluster *c, int r, int tag, const void *data, size_t len, uint64_t frame)
+{
+    peer *q = &c->peers[r];
+    if (q->lost)
+        return false;
+    send_slot *sl = &q->slots[tag];
+    double deadline = clock_monotonic_s() + c->timeout_s;
+    for (int spins = 0; sl->req != MPI_REQUEST_NULL; spins++) {
+        int done = 0;
+        if (MPI_Test(&sl->req, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS || (!done && clock_monotonic_s() > deadline)) {
+            lose_peer(c, r, "taking the last message", frame);
+            return false;
+        }
+        if (!done)
+            pause_after(spins);
+    }
+    if (len > sl->capacity) {
+        unsigned char *grown = realloc(sl->buf, len);
+        if (!grown) {
+            lose_peer(c, r, "out of memory for a message", frame);
+            return false;
+        }
+        sl->buf = grown;
+        sl->capacity = len;
+    }
+    memcpy(sl->buf, data, len);
+    if (MPI_Isend(sl->buf, (int)len, MPI_BYTE, r, tag, MPI_COMM_WORLD, &sl->req) != MPI_SUCCESS) {
+        sl->req = MPI_REQUEST_NULL;
+        lose_peer(c, r, "sending", frame);
+        return false;
+    }
+    return true;
+}
+
+/* Receive the message (tag) waiting from peer r into *buf (grown as needed);
+ * its size; -1 on an MPI error or no memory. */
+static long take(int r, int tag, unsigned char **buf, size_t *capacity)
+{
+    MPI_Status st;
+    int count = 0;
+    if (MPI_Probe(r, tag, MPI_COMM_WORLD, &st) != MPI_SUCCESS || MPI_Get_count(&st, MPI_BYTE, &count) != MPI_SUCCESS ||
+        count < 0)
+        return -1;
+    if ((size_t)count > *capacity) {
+        unsigned char *grown = realloc(*buf, (size_t)count);
+        if (!grown)
+            return -1;
+        *buf = grown;
+        *capacity = (size_t)count;
+    }
+    if (MPI_Recv(*buf, count, MPI_BYTE, r, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+        return -1;
+    return count;
+}
+
+/* Leader: one message (tag, exactly `len` bytes, starting with a uint64_t
+ * equal to `expect`) from every follower not lost, within the time-out; the
+ * ones that do not send it are lost. Votes are OR-ed into *stop when given. */
+static void gather(cluster *c, int tag, size_t len, uint64_t expect, const char *what, uint64_t frame, bool *stop)
+{
+    int left = 0;
+    for (int r = 0; r < c->size; r++) {
+        c->peers[r].pending = r != c->rank && !c->peers[r].lost;
+        left += c->peers[r].pending;
+    }
+    double deadline = clock_monotonic_s() + c->timeout_s;
+    for (int spins = 0; left > 0; spins++) {
+        for (int r = 0; r < c->size; r++) {
+            if (!c->peers[r].pending)
+                continue;
+            int here = 0;
+            if (MPI_Iprobe(r, tag, MPI_COMM_WORLD, &here, MPI_STATUS_IGNORE) != MPI_SUCCESS) {
+                lose_peer(c, r, what, frame);
+            } else if (here) {
+                long got = take(r, tag, &c->inbox, &c->in_capacity);
+                uint64_t said = 0;
+                if (got == (long)len)
+                    memcpy(&said, c->inbox, sizeof said);
+                if (got != (long)len || said != expect) {
+                    log_error("cluster: rank %d (%s) is out of step (%s: %" PRIu64 ", here %" PRIu64 ")", r,
+                              c->hosts[r], what, said, expect);
+                    lose_peer(c, r, what, frame);
+                } else if (stop && ((const vote_msg *)(const void *)c->inbox)->stop) {
+                    *stop = true;
+                }
+            } else {
+                continue;
+            }
+            c->peers[r].pending = false;
+            left--;
+        }
+        if (left > 0 && clock_monotonic_s() > deadline)
+            for (int r = 0; r < c->size; r++)
+                if (c->peers[r].pending) {
+                    lose_peer(c, r, what, frame);
+                    c->peers[r].pending = false;
+                    left--;
+                }
+        if (left > 0)
+            pause_after(spins);
+    }
+}
+
+/* Follower: the leader's next message of `tag` into c->inbox; its size, or -1
+ * when it does not come within twice the time-out (or MPI fails), or -2 when
+ * the leader said this process was dropped. Twice: when another follower
+ * dies the leader gives up on it after one time-out, and its verdict (stop,
+ * or carry on) must reach this process before it blames the leader. */
+static long await_leader(cluster *c, int tag)
+{
+    double deadline = clock_monotonic_s() + 2.0 * c->timeout_s;
+    for (int spins = 0;; spins++) {
+        int here = 0, dropped = 0;
+        if (MPI_Iprobe(c->leader, TAG_DROPPED, MPI_COMM_WORLD, &dropped, MPI_STATUS_IGNORE) != MPI_SUCCESS ||
+            MPI_Iprobe(c->leader, tag, MPI_COMM_WORLD, &here, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+            return -1;
+        if (dropped)
+            return -2;
+        if (here)
+            return take(c->leader, tag, &c->inbox, &c->in_capacity);
+        if (clock_monotonic_s() > deadline)
+            return -1;
+        pause_after(spins);
     }
 }
 
@@ -120,7 +330,7 @@ static void observe(void *ctx, const txn_record *r)
         return;
     if (c->out_records == c->out_capacity) {
         size_t grown = c->out_capacity ? 2 * c->out_capacity : 64;
-        unsigned char *more = realloc(c->outbox, grown * TXN_BINARY_BYTES);
+        unsigned char *more = realloc(c->outbox, sizeof(frame_msg) + grown * TXN_BINARY_BYTES);
         if (!more) {
             c->out_overflow = true;
             return;
@@ -128,107 +338,195 @@ static void observe(void *ctx, const txn_record *r)
         c->outbox = more;
         c->out_capacity = grown;
     }
-    if (txn_encode_binary(r, c->outbox + c->out_records * TXN_BINARY_BYTES))
+    if (txn_encode_binary(r, c->outbox + sizeof(frame_msg) + c->out_records * TXN_BINARY_BYTES))
         c->out_records++;
 }
 
 /* ---- the frame sync -------------------------------------------------------------------- */
 
-static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *stop)
+/* Put `text` in this process's status line (on the leader also sent: the observer takes it). */
+static void say(struct pipeline *p, const char *text)
 {
-    cluster *c = ctx;
-    tess_error err = {{0}};
-    if (c->failed) { /* the frame with the message was rendered: now the loop stops */
-        *stop = true;
-        return;
-    }
+    txn_record why = txn_status(text);
+    pipeline_apply(p, &why);
+}
+
+static void leader_frame_sync(cluster *c, struct pipeline *p, frame_info *info, bool *stop)
+{
     double t0 = clock_monotonic_s();
-    bool leader = c->rank == c->leader;
-    if (leader && c->out_overflow) {
+    if (c->out_overflow) {
         log_error("cluster: out of memory for the frame's records: the run stops (the other processes would "
                   "render something else)");
         *stop = true;
     }
-    /* whether anybody stops after this step */
-    int mine = *stop ? 1 : 0, any = 0;
-    MPI_Request req;
-    if (!wait_for(c, &req, MPI_Iallreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD, &req), "the stop vote",
-                  info->frame, &err))
-        goto failed;
+    bool any = *stop;
+    gather(c, TAG_VOTE, sizeof(vote_msg), info->frame, "the stop vote", info->frame, &any);
     double t1 = clock_monotonic_s();
-    /* the leader's time and records */
-    sync_header h = {0};
-    if (leader)
-        h = (sync_header){.frame = info->frame, .time_s = info->time_s, .records = (uint32_t)c->out_records};
-    if (!wait_for(c, &req, MPI_Ibcast(&h, (int)sizeof h, MPI_BYTE, c->leader, MPI_COMM_WORLD, &req), "the frame header",
-                  info->frame, &err))
-        goto failed;
-    size_t bytes = (size_t)h.records * TXN_BINARY_BYTES;
-    if (!leader && bytes > c->in_capacity) {
-        unsigned char *grown = realloc(c->inbox, bytes);
-        if (!grown) {
-            tess_error_set(&err, "cluster: rank %d: out of memory for %u records", c->rank, h.records);
+    uint32_t flags = any ? FRAME_STOP : 0u;
+    if (c->newly_lost > 0) {
+        char text[TXN_TEXT_BYTES];
+        if (c->on_loss == CLUSTER_CARRY_ON) {
+            snprintf(text, sizeof text, "cluster: %" PRIu64 " machine%s lost at frame %" PRIu64 ": the wall carries on",
+                     c->stats.nodes_lost, c->stats.nodes_lost == 1 ? "" : "s", info->frame);
+        } else {
+            snprintf(text, sizeof text, "cluster: a machine was lost at frame %" PRIu64 ": this wall stops",
+                     info->frame);
+            flags = FRAME_FAILED;
             c->failed = true;
-            goto failed; /* the leader's broadcast is left waiting: it times out too */
         }
-        c->inbox = grown;
-        c->in_capacity = bytes;
+        say(p, text); /* into the outbox: the others show it too */
+        c->newly_lost = 0;
     }
-    if (bytes && !wait_for(c, &req,
-                           MPI_Ibcast(leader ? c->outbox : c->inbox, (int)bytes, MPI_BYTE, c->leader, MPI_COMM_WORLD,
-                                      &req),
-                           "the frame's records", info->frame, &err))
-        goto failed;
-    if (!leader) {
-        if (h.frame != info->frame) {
-            c->failed = true;
-            tess_error_set(&err, "cluster: rank %d renders frame %" PRIu64 " while the leader renders %" PRIu64
-                                 ": out of step",
-                           c->rank, info->frame, h.frame);
-            goto failed;
-        }
-        info->time_s = h.time_s;
-        for (uint32_t i = 0; i < h.records; i++) {
-            txn_record r;
-            if (!txn_decode_binary(c->inbox + (size_t)i * TXN_BINARY_BYTES, &r, &err) || !pipeline_apply(p, &r)) {
-                c->failed = true;
-                if (!tess_error_is_set(&err))
-                    tess_error_set(&err, "cluster: rank %d: the leader's record %u of frame %" PRIu64 " was refused",
-                                   c->rank, i, info->frame);
-                goto failed;
-            }
-        }
+    frame_msg h = {.frame = info->frame, .time_s = info->time_s, .records = (uint32_t)c->out_records,
+                   .flags = flags, .nodes_lost = (uint32_t)c->stats.nodes_lost};
+    size_t bytes = sizeof h + c->out_records * TXN_BINARY_BYTES;
+    if (!c->outbox && !(c->outbox = malloc(sizeof h))) { /* no record yet: room for the header */
+        log_error("cluster: out of memory for the frame header: the run stops");
+        *stop = true;
+        return;
     }
+    memcpy(c->outbox, &h, sizeof h);
+    for (int r = 0; r < c->size; r++) /* one that cannot take it is lost (said next frame) */
+        if (r != c->rank && !c->peers[r].lost)
+            post(c, r, TAG_FRAME, c->outbox, bytes, info->frame);
     c->out_records = 0;
     c->stats.frames++;
     c->stats.records += h.records;
-    c->stats.bytes += sizeof h + bytes;
+    c->stats.bytes += bytes;
     sample_ring_add(&c->vote, (t1 - t0) * 1e6);
     sample_ring_add(&c->send, (clock_monotonic_s() - t1) * 1e6);
-    *stop = any != 0;
-    return;
-failed:
-    /* the others are gone or stuck: no more syncs. This step renders one more frame, on this
-     * process's own, with the reason in the status line, so the wall says why it stops; the
-     * next step stops */
-    log_error("%s", err.msg);
-    char text[TXN_TEXT_BYTES];
-    snprintf(text, sizeof text, "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops",
-             info->frame);
-    txn_record why = txn_status(text);
-    pipeline_apply(p, &why);
-    *stop = false;
+    *stop = c->failed ? false : any; /* failed: one more frame, with the message; the next step stops */
 }
 
+static void follower_frame_sync(cluster *c, struct pipeline *p, frame_info *info, bool *stop)
+{
+    double t0 = clock_monotonic_s();
+    vote_msg v = {.frame = info->frame, .stop = *stop ? 1u : 0u};
+    long got = post(c, c->leader, TAG_VOTE, &v, sizeof v, info->frame) ? await_leader(c, TAG_FRAME) : -1;
+    double t1 = clock_monotonic_s();
+    char text[TXN_TEXT_BYTES];
+    if (got == -2) { /* the others went on without this process: its picture would be stale */
+        log_error("cluster: rank %d: the leader gave up waiting for this process at frame %" PRIu64
+                  " (it was stopped or too slow): this part of the wall stops",
+                  c->rank, info->frame);
+        snprintf(text, sizeof text, "cluster: this machine fell behind the wall at frame %" PRIu64 ": it stops",
+                 info->frame);
+        c->failed = true;
+        say(p, text);
+        *stop = false;
+        return;
+    }
+    if (got < 0) {
+        lose_peer(c, c->leader, "the leader's frame", info->frame);
+        if (c->on_loss == CLUSTER_CARRY_ON) {
+            c->alone = true;
+            snprintf(text, sizeof text,
+                     "cluster: the leader (input) was lost at frame %" PRIu64 ": this part of the wall carries on",
+                     info->frame);
+        } else {
+            c->failed = true;
+            snprintf(text, sizeof text,
+                     "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops",
+                     info->frame);
+        }
+        say(p, text);
+        *stop = false;
+        return;
+    }
+    frame_msg h;
+    const char *wrong = NULL;
+    if ((size_t)got < sizeof h)
+        wrong = "a short frame message";
+    if (!wrong) {
+        memcpy(&h, c->inbox, sizeof h);
+        if ((size_t)got != sizeof h + (size_t)h.records * TXN_BINARY_BYTES)
+            wrong = "a frame message of the wrong size";
+        else if (h.frame != info->frame)
+            wrong = "another frame";
+    }
+    tess_error err = {{0}};
+    for (uint32_t i = 0; !wrong && i < h.records; i++) {
+        txn_record r;
+        if (!txn_decode_binary(c->inbox + sizeof h + (size_t)i * TXN_BINARY_BYTES, &r, &err) ||
+            !pipeline_apply(p, &r))
+            wrong = "a record this process refused";
+    }
+    if (wrong) {
+        log_error("cluster: rank %d at frame %" PRIu64 ": the leader sent %s%s%s: this wall stops", c->rank,
+                  info->frame, wrong, err.msg[0] ? ": " : "", err.msg);
+        snprintf(text, sizeof text, "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops",
+                 info->frame);
+        c->failed = true;
+        say(p, text);
+        *stop = false;
+        return;
+    }
+    info->time_s = h.time_s;
+    if (h.nodes_lost > c->stats.nodes_lost)
+        c->stats.nodes_lost = h.nodes_lost;
+    c->stats.frames++;
+    c->stats.records += h.records;
+    c->stats.bytes += (uint64_t)got;
+    sample_ring_add(&c->vote, (t1 - t0) * 1e6);
+    sample_ring_add(&c->send, (clock_monotonic_s() - t1) * 1e6);
+    if (h.flags & FRAME_FAILED) { /* the leader's message is among the records */
+        c->failed = true;
+        *stop = false;
+        return;
+    }
+    *stop = (h.flags & FRAME_STOP) != 0;
+}
+
+static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *stop)
+{
+    cluster *c = ctx;
+    if (c->failed) { /* the frame with the message was rendered: now the loop stops */
+        *stop = true;
+        return;
+    }
+    if (c->alone)
+        return;
+    if (c->rank == c->leader)
+        leader_frame_sync(c, p, info, stop);
+    else
+        follower_frame_sync(c, p, info, stop);
+}
+
+/* The barrier before the flip: every follower says it is READY, then the leader says GO. */
 static bool display_sync(void *ctx, uint64_t frame, tess_error *err)
 {
     cluster *c = ctx;
-    if (c->failed) /* nobody to wait for: the frame with the message is shown alone */
+    if (c->failed || c->alone) /* nobody to wait for */
         return true;
     double t0 = clock_monotonic_s();
-    MPI_Request req;
-    if (!wait_for(c, &req, MPI_Ibarrier(MPI_COMM_WORLD, &req), "the barrier before the flip", frame, err))
-        return false;
+    step_msg m = {.step = ++c->display_steps};
+    if (c->rank == c->leader) {
+        gather(c, TAG_READY, sizeof m, m.step, "the barrier before the flip", frame, NULL);
+        for (int r = 0; r < c->size; r++)
+            if (r != c->rank && !c->peers[r].lost)
+                post(c, r, TAG_GO, &m, sizeof m, frame);
+    } else {
+        long got = post(c, c->leader, TAG_READY, &m, sizeof m, frame) ? await_leader(c, TAG_GO) : -1;
+        uint64_t said = 0;
+        if (got == (long)sizeof m)
+            memcpy(&said, c->inbox, sizeof said);
+        if (got != (long)sizeof m || said != m.step) {
+            if (got != -2)
+                lose_peer(c, c->leader, "the barrier before the flip", frame);
+            if (got != -2 && c->on_loss == CLUSTER_CARRY_ON) {
+                c->alone = true; /* the next frame sync says so in the status line */
+                return true;
+            }
+            c->failed = true;
+            return tess_error_set(err,
+                                  "cluster: rank %d: %s at the barrier before the flip (frame %" PRIu64
+                                  "): this wall stops",
+                                  c->rank,
+                                  got == -2 ? "the leader gave up waiting for this process"
+                                            : "no answer from the leader",
+                                  frame);
+        }
+    }
     sample_ring_add(&c->barrier, (clock_monotonic_s() - t0) * 1e6);
     if (frame != UINT64_MAX) {
         struct timespec ts;
@@ -304,6 +602,7 @@ cluster *cluster_start(int *argc, char ***argv, const cluster_config *cfg, tess_
         return NULL;
     }
     c->timeout_s = cfg && cfg->timeout_s > 0.0 ? cfg->timeout_s : CLUSTER_DEFAULT_TIMEOUT_S;
+    c->on_loss = cfg ? cfg->on_loss : CLUSTER_STOP;
     MPI_Comm_rank(MPI_COMM_WORLD, &c->rank);
     MPI_Comm_size(MPI_COMM_WORLD, &c->size);
     c->leader = cfg ? cfg->leader : 0;
@@ -322,11 +621,15 @@ cluster *cluster_start(int *argc, char ***argv, const cluster_config *cfg, tess_
     }
     c->host_names = calloc((size_t)c->size, sizeof *c->host_names);
     c->hosts = calloc((size_t)c->size, sizeof *c->hosts);
+    c->peers = calloc((size_t)c->size, sizeof *c->peers);
+    for (int r = 0; c->peers && r < c->size; r++)
+        for (int t = 0; t < TAG_COUNT; t++)
+            c->peers[r].slots[t].req = MPI_REQUEST_NULL; /* not all-bits-zero in OpenMPI */
     char mine[CLUSTER_HOST_BYTES] = "";
     if (gethostname(mine, sizeof mine - 1) != 0)
         snprintf(mine, sizeof mine, "unknown");
     MPI_Request req;
-    if (!c->host_names || !c->hosts ||
+    if (!c->host_names || !c->hosts || !c->peers ||
         !wait_for(c, &req,
                   MPI_Iallgather(mine, CLUSTER_HOST_BYTES, MPI_CHAR, c->host_names, CLUSTER_HOST_BYTES, MPI_CHAR,
                                  MPI_COMM_WORLD, &req),
@@ -384,6 +687,7 @@ cluster_stats cluster_get_stats(const cluster *c)
     s.barrier_us_median = sample_ring_median(&c->barrier);
     s.barrier_us_max = c->barrier.max;
     s.failed = c->failed;
+    s.alone = c->alone;
     return s;
 }
 
@@ -393,17 +697,21 @@ void cluster_print_stats(const cluster *c, FILE *out)
     fprintf(out,
             "tessera: cluster: rank %d of %d (%s): %" PRIu64 " frames in step, %" PRIu64 " records %s (%" PRIu64
             " bytes); us a frame, median (max): stop vote %.0f (%.0f), leader's records %.0f (%.0f), barrier "
-            "before the flip %.0f (%.0f)%s\n",
+            "before the flip %.0f (%.0f)%s%s\n",
             c->rank, c->size, c->hosts ? c->hosts[c->rank] : "?", s.frames, s.records,
             c->rank == c->leader ? "sent" : "applied", s.bytes, s.vote_us_median, s.vote_us_max, s.send_us_median,
-            s.send_us_max, s.barrier_us_median, s.barrier_us_max, s.failed ? "; FAILED" : "");
+            s.send_us_max, s.barrier_us_median, s.barrier_us_max, s.failed ? "; FAILED" : "",
+            s.failed  ? ""
+            : s.alone ? "; carried on alone (the leader was lost)"
+            : s.nodes_lost ? "; carried on without a lost machine"
+                           : "");
 }
 
 bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
 {
     *out = (cluster_skew){0};
-    if (c->failed)
-        return tess_error_set(err, "cluster: failed before: no skew to measure");
+    if (c->failed || c->alone || c->stats.nodes_lost > 0)
+        return tess_error_set(err, "cluster: a machine was lost: no skew to measure");
     /* the frames every process kept: the last min(flips, FLIPS_KEPT) of each; rank 0 compares */
     uint64_t kept = c->flips < FLIPS_KEPT ? c->flips : FLIPS_KEPT, fewest = kept;
     MPI_Request req;
@@ -470,8 +778,20 @@ void cluster_finish(cluster *c)
 {
     if (!c)
         return;
-    if (!c->failed)
+    /* after a loss MPI cannot be finalised: it would wait for the lost (over TCP it hangs) */
+    bool whole = !c->failed && !c->alone && c->stats.nodes_lost == 0;
+    for (int r = 0; whole && c->peers && r < c->size; r++)
+        for (int t = 0; t < TAG_COUNT; t++)
+            if (c->peers[r].slots[t].req != MPI_REQUEST_NULL)
+                whole = wait_for(c, &c->peers[r].slots[t].req, MPI_SUCCESS, "the last messages", c->stats.frames,
+                                 &(tess_error){{0}});
+    if (whole)
         MPI_Finalize();
+    for (int r = 0; c->peers && r < c->size; r++)
+        for (int t = 0; t < TAG_COUNT; t++)
+            if (c->peers[r].slots[t].req == MPI_REQUEST_NULL)
+                free(c->peers[r].slots[t].buf);
+    free(c->peers);
     free(c->outbox);
     free(c->inbox);
     free(c->host_names);

@@ -60,9 +60,18 @@ struct pipeline;
 
 typedef struct cluster cluster;
 
+/* What the others do when a machine stops answering (--on-node-loss). */
+typedef enum cluster_on_loss {
+    CLUSTER_STOP,     /* every process shows why for one frame and exits (status 3) */
+    CLUSTER_CARRY_ON, /* the others go on in step; the lost machine's outputs stay dark (or frozen);
+                       * needs `mpirun --enable-recovery` (else mpirun ends the job when a process dies) */
+} cluster_on_loss;
+
 typedef struct cluster_config {
-    double timeout_s; /* how long a process waits for the others at a sync point; 0: the default */
+    double timeout_s; /* how long the leader waits for a follower at a sync point (a follower waits twice
+                       * as long for the leader); 0: the default */
     int leader;       /* the rank that reads input and leads (0..size-1; default 0) */
+    cluster_on_loss on_loss;
 } cluster_config;
 
 /* Whether this process was started by mpirun (OpenMPI or PMIx set the
@@ -99,7 +108,9 @@ typedef struct cluster_stats {
     double vote_us_median, vote_us_max; /* the stop vote: it also waits for the slowest process */
     double send_us_median, send_us_max; /* the leader's header and records, everybody there: the broadcast's cost */
     double barrier_us_median, barrier_us_max;
-    bool failed;                /* a sync point timed out or MPI failed */
+    bool failed;                /* this process stops for a lost machine, or MPI failed */
+    bool alone;                 /* a follower that lost the leader and carried on (CLUSTER_CARRY_ON) */
+    uint64_t nodes_lost;        /* machines given up on (the leader's count, as the followers heard it) */
 } cluster_stats;
 cluster_stats cluster_get_stats(const cluster *c);
 void cluster_print_stats(const cluster *c, FILE *out);

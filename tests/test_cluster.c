@@ -188,13 +188,13 @@ Test(cluster, a_replayed_input_session_reaches_every_process, .timeout = 900)
 
 /* ---- a job in the background: mpirun over `sh -c "echo RANK PID >> DIR/pids; exec tessera ..."` ---- */
 
-/* The command line that starts 4 processes each writing "RANK PID" to dir/pids before it
- * becomes `tessera ARGS` (stdout and stderr to dir/run.log). */
-static void job_command(char *cmd, size_t bytes, const char *dir, const char *args)
+/* The command line that starts 4 processes (mpirun options `mpi`) each writing "RANK PID" to
+ * dir/pids before it becomes `tessera ARGS` (stdout and stderr to dir/run.log). */
+static void job_command(char *cmd, size_t bytes, const char *dir, const char *mpi, const char *args)
 {
     snprintf(cmd, bytes,
-             MPIRUN " -np 4 sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s %s\" > %s/run.log 2>&1",
-             dir, support_tessera_bin(), args, dir);
+             MPIRUN " -np 4 %s sh -c \"echo \\$OMPI_COMM_WORLD_RANK \\$\\$ >> %s/pids; exec %s %s\" > %s/run.log 2>&1",
+             mpi, dir, support_tessera_bin(), args, dir);
 }
 
 static pid_t start_job(const char *cmd)
@@ -255,7 +255,7 @@ static int signal_a_running_wall(const char *dir, const char *command, int rank,
              "%s --wall %s/wall.json --display dump --out %s/f_####.png --frames 100000000 --threads 1 "
              "--sync-timeout 5",
              command, dir, dir);
-    job_command(cmd, sizeof cmd, dir, args);
+    job_command(cmd, sizeof cmd, dir, "", args);
     pid_t job = start_job(cmd);
     double end = now_s() + RUN_TIMEOUT_S;
     for (int i = 1; i <= 4; i++) {
@@ -275,8 +275,9 @@ static int signal_a_running_wall(const char *dir, const char *command, int rank,
 }
 
 /* A process that stops answering (SIGSTOP) while the wall runs ends the run on the others
- * within the sync time-out (5 s here, generous for sanitizer builds) plus a frame: they say
- * what they waited for, and the first to exit (status 3) makes mpirun end the job. */
+ * within the sync time-out (5 s here, generous for sanitizer builds) plus a frame: the leader
+ * names the lost process and what it waited for, tells the others, and the first to exit
+ * (status 3) makes mpirun end the job. */
 Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .timeout = 900)
 {
     need_mpirun();
@@ -286,7 +287,8 @@ Test(cluster, a_process_that_stops_answering_ends_the_run_within_the_time_out, .
     double took;
     int status = signal_a_running_wall(dir, "render", 1, SIGSTOP, &took, log, sizeof log);
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
-    cr_assert(strstr(log, "no answer from the other processes within 5.0 s"), "%s", log);
+    cr_assert(strstr(log, "cluster: rank 0 lost rank 1 (") && strstr(log, "time-out 5.0 s): the wall stops"), "%s",
+              log);
     cr_assert(strstr(log, "FAILED"), "%s", log);
     cr_log_info("cluster: the job ended %.2f s after a process stopped answering (time-out 5 s)", took);
     support_remove_tmp_dir(dir);
@@ -352,13 +354,12 @@ static int last_frame_of(const char *dir, const char *connector)
     DIR *d = opendir(dir);
     cr_assert(d, "%s", dir);
     char pattern[64];
-    snprintf(pattern, sizeof pattern, "f_%%d-%s.png", connector);
+    snprintf(pattern, sizeof pattern, "f_%%d-%s.png%%n", connector);
     int last = -1;
     struct dirent *e;
     while ((e = readdir(d))) {
-        int n;
-        char tail[8];
-        if (sscanf(e->d_name, pattern, &n) == 1 && sscanf(e->d_name, "f_%*d-%*[^.].%3s", tail) == 1 && n > last)
+        int n, used = 0; /* %n: the whole name matched (sscanf counts only the number) */
+        if (sscanf(e->d_name, pattern, &n, &used) == 1 && used > 0 && e->d_name[used] == '\0' && n > last)
             last = n;
     }
     closedir(d);
@@ -382,7 +383,7 @@ Test(cluster, live_input_on_the_leader_steers_every_process, .timeout = 900)
              "run --wall %s/wall.json --display dump --out %s/four/f_####.png --threads 1 --time fixed --rate 30 "
              "--remote 0 --remote-token cluster-live-token --record-input %s/rec.txt --input-rank 2",
              dir, dir, dir);
-    job_command(cmd, sizeof cmd, dir, args);
+    job_command(cmd, sizeof cmd, dir, "", args);
     pid_t job = start_job(cmd);
     /* the leader's URL line (an event), then a viewer */
     double end = now_s() + RUN_TIMEOUT_S;
@@ -463,5 +464,102 @@ Test(cluster, a_killed_process_ends_the_job, .timeout = 900)
     int status = signal_a_running_wall(dir, "run", 3, SIGKILL, &took, log, sizeof log);
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) != 0, "the job ended with status %d: %s", status, log);
     cr_log_info("cluster: the job ended %.2f s after a process was killed", took);
+    support_remove_tmp_dir(dir);
+}
+
+/* Frames first..last of output `connector` in dir `a` equal those of dir `b` (NAME f_NNNN-...). */
+static void same_frames(const char *a, const char *b, const char *connector, int first, int last)
+{
+    for (int f = first; f <= last; f++) {
+        char pa[400], pb[400];
+        snprintf(pa, sizeof pa, "%s/f_%04d-%s.png", a, f, connector);
+        snprintf(pb, sizeof pb, "%s/f_%04d-%s.png", b, f, connector);
+        tess_error err = {{0}};
+        int wa, ha, wb, hb;
+        uint8_t *ia = NULL, *ib = NULL;
+        cr_assert(dump_read_rgb8(pa, &wa, &ha, &ia, &err) && dump_read_rgb8(pb, &wb, &hb, &ib, &err), "%s",
+                  err.msg);
+        cr_assert(wa == wb && ha == hb && memcmp(ia, ib, (size_t)wa * (size_t)ha * 3) == 0,
+                  "%s frame %d differs from the one-process wall's", connector, f);
+        free(ia);
+        free(ib);
+    }
+}
+
+/* --on-node-loss carry-on (under mpirun --enable-recovery): a process killed mid-run (SIGKILL,
+ * a machine gone) is given up on by the leader after the time-out; the others go on in step to
+ * the last frame and exit 0. Their outputs' every frame is the one-process wall's (the orbit at
+ * a fixed rate), apart from the status line, which from the loss on says so on the bottom-left
+ * output; the killed process's output stops. */
+Test(cluster, with_carry_on_the_others_go_on_in_step_when_a_process_dies, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[32768], path[512], four[300], one[300];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-carry-on");
+    support_write_file(dir, "wall.json", wall_text);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s/four %s/one", dir, dir);
+    cr_assert_eq(support_run(cmd), 0);
+    snprintf(four, sizeof four, "%s/four", dir);
+    snprintf(one, sizeof one, "%s/one", dir);
+    const int frames = 40;
+    char args[1024];
+    snprintf(args, sizeof args,
+             "run --wall %s/wall.json --display dump --out %s/f_####.png --frames %d --threads 1 --time fixed --rate 30 "
+             "--sync-timeout 5 --on-node-loss carry-on",
+             dir, four, frames);
+    job_command(cmd, sizeof cmd, dir, "--enable-recovery", args);
+    pid_t job = start_job(cmd);
+    double end = now_s() + RUN_TIMEOUT_S;
+    snprintf(path, sizeof path, "%s/f_0003-Virtual-4.png", four);
+    cr_assert(wait_file(path, end), "the wall never ran");
+    int pid = rank_pid(dir, 3);
+    cr_assert_gt(pid, 0);
+    cr_assert_eq(kill(pid, SIGKILL), 0);
+    int status = wait_job(job, end);
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    support_read_text(path, log, sizeof log);
+    cr_assert(WIFEXITED(status) && WEXITSTATUS(status) == 0, "the job ended with status %d: %s", status, log);
+    cr_assert(strstr(log, "cluster: rank 0 lost rank 3 (") && strstr(log, "the wall carries on without its outputs"),
+              "%s", log);
+    for (int r = 0; r < 3; r++) {
+        char line[96];
+        snprintf(line, sizeof line, "cluster: rank %d of 4", r);
+        const char *stats = strstr(log, line);
+        cr_assert(stats, "no counts from rank %d: %s", r, log);
+        cr_assert(strstr(stats, "carried on without a lost machine"), "rank %d: %s", r, log);
+    }
+    int killed_at = last_frame_of(four, "Virtual-4");
+    cr_assert_lt(killed_at, frames - 1, "the killed process's output went on to frame %d: %s", killed_at, log);
+    for (int i = 1; i <= 3; i++) {
+        char connector[16];
+        snprintf(connector, sizeof connector, "Virtual-%d", i);
+        cr_assert_eq(last_frame_of(four, connector), frames - 1, "%s stopped early: %s", connector, log);
+    }
+    snprintf(cmd, sizeof cmd,
+             "%s run --wall %s/wall.json --display dump --out %s/f_####.png --frames %d --threads 2 --time fixed "
+             "--rate 30",
+             support_tessera_bin(), dir, one, frames);
+    cr_assert_eq(run_logged(dir, "one", cmd, log, sizeof log), 0, "%s", log);
+    same_frames(four, one, "Virtual-1", 0, frames - 1);
+    same_frames(four, one, "Virtual-2", 0, frames - 1);
+    same_frames(four, one, "Virtual-3", 0, killed_at); /* before the loss was noticed */
+    same_frames(four, one, "Virtual-4", 0, killed_at);
+    /* the last frame of the bottom-left output carries the message: it differs in its bottom rows only */
+    snprintf(path, sizeof path, "%s/f_%04d-Virtual-3.png", four, frames - 1);
+    char ref[400];
+    snprintf(ref, sizeof ref, "%s/f_%04d-Virtual-3.png", one, frames - 1);
+    tess_error err = {{0}};
+    int w, h, w1, h1;
+    uint8_t *a = NULL, *b = NULL;
+    cr_assert(dump_read_rgb8(path, &w, &h, &a, &err) && dump_read_rgb8(ref, &w1, &h1, &b, &err), "%s", err.msg);
+    cr_assert(w == w1 && h == h1);
+    int first_row = h;
+    for (int y = 0; y < h && first_row == h; y++)
+        if (memcmp(a + (size_t)y * (size_t)w * 3, b + (size_t)y * (size_t)w * 3, (size_t)w * 3) != 0)
+            first_row = y;
+    cr_assert_lt(first_row, h, "no status line on the bottom-left output after the loss");
+    cr_assert_gt(first_row, h / 2, "the last frame differs above its status line (row %d of %d)", first_row, h);
+    free(a);
+    free(b);
     support_remove_tmp_dir(dir);
 }

@@ -49,7 +49,8 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
                   "different scales; not with mpirun yet");
         return false;
     }
-    cluster_config cfg = {.timeout_s = s->sync_timeout_s, .leader = s->input_rank};
+    cluster_config cfg = {.timeout_s = s->sync_timeout_s, .leader = s->input_rank,
+                          .on_loss = s->carry_on_node_loss ? CLUSTER_CARRY_ON : CLUSTER_STOP};
     if (!(active.c = cluster_start(NULL, NULL, &cfg, &err))) {
         cli_error("%s", err.msg);
         return false;
@@ -111,8 +112,11 @@ bool cli_cluster_report(void)
     if (!active.c)
         return false;
     cluster_print_stats(active.c, stderr);
-    if (cluster_get_stats(active.c).failed)
+    cluster_stats st = cluster_get_stats(active.c);
+    if (st.failed)
         return true;
+    if (st.alone || st.nodes_lost > 0) /* carried on as configured: no skew over the ones left */
+        return false;
     cluster_skew k;
     tess_error err = {{0}};
     if (!cluster_flip_skew(active.c, &k, &err)) {

@@ -592,6 +592,15 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
         return (val = cli_option_value(argc, argv, i)) && cli_parse_double(a, val, 0.1, 3600.0, &s->sync_timeout_s);
     } else if (!strcmp(a, "--input-rank")) {
         return (val = cli_option_value(argc, argv, i)) && cli_parse_int(a, val, 0, WALL_MAX_OUTPUTS - 1, &s->input_rank);
+    } else if (!strcmp(a, "--on-node-loss")) {
+        if (!(val = cli_option_value(argc, argv, i)))
+            return false;
+        if (strcmp(val, "stop") && strcmp(val, "carry-on")) {
+            cli_error("--on-node-loss: expected stop or carry-on, got '%s'", val);
+            return false;
+        }
+        s->carry_on_node_loss = !strcmp(val, "carry-on");
+        return true;
     }
     if (!cli_remote_option(argc, argv, i, &s->remote, handled))
         return false;
@@ -635,8 +644,11 @@ void cli_pipeline_usage(FILE *f)
     cli_input_usage(f);
     cli_remote_usage(f);
     fputs("a wall of several machines (mpirun -np N; the wall file's \"nodes\"; cluster/cluster.h):\n"
-          "  --sync-timeout S how long a process waits for the others once a frame before it gives up\n"
-          "                   (0.1..3600 s, default 10): a process that died or hangs ends the run\n"
+          "  --sync-timeout S how long the leader waits for a process at a sync point before it gives\n"
+          "                   up on it (0.1..3600 s, default 10; the others wait twice as long for it)\n"
+          "  --on-node-loss stop|carry-on  when a process dies or hangs: every process shows why and\n"
+          "                   exits with status 3 (stop, the default), or the others go on in step and the\n"
+          "                   lost machine's outputs stay dark (carry-on; needs mpirun --enable-recovery)\n"
           "  --input-rank R   the process that reads input, plays the path, serves a remote view and\n"
           "                   sends every frame's changes to the others (default 0)\n",
           f);

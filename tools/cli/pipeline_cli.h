@@ -60,6 +60,7 @@ typedef struct cli_pipeline_spec {
     double budget_ms;
     double sync_timeout_s;       /* --sync-timeout: mpirun, how long a process waits for the others (0: 10 s) */
     int input_rank;              /* --input-rank: mpirun, the rank that reads input and leads (default 0) */
+    bool carry_on_node_loss;     /* --on-node-loss carry-on: mpirun, the others go on when a machine is lost */
     int refine_k;
     double still_s;
     /* inspection (the config's renderer.transparency, renderer.caps, renderer.ao, opacity,
