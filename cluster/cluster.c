@@ -82,6 +82,7 @@ struct cluster {
     size_t in_capacity;
     bool failed;       /* this process stops: it renders one more frame with the reason, then the loop ends */
     bool alone;        /* a follower that lost its leader and carries on (CLUSTER_CARRY_ON): no more syncs */
+    char untold[TXN_TEXT_BYTES]; /* why this process stops or is alone, for the next frame's status line */
     int newly_lost;    /* leader: followers lost since the last frame sync (said in the status line then) */
     uint64_t display_steps; /* display syncs so far: READY and GO carry it */
     cluster_stats stats;
@@ -165,7 +166,7 @@ static void lose_peer(cluster *c, int r, const char *what, uint64_t frame)
         }
     c->stats.nodes_lost++;
     log_error("cluster: rank %d lost rank %d (%s) at frame %" PRIu64 " (%s; time-out %.1f s): %s", c->rank, r,
-              c->hosts[r], frame, what, c->timeout_s,
+              c->hosts[r], frame, what, c->rank == c->leader ? c->timeout_s : 2.0 * c->timeout_s,
               c->rank != c->leader             ? "the leader is gone"
               : c->on_loss == CLUSTER_CARRY_ON ? "the wall carries on without its outputs"
                                                : "the wall stops");
@@ -398,39 +399,50 @@ static void leader_frame_sync(cluster *c, struct pipeline *p, frame_info *info, 
     *stop = c->failed ? false : any; /* failed: one more frame, with the message; the next step stops */
 }
 
+/* A follower that did not get the leader's message at `where` (got: await_leader's -1, or -2
+ * when the leader had dropped this process): log why, and leave the status line's text for the
+ * next frame (c->untold). */
+static void leader_silent(cluster *c, long got, const char *where, uint64_t frame)
+{
+    if (got == -2) { /* the others went on without this process: its picture would be out of step */
+        log_error("cluster: rank %d: the leader gave up waiting for this process at frame %" PRIu64
+                  " (%s; it was stopped or too slow): this part of the wall stops",
+                  c->rank, frame, where);
+        snprintf(c->untold, sizeof c->untold, "cluster: this machine fell behind the wall at frame %" PRIu64
+                 ": it stops", frame);
+        c->failed = true;
+        return;
+    }
+    lose_peer(c, c->leader, where, frame);
+    if (c->on_loss == CLUSTER_CARRY_ON) {
+        c->alone = true;
+        snprintf(c->untold, sizeof c->untold,
+                 "cluster: the leader (input) was lost at frame %" PRIu64 ": this part of the wall carries on", frame);
+    } else {
+        c->failed = true;
+        snprintf(c->untold, sizeof c->untold,
+                 "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops", frame);
+    }
+}
+
+/* Put c->untold in the status line: this step renders it; a process that failed stops after it. */
+static void tell(cluster *c, struct pipeline *p, bool *stop)
+{
+    say(p, c->untold);
+    c->untold[0] = '\0';
+    if (c->failed)
+        *stop = false; /* one more frame, with the message; the next frame sync stops */
+}
+
 static void follower_frame_sync(cluster *c, struct pipeline *p, frame_info *info, bool *stop)
 {
     double t0 = clock_monotonic_s();
     vote_msg v = {.frame = info->frame, .stop = *stop ? 1u : 0u};
     long got = post(c, c->leader, TAG_VOTE, &v, sizeof v, info->frame) ? await_leader(c, TAG_FRAME) : -1;
     double t1 = clock_monotonic_s();
-    char text[TXN_TEXT_BYTES];
-    if (got == -2) { /* the others went on without this process: its picture would be stale */
-        log_error("cluster: rank %d: the leader gave up waiting for this process at frame %" PRIu64
-                  " (it was stopped or too slow): this part of the wall stops",
-                  c->rank, info->frame);
-        snprintf(text, sizeof text, "cluster: this machine fell behind the wall at frame %" PRIu64 ": it stops",
-                 info->frame);
-        c->failed = true;
-        say(p, text);
-        *stop = false;
-        return;
-    }
     if (got < 0) {
-        lose_peer(c, c->leader, "the leader's frame", info->frame);
-        if (c->on_loss == CLUSTER_CARRY_ON) {
-            c->alone = true;
-            snprintf(text, sizeof text,
-                     "cluster: the leader (input) was lost at frame %" PRIu64 ": this part of the wall carries on",
-                     info->frame);
-        } else {
-            c->failed = true;
-            snprintf(text, sizeof text,
-                     "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops",
-                     info->frame);
-        }
-        say(p, text);
-        *stop = false;
+        leader_silent(c, got, "the leader's frame", info->frame);
+        tell(c, p, stop);
         return;
     }
     frame_msg h;
@@ -454,10 +466,10 @@ static void follower_frame_sync(cluster *c, struct pipeline *p, frame_info *info
     if (wrong) {
         log_error("cluster: rank %d at frame %" PRIu64 ": the leader sent %s%s%s: this wall stops", c->rank,
                   info->frame, wrong, err.msg[0] ? ": " : "", err.msg);
-        snprintf(text, sizeof text, "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops",
-                 info->frame);
+        snprintf(c->untold, sizeof c->untold,
+                 "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops", info->frame);
         c->failed = true;
-        say(p, text);
+        tell(c, p, stop);
         *stop = false;
         return;
     }
@@ -480,6 +492,10 @@ static void follower_frame_sync(cluster *c, struct pipeline *p, frame_info *info
 static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *stop)
 {
     cluster *c = ctx;
+    if (c->untold[0]) { /* the display sync found the leader gone or this process dropped */
+        tell(c, p, stop);
+        return;
+    }
     if (c->failed) { /* the frame with the message was rendered: now the loop stops */
         *stop = true;
         return;
@@ -495,6 +511,7 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
 /* The barrier before the flip: every follower says it is READY, then the leader says GO. */
 static bool display_sync(void *ctx, uint64_t frame, tess_error *err)
 {
+    (void)err; /* never fails the display: a lost leader or a drop is said on the next frame */
     cluster *c = ctx;
     if (c->failed || c->alone) /* nobody to wait for */
         return true;
@@ -510,21 +527,9 @@ static bool display_sync(void *ctx, uint64_t frame, tess_error *err)
         uint64_t said = 0;
         if (got == (long)sizeof m)
             memcpy(&said, c->inbox, sizeof said);
-        if (got != (long)sizeof m || said != m.step) {
-            if (got != -2)
-                lose_peer(c, c->leader, "the barrier before the flip", frame);
-            if (got != -2 && c->on_loss == CLUSTER_CARRY_ON) {
-                c->alone = true; /* the next frame sync says so in the status line */
-                return true;
-            }
-            c->failed = true;
-            return tess_error_set(err,
-                                  "cluster: rank %d: %s at the barrier before the flip (frame %" PRIu64
-                                  "): this wall stops",
-                                  c->rank,
-                                  got == -2 ? "the leader gave up waiting for this process"
-                                            : "no answer from the leader",
-                                  frame);
+        if (got != (long)sizeof m || said != m.step) { /* the frame is shown; the next one says why */
+            leader_silent(c, got == -2 ? -2 : -1, "the barrier before the flip", frame);
+            return true;
         }
     }
     sample_ring_add(&c->barrier, (clock_monotonic_s() - t0) * 1e6);

@@ -563,3 +563,91 @@ Test(cluster, with_carry_on_the_others_go_on_in_step_when_a_process_dies, .timeo
     free(b);
     support_remove_tmp_dir(dir);
 }
+
+/* Start a carry-on run of `frames` frames on the 4-output wall in dir (mpirun --enable-recovery,
+ * sync time-out 5 s) and wait until every output has frame 3; the job. */
+static pid_t start_carry_on(const char *dir, int frames, double end)
+{
+    char cmd[4096], args[1024], path[400];
+    snprintf(args, sizeof args,
+             "run --wall %s/wall.json --display dump --out %s/f_####.png --frames %d --threads 1 --time fixed --rate 30 "
+             "--sync-timeout 5 --on-node-loss carry-on",
+             dir, dir, frames);
+    job_command(cmd, sizeof cmd, dir, "--enable-recovery", args);
+    pid_t job = start_job(cmd);
+    for (int i = 1; i <= 4; i++) {
+        snprintf(path, sizeof path, "%s/f_0003-Virtual-%d.png", dir, i);
+        cr_assert(wait_file(path, end), "the wall never ran (%s)", path);
+    }
+    return job;
+}
+
+/* With carry-on, a follower that stops answering (SIGSTOP) is given up on and the others go
+ * on; when it comes back (SIGCONT) it finds it was dropped and stops with the reason rather
+ * than show a picture out of step; the others reach their last frame. */
+Test(cluster, with_carry_on_a_process_that_comes_back_late_is_told_and_stops, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], log[32768], path[400];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-late");
+    support_write_file(dir, "wall.json", wall_text);
+    double end = now_s() + RUN_TIMEOUT_S;
+    const int frames = 60;
+    pid_t job = start_carry_on(dir, frames, end);
+    int pid = rank_pid(dir, 1);
+    cr_assert_gt(pid, 0);
+    cr_assert_eq(kill(pid, SIGSTOP), 0);
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    while (!strstr(log, "cluster: rank 0 lost rank 1 (") && now_s() < end) { /* an event: the leader's verdict */
+        nanosleep(&(struct timespec){0, 20000000}, NULL);
+        support_read_text(path, log, sizeof log);
+    }
+    cr_assert(strstr(log, "cluster: rank 0 lost rank 1 ("), "%s", log);
+    cr_assert_eq(kill(pid, SIGCONT), 0);
+    int status = wait_job(job, end);
+    support_read_text(path, log, sizeof log);
+    cr_assert(WIFEXITED(status), "the job ended with status %d: %s", status, log);
+    cr_assert(strstr(log, "cluster: rank 1: the leader gave up waiting for this process at frame"), "%s", log);
+    const char *one = strstr(log, "cluster: rank 1 of 4");
+    cr_assert(one && strstr(one, "FAILED"), "%s", log);
+    cr_assert_lt(last_frame_of(dir, "Virtual-2"), frames - 1, "the dropped process went on: %s", log);
+    for (int i = 1; i <= 4; i++) {
+        char connector[16];
+        snprintf(connector, sizeof connector, "Virtual-%d", i);
+        if (i != 2)
+            cr_assert_eq(last_frame_of(dir, connector), frames - 1, "%s stopped early: %s", connector, log);
+    }
+    support_remove_tmp_dir(dir);
+}
+
+/* With carry-on, the leader killed: the followers wait twice the time-out for it, then each
+ * goes on alone to its last frame (no more input), saying so on the wall. */
+Test(cluster, with_carry_on_the_others_go_on_alone_when_the_leader_dies, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], log[32768], path[400];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-leader");
+    support_write_file(dir, "wall.json", wall_text);
+    double end = now_s() + RUN_TIMEOUT_S;
+    const int frames = 40;
+    pid_t job = start_carry_on(dir, frames, end);
+    int pid = rank_pid(dir, 0);
+    cr_assert_gt(pid, 0);
+    cr_assert_eq(kill(pid, SIGKILL), 0);
+    int status = wait_job(job, end);
+    snprintf(path, sizeof path, "%s/run.log", dir);
+    support_read_text(path, log, sizeof log);
+    cr_assert(WIFEXITED(status) && WEXITSTATUS(status) == 0, "the job ended with status %d: %s", status, log);
+    cr_assert_lt(last_frame_of(dir, "Virtual-1"), frames - 1, "the killed leader's output went on: %s", log);
+    for (int r = 1; r < 4; r++) {
+        char line[96], connector[16];
+        snprintf(line, sizeof line, "cluster: rank %d lost rank 0 (", r);
+        cr_assert(strstr(log, line) && strstr(log, "time-out 10.0 s): the leader is gone"), "rank %d: %s", r, log);
+        snprintf(line, sizeof line, "cluster: rank %d of 4", r);
+        const char *stats = strstr(log, line);
+        cr_assert(stats && strstr(stats, "carried on alone (the leader was lost)"), "rank %d: %s", r, log);
+        snprintf(connector, sizeof connector, "Virtual-%d", r + 1);
+        cr_assert_eq(last_frame_of(dir, connector), frames - 1, "%s stopped early: %s", connector, log);
+    }
+    support_remove_tmp_dir(dir);
+}
