@@ -4,33 +4,42 @@
  * and builds its accel itself and renders its own outputs with its own
  * threads; they meet twice a frame:
  *
- *   FRAME SYNC (the serial section, pipeline.h: the frame sync hook). The
- *   LEADER (rank 0 unless configured: it reads input) sends what changed its frame state this
- *   step as data records (txn.h, binary form) with the step's time; every
- *   other process (a FOLLOWER) applies the same records at the same frame,
- *   so all render the same state. Whether the loop stops after the step is
- *   decided together: any process that stops (quit on the leader, SIGTERM,
- *   a display that failed) stops all of them at the same step. Records that
- *   name a channel (a camera or a switch of one channel: an output's
- *   hotplug, a remote viewer's private view) are the process's own and are
- *   not sent. Followers run no camera path or tour of their own: the
- *   leader's cameras arrive as records.
+ *   Every message goes to or from the LEADER (rank 0 unless configured: it
+ *   reads input), a star of point-to-point messages, so the leader always
+ *   knows who is there and no collective waits for a process that is gone.
+ *
+ *   FRAME SYNC (the serial section, pipeline.h: the frame sync hook). Each
+ *   FOLLOWER (every other process) sends its stop vote; the leader, once it
+ *   has every vote, sends each the step's frame number and time, whether
+ *   everybody stops after the step (any process that stops -- quit on the
+ *   leader, SIGTERM, a display that failed -- stops all at the same step),
+ *   and what changed its frame state this step as data records (txn.h,
+ *   binary form); the followers apply the same records at the same frame,
+ *   so all render the same state. Records that name a channel (a camera or
+ *   a switch of one channel: an output's hotplug, a remote viewer's private
+ *   view) are the process's own and are not sent. Followers run no camera
+ *   path or tour of their own: the leader's cameras arrive as records.
  *
  *   DISPLAY SYNC (the display thread, before the flips: pipeline.h: the
- *   display sync hook). A barrier, so every process flips the same frame at
- *   the same time (Tide's software swap sync).
+ *   display sync hook). A barrier: the followers say READY, the leader says
+ *   GO, so every process flips the same frame at the same time (Tide's
+ *   software swap sync).
  *
- * FAILURE. Every collective is started non-blocking and waited for with a
- * time-out (cluster_config.timeout_s): a process that dies or stops
- * answering makes the others stop the run with an error naming what they
- * waited for and the frame, never hang: it renders one more frame on its own
- * with the reason in the status line ("cluster: out of step with the other
- * machines at frame F: this wall stops"), shows it, and the run ends.
- * MPI_Init has no time-out of its own: a watchdog thread ends the process
- * (status 3) when starting takes longer than CLUSTER_START_TIMEOUT_S (or the
- * sync time-out, when longer). After a failure MPI cannot be finalised (a
- * collective is left open): cluster_finish skips it and the process exits
- * with the error.
+ * FAILURE. Every wait has a time-out: the leader waits timeout_s for a
+ * follower, a follower twice that for the leader (so the leader's verdict on
+ * another follower reaches it first). A follower that does not answer is
+ * LOST: the leader tells the others through the records (a status line),
+ * and cluster_config.on_loss decides: CLUSTER_STOP renders one more frame
+ * everywhere with the reason in the status line and ends the run (status 3;
+ * mpirun then ends the job); CLUSTER_CARRY_ON goes on without it (its
+ * outputs dark or frozen: they are its machine's). A lost follower that
+ * comes back (it was stopped, or slow) finds the leader's DROPPED message
+ * and stops rather than show a picture out of step. A follower that loses
+ * the leader stops (CLUSTER_STOP) or goes on alone without input
+ * (CLUSTER_CARRY_ON). MPI_Init has no time-out of its own: a watchdog
+ * thread ends the process (status 3) when starting takes longer than
+ * CLUSTER_START_TIMEOUT_S (or the sync time-out, when longer). After a loss
+ * MPI is not finalised (it would wait for the lost; over TCP it hangs).
  *
  * START. cluster_agree compares one value (the accel's checksum) across the
  * processes before the run: a mismatch (a different scene file, a different
@@ -98,15 +107,17 @@ bool cluster_agree(cluster *c, uint64_t value, const char *what, tess_error *err
  * observer), before pipeline_run. False with err. */
 bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err);
 
-/* What the run cost: per frame, the frame sync (its first collective, which
- * waits for the slowest process, apart from the leader's broadcast, which
- * starts when everybody is there) and the display barrier, in microseconds
- * (medians of the last 1024), records and bytes the leader sent. */
+/* What the run cost: per frame, in microseconds (medians of the last 1024):
+ * on the leader the wait for every follower's vote (it waits for the
+ * slowest) and the sending of the header and records to each; on a follower
+ * the wait for the leader's frame message (from its vote on, so the slowest
+ * process's lag too) and applying it; on both the barrier before the flip.
+ * Records and bytes the leader sent (or a follower applied). */
 typedef struct cluster_stats {
     uint64_t frames;            /* frame syncs */
     uint64_t records, bytes;    /* sent (leader) or applied (follower) */
-    double vote_us_median, vote_us_max; /* the stop vote: it also waits for the slowest process */
-    double send_us_median, send_us_max; /* the leader's header and records, everybody there: the broadcast's cost */
+    double vote_us_median, vote_us_max; /* leader: every vote in; follower: the leader's frame message in */
+    double send_us_median, send_us_max; /* leader: sending it to each follower; follower: applying it */
     double barrier_us_median, barrier_us_max;
     bool failed;                /* this process stops for a lost machine, or MPI failed */
     bool alone;                 /* a follower that lost the leader and carried on (CLUSTER_CARRY_ON) */

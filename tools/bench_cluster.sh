@@ -9,8 +9,8 @@
 #   mpirun -np 2 (two outputs each, 1 thread each);
 #   mpirun -np 4 (one output each, 1 thread each: 4 processes on this machine's CPUs);
 # each BENCH_CLUSTER_RUNS times (default 3, medians). Per run: frames per second, the frame
-# sync's stop vote (it also waits for the slowest process) and broadcast (the leader's header
-# and records once everybody is there), the barrier before the flip, and the flip skew (how far
+# sync's stop vote (the leader's wait for every vote: the slowest process) and send (the leader's
+# header and records to each once everybody is there), the barrier before the flip, and the flip skew (how far
 # apart the processes passed that barrier, per frame; CLOCK_REALTIME, one clock here). Prints the
 # section and writes it into BENCHMARKS.md as "## Cluster" (BENCH_CLUSTER_OUT names another
 # file; "-" for none).
@@ -92,13 +92,14 @@ SECTION=$WORK/section.md
     echo "$(date -u '+%Y-%m-%d %H:%M UTC'), revision $revision; $(nproc) CPUs, ${cpu_model:-unknown CPU} (lscpu); load average at the start $load_at_start. \`make bench-cluster\` (\`tools/bench_cluster.sh\`), medians of $RUNS runs."
     echo
     echo "One 2x2 wall of four 480x270 outputs (the built-in scene orbiting, $FRAMES frames, fixed time, display"
-    echo "null) rendered by one process and by 1, 2 and 4 processes under \`mpirun\` on this one machine. *Vote*: the"
-    echo "frame sync's first collective, which also waits for the slowest process; *broadcast*: the leader's header"
-    echo "and records once everybody is there (the sync's own cost); *barrier*: the barrier before the flip, waiting"
-    echo "included; *skew*: how far apart the processes passed that barrier for one frame (median / max). All in"
-    echo "microseconds a frame, the leader's."
+    echo "null) rendered by one process and by 1, 2 and 4 processes under \`mpirun\` on this one machine. Every"
+    echo "message goes to or from the leader (cluster/README.md). *Vote*: the leader's wait for every follower's"
+    echo "stop vote, which is the wait for the slowest process; *send*: the leader sending the header and records"
+    echo "to each follower once everybody is there (the sync's own cost); *barrier*: the barrier before the flip"
+    echo "(READY from each, then GO), waiting included; *skew*: how far apart the processes passed that barrier for"
+    echo "one frame (median / max). All in microseconds a frame, the leader's."
     echo
-    echo "| processes | threads each | frames/s | vs one process | vote us | broadcast us | barrier us | skew us |"
+    echo "| processes | threads each | frames/s | vs one process | vote us | send us | barrier us | skew us |"
     echo "|---|---:|---:|---:|---:|---:|---:|---:|"
     row one "1 (no mpirun)" 2 1.00
     row np1 "1 (mpirun)" 2 "$(ratio np1)"
@@ -107,7 +108,7 @@ SECTION=$WORK/section.md
     echo
     echo "What this machine can and cannot show: it has $(nproc) CPUs, so 2 processes of 1 thread use what 1"
     echo "process of 2 threads uses, and 4 processes share 2 CPUs (the kernel's scheduler then decides the skew). It"
-    echo "shows the cost of keeping processes in step (np 1 against no mpirun), and that the broadcast itself is"
+    echo "shows the cost of keeping processes in step (np 1 against no mpirun), and that sending the records is"
     echo "microseconds; it cannot show how a wall scales with machines, which takes machines."
     echo
 } > "$SECTION"
