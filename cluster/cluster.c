@@ -3,6 +3,7 @@
 #include "cluster/cluster.h"
 
 #include <inttypes.h>
+#include <math.h>
 #include <mpi.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -26,6 +27,7 @@ enum {
     TAG_READY,     /* follower -> leader: step_msg, before the flip */
     TAG_GO,        /* leader -> follower: step_msg, before the flip */
     TAG_DROPPED,   /* leader -> a follower it gave up on: step_msg; the follower must stop */
+    TAG_PLAN,      /* leader -> follower: plan_msg, in the serial section (a governed wall) */
     TAG_COUNT
 };
 
@@ -33,7 +35,14 @@ typedef struct vote_msg {
     uint64_t frame;
     uint32_t stop; /* 1: this process stops after the step */
     uint32_t reserved;
+    governor_cost cost; /* what its previous step cost (pipeline_step_cost) */
 } vote_msg;
+
+/* The governor's plan of a frame (a governed wall: every process renders it alike). */
+typedef struct plan_msg {
+    uint64_t frame;
+    int32_t kind, rung, stratum, samples; /* governor_frame */
+} plan_msg;
 
 /* What the leader sends every frame before its records. */
 typedef struct frame_msg {
@@ -242,10 +251,20 @@ static long take(int r, int tag, unsigned char **buf, size_t *capacity)
     return count;
 }
 
+/* Votes merged: any stop, the slowest process's costs. */
+static void merge_vote(vote_msg *into, const vote_msg *v)
+{
+    into->stop |= v->stop;
+    into->cost.step_s = fmax(into->cost.step_s, v->cost.step_s);
+    into->cost.render_s = fmax(into->cost.render_s, v->cost.render_s);
+    into->cost.upscale_s = fmax(into->cost.upscale_s, v->cost.upscale_s);
+}
+
 /* Leader: one message (tag, exactly `len` bytes, starting with a uint64_t
  * equal to `expect`) from every follower not lost, within the time-out; the
- * ones that do not send it are lost. Votes are OR-ed into *stop when given. */
-static void gather(cluster *c, int tag, size_t len, uint64_t expect, const char *what, uint64_t frame, bool *stop)
+ * ones that do not send it are lost. Votes are merged into *votes when given. */
+static void gather(cluster *c, int tag, size_t len, uint64_t expect, const char *what, uint64_t frame,
+                   vote_msg *votes)
 {
     int left = 0;
     for (int r = 0; r < c->size; r++) {
@@ -269,8 +288,10 @@ static void gather(cluster *c, int tag, size_t len, uint64_t expect, const char 
                     log_error("cluster: rank %d (%s) is out of step (%s: %" PRIu64 ", here %" PRIu64 ")", r,
                               c->hosts[r], what, said, expect);
                     lose_peer(c, r, what, frame);
-                } else if (stop && ((const vote_msg *)(const void *)c->inbox)->stop) {
-                    *stop = true;
+                } else if (votes) {
+                    vote_msg v;
+                    memcpy(&v, c->inbox, sizeof v);
+                    merge_vote(votes, &v);
                 }
             } else {
                 continue;
@@ -360,8 +381,11 @@ static void leader_frame_sync(cluster *c, struct pipeline *p, frame_info *info, 
                   "render something else)");
         *stop = true;
     }
-    bool any = *stop;
-    gather(c, TAG_VOTE, sizeof(vote_msg), info->frame, "the stop vote", info->frame, &any);
+    vote_msg votes = {.frame = info->frame, .stop = *stop ? 1u : 0u, .cost = pipeline_step_cost(p)};
+    gather(c, TAG_VOTE, sizeof(vote_msg), info->frame, "the stop vote", info->frame, &votes);
+    bool any = votes.stop != 0;
+    if (pipeline_governed(p)) /* the governor plans for the slowest process (its pixels are this one's) */
+        pipeline_set_step_cost(p, &votes.cost);
     double t1 = clock_monotonic_s();
     uint32_t flags = any ? FRAME_STOP : 0u;
     if (c->newly_lost > 0) {
@@ -437,7 +461,7 @@ static void tell(cluster *c, struct pipeline *p, bool *stop)
 static void follower_frame_sync(cluster *c, struct pipeline *p, frame_info *info, bool *stop)
 {
     double t0 = clock_monotonic_s();
-    vote_msg v = {.frame = info->frame, .stop = *stop ? 1u : 0u};
+    vote_msg v = {.frame = info->frame, .stop = *stop ? 1u : 0u, .cost = pipeline_step_cost(p)};
     long got = post(c, c->leader, TAG_VOTE, &v, sizeof v, info->frame) ? await_leader(c, TAG_FRAME) : -1;
     double t1 = clock_monotonic_s();
     if (got < 0) {
@@ -506,6 +530,31 @@ static void frame_sync(void *ctx, struct pipeline *p, frame_info *info, bool *st
         leader_frame_sync(c, p, info, stop);
     else
         follower_frame_sync(c, p, info, stop);
+}
+
+/* A governed wall: the leader's plan for every process. */
+static void plan_sync(void *ctx, uint64_t frame, governor_frame *plan)
+{
+    cluster *c = ctx;
+    if (c->failed || c->alone || c->untold[0])
+        return;
+    if (c->rank == c->leader) {
+        plan_msg m = {frame, (int32_t)plan->kind, plan->rung, plan->stratum, plan->samples};
+        for (int r = 0; r < c->size; r++)
+            if (r != c->rank && !c->peers[r].lost)
+                post(c, r, TAG_PLAN, &m, sizeof m, frame);
+    } else {
+        long got = await_leader(c, TAG_PLAN);
+        plan_msg m;
+        if (got != (long)sizeof m || (memcpy(&m, c->inbox, sizeof m), m.frame != frame) || m.kind < 0 ||
+            m.kind > GOVERNOR_FRAME_IDLE || m.rung < 0 || m.rung >= GOVERNOR_RUNGS) {
+            leader_silent(c, got == -2 ? -2 : -1, "the governor's plan", frame); /* said next frame */
+            return;
+        }
+        *plan = (governor_frame){(governor_frame_kind)m.kind, m.rung, m.stratum, m.samples};
+    }
+    log_debug("cluster: rank %d frame %" PRIu64 ": plan kind %d rung %d stratum %d", c->rank, frame, (int)plan->kind,
+              plan->rung, plan->stratum);
 }
 
 /* The barrier before the flip: every follower says it is READY, then the leader says GO. */
@@ -678,6 +727,7 @@ bool cluster_attach(cluster *c, struct pipeline *p, tess_error *err)
 {
     c->p = p;
     bool ok = pipeline_set_frame_sync(p, frame_sync, c) && pipeline_set_display_sync(p, display_sync, c) &&
+              (!pipeline_governed(p) || pipeline_set_plan_sync(p, plan_sync, c)) &&
               (c->rank != c->leader || pipeline_set_record_observer(p, observe, c));
     return ok || tess_error_set(err, "cluster: the pipeline's sync hooks are taken, or it runs already");
 }

@@ -20,6 +20,11 @@
  *   view) are the process's own and are not sent. Followers run no camera
  *   path or tour of their own: the leader's cameras arrive as records.
  *
+ *   PLAN SYNC (a governed pipeline: --budget-ms; pipeline.h). The leader's
+ *   governor plans each frame for the slowest process (the votes carry
+ *   each follower's step costs) and sends the plan; the followers render
+ *   it instead of their own.
+ *
  *   DISPLAY SYNC (the display thread, before the flips: pipeline.h: the
  *   display sync hook). A barrier: the followers say READY, the leader says
  *   GO, so every process flips the same frame at the same time (Tide's

@@ -157,6 +157,10 @@ struct pipeline {
     void *frame_sync_ctx;
     pipeline_display_sync_fn display_sync;
     void *display_sync_ctx;
+    pipeline_plan_sync_fn plan_sync;
+    void *plan_sync_ctx;
+    governor_cost step_cost; /* serial section: the cost observed this step instead of the measured one */
+    bool step_cost_set;      /* serial section: step_cost holds it (cleared once observed) */
 
     /* transaction queue (ring) and one-shots: guarded by queue_lock */
     pthread_mutex_t queue_lock;
@@ -639,6 +643,29 @@ bool pipeline_set_frame_sync(pipeline *p, pipeline_sync_fn fn, void *ctx)
     p->frame_sync = fn;
     p->frame_sync_ctx = ctx;
     return true;
+}
+
+bool pipeline_governed(const pipeline *p) { return p->cfg.budget_ms > 0.0; }
+
+bool pipeline_set_plan_sync(pipeline *p, pipeline_plan_sync_fn fn, void *ctx)
+{
+    if (!pipeline_governed(p) || !may_set_hook(p, p->plan_sync != NULL))
+        return false;
+    p->plan_sync = fn;
+    p->plan_sync_ctx = ctx;
+    return true;
+}
+
+governor_cost pipeline_step_cost(const pipeline *p)
+{
+    const loop_step *s = &p->step;
+    return (governor_cost){s->info.last_frame_s, s->info.last_render_s, p->last_upscale_s, p->last_step_pixels};
+}
+
+void pipeline_set_step_cost(pipeline *p, const governor_cost *cost)
+{
+    p->step_cost = *cost;
+    p->step_cost_set = true;
 }
 
 bool pipeline_set_display_sync(pipeline *p, pipeline_display_sync_fn fn, void *ctx)
@@ -1484,7 +1511,7 @@ static void plan_governed_frame(pipeline *p, int threads)
 {
     const loop_step *s = &p->step;
     if (p->last_step_pixels > 0.0) { /* the previous step rendered: what did it cost? */
-        governor_cost cost = {s->info.last_frame_s, s->info.last_render_s, p->last_upscale_s, p->last_step_pixels};
+        governor_cost cost = p->step_cost_set ? p->step_cost : pipeline_step_cost(p);
         uint64_t over = p->gov.frames_over_budget;
         governor_observe(&p->gov, &p->frame_plan, &cost);
         if (p->gov.frames_over_budget != over) {
@@ -1497,7 +1524,10 @@ static void plan_governed_frame(pipeline *p, int threads)
     bool overlay_changed = p->state.overlay_serial != p->planned_overlay_serial;
     governor_mode before = p->gov.mode;
     int rung_before = p->frame_plan.rung;
+    p->step_cost_set = false;
     governor_frame f = governor_plan(&p->gov, s->info.time_s, picture_changed, overlay_changed, p->rung_pixels);
+    if (p->plan_sync) /* several processes: the leader's plan for all (cluster/) */
+        p->plan_sync(p->plan_sync_ctx, s->info.frame, &f);
     if (f.kind == GOVERNOR_FRAME_SCALED && f.rung > 0 && !have_upscale_scratch(p, threads))
         f.rung = 0;
     p->frame_plan = f;

@@ -379,13 +379,27 @@ typedef struct frame_info {
  *     flips): the frame lock. With it the loop runs a display stage every
  *     step, the stopping one included, so every process calls it equally
  *     often. `frame`: the frame the stage showed (UINT64_MAX: none). It may
- *     block; false with err stops the run. */
+ *     block; false with err stops the run;
+ *   - the PLAN SYNC (a governed pipeline only) runs in the serial section
+ *     once the governor has planned the step, after the frame sync and
+ *     before the plan is carried out: every process must render a frame at
+ *     the same scale and stratum, so the leading process passes its *plan on
+ *     and the others replace theirs with it. It may block.
+ * pipeline_step_cost is what the governor will observe of the previous step
+ * (a following process sends it to the leader); pipeline_set_step_cost puts
+ * another cost in its place for this step only (the leader: the slowest
+ * process's), both in the frame sync. */
 typedef void (*pipeline_record_fn)(void *ctx, const txn_record *r);
 typedef void (*pipeline_sync_fn)(void *ctx, pipeline *p, frame_info *info, bool *stop);
 typedef bool (*pipeline_display_sync_fn)(void *ctx, uint64_t frame, tess_error *err);
 bool pipeline_set_record_observer(pipeline *p, pipeline_record_fn fn, void *ctx);
 bool pipeline_set_frame_sync(pipeline *p, pipeline_sync_fn fn, void *ctx);
 bool pipeline_set_display_sync(pipeline *p, pipeline_display_sync_fn fn, void *ctx);
+typedef void (*pipeline_plan_sync_fn)(void *ctx, uint64_t frame, governor_frame *plan);
+bool pipeline_set_plan_sync(pipeline *p, pipeline_plan_sync_fn fn, void *ctx);
+bool pipeline_governed(const pipeline *p);
+governor_cost pipeline_step_cost(const pipeline *p);
+void pipeline_set_step_cost(pipeline *p, const governor_cost *cost);
 
 /* Serial animation: once per frame in the serial section, after transactions. */
 typedef void (*pipeline_serial_fn)(pipeline *p, void *ctx, const frame_info *fi);

@@ -651,3 +651,50 @@ Test(cluster, with_carry_on_the_others_go_on_alone_when_the_leader_dies, .timeou
     }
     support_remove_tmp_dir(dir);
 }
+
+/* With a frame budget (--budget-ms) the governor picks each frame's scale for the whole wall:
+ * the leader's governor plans for the slowest process (the followers send their step costs
+ * with their votes) and every process renders its plan. Every frame's plan, as each process
+ * logged it, is the same on all four, and the budget (far below a full-size frame here) made
+ * the governor reduce the scale. */
+Test(cluster, with_a_frame_budget_every_process_renders_the_leaders_plan, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-budget");
+    char big[4096];
+    snprintf(big, sizeof big, "%s", wall_text);
+    for (char *m; (m = strstr(big, "96x54"));) /* four 480x270 outputs: frames that cost something */
+        memmove(m + 7, m + 5, strlen(m + 5) + 1), memcpy(m, "480x270", 7);
+    support_write_file(dir, "wall.json", big);
+    const int frames = 30;
+    snprintf(cmd, sizeof cmd,
+             "TESSERA_LOG=debug " MPIRUN " -np 4 --bind-to none %s run --wall %s/wall.json --display null --frames %d "
+             "--threads 1 --budget-ms 1",
+             support_tessera_bin(), dir, frames);
+    char *log = malloc(1 << 22);
+    cr_assert(log);
+    int status = run_logged(dir, "budget", cmd, log, 1 << 22);
+    cr_assert_eq(status, 0, "status %d", status);
+    /* plans[rank][frame]: "kind K rung R stratum S" */
+    static char plans[4][64][48];
+    memset(plans, 0, sizeof plans);
+    int reduced = 0;
+    for (const char *l = strstr(log, "cluster: rank "); l; l = strstr(l + 1, "cluster: rank ")) {
+        int rank, frame, kind, rung, stratum;
+        if (sscanf(l, "cluster: rank %d frame %d: plan kind %d rung %d stratum %d", &rank, &frame, &kind, &rung,
+                   &stratum) != 5)
+            continue;
+        cr_assert(rank >= 0 && rank < 4 && frame >= 0 && frame < 64);
+        snprintf(plans[rank][frame], sizeof plans[rank][frame], "kind %d rung %d stratum %d", kind, rung, stratum);
+        reduced += rank == 0 && rung > 0;
+    }
+    for (int f = 0; f < frames; f++) {
+        cr_assert(plans[0][f][0], "the leader logged no plan for frame %d", f);
+        for (int r = 1; r < 4; r++)
+            cr_assert_str_eq(plans[r][f], plans[0][f], "frame %d: rank %d rendered another plan", f, r);
+    }
+    cr_assert_gt(reduced, frames / 2, "the governor reduced %d of %d frames under a 1 ms budget", reduced, frames);
+    free(log);
+    support_remove_tmp_dir(dir);
+}

@@ -621,3 +621,71 @@ Test(governor, bad_pipeline_configs_are_named)
     cr_expect(strstr(err.msg, "render_scale"), "%s", err.msg);
     fixture_free(&fx);
 }
+
+/* ---- the cluster's hooks on a governed pipeline (cluster/: every process renders the leader's plan) ---- */
+
+typedef struct plan_hooks {
+    governor_frame proposed[FRAMES_MAX]; /* what the governor planned, by frame */
+    int calls;
+} plan_hooks;
+
+/* Frame 3's step costs a second (what a slow process would report). */
+static void slow_machine_at_frame_3(void *ctx, pipeline *p, frame_info *info, bool *stop)
+{
+    (void)ctx;
+    (void)stop;
+    if (info->frame == 3) {
+        governor_cost c = pipeline_step_cost(p);
+        c.step_s = c.render_s = 1.0;
+        pipeline_set_step_cost(p, &c);
+    }
+}
+
+/* Keep the governor's plan, then impose rung 3 from frame 2 on (the leader's plan). */
+static void impose_rung_3(void *ctx, uint64_t frame, governor_frame *plan)
+{
+    plan_hooks *h = ctx;
+    cr_assert_lt(frame, FRAMES_MAX);
+    h->proposed[frame] = *plan;
+    h->calls++;
+    if (frame >= 2)
+        *plan = (governor_frame){GOVERNOR_FRAME_SCALED, 3, 0, 1};
+}
+
+Test(governor, the_plan_sync_imposes_a_plan_and_the_step_cost_replaces_what_the_governor_observes)
+{
+    fixture fx = fixture_make();
+    pipeline_config cfg = pipeline_config_default(fx.scene, fx.accel);
+    cfg.threads = 2;
+    cfg.budget_ms = 50.0; /* a 96x54 frame takes about a millisecond: rung 0 unless told otherwise */
+    cfg.max_frames = 6;
+    cfg.time_mode = PIPELINE_TIME_FIXED_RATE;
+    record_display *out;
+    pipeline *p = one_channel(&fx, &cfg, 96, 54, &out);
+    plan_hooks h = {0};
+    camera_desc base = fx.camera;
+    cr_assert(pipeline_add_serial_animation(p, "move", keep_moving, &base));
+    cr_assert(pipeline_set_frame_sync(p, slow_machine_at_frame_3, NULL));
+    cr_assert(pipeline_set_plan_sync(p, impose_rung_3, &h));
+    cr_assert_not(pipeline_set_plan_sync(p, impose_rung_3, &h), "a second plan sync");
+    tess_error err = {{0}};
+    cr_assert(pipeline_run(p, &err), "%s", err.msg);
+    cr_assert_eq(h.calls, 6);
+    cr_assert_eq(out->count, 6);
+    for (int i = 0; i < 6; i++)
+        cr_expect_eq(out->scale[i], i < 2 ? 1.0 : GOVERNOR_SCALES[3], "frame %d shown at scale %g", i, out->scale[i]);
+    cr_expect_eq(h.proposed[1].rung, 0, "the governor's own plan of a cheap frame");
+    cr_expect_eq(h.proposed[3].rung, GOVERNOR_RUNGS - 1, "a step that cost a second sends the plan to the smallest scale");
+    pipeline_destroy(p);
+    fixture_free(&fx);
+
+    /* no plan sync on a pipeline without a governor */
+    fixture fy = fixture_make();
+    pipeline_config plain = pipeline_config_default(fy.scene, fy.accel);
+    pipeline *q = pipeline_create(&plain, &err);
+    cr_assert(q, "%s", err.msg);
+    cr_assert_not(pipeline_governed(q));
+    cr_assert_not(pipeline_set_plan_sync(q, impose_rung_3, &h));
+    pipeline_destroy(q);
+    fixture_free(&fy);
+}

@@ -44,11 +44,6 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
                   s->channels[0].display);
         return false;
     }
-    if (s->budget_ms > 0.0) {
-        cli_error("--budget-ms: the governor decides per process, so the machines of a wall would render at "
-                  "different scales; not with mpirun yet");
-        return false;
-    }
     cluster_config cfg = {.timeout_s = s->sync_timeout_s, .leader = s->input_rank,
                           .on_loss = s->carry_on_node_loss ? CLUSTER_CARRY_ON : CLUSTER_STOP};
     if (!(active.c = cluster_start(NULL, NULL, &cfg, &err))) {
