@@ -70,7 +70,8 @@ typedef struct send_slot {
 typedef struct peer {
     bool lost;                  /* stopped answering, or out of step: no more messages to or from it */
     bool pending;               /* gather: its message has not come yet */
-    send_slot slots[TAG_COUNT]; /* by tag */
+    send_slot slots[TAG_COUNT]; /* by tag; a lost peer's stay MPI's (never reused) until cluster_finish */
+    void *dropped_note;         /* leader: the DROPPED message sent to it once lost (MPI's until cluster_finish) */
 } peer;
 
 struct cluster {
@@ -160,7 +161,8 @@ static bool wait_for(cluster *c, MPI_Request *req, int started, const char *what
 /* ---- messages to and from peers -------------------------------------------------------- */
 
 /* Give up on peer r: no more messages to or from it. Its sends in flight are
- * left to MPI with their buffers (never freed: MPI may still read them). */
+ * left to MPI with their buffers (freed only by cluster_finish, after the
+ * last MPI call: MPI may read them until then). */
 static void lose_peer(cluster *c, int r, const char *what, uint64_t frame)
 {
     peer *q = &c->peers[r];
@@ -168,11 +170,8 @@ static void lose_peer(cluster *c, int r, const char *what, uint64_t frame)
         return;
     q->lost = true;
     for (int t = 0; t < TAG_COUNT; t++)
-        if (q->slots[t].req != MPI_REQUEST_NULL) {
-            MPI_Request_free(&q->slots[t].req);
-            q->slots[t].buf = NULL; /* in MPI's hands */
-            q->slots[t].capacity = 0;
-        }
+        if (q->slots[t].req != MPI_REQUEST_NULL)
+            MPI_Request_free(&q->slots[t].req); /* the buffer stays: post() never sends to a lost peer */
     c->stats.nodes_lost++;
     log_error("cluster: rank %d lost rank %d (%s) at frame %" PRIu64 " (%s; time-out %.1f s): %s", c->rank, r,
               c->hosts[r], frame, what, c->rank == c->leader ? c->timeout_s : 2.0 * c->timeout_s,
@@ -183,13 +182,14 @@ static void lose_peer(cluster *c, int r, const char *what, uint64_t frame)
         return;
     c->newly_lost++;
     /* if it was only stopped or slow, it reads this when it comes back and stops rather than
-     * show a stale picture; the bytes stay MPI's (one small block a lost machine) */
+     * show a stale picture */
     step_msg *note = malloc(sizeof *note);
     MPI_Request req;
     if (note) {
         note->step = frame;
         if (MPI_Isend(note, (int)sizeof *note, MPI_BYTE, r, TAG_DROPPED, MPI_COMM_WORLD, &req) == MPI_SUCCESS)
             MPI_Request_free(&req);
+        q->dropped_note = note;
     }
 }
 
@@ -842,10 +842,12 @@ void cluster_finish(cluster *c)
                                  &(tess_error){{0}});
     if (whole)
         MPI_Finalize();
-    for (int r = 0; c->peers && r < c->size; r++)
+    /* MPI is done with (or, after a loss, no longer called for) every buffer: no MPI call follows */
+    for (int r = 0; c->peers && r < c->size; r++) {
         for (int t = 0; t < TAG_COUNT; t++)
-            if (c->peers[r].slots[t].req == MPI_REQUEST_NULL)
-                free(c->peers[r].slots[t].buf);
+            free(c->peers[r].slots[t].buf);
+        free(c->peers[r].dropped_note);
+    }
     free(c->peers);
     free(c->outbox);
     free(c->inbox);

@@ -486,6 +486,24 @@ static void same_frames(const char *a, const char *b, const char *connector, int
     }
 }
 
+/* Start a carry-on run of `frames` frames on the 4-output wall in dir (mpirun --enable-recovery,
+ * sync time-out 5 s, the frames written to out) and wait until every output has frame 3; the job. */
+static pid_t start_carry_on(const char *dir, const char *out, int frames, double end)
+{
+    char cmd[4096], args[1024], path[400];
+    snprintf(args, sizeof args,
+             "run --wall %s/wall.json --display dump --out %s/f_####.png --frames %d --threads 1 --time fixed --rate 30 "
+             "--sync-timeout 5 --on-node-loss carry-on",
+             dir, out, frames);
+    job_command(cmd, sizeof cmd, dir, "--enable-recovery", args);
+    pid_t job = start_job(cmd);
+    for (int i = 1; i <= 4; i++) {
+        snprintf(path, sizeof path, "%s/f_0003-Virtual-%d.png", out, i);
+        cr_assert(wait_file(path, end), "the wall never ran (%s)", path);
+    }
+    return job;
+}
+
 /* --on-node-loss carry-on (under mpirun --enable-recovery): a process killed mid-run (SIGKILL,
  * a machine gone) is given up on by the leader after the time-out; the others go on in step to
  * the last frame and exit 0. Their outputs' every frame is the one-process wall's (the orbit at
@@ -502,16 +520,8 @@ Test(cluster, with_carry_on_the_others_go_on_in_step_when_a_process_dies, .timeo
     snprintf(four, sizeof four, "%s/four", dir);
     snprintf(one, sizeof one, "%s/one", dir);
     const int frames = 40;
-    char args[1024];
-    snprintf(args, sizeof args,
-             "run --wall %s/wall.json --display dump --out %s/f_####.png --frames %d --threads 1 --time fixed --rate 30 "
-             "--sync-timeout 5 --on-node-loss carry-on",
-             dir, four, frames);
-    job_command(cmd, sizeof cmd, dir, "--enable-recovery", args);
-    pid_t job = start_job(cmd);
     double end = now_s() + RUN_TIMEOUT_S;
-    snprintf(path, sizeof path, "%s/f_0003-Virtual-4.png", four);
-    cr_assert(wait_file(path, end), "the wall never ran");
+    pid_t job = start_carry_on(dir, four, frames, end);
     int pid = rank_pid(dir, 3);
     cr_assert_gt(pid, 0);
     cr_assert_eq(kill(pid, SIGKILL), 0);
@@ -531,7 +541,7 @@ Test(cluster, with_carry_on_the_others_go_on_in_step_when_a_process_dies, .timeo
     int killed_at = last_frame_of(four, "Virtual-4");
     cr_assert_lt(killed_at, frames - 1, "the killed process's output went on to frame %d: %s", killed_at, log);
     for (int i = 1; i <= 3; i++) {
-        char connector[16];
+        char connector[24];
         snprintf(connector, sizeof connector, "Virtual-%d", i);
         cr_assert_eq(last_frame_of(four, connector), frames - 1, "%s stopped early: %s", connector, log);
     }
@@ -564,24 +574,6 @@ Test(cluster, with_carry_on_the_others_go_on_in_step_when_a_process_dies, .timeo
     support_remove_tmp_dir(dir);
 }
 
-/* Start a carry-on run of `frames` frames on the 4-output wall in dir (mpirun --enable-recovery,
- * sync time-out 5 s) and wait until every output has frame 3; the job. */
-static pid_t start_carry_on(const char *dir, int frames, double end)
-{
-    char cmd[4096], args[1024], path[400];
-    snprintf(args, sizeof args,
-             "run --wall %s/wall.json --display dump --out %s/f_####.png --frames %d --threads 1 --time fixed --rate 30 "
-             "--sync-timeout 5 --on-node-loss carry-on",
-             dir, dir, frames);
-    job_command(cmd, sizeof cmd, dir, "--enable-recovery", args);
-    pid_t job = start_job(cmd);
-    for (int i = 1; i <= 4; i++) {
-        snprintf(path, sizeof path, "%s/f_0003-Virtual-%d.png", dir, i);
-        cr_assert(wait_file(path, end), "the wall never ran (%s)", path);
-    }
-    return job;
-}
-
 /* With carry-on, a follower that stops answering (SIGSTOP) is given up on and the others go
  * on; when it comes back (SIGCONT) it finds it was dropped and stops with the reason rather
  * than show a picture out of step; the others reach their last frame. */
@@ -593,7 +585,7 @@ Test(cluster, with_carry_on_a_process_that_comes_back_late_is_told_and_stops, .t
     support_write_file(dir, "wall.json", wall_text);
     double end = now_s() + RUN_TIMEOUT_S;
     const int frames = 60;
-    pid_t job = start_carry_on(dir, frames, end);
+    pid_t job = start_carry_on(dir, dir, frames, end);
     int pid = rank_pid(dir, 1);
     cr_assert_gt(pid, 0);
     cr_assert_eq(kill(pid, SIGSTOP), 0);
@@ -612,7 +604,7 @@ Test(cluster, with_carry_on_a_process_that_comes_back_late_is_told_and_stops, .t
     cr_assert(one && strstr(one, "FAILED"), "%s", log);
     cr_assert_lt(last_frame_of(dir, "Virtual-2"), frames - 1, "the dropped process went on: %s", log);
     for (int i = 1; i <= 4; i++) {
-        char connector[16];
+        char connector[24];
         snprintf(connector, sizeof connector, "Virtual-%d", i);
         if (i != 2)
             cr_assert_eq(last_frame_of(dir, connector), frames - 1, "%s stopped early: %s", connector, log);
@@ -630,7 +622,7 @@ Test(cluster, with_carry_on_the_others_go_on_alone_when_the_leader_dies, .timeou
     support_write_file(dir, "wall.json", wall_text);
     double end = now_s() + RUN_TIMEOUT_S;
     const int frames = 40;
-    pid_t job = start_carry_on(dir, frames, end);
+    pid_t job = start_carry_on(dir, dir, frames, end);
     int pid = rank_pid(dir, 0);
     cr_assert_gt(pid, 0);
     cr_assert_eq(kill(pid, SIGKILL), 0);
@@ -640,7 +632,7 @@ Test(cluster, with_carry_on_the_others_go_on_alone_when_the_leader_dies, .timeou
     cr_assert(WIFEXITED(status) && WEXITSTATUS(status) == 0, "the job ended with status %d: %s", status, log);
     cr_assert_lt(last_frame_of(dir, "Virtual-1"), frames - 1, "the killed leader's output went on: %s", log);
     for (int r = 1; r < 4; r++) {
-        char line[96], connector[16];
+        char line[96], connector[24];
         snprintf(line, sizeof line, "cluster: rank %d lost rank 0 (", r);
         cr_assert(strstr(log, line) && strstr(log, "time-out 10.0 s): the leader is gone"), "rank %d: %s", r, log);
         snprintf(line, sizeof line, "cluster: rank %d of 4", r);
