@@ -494,7 +494,6 @@ static void follower_frame_sync(cluster *c, struct pipeline *p, frame_info *info
                  "cluster: out of step with the other machines at frame %" PRIu64 ": this wall stops", info->frame);
         c->failed = true;
         tell(c, p, stop);
-        *stop = false;
         return;
     }
     info->time_s = h.time_s;
