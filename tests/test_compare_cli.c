@@ -138,7 +138,7 @@ Test(compare_cli, bad_images_are_named)
     EXPECT_FAILURE(1, "%s/ref.png %s/missing.png", "missing.png: cannot read");
     EXPECT_FAILURE(1, "%s/missing.png %s/ref.png", "missing.png: cannot read");
     EXPECT_FAILURE(1, "%s/ref.png %s/text.png", "text.png: cannot read");
-    EXPECT_FAILURE(1, "%s/ref.png %s", "cannot read"); /* a directory */
+    EXPECT_FAILURE(1, "%s/ref.png %s", "cannot read: it is a directory, not an image file");
 }
 
 Test(compare_cli, option_errors)

@@ -282,6 +282,19 @@ struct free_deleter {
 
 /* Read the first subimage of `path` as 3 channels of T: grey (1 or 2
  * channels) is replicated, channels past the third (alpha) are dropped. */
+/* A directory or a device is no image: said before OpenImageIO tries every
+ * reader on it (libheif's, given a directory, allocates for minutes under
+ * ASan's slow unwinding). A path that does not exist is left to OIIO's message. */
+bool not_a_file(const char *path, tess_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0 || S_ISREG(st.st_mode))
+        return false;
+    tess_error_set(err, "%s: cannot read: %s, not an image file", path,
+                   S_ISDIR(st.st_mode) ? "it is a directory" : "it is not a regular file");
+    return true;
+}
+
 template <class T>
 bool read_rgb(const char *path, OIIO::TypeDesc type, int *width_px, int *height_px, T **rgb_out,
               tess_error *err)
@@ -293,6 +306,8 @@ bool read_rgb(const char *path, OIIO::TypeDesc type, int *width_px, int *height_
 
     /* Keep colour values as stored: without this hint OIIO premultiplies
      * them by alpha on read (PNG, TGA...), which dropping alpha would bake in. */
+    if (not_a_file(path, err))
+        return false;
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
     auto in = OIIO::ImageInput::open(path, &config);
@@ -334,6 +349,8 @@ bool read_linear_rgb(const char *path, int *width_px, int *height_px, float **rg
     *rgb_out = nullptr;
     /* What the file stores decides the encoding; a second open is cheap
      * next to decoding the pixels. */
+    if (not_a_file(path, err))
+        return false;
     bool stored_float;
     {
         auto in = OIIO::ImageInput::open(path);
