@@ -581,7 +581,7 @@ Test(cluster, with_carry_on_the_others_go_on_in_step_when_a_process_dies, .timeo
 Test(cluster, with_carry_on_a_process_that_comes_back_late_is_told_and_stops, .timeout = 900)
 {
     need_mpirun();
-    char dir[256], log[32768], path[400];
+    char dir[256], log[32768] = "", path[400];
     support_make_tmp_dir(dir, sizeof dir, "cluster-late");
     support_write_file(dir, "wall.json", wall_text);
     double end = now_s() + RUN_TIMEOUT_S;
