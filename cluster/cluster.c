@@ -101,6 +101,9 @@ struct cluster {
      * (CLOCK_REALTIME us: one clock on one machine, NTP-close across machines) */
     uint64_t flip_frame[FLIPS_KEPT];
     int64_t flip_us[FLIPS_KEPT];
+    /* and when the display reported them on screen (cluster_note_scanout): the first and
+     * the last of this process's outputs, CLOCK_REALTIME us; 0 while not reported */
+    int64_t scan_first_us[FLIPS_KEPT], scan_last_us[FLIPS_KEPT];
     uint64_t flips;
 };
 
@@ -586,9 +589,25 @@ static bool display_sync(void *ctx, uint64_t frame, tess_error *err)
         clock_gettime(CLOCK_REALTIME, &ts);
         c->flip_frame[c->flips % FLIPS_KEPT] = frame;
         c->flip_us[c->flips % FLIPS_KEPT] = (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+        c->scan_first_us[c->flips % FLIPS_KEPT] = c->scan_last_us[c->flips % FLIPS_KEPT] = 0;
         c->flips++;
     }
     return true;
+}
+
+void cluster_note_scanout(cluster *c, uint64_t frame, int64_t realtime_us)
+{
+    /* the flip of frame F completes after F's display sync, before a few more have passed */
+    for (uint64_t back = 1; back <= 8 && back <= c->flips; back++) {
+        uint64_t k = (c->flips - back) % FLIPS_KEPT;
+        if (c->flip_frame[k] != frame)
+            continue;
+        if (!c->scan_first_us[k] || realtime_us < c->scan_first_us[k])
+            c->scan_first_us[k] = realtime_us;
+        if (realtime_us > c->scan_last_us[k])
+            c->scan_last_us[k] = realtime_us;
+        return;
+    }
 }
 
 /* ---- life ------------------------------------------------------------------------------ */
@@ -761,9 +780,41 @@ void cluster_print_stats(const cluster *c, FILE *out)
                            : "");
 }
 
+/* Over the n frames of every process (all_*[r * n + i]: process r's frame i):
+ * how far apart the processes' times of one frame are, max(hi) - min(lo), for
+ * the frames every process numbered alike and timed (lo != 0). */
+static void spread_of(const uint64_t *all_frames, const int64_t *lo, const int64_t *hi, size_t n, int size,
+                      cluster_spread *out)
+{
+    double *spreads = malloc((n ? n : 1) * sizeof *spreads);
+    size_t m = 0;
+    for (size_t i = 0; spreads && i < n; i++) {
+        int64_t first = lo[i], last = hi[i];
+        bool same = true, timed = lo[i] != 0;
+        for (int r = 1; r < size; r++) {
+            size_t k = (size_t)r * n + i;
+            same = same && all_frames[k] == all_frames[i];
+            timed = timed && lo[k] != 0;
+            first = lo[k] < first ? lo[k] : first;
+            last = hi[k] > last ? hi[k] : last;
+        }
+        if (!same)
+            out->frames_out_of_step++;
+        else if (timed)
+            spreads[m++] = (double)(last - first);
+    }
+    if (spreads && m) {
+        out->frames = m;
+        out->median_us = median_sorting(spreads, m); /* sorts them */
+        out->p95_us = spreads[(size_t)((double)(m - 1) * 0.95)];
+        out->max_us = spreads[m - 1];
+    }
+    free(spreads);
+}
+
 bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
 {
-    *out = (cluster_skew){0};
+    *out = (cluster_skew){{0}, {0}};
     if (c->failed || c->alone || c->stats.nodes_lost > 0)
         return tess_error_set(err, "cluster: a machine was lost: no skew to measure");
     /* the frames every process kept: the last min(flips, FLIPS_KEPT) of each; rank 0 compares */
@@ -773,16 +824,19 @@ bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
                   "the skew's frame count", 0, err))
         return false;
     size_t n = (size_t)fewest;
-    int64_t *mine = malloc((n ? n : 1) * sizeof *mine), *all = NULL;
+    /* mine: n barrier times, then n first and n last scan-out times */
+    int64_t *mine = malloc((n ? 3 * n : 1) * sizeof *mine), *all = NULL;
     uint64_t *frames = malloc((n ? n : 1) * sizeof *frames), *all_frames = NULL;
     bool ok = mine && frames;
     for (size_t i = 0; ok && i < n; i++) { /* oldest first */
         uint64_t k = (c->flips - n + i) % FLIPS_KEPT;
         mine[i] = c->flip_us[k];
+        mine[n + i] = c->scan_first_us[k];
+        mine[2 * n + i] = c->scan_last_us[k];
         frames[i] = c->flip_frame[k];
     }
     if (ok && c->rank == c->leader) {
-        all = malloc((n ? n : 1) * (size_t)c->size * sizeof *all);
+        all = malloc((n ? 3 * n : 1) * (size_t)c->size * sizeof *all);
         all_frames = malloc((n ? n : 1) * (size_t)c->size * sizeof *all_frames);
         ok = all && all_frames;
     }
@@ -793,33 +847,27 @@ bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err)
                               &req),
                   "the flip frames", 0, err) &&
          wait_for(c, &req,
-                  MPI_Igather(mine, (int)n, MPI_INT64_T, all, (int)n, MPI_INT64_T, c->leader, MPI_COMM_WORLD, &req),
+                  MPI_Igather(mine, (int)(3 * n), MPI_INT64_T, all, (int)(3 * n), MPI_INT64_T, c->leader,
+                              MPI_COMM_WORLD, &req),
                   "the flip times", 0, err) &&
          ok;
     if (ok && c->rank == c->leader && n > 0) {
-        double *skews = malloc(n * sizeof *skews);
-        size_t m = 0;
-        for (size_t i = 0; skews && i < n; i++) {
-            int64_t lo = all[i], hi = all[i];
-            bool same = true;
-            for (int r = 1; r < c->size; r++) {
-                same = same && all_frames[(size_t)r * n + i] == all_frames[i];
-                int64_t t = all[(size_t)r * n + i];
-                lo = t < lo ? t : lo;
-                hi = t > hi ? t : hi;
+        int64_t *barrier = malloc(n * (size_t)c->size * sizeof *barrier);
+        int64_t *first = malloc(n * (size_t)c->size * sizeof *first);
+        int64_t *last = malloc(n * (size_t)c->size * sizeof *last);
+        for (int r = 0; barrier && first && last && r < c->size; r++) /* [r][kind][i] -> [kind][r][i] */
+            for (size_t i = 0; i < n; i++) {
+                barrier[(size_t)r * n + i] = all[(size_t)r * 3 * n + i];
+                first[(size_t)r * n + i] = all[(size_t)r * 3 * n + n + i];
+                last[(size_t)r * n + i] = all[(size_t)r * 3 * n + 2 * n + i];
             }
-            if (same)
-                skews[m++] = (double)(hi - lo);
-            else
-                out->frames_out_of_step++;
+        if (barrier && first && last) {
+            spread_of(all_frames, barrier, barrier, n, c->size, &out->barrier);
+            spread_of(all_frames, first, last, n, c->size, &out->scanout);
         }
-        if (skews && m) {
-            out->frames = m;
-            out->median_us = median_sorting(skews, m); /* sorts them */
-            out->p95_us = skews[(size_t)((double)(m - 1) * 0.95)];
-            out->max_us = skews[m - 1];
-        }
-        free(skews);
+        free(barrier);
+        free(first);
+        free(last);
     }
     free(mine);
     free(frames);

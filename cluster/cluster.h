@@ -131,15 +131,27 @@ typedef struct cluster_stats {
 cluster_stats cluster_get_stats(const cluster *c);
 void cluster_print_stats(const cluster *c, FILE *out);
 
+/* A display that knows when a frame reached the screen (DRM: the vblank of
+ * its page flip) tells the cluster, once per output: `realtime_us` is that
+ * moment on CLOCK_REALTIME. Call on the display thread (it writes what the
+ * display sync writes), within 8 frames of the frame's display sync. */
+void cluster_note_scanout(cluster *c, uint64_t frame, int64_t realtime_us);
+
 /* FLIP SKEW: how far apart the processes passed the barrier before the flip
- * of one frame (CLOCK_REALTIME, so on one machine exact; across machines as
- * close as their clocks), over the last frames each kept. A collective after
- * the run: every process calls it; the figures are the leader's (zero on the
+ * of one frame, and (when the display reported them) how far apart the
+ * frame's first and last output reached the screen over all processes
+ * (CLOCK_REALTIME, so on one machine exact; across machines as close as
+ * their clocks), over the last frames each kept. A collective after the
+ * run: every process calls it; the figures are the leader's (zero on the
  * others). False with err after a failure. */
-typedef struct cluster_skew {
-    uint64_t frames;                /* frames every process flipped */
+typedef struct cluster_spread {
+    uint64_t frames;                /* frames every process flipped (and, for scan-out, reported) */
     uint64_t frames_out_of_step;    /* frames where the processes' frame numbers differed (should be 0) */
     double median_us, p95_us, max_us;
+} cluster_spread;
+typedef struct cluster_skew {
+    cluster_spread barrier;         /* passing the barrier before the flip */
+    cluster_spread scanout;         /* on screen: frames 0 when the display reports none (headless) */
 } cluster_skew;
 bool cluster_flip_skew(cluster *c, cluster_skew *out, tess_error *err);
 

@@ -23,7 +23,7 @@
 
 /* One output of the wall: its name (connector) and where it is on the plane. */
 typedef struct input_output_area {
-    char name[32];
+    char name[48]; /* the output's label: "DP-1", or "node1-DP-1" on a wall of several machines */
     camera_window window;
 } input_output_area;
 

@@ -647,6 +647,45 @@ Test(wall_config, nodes_by_rank_and_by_host)
     cr_assert_eq(w.node_count, 0);
 }
 
+/* Every machine has its own Virtual-1: outputs of different nodes may share a
+ * connector name, named in the nodes by index; files call them nodeK-NAME. */
+Test(wall_config, nodes_may_share_connector_names)
+{
+#define SHARED OUT(1, "\"grid\": [0, 0]") "," OUT(2, "\"grid\": [1, 0]") "," OUT(1, "\"grid\": [0, 1]") "," \
+    OUT(2, "\"grid\": [1, 1]")
+    wall_config w = parse_ok("{" HEADER "\"outputs\": [" SHARED "], \"nodes\": ["
+                             "{\"rank\": 0, \"outputs\": [0, 1]}, {\"rank\": 1, \"outputs\": [2, 3]}]}");
+    cr_assert_eq(w.node_count, 2);
+    cr_assert(w.nodes[1].outputs[2] && w.nodes[1].outputs[3] && !w.nodes[1].outputs[0]);
+    char label[WALL_LABEL_BYTES];
+    cr_expect_str_eq(wall_output_label(&w, 0, label, sizeof label), "node0-Virtual-1");
+    cr_expect_str_eq(wall_output_label(&w, 3, label, sizeof label), "node1-Virtual-2");
+    /* one machine's part, as it matches its card */
+    wall_config mine;
+    int index_of[WALL_MAX_OUTPUTS];
+    cr_assert_eq(wall_config_subset(&w, w.nodes[1].outputs, &mine, index_of), 2);
+    cr_expect(index_of[0] == 2 && index_of[1] == 3);
+    cr_expect_str_eq(mine.outputs[1].connector, "Virtual-2");
+    cr_expect(mine.outputs[1].x_mm == w.outputs[3].x_mm && mine.outputs[1].y_mm == w.outputs[3].y_mm);
+    cr_expect(mine.width_mm == w.width_mm && mine.node_count == 0);
+    /* a unique name still goes by itself; names and indices mix */
+    w = parse_ok("{" HEADER "\"outputs\": [" FOUR "], \"nodes\": ["
+                 "{\"rank\": 0, \"outputs\": [0, \"Virtual-2\"]}, {\"rank\": 1, \"outputs\": [\"Virtual-3\", 3]}]}");
+    cr_expect_str_eq(wall_output_label(&w, 3, label, sizeof label), "Virtual-4");
+    /* what cannot be: a shared name named, the same name twice on one machine, and without
+     * nodes the same name twice at all */
+    expect_failure("{" HEADER "\"outputs\": [" SHARED "], \"nodes\": ["
+                   "{\"rank\": 0, \"outputs\": [\"Virtual-1\", 1]}, {\"rank\": 1, \"outputs\": [2, 3]}]}",
+                   "field 'nodes[0].outputs[0]': 'Virtual-1' is the connector of outputs[0] and outputs[2]: name each "
+                   "by its index");
+    expect_failure("{" HEADER "\"outputs\": [" SHARED "], \"nodes\": ["
+                   "{\"rank\": 0, \"outputs\": [0, 2]}, {\"rank\": 1, \"outputs\": [1, 3]}]}",
+                   "field 'nodes[0].outputs[1]': outputs[0] and outputs[2] are both connector 'Virtual-1' of this node");
+    expect_failure("{" HEADER "\"outputs\": [" SHARED "]}",
+                   "field 'outputs[2].connector': 'Virtual-1' is also the connector of outputs[0]");
+#undef SHARED
+}
+
 Test(wall_config, bad_nodes_are_named)
 {
     static const struct {
@@ -660,10 +699,15 @@ Test(wall_config, bad_nodes_are_named)
         {"[{\"rank\": 0}]", "field 'nodes[0].outputs': required field is missing"},
         {"[{\"rank\": 0, \"outputs\": []}]", "field 'nodes[0].outputs': a node drives at least 1 output"},
         {"[{\"rank\": 0, \"outputs\": [\"HDMI-A-9\"]}]", "field 'nodes[0].outputs[0]': 'HDMI-A-9' is not one of the wall's outputs"},
-        {"[{\"rank\": 0, \"outputs\": [3]}]", "field 'nodes[0].outputs[0]': expected a connector name, got"},
+        {"[{\"rank\": 0, \"outputs\": [true]}]",
+         "field 'nodes[0].outputs[0]': expected a connector name or an output index, got"},
+        {"[{\"rank\": 0, \"outputs\": [4]}]", "field 'nodes[0].outputs[0]': output index 4: the wall's outputs are 0..3"},
+        {"[{\"rank\": 0, \"outputs\": [-1]}]", "field 'nodes[0].outputs[0]': output index -1: the wall's outputs are 0..3"},
         {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\", \"Virtual-3\"]},"
          " {\"rank\": 1, \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",
-         "field 'nodes[1].outputs[0]': output 'Virtual-3' is driven by another node already"},
+         "field 'nodes[1].outputs[0]': output 2 (Virtual-3) is driven by another node already"},
+        {"[{\"rank\": 0, \"outputs\": [0, 1, 2]}, {\"rank\": 1, \"outputs\": [\"Virtual-3\", 3]}]",
+         "field 'nodes[1].outputs[0]': output 2 (Virtual-3) is driven by another node already"},
         {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\"]}, {\"rank\": 0, \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",
          "field 'nodes[1]': rank 0 is nodes[0]'s already"},
         {"[{\"rank\": 0, \"outputs\": [\"Virtual-1\", \"Virtual-2\"]}, {\"rank\": 2, \"outputs\": [\"Virtual-3\", \"Virtual-4\"]}]",

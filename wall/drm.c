@@ -456,9 +456,13 @@ static void disable_output(drm_card *c, int o)
 
 /* ---------------------------------------------------------------- frames */
 
+static const char *output_name(const drm_card *c, int o);
+
+/* tv_sec, tv_usec: the vblank's time on CLOCK_MONOTONIC (DRM_CAP_TIMESTAMP_MONOTONIC,
+ * every kernel since 3.x) */
 static void flip_done(int fd, unsigned sequence, unsigned tv_sec, unsigned tv_usec, unsigned crtc_id, void *data)
 {
-    (void)fd, (void)sequence, (void)tv_sec, (void)tv_usec;
+    (void)fd;
     drm_card *c = data;
     if (c->pending_flips > 0)
         c->pending_flips--;
@@ -466,6 +470,11 @@ static void flip_done(int fd, unsigned sequence, unsigned tv_sec, unsigned tv_us
         if (c->outputs[o].flip_pending && c->outputs[o].crtc_id == crtc_id) {
             c->outputs[o].flip_pending = false;
             c->outputs[o].flip = DRM_FLIP_DONE;
+            log_debug("%s: %s: flipped to frame %llu at vblank %u (%u.%06u s)", c->path, output_name(c, o),
+                      (unsigned long long)c->flipping_frame, sequence, tv_sec, tv_usec);
+            if (c->flip_fn)
+                c->flip_fn(c->flip_ctx, c->flipping_frame, output_name(c, o), sequence,
+                           (int64_t)tv_sec * 1000000 + tv_usec);
         }
 }
 
@@ -892,6 +901,12 @@ void drm_card_set_pause_hook(drm_card *c, drm_pause_fn fn, void *ctx)
 {
     c->pause_fn = fn;
     c->pause_ctx = ctx;
+}
+
+void drm_card_set_flip_hook(drm_card *c, drm_flip_fn fn, void *ctx)
+{
+    c->flip_fn = fn;
+    c->flip_ctx = ctx;
 }
 
 /* ---------------------------------------------------------------- tessera outputs */

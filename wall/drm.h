@@ -77,6 +77,15 @@ void drm_wall_attach(drm_card *c, struct pipeline *p, int first_channel);
 typedef void (*drm_pause_fn)(void *ctx, bool paused);
 void drm_card_set_pause_hook(drm_card *c, drm_pause_fn fn, void *ctx);
 
+/* Told on the display thread of each output's completed page flip: the
+ * frame now on screen, the output's name, the CRTC's vblank counter and the
+ * vblank's time (CLOCK_MONOTONIC us, as the kernel stamps it). The same is
+ * logged at debug level: "CARD: OUTPUT: flipped to frame F at vblank S (T s)" (not "frame F on screen": that line,
+ * once per commit, says every output shows F). */
+typedef void (*drm_flip_fn)(void *ctx, uint64_t frame, const char *output, unsigned vblank_sequence,
+                            int64_t vblank_monotonic_us);
+void drm_card_set_flip_hook(drm_card *c, drm_flip_fn fn, void *ctx);
+
 /* CRTCs for outputs: masks[o] has bit k set when output o's encoders can
  * drive CRTC k (of `crtcs`, at most 32). Fills crtc_of_output[o] with distinct
  * CRTC indices by a maximum bipartite matching (augmenting paths: an earlier

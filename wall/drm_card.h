@@ -102,6 +102,8 @@ struct drm_card {
     int first_channel;
     drm_pause_fn pause_fn;        /* told while a VT switch pauses the wall (display thread) */
     void *pause_ctx;
+    drm_flip_fn flip_fn;          /* told of each completed flip (display thread) */
+    void *flip_ctx;
     /* property ids by (object, name), looked up once: a flip then costs no property ioctls
      * (display thread, and drm_wall_start before it) */
     drm_prop_entry prop_cache[DRM_PROP_CACHE];

@@ -614,15 +614,17 @@ static const char *describe_edid(char *buf, size_t size, const char *manufacture
     return buf;
 }
 
-/* One monitor, one output: connector names and EDID identities are unique. */
-static bool check_duplicates(jr_ctx *c, const wall_config *w)
+/* One monitor, one output: EDID identities are unique, and so are connector
+ * names on one machine. With `per_node` (the file has "nodes": each machine
+ * has its own DP-1) read_nodes checks the names node by node instead. */
+static bool check_duplicates(jr_ctx *c, const wall_config *w, bool per_node)
 {
     char who[3 * WALL_EDID_TEXT_BYTES + 40];
     for (int j = 1; j < w->count; j++) {
         const wall_output *b = &w->outputs[j];
         for (int i = 0; i < j; i++) {
             const wall_output *a = &w->outputs[i];
-            if (strcmp(a->connector, b->connector) == 0)
+            if (!per_node && strcmp(a->connector, b->connector) == 0)
                 return output_fail(c, j, "connector", "'%s' is also the connector of outputs[%d]", b->connector, i);
             if (same_edid(&a->edid, &b->edid))
                 return output_fail(c, j, "edid", "the same monitor identity as outputs[%d] (%s); one monitor "
@@ -632,6 +634,35 @@ static bool check_duplicates(jr_ctx *c, const wall_config *w)
         }
     }
     return true;
+}
+
+/* The output a node's list names (the current field): a connector name that
+ * only one output has, or an index into "outputs". -1 with the error. */
+static int find_node_output(jr_ctx *c, const wall_config *w, json_object *entry)
+{
+    if (json_object_is_type(entry, json_type_int)) {
+        int64_t k = json_object_get_int64(entry);
+        if (k < 0 || k >= w->count)
+            return jr_field_fail(c, "output index %lld: the wall's outputs are 0..%d", (long long)k, w->count - 1),
+                   -1;
+        return (int)k;
+    }
+    if (!json_object_is_type(entry, json_type_string))
+        return jr_field_fail(c, "expected a connector name or an output index, got %s", jr_kind(entry)), -1;
+    const char *name = json_object_get_string(entry);
+    int found = -1;
+    for (int k = 0; k < w->count; k++) {
+        if (strcmp(w->outputs[k].connector, name) != 0)
+            continue;
+        if (found >= 0)
+            return jr_field_fail(c, "'%s' is the connector of outputs[%d] and outputs[%d]: name each by its index",
+                                 name, found, k),
+                   -1;
+        found = k;
+    }
+    if (found < 0)
+        jr_field_fail(c, "'%s' is not one of the wall's outputs", name);
+    return found;
 }
 
 /* nodes[i] (the current field). */
@@ -666,17 +697,15 @@ static bool read_node(jr_ctx *c, json_object *v, wall_config *w, wall_node *n, b
         ok = jr_field_fail(c, "a node drives at least 1 output");
     for (size_t i = 0; ok && i < count; i++) {
         size_t inner = jr_field_index(c, i);
-        json_object *name = json_object_array_get_idx(list, i);
-        if (!json_object_is_type(name, json_type_string))
-            ok = jr_field_fail(c, "expected a connector name, got %s", jr_kind(name));
-        int found = -1;
-        for (int k = 0; ok && k < w->count && found < 0; k++)
-            if (!strcmp(w->outputs[k].connector, json_object_get_string(name)))
-                found = k;
-        if (ok && found < 0)
-            ok = jr_field_fail(c, "'%s' is not one of the wall's outputs", json_object_get_string(name));
+        int found = find_node_output(c, w, json_object_array_get_idx(list, i));
+        ok = found >= 0;
         if (ok && taken[found])
-            ok = jr_field_fail(c, "output '%s' is driven by another node already", w->outputs[found].connector);
+            ok = jr_field_fail(c, "output %d (%s) is driven by another node already", found,
+                               w->outputs[found].connector);
+        for (int k = 0; ok && k < w->count; k++) /* one machine has one connector of a name */
+            if (n->outputs[k] && !strcmp(w->outputs[k].connector, w->outputs[found].connector))
+                ok = jr_field_fail(c, "outputs[%d] and outputs[%d] are both connector '%s' of this node", k, found,
+                                   w->outputs[k].connector);
         if (ok)
             taken[found] = n->outputs[found] = true;
         jr_field_leave(c, inner);
@@ -754,7 +783,8 @@ static bool read_wall(jr_ctx *c, json_object *root, wall_config *w)
     for (int i = 0; i < w->count; i++)
         place_output(&w->outputs[i], &places[i]);
     normalise(w);
-    return check_duplicates(c, w) && check_overlaps(c, w) && read_nodes(c, root, w);
+    return check_duplicates(c, w, jr_get_member(root, "nodes", NULL)) && check_overlaps(c, w) &&
+           read_nodes(c, root, w);
 }
 
 bool wall_config_parse(const char *name, const char *text, size_t len, wall_config *out, tess_error *err)
@@ -1045,6 +1075,35 @@ void wall_hotplug_plan(const wall_config *w, const bool *live, const int *drivin
 }
 
 /* ---- headless runs ---------------------------------------------------------- */
+
+const char *wall_output_label(const wall_config *w, int i, char *buf, size_t bytes)
+{
+    const char *name = w->outputs[i].connector;
+    bool shared = false;
+    for (int k = 0; k < w->count && !shared; k++)
+        shared = k != i && !strcmp(w->outputs[k].connector, name);
+    int node = -1;
+    for (int k = 0; shared && k < w->node_count && node < 0; k++)
+        node = w->nodes[k].outputs[i] ? k : -1;
+    if (node >= 0)
+        snprintf(buf, bytes, "node%d-%s", node, name);
+    else
+        snprintf(buf, bytes, "%s", name);
+    return buf;
+}
+
+int wall_config_subset(const wall_config *w, const bool *mask, wall_config *out, int *index_of)
+{
+    *out = *w;
+    out->count = 0;
+    out->node_count = 0;
+    for (int i = 0; i < w->count; i++)
+        if (mask[i]) {
+            index_of[out->count] = i;
+            out->outputs[out->count++] = w->outputs[i];
+        }
+    return out->count;
+}
 
 bool wall_config_headless_sizes(wall_config *w, tess_error *err)
 {

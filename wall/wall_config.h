@@ -43,9 +43,13 @@
  *      "host": "wall-a",               rank (0..WALL_MAX_OUTPUTS-1, the MPI rank) and host
  *                                      (the machine's host name, 1..63 chars; nodes on one
  *                                      host take its ranks in file order)
- *      "outputs": ["HDMI-A-1", ...]},  the connectors of the outputs it drives: each
- *     ...                              output is in exactly one node, a node has >= 1
- *   ]                                  Ranks given must be 0..count-1, each once.
+ *      "outputs": ["HDMI-A-1", ...]},  the outputs it drives, each by its connector name
+ *     ...                              or by its index in "outputs" (needed when outputs
+ *   ]                                  of several nodes share a connector name: each
+ *                                      machine has its own DP-1). Each output is in
+ *                                      exactly one node, a node has >= 1; connector
+ *                                      names are unique within a node. Ranks given must
+ *                                      be 0..count-1, each once.
  *
  * Placement (all give the top-left corner of the output's active area):
  *  - position_mm: [x, y] in wall millimetres (within +-1e6; see below).
@@ -64,7 +68,8 @@
  * Checks made from the file alone (each message names the outputs involved):
  * 1..16 outputs; exactly one placement; the grid rule above; no two tiles
  * (active + bezels) overlapping by more than WALL_OVERLAP_TOLERANCE_MM in both
- * directions; no two outputs with the same connector name, nor with the same
+ * directions; no two outputs with the same connector name (of one node, when
+ * the file has nodes), nor with the same
  * EDID identity (all three fields equal, an absent field equal only to an
  * absent one); with an explicit mode, |(w_mm / h_mm) / (w_px / h_px) - 1| <=
  * WALL_ASPECT_TOLERANCE using the mounted sizes (non-square pixels are refused).
@@ -133,6 +138,18 @@ typedef struct wall_config {
  * k is how many lower ranks' hosts (hosts[0..rank)) are this host. -1 with
  * err when none is. hosts: every rank's host name (size of them). */
 int wall_config_node_of(const wall_config *w, int rank, int size, const char *const *hosts, tess_error *err);
+
+/* The name output i goes by in file names and messages: its connector, or
+ * "nodeK-CONNECTOR" when outputs of several nodes share that connector name
+ * (each machine has its own DP-1). Returns buf. */
+#define WALL_LABEL_BYTES (WALL_CONNECTOR_BYTES + 8)
+const char *wall_output_label(const wall_config *w, int i, char *buf, size_t bytes);
+
+/* The outputs of w where mask[i], in order, as a wall of their own in *out
+ * (one machine's part of a wall of several: what it matches to its card).
+ * Sizes and places stay the whole wall's; out has no nodes. index_of[j]: the
+ * index in w of out's output j. Returns out->count. */
+int wall_config_subset(const wall_config *w, const bool *mask, wall_config *out, int *index_of);
 
 /* Read and check a wall file; *out is fully written (zeroed on failure). */
 bool wall_config_load(const char *file, wall_config *out, tess_error *err);

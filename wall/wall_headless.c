@@ -182,9 +182,9 @@ bool wall_headless_displays(const wall_config *w, const char *pattern, bool sequ
         displays[i] = NULL;
         if (present && !present[i])
             continue;
-        char own[4096];
+        char own[4096], label[WALL_LABEL_BYTES];
         wall_display *wd = calloc(1, sizeof *wd);
-        bool ok = wd && wall_output_pattern(pattern, w->outputs[i].connector, own, sizeof own);
+        bool ok = wd && wall_output_pattern(pattern, wall_output_label(w, i, label, sizeof label), own, sizeof own);
         if (ok)
             wd->dump = display_dump_create(own, sequence, err);
         if (!ok || !wd->dump) {

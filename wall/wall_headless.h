@@ -26,7 +26,7 @@ void wall_stitched_size(const wall_config *w, int *width_px, int *height_px);
 
 /* One display per output (displays[i] for output i, in channel order 0..n-1,
  * every output's pixel size resolved). Output i's frames go to `pattern` with
- * "-CONNECTOR" before the extension; the stitched wall to `pattern` itself.
+ * "-CONNECTOR" (wall_output_label) before the extension; the stitched wall to `pattern` itself.
  * `sequence`: frame numbers in the names (dump_frame_path). `present` (NULL:
  * every output): the outputs this process drives (one machine of several:
  * cluster/); displays[i] is NULL for the others, and without all of them no

@@ -4,10 +4,12 @@
 
 #include <sched.h>
 #include <string.h>
+#include <time.h>
 
 #include "cli.h"
+#include "pipeline_cli.h"
 #include "cluster/cluster.h"
-#include "wall/display_backend.h"
+#include "wall/drm.h"
 #include "engine/log.h"
 #include "engine/pipeline.h"
 #include "wall/wall_config.h"
@@ -37,11 +39,6 @@ bool cli_cluster_begin(cli_pipeline_spec *s)
     if (wall.node_count == 0) {
         cli_error("%s: started by mpirun, but the wall has no \"nodes\" (which outputs each process drives)",
                   s->wall_file);
-        return false;
-    }
-    if (display_backend_by_name(s->channels[0].display)->needs & DISPLAY_NEEDS_CARD) {
-        cli_error("--display %s: a wall of several machines runs headless so far (dump, null, convert)",
-                  s->channels[0].display);
         return false;
     }
     cluster_config cfg = {.timeout_s = s->sync_timeout_s, .leader = s->input_rank,
@@ -90,10 +87,25 @@ bool cli_cluster_agree(const accel *a)
     return true;
 }
 
+/* drm_flip_fn: a DRM output's flip is the frame on screen; the cluster keeps its time
+ * (CLOCK_REALTIME, the clock the processes compare) for the scan-out skew. */
+static void note_flip(void *ctx, uint64_t frame, const char *output, unsigned vblank_sequence,
+                      int64_t vblank_monotonic_us)
+{
+    (void)output, (void)vblank_sequence; /* drm.c logs them */
+    struct timespec real, mono;
+    clock_gettime(CLOCK_REALTIME, &real);
+    clock_gettime(CLOCK_MONOTONIC, &mono);
+    int64_t offset_us = ((int64_t)real.tv_sec - mono.tv_sec) * 1000000 + (real.tv_nsec - mono.tv_nsec) / 1000;
+    cluster_note_scanout(ctx, frame, vblank_monotonic_us + offset_us);
+}
+
 bool cli_cluster_attach(struct pipeline *p)
 {
     if (!active.c)
         return true;
+    if (cli_pipeline_card()) /* scan-out on a card: its flips say when each frame reached the screen */
+        drm_card_set_flip_hook(cli_pipeline_card(), note_flip, active.c);
     tess_error err = {{0}};
     if (!cluster_attach(active.c, p, &err)) {
         cli_error("%s", err.msg);
@@ -118,13 +130,19 @@ bool cli_cluster_report(void)
         cli_error("%s", err.msg);
         return true;
     }
-    if (cluster_rank(active.c) == cluster_leader(active.c))
+    if (cluster_rank(active.c) == cluster_leader(active.c)) {
         fprintf(stderr,
                 "tessera: cluster: flip skew over %llu frames: median %.0f us, p95 %.0f us, max %.0f us (frames out "
                 "of step: %llu)\n",
-                (unsigned long long)k.frames, k.median_us, k.p95_us, k.max_us,
-                (unsigned long long)k.frames_out_of_step);
-    return k.frames_out_of_step > 0;
+                (unsigned long long)k.barrier.frames, k.barrier.median_us, k.barrier.p95_us, k.barrier.max_us,
+                (unsigned long long)k.barrier.frames_out_of_step);
+        if (k.scanout.frames > 0)
+            fprintf(stderr,
+                    "tessera: cluster: scan-out skew (first to last output's flip, by vblank time) over %llu frames: "
+                    "median %.0f us, p95 %.0f us, max %.0f us\n",
+                    (unsigned long long)k.scanout.frames, k.scanout.median_us, k.scanout.p95_us, k.scanout.max_us);
+    }
+    return k.barrier.frames_out_of_step > 0;
 }
 
 void cli_cluster_end(void)

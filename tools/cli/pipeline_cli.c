@@ -701,9 +701,34 @@ void cli_pipeline_release_outputs(void)
 }
 
 /* Open the card, match the wall's outputs to its connectors (which resolves
- * their modes), bring them up. */
+ * their modes), bring them up. On one machine of several (cluster_cli.h) the
+ * card holds that machine's outputs only: they are matched and brought up as
+ * a wall of their own (the card's output k is mine's), and the others' sizes
+ * come from their explicit modes, as on that machine, so that every process
+ * derives the same picture size. displays[i]: output i's, NULL for others'. */
 static bool start_drm(const cli_pipeline_spec *s, wall_config *wall, image_display **displays, tess_error *err)
 {
+    const bool *present = cli_cluster_outputs();
+    bool every[WALL_MAX_OUTPUTS];
+    for (int i = 0; i < WALL_MAX_OUTPUTS; i++)
+        every[i] = !present || present[i];
+    wall_config mine, others;
+    int mine_index[WALL_MAX_OUTPUTS], other_index[WALL_MAX_OUTPUTS];
+    bool elsewhere[WALL_MAX_OUTPUTS];
+    for (int i = 0; i < WALL_MAX_OUTPUTS; i++)
+        elsewhere[i] = !every[i];
+    int mine_count = wall_config_subset(wall, every, &mine, mine_index);
+    int other_count = wall_config_subset(wall, elsewhere, &others, other_index);
+    for (int j = 0; j < other_count; j++)
+        if (others.outputs[j].mode_preferred) {
+            char label[WALL_LABEL_BYTES];
+            return tess_error_set(err, "outputs[%d] (%s, another machine's): a wall of several machines needs every "
+                                       "output's mode in the file (\"mode\": \"WxH\"): each machine sees only its "
+                                       "own monitors",
+                                  other_index[j], wall_output_label(wall, other_index[j], label, sizeof label));
+        }
+    if (!wall_config_headless_sizes(&others, err)) /* explicit modes: cannot fail */
+        return false;
     active_session = session_open();
     if (!active_session)
         return tess_error_set(err, "seat: out of memory");
@@ -712,13 +737,20 @@ static bool start_drm(const cli_pipeline_spec *s, wall_config *wall, image_displ
         return false;
     const wall_device_connector *conns;
     size_t n = drm_card_connectors(active_card, &conns);
-    if (!wall_config_match_device(wall, conns, n, err)) {
+    image_display *mine_displays[WALL_MAX_OUTPUTS] = {NULL};
+    if (!wall_config_match_device(&mine, conns, n, err)) {
         tess_error_prefix(err, "%s: ", drm_card_path(active_card));
         return false;
     }
-    if (!drm_wall_start(active_card, wall, displays, err))
+    if (!drm_wall_start(active_card, &mine, mine_displays, err))
         return false;
-    fprintf(stderr, "tessera: %s: %d outputs up (%s modesetting)\n", drm_card_path(active_card), wall->count,
+    for (int j = 0; j < mine_count; j++) {
+        wall->outputs[mine_index[j]] = mine.outputs[j];
+        displays[mine_index[j]] = mine_displays[j];
+    }
+    for (int j = 0; j < other_count; j++)
+        wall->outputs[other_index[j]] = others.outputs[j];
+    fprintf(stderr, "tessera: %s: %d outputs up (%s modesetting)\n", drm_card_path(active_card), mine_count,
             drm_card_atomic(active_card) ? "atomic" : "legacy");
     return true;
 }
@@ -772,7 +804,7 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
         active_layout.plane_aspect = wall_plane_aspect(&wall);
         active_layout.count = wall.count;
         for (int i = 0; i < wall.count; i++) {
-            snprintf(active_layout.areas[i].name, sizeof active_layout.areas[i].name, "%s", wall.outputs[i].connector);
+            wall_output_label(&wall, i, active_layout.areas[i].name, sizeof active_layout.areas[i].name);
             active_layout.areas[i].window = wall_output_window(&wall, i);
         }
     }
