@@ -329,6 +329,58 @@ Test(cluster, processes_over_different_scenes_refuse_to_run, .timeout = 900)
     support_remove_tmp_dir(dir);
 }
 
+/* Every machine has its own Virtual-1 and Virtual-2: a wall of two such machines names its
+ * outputs by index in the nodes, and the files call them nodeK-NAME; two processes render
+ * what one does. With the drm display, another machine's output without an explicit mode is
+ * refused before any card is opened: no process could know that monitor's pixels. */
+Test(cluster, machines_with_the_same_connector_names_make_one_wall, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[16384];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-shared-names");
+    static const char *shared =
+        "{\"format\": \"tessera-wall\", \"version\": 1, \"units\": \"mm\", \"outputs\": [\n"
+        " {\"connector\": \"Virtual-1\", \"mode\": \"96x54\", \"grid\": [0, 0], \"size_mm\": [160, 90]},\n"
+        " {\"connector\": \"Virtual-2\", \"mode\": \"96x54\", \"grid\": [1, 0], \"size_mm\": [160, 90]},\n"
+        " {\"connector\": \"Virtual-1\", \"mode\": \"%s\", \"grid\": [0, 1], \"size_mm\": [160, 90]},\n"
+        " {\"connector\": \"Virtual-2\", \"mode\": \"96x54\", \"grid\": [1, 1], \"size_mm\": [160, 90]}],\n"
+        " \"nodes\": [{\"rank\": 0, \"outputs\": [0, 1]}, {\"rank\": 1, \"outputs\": [2, 3]}]}\n";
+    char text[2048];
+    snprintf(text, sizeof text, shared, "96x54");
+    support_write_file(dir, "wall.json", text);
+    snprintf(cmd, sizeof cmd, "mkdir -p %s/two %s/one", dir, dir);
+    cr_assert_eq(support_run(cmd), 0);
+    const char *args = "run --display dump --frames 3";
+    snprintf(cmd, sizeof cmd, MPIRUN " -np 2 --bind-to none %s %s --wall %s/wall.json --out %s/two/f_####.png "
+                              "--threads 1", support_tessera_bin(), args, dir, dir);
+    int status = run_logged(dir, "two", cmd, log, sizeof log);
+    cr_assert_eq(status, 0, "2 processes: status %d: %s", status, log);
+    snprintf(cmd, sizeof cmd, "%s %s --wall %s/wall.json --out %s/one/f_####.png --threads 2", support_tessera_bin(),
+             args, dir, dir);
+    status = run_logged(dir, "one", cmd, log, sizeof log);
+    cr_assert_eq(status, 0, "1 process: status %d: %s", status, log);
+    char two[300], one[300], path[400];
+    snprintf(two, sizeof two, "%s/two", dir);
+    snprintf(one, sizeof one, "%s/one", dir);
+    cr_assert_eq(same_output_files(two, one), 4 * 3);
+    const char *names[] = {"node0-Virtual-1", "node0-Virtual-2", "node1-Virtual-1", "node1-Virtual-2"};
+    for (int i = 0; i < 4; i++) {
+        snprintf(path, sizeof path, "%s/f_0002-%s.png", two, names[i]);
+        cr_assert_eq(access(path, R_OK), 0, "no %s", path);
+    }
+    /* the drm display: node 1's Virtual-1 runs the monitor's preferred mode */
+    snprintf(text, sizeof text, shared, "preferred");
+    support_write_file(dir, "preferred.json", text);
+    snprintf(cmd, sizeof cmd, MPIRUN " -np 2 --bind-to none %s run --wall %s/preferred.json --display drm --frames 2",
+             support_tessera_bin(), dir);
+    status = run_logged(dir, "drm", cmd, log, sizeof log);
+    cr_assert_neq(status, 0, "%s", log);
+    cr_assert(strstr(log, "outputs[2] (node1-Virtual-1, another machine's): a wall of several machines needs every "
+                          "output's mode in the file"),
+              "%s", log);
+    support_remove_tmp_dir(dir);
+}
+
 /* The checksum is the build's: the same scene built with 1 and 2 threads agrees, another
  * scene does not. */
 Test(cluster, the_accel_checksum_is_the_same_for_the_same_scene)
