@@ -159,14 +159,16 @@ run: deps
 	./tessera run
 
 # the whole suite (Criterion prints its summary line), then the DRM/KMS wall end to end in a
-# qemu guest (tests/vm_wall.sh) and input driving it there (tests/vm_input.sh): each its own
-# summary line; SKIPPED, said so, when qemu cannot be installed
+# qemu guest (tests/vm_wall.sh), input driving it there (tests/vm_input.sh) and a wall of two
+# machines on two cards under mpirun there (tests/vm_cluster.sh): each its own summary line;
+# SKIPPED, said so, when qemu cannot be installed
 test:
 	@sh tools/deps.sh --test
 	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
 	cd tests && ../$(TEST_BIN) --jobs 2
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
+	sh tests/vm_cluster.sh
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan:

@@ -28,7 +28,14 @@
  *     first step, before any frame exists, to the one after the last frame),
  *     so it is served even while all its channels are switched off; the hook
  *     then paces the loop (it should wait for its events rather than return
- *     at once). */
+ *     at once).
+ *   settle_stage: optional, called on the display thread once per display
+ *     stage after the show() calls and before the display sync (pipeline.h;
+ *     a wall of several machines: the barrier before the flip), then
+ *     end_stage after it: a display that commits in end_stage waits here for
+ *     what its last commit started (a card's flips), so that after the
+ *     barrier only the commit is left. A display must also work when a
+ *     wrapper calls end_stage alone. */
 #ifndef TESSERA_DISPLAY_H
 #define TESSERA_DISPLAY_H
 
@@ -60,6 +67,7 @@ typedef struct image_display_ops {
     void (*destroy)(image_display *d); /* frees d */
     void (*write_tile)(image_display *d, const frame_image *img, int x0, int y0, int x1, int y1); /* optional */
     bool (*end_stage)(image_display *d, tess_error *err); /* optional; false with err stops the pipeline */
+    bool (*settle_stage)(image_display *d, tess_error *err); /* optional; false with err stops the pipeline */
 } image_display_ops;
 
 /* Implementations embed this as their first member. */

@@ -1699,6 +1699,12 @@ static void display_stage(pipeline *p)
         if (!c->display->ops->show(c->display, &c->buffers[c->queued].meta, &err))
             display_failed(p, c->display, &err);
     }
+    for (int i = 0; i < p->channel_count && !p->display_failed; i++) {
+        image_display *d = p->channels[i].display;
+        tess_error err = {{0}};
+        if (d->ops->settle_stage && !d->ops->settle_stage(d, &err))
+            display_failed(p, d, &err);
+    }
     if (p->display_sync && !p->display_failed) { /* the frame lock: every process here before a flip */
         uint64_t shown = UINT64_MAX;
         for (int i = 0; i < p->channel_count && shown == UINT64_MAX; i++)

@@ -774,12 +774,38 @@ static bool drm_show(image_display *d, const frame_image *img, tess_error *err)
 /* Once per display stage (output 0's display speaks for the card): wait for
  * the previous flips (this paces the pipeline on the display), follow
  * hotplug, flip every live output in one commit. */
+static bool settle(drm_card *c, tess_error *err);
+
+/* Before the display sync (the barrier before the flip of a wall of several machines):
+ * everything but the commit, so that after the barrier only the commit is left. */
+static bool drm_settle_stage(image_display *d, tess_error *err)
+{
+    drm_display *dd = (drm_display *)d;
+    return dd->output != 0 || settle(dd->card, err);
+}
+
 static bool drm_end_stage(image_display *d, tess_error *err)
 {
     drm_display *dd = (drm_display *)d;
     drm_card *c = dd->card;
     if (dd->output != 0)
         return true;
+    if (!c->settled && !settle(c, err)) /* a caller that knows no settle_stage */
+        return false;
+    c->settled = false;
+    if (c->commit_due) {
+        c->commit_due = false;
+        flip_ready(c);
+    }
+    return true;
+}
+
+/* drm_settle_stage's work: follow the seat, wait for the last commit's flips, judge them,
+ * follow hotplug; c->commit_due when the stage's frame is to be flipped. */
+static bool settle(drm_card *c, tess_error *err)
+{
+    c->settled = true;
+    c->commit_due = false;
     follow_seat(c);
     if (!session_active(c->session))
         return true; /* stopping while switched away: touch nothing */
@@ -826,7 +852,7 @@ static bool drm_end_stage(image_display *d, tess_error *err)
     }
     if (verdict.fatal && !outputs_changed)
         return tess_error_set(err, "%s: %s, and no output was unplugged", c->path, verdict.why.msg);
-    flip_ready(c);
+    c->commit_due = true;
     return true;
 }
 
@@ -836,7 +862,8 @@ static const image_display_ops drm_display_ops = {.name = "drm",
                                                   .show = drm_show,
                                                   .destroy = drm_display_destroy,
                                                   .write_tile = drm_write_tile,
-                                                  .end_stage = drm_end_stage};
+                                                  .end_stage = drm_end_stage,
+                                                  .settle_stage = drm_settle_stage};
 
 bool drm_wall_start(drm_card *c, const wall_config *w, image_display **displays, tess_error *err)
 {

@@ -92,6 +92,8 @@ struct drm_card {
     int pending_flips;            /* flip events still to come; display thread only */
     uint64_t ready_frame;         /* the newest frame show() handed us (display thread) */
     uint64_t flipping_frame;      /* the frame the last commit flips to (display thread) */
+    bool settled;                 /* settle() ran this display stage; end_stage clears it (display thread) */
+    bool commit_due;              /* settle() found the stage's frame to flip (display thread) */
     drm_flip_health flip_health;  /* per output: stages in a row whose flips failed (display thread) */
     /* hotplug (display thread): udev's connector-change events for this card */
     struct udev *udev;

@@ -174,6 +174,12 @@ static bool tap_end_stage(image_display *d, tess_error *err)
     return t->inner->ops->end_stage(t->inner, err);
 }
 
+static bool tap_settle_stage(image_display *d, tess_error *err)
+{
+    frame_tap *t = (frame_tap *)d;
+    return t->inner->ops->settle_stage(t->inner, err);
+}
+
 static void tap_destroy(image_display *d)
 {
     frame_tap *t = (frame_tap *)d;
@@ -190,7 +196,8 @@ static image_display *wrap_with_tap(void *ctx, int channel, image_display *inner
         return inner;
     t->inner = inner;
     t->ops = (image_display_ops){"tap", tap_show, tap_destroy, inner->ops->write_tile ? tap_write_tile : NULL,
-                                 inner->ops->end_stage ? tap_end_stage : NULL};
+                                 inner->ops->end_stage ? tap_end_stage : NULL,
+                                 inner->ops->settle_stage ? tap_settle_stage : NULL};
     t->base.ops = &t->ops;
     return &t->base;
 }
