@@ -3,8 +3,9 @@
 # guest (tests/vm/) with two virtio-gpu cards of two heads each stands in for
 # two machines: `mpirun -np 2` (OpenMPI in the guest) starts one tessera per
 # card (--card /dev/dri/cardN), each driving its node's two outputs of the 2x2
-# wall configs/walls/vm_two_machines.json (both cards name their connectors
-# Virtual-1 and Virtual-2; the nodes name the outputs by index). Rank 0 plays
+# wall configs/walls/vm_two_machines.json (card0's Virtual-1 and Virtual-2,
+# card1's Virtual-3 and Virtual-4: one kernel numbers connectors across its
+# cards; the nodes name the outputs by index). Rank 0 plays
 # the camera path and sends every frame's camera to rank 1 (cluster/); both
 # flip each frame after the barrier before the flip. The animation is
 # vm_wall.sh's: 6 spheres, an 8-key orbit that loops every 4 s, played with
@@ -99,8 +100,8 @@ tests/vm/run-guest.sh -c "$CACHE/mpi" -s "$W" -q "$W/qmp.sock" -g 2 -n 2 -r 640x
 GPID=$!
 
 qmp() { python3 tests/vm/qmp.py "$W/qmp.sock" "$@"; }
-# head h of the wall: card h/2 (qemu device gpuN), its head h%2; output node(h/2)-Virtual-(h%2+1)
-label() { printf 'node%d-Virtual-%d' $(($1 / 2)) $(($1 % 2 + 1)); }
+# head h of the wall: card h/2 (qemu device gpuN), its head h%2; output Virtual-(h+1)
+label() { printf 'Virtual-%d' $(($1 + 1)); }
 dump() { qmp screendump "$2" $(($1 % 2)) gpu$(($1 / 2)) > "$W/dump.err" 2>&1; } # HEAD FILE
 
 # the native references, while the guest boots: frames 0 .. K-1 of every output, one process

@@ -29,11 +29,20 @@
 #                        /usr/local/lib/vm): no boot time for big binaries.
 #                        VM_LIBS=initrd puts them into the initrd instead.
 #   VM_EXTRA_MODULES=".."  more kernel modules to put in and load at boot
+#   VM_MPI=1             also ship the host's OpenMPI (openmpi-bin, installed
+#                        on the host if missing): mpirun/mpiexec (orterun),
+#                        orted, ompi_info, the MCA and PMIx plugins at their
+#                        compiled-in paths (in the libs share like the FILEs'
+#                        libraries, reached through symlinks in the initrd;
+#                        with VM_LIBS=initrd in the initrd), the help files,
+#                        /etc/openmpi and every library all of them need.
+#                        /init then brings up lo and exports
+#                        OMPI_ALLOW_RUN_AS_ROOT(_CONFIRM)=1. Default: 0
 set -euo pipefail
 
 die() { echo "build-guest: $*" >&2; exit 1; }
 trap 'echo "build-guest: failed (line $LINENO: $BASH_COMMAND)" >&2' ERR
-[ $# -ge 1 ] || { sed -n '2,31p' "$0" >&2; exit 2; }
+[ $# -ge 1 ] || { sed -n '2,39p' "$0" >&2; exit 2; }
 
 CACHE=$1; shift
 FILES=()
@@ -69,6 +78,11 @@ command -v python3 >/dev/null || need+=(python3)
 COMPRESS=${VM_COMPRESS:-zstd}
 [ "$COMPRESS" != zstd ] || command -v zstd >/dev/null || need+=(zstd)
 command -v apt-get >/dev/null || die "needs apt-get (Debian host)"
+case ${VM_MPI:-0} in
+  0) MPI=0 ;;
+  1) MPI=1; command -v orterun >/dev/null || need+=(openmpi-bin) ;;
+  *) die "VM_MPI must be 0 or 1" ;;
+esac
 if [ ${#need[@]} -gt 0 ]; then
   if [ "${VM_NO_APT:-}" = 1 ] || [ "$(id -u)" != 0 ]; then
     die "missing host packages: ${need[*]} (as root: apt-get install ${need[*]})"
@@ -251,6 +265,92 @@ mkdir -p usr/local/lib/vm
 for f in ${FILES[@]+"${FILES[@]}"}; do
   put_elf "$f" "/usr/local/bin/$(basename "$f")" "$LIBDIR"
 done
+
+# ---- OpenMPI (VM_MPI=1) ----------------------------------------------------
+# What `mpirun -np N PROG` needs on this one node, taken from the host's
+# installed runtime packages (dpkg -L; not the -dev ones: no headers, no .a):
+#   - orterun (as mpirun and mpiexec), orted, ompi_info in /usr/bin;
+#   - the plugin trees, /usr/lib/<triplet>/openmpi (MCA components in
+#     lib/openmpi3) and /usr/lib/<triplet>/pmix2 (libpmix, its plugins and
+#     help files). OpenMPI and PMIx dlopen them from compiled-in absolute
+#     paths, so the guest must see them at those very paths: by default the
+#     trees go to the libs share (LIBDIR/mpi/<absolute path>) and the initrd
+#     holds a relative symlink at each tree's path (resolves in the build tree
+#     and in the guest alike); with VM_LIBS=initrd they are copied in place;
+#   - /usr/share/openmpi (help texts, read at run time) and /etc/openmpi
+#     (openmpi-mca-params.conf: the host's defaults) into the initrd;
+#   - every library any of these ELF files needs (ldd of each plugin), like
+#     the FILEs' libraries (LIBDIR or in place). A plugin whose libraries are
+#     missing on the host could not load there either: shipped, with a warning.
+# The guest's openmpi-mca-params.conf gets "plm = isolated" (see below).
+# /etc/vm-mpi tells /init to bring up lo (OpenMPI's out-of-band TCP channel
+# needs an interface) and to export OMPI_ALLOW_RUN_AS_ROOT(_CONFIRM)=1.
+if [ "$MPI" = 1 ]; then
+  mapfile -t MPI_PKGS < <(dpkg-query -W -f='${db:Status-Abbrev} ${Package}\n' \
+    openmpi-bin openmpi-common 'libopenmpi[0-9]*' 'libpmix[0-9]*' 2>/dev/null |
+    awk '$1 == "ii" { print $2 }')
+  [ ${#MPI_PKGS[@]} -ge 3 ] ||
+    die "VM_MPI=1: OpenMPI is not installed on the host (apt-get install openmpi-bin)"
+  # sort the packages' files (and symlinks, kept as they are: libpmix.so.2 ->
+  # libpmix.so.2.6.2) into plugin trees and data; paths without the leading /
+  mpi_trees=() mpi_tree_files=() mpi_data=() mpi_elves=()
+  while IFS= read -r p; do
+    { [ -f "$p" ] || [ -L "$p" ]; } || continue   # directories come with their files
+    case $p in
+      /usr/share/doc/*|/usr/share/man/*|/usr/share/lintian/*) ;;
+      /usr/lib/*/*/*)            # in a plugin tree: /usr/lib/<triplet>/<tree>/...
+        t=${p#/usr/lib/*/}; t=${p%"/${t#*/}"}
+        [[ " ${mpi_trees[*]-} " == *" $t "* ]] || mpi_trees+=("$t")
+        mpi_tree_files+=("${p#/}")
+        if [ ! -L "$p" ]; then case $p in *.so|*.so.*) mpi_elves+=("$p") ;; esac; fi ;;
+      /usr/share/*|/etc/*) mpi_data+=("${p#/}") ;;
+    esac
+  done < <(dpkg -L "${MPI_PKGS[@]}" | LC_ALL=C sort -u)
+  [ ${#mpi_trees[@]} -gt 0 ] || die "VM_MPI=1: no OpenMPI plugin tree in: ${MPI_PKGS[*]}"
+  # copy_list DIR PATH...: each PATH of the host's / to DIR/PATH, in one pass
+  copy_list() {
+    local dir=$1; shift
+    mkdir -p "$dir"
+    printf '%s\n' "$@" | tar -C / --no-recursion -cf - -T - | tar -C "$dir" -xf -
+  }
+  if [ -z "$LIBDIR" ]; then
+    copy_list "$ROOT" "${mpi_tree_files[@]}"
+  else
+    copy_list "$ROOT$LIBDIR/mpi" "${mpi_tree_files[@]}"
+    for t in "${mpi_trees[@]}"; do
+      mkdir -p "$ROOT$(dirname "$t")"
+      ln -s "$(realpath -m --relative-to="$ROOT$(dirname "$t")" "$ROOT$LIBDIR/mpi$t")" "$ROOT$t"
+    done
+  fi
+  copy_list "$ROOT" "${mpi_data[@]}"
+  for b in orterun orted ompi_info; do
+    put_elf "$(command -v "$b")" "/usr/bin/$b" "$LIBDIR"
+  done
+  ln -sf orterun usr/bin/mpirun; ln -sf orterun usr/bin/mpiexec
+  # the plugins' libraries: one ldd over all of them (~4 s), each library once
+  ldd "${mpi_elves[@]}" >"$WORK/mpi-ldd" 2>&1 || true
+  awk '/:$/ { f = $1 } / => not found/ { print "build-guest: warning: " f " cannot load here (" $1 " missing), shipped as is" }' \
+    "$WORK/mpi-ldd" >&2
+  for lib in $(awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// && $2 ~ /^\(/ { print $1 }' \
+                 "$WORK/mpi-ldd" | LC_ALL=C sort -u); do
+    if [ -n "$LIBDIR" ] && [ ! -e "$ROOT$lib" ]; then
+      put "$lib" "$LIBDIR/${lib##*/}"
+    else
+      put "$lib" "$lib"
+    fi
+  done
+  # The guest has no ssh or rsh, and orterun's default launcher (plm rsh)
+  # then refuses to start at all, even for ranks on this node ("plm_rsh_agent:
+  # ssh : rsh ... could not be found"): the guest's MCA defaults launch
+  # locally (plm isolated: this node only, which is all a guest has).
+  conf=/etc/openmpi/openmpi-mca-params.conf
+  [ -f "$ROOT$conf" ] || die "VM_MPI=1: no $conf in ${MPI_PKGS[*]}"
+  printf '\n# tests/vm/build-guest.sh VM_MPI=1: no ssh in the guest, one node only\nplm = isolated\n' >>"$ROOT$conf"
+  # name lookups of the host name stay local (no DNS in the guest); the name
+  # is the one etc/hostname gets below
+  printf '127.0.0.1 localhost\n127.0.1.1 tessera-vm\n' >etc/hosts
+  echo "${MPI_PKGS[*]}" >etc/vm-mpi
+fi
 
 # a loader cache (built while the shared libraries are in the tree), so that
 # they and libraries in sub-directories are found without LD_LIBRARY_PATH

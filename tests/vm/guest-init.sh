@@ -2,11 +2,16 @@
 # /init of the test guest (tests/vm/guest-init.sh, installed by build-guest.sh).
 #
 # 1. mounts proc, sys, devtmpfs, devpts, tmpfs on /run /tmp /dev/shm
+#    (/dev/shm must be a tmpfs: OpenMPI's vader transport maps its segments there)
 # 2. loads the modules listed in /etc/vm-modules (modprobe, dependencies too)
 # 3. starts systemd-udevd, triggers the input/drm/misc devices (vm.udev=all:
 #    every device), waits for udev to settle
 # 4. mounts the 9p share (tag "share") on /mnt/share, and the read-only one
 #    with the libraries of the binaries under test (tag "libs") if any
+#    With OpenMPI in the guest (build-guest.sh VM_MPI=1, /etc/vm-mpi): brings
+#    up the loopback interface (OpenMPI's out-of-band TCP channel needs an
+#    interface) and exports OMPI_ALLOW_RUN_AS_ROOT=1 and
+#    OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 (everything runs as root here)
 # 5. runs the command run-guest.sh passed as vm.cmd=<base64 of a shell command
 #    line> on the kernel command line, with /mnt/share as working directory
 #    and /dev/null as stdin, then prints "VM-EXIT-CODE=<status>"
@@ -68,6 +73,11 @@ set -f
 if [ -e /etc/vm-libs ]; then
   mount -t 9p -o trans=virtio,version=9p2000.L,msize=262144,cache=loose,ro libs /usr/local/lib/vm ||
     say "cannot mount the libs share: the binaries under test will not start"
+fi
+
+if [ -e /etc/vm-mpi ]; then
+  ip link set lo up 2>/dev/null || ifconfig lo 127.0.0.1 up || say "cannot bring up lo"
+  export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 fi
 
 say "up after $(cut -d' ' -f1 /proc/uptime) s"

@@ -3,7 +3,9 @@
 
 usage: qmp.py SOCKET COMMAND [ARGS...]
   wait [SECS]                    until the QMP socket answers (default 30 s)
-  screendump FILE [HEAD]         head HEAD (default 0) of gpu0; FILE *.png -> PNG, else PPM
+  screendump FILE [HEAD [DEVICE]]  head HEAD (default 0) of the virtio-gpu DEVICE (its qom
+                                 id, default gpu0; run-guest.sh -g 2: gpu1 is the second
+                                 card); FILE *.png -> PNG, else PPM
   key KEY...                     press and release each KEY in turn; KEY is a QEMU
                                  qcode (a, 1, ret, esc, spc, up, f1, ...) or several
                                  joined by '+', held together (ctrl+alt+f2)
@@ -412,7 +414,7 @@ def run(sock, op, args):
         if op == "screendump":
             if not args:
                 return usage()
-            kw = {"filename": os.path.abspath(args[0]), "device": "gpu0",
+            kw = {"filename": os.path.abspath(args[0]), "device": args[2] if len(args) > 2 else "gpu0",
                   "head": int(args[1]) if len(args) > 1 else 0}
             if args[0].lower().endswith(".png"):
                 kw["format"] = "png"

@@ -14,6 +14,15 @@
 #   -q SOCK    create a QMP socket there (tests/vm/qmp.py: screendump, input)
 #   -n N       heads (outputs) of the virtio-gpu, 1..4        (default 2)
 #   -r WxH[,WxH...]  mode of each head; the last one repeats  (default 1024x768)
+#   -g CARDS   virtio-gpus (DRM cards), 1 or 2: the second one, id=gpu1,
+#              has -n heads too. Guest: gpu0 = /dev/dri/card0 (connectors
+#              Virtual-1..N), gpu1 = card1 (connectors Virtual-N+1..2N: the
+#              kernel numbers connectors across cards). Modes: with more
+#              than N modes in -r, gpu1's heads take the modes after the
+#              first N (-n 2 -r A,B,C,D: gpu0 A,B, gpu1 C,D); else head i of
+#              either card gets mode i. gpu1's PCI slot comes after this
+#              script's other devices, which keep theirs; -x ones follow.
+#                                                                 (default 1)
 #   -m MEM     guest memory                                   (default 1G)
 #   -j CPUS    guest CPUs                        (default: host's, at most 2)
 #   -t SECS    time limit for the whole run, then exit 124    (default 300)
@@ -26,22 +35,25 @@
 # Guest devices: virtio-gpu-pci id=gpu0 (head i = connector Virtual-(i+1) =
 # screendump head i), virtio-keyboard-pci id=kbd, virtio-mouse-pci id=mouse,
 # virtio-tablet-pci id=tablet, 9p share "share" (and "libs", read-only, when
-# build-guest.sh put libraries in CACHE/libs). The console goes to stdout.
+# build-guest.sh put libraries in CACHE/libs), with -g 2 virtio-gpu-pci
+# id=gpu1 (screendump: qmp.py SOCK screendump FILE HEAD gpu1). The console
+# goes to stdout.
 # shellcheck disable=SC2054  # commas inside qemu option values are meant
 set -uo pipefail
 
-usage() { sed -n '2,29p' "$0" >&2; exit 125; }
+usage() { sed -n '2,40p' "$0" >&2; exit 125; }
 die() { echo "run-guest: $*" >&2; exit 125; }
 
 CACHE=${VM_CACHE:-} SHARE=. QMP='' HEADS=2 RES=1024x768 MEM=1G TMO=300
-LOG='' KARGS='' XARGS='' ACCEL=${VM_ACCEL:-}
+LOG='' KARGS='' XARGS='' ACCEL=${VM_ACCEL:-} CARDS=1
 CPUS=$(nproc 2>/dev/null || echo 1); [ "$CPUS" -le 2 ] || CPUS=2
-while getopts c:s:q:n:r:m:j:t:l:a:x:KTh opt; do
+while getopts c:s:q:n:r:m:j:t:l:a:x:g:KTh opt; do
   case $opt in
     c) CACHE=$OPTARG ;; s) SHARE=$OPTARG ;; q) QMP=$OPTARG ;; n) HEADS=$OPTARG ;;
     r) RES=$OPTARG ;; m) MEM=$OPTARG ;; j) CPUS=$OPTARG ;; t) TMO=$OPTARG ;;
     l) LOG=$OPTARG ;; a) KARGS=$OPTARG ;; x) XARGS=$OPTARG ;;
-    K) ACCEL=kvm ;; T) ACCEL=tcg ;; h) sed -n '2,29p' "$0"; exit 0 ;; *) usage ;;
+    g) CARDS=$OPTARG ;;
+    K) ACCEL=kvm ;; T) ACCEL=tcg ;; h) sed -n '2,40p' "$0"; exit 0 ;; *) usage ;;
   esac
 done
 shift $((OPTIND - 1))
@@ -52,6 +64,7 @@ if [ ! -r "$CACHE/vmlinuz" ] || [ ! -r "$CACHE/initrd.img" ]; then
 fi
 [ -d "$SHARE" ] || die "share folder $SHARE does not exist"
 case $HEADS in [1-4]) ;; *) die "-n: heads must be 1..4" ;; esac
+case $CARDS in [12]) ;; *) die "-g: cards must be 1 or 2" ;; esac
 case $TMO in ''|*[!0-9]*) die "-t: seconds expected" ;; esac
 command -v qemu-system-x86_64 >/dev/null || die "qemu-system-x86_64 missing (build-guest.sh installs it)"
 SHARE=$(cd "$SHARE" && pwd)
@@ -59,10 +72,15 @@ SHARE=$(cd "$SHARE" && pwd)
 # mode of head I (0-based) from the -r list
 IFS=, read -r -a MODES <<<"$RES"
 mode_of() { local i=$1; [ "$i" -lt ${#MODES[@]} ] || i=$((${#MODES[@]} - 1)); echo "${MODES[$i]}"; }
+# mode of head I of card C (see -g): the list goes on with gpu1's heads only
+# when it has more than HEADS modes, else gpu1 repeats gpu0's modes
+card_mode_of() {
+  if [ "$1" = 1 ] && [ ${#MODES[@]} -gt "$HEADS" ]; then mode_of $((HEADS + $2)); else mode_of "$2"; fi
+}
 for m in "${MODES[@]}"; do
   [[ $m =~ ^[1-9][0-9]*x[1-9][0-9]*$ ]] || die "-r: WxH expected, got '$m'"
 done
-M0=$(mode_of 0)
+M0=$(mode_of 0) M1=$(card_mode_of 1 0)
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/run-guest.XXXXXX")
 QPID='' WPID=''
@@ -104,7 +122,13 @@ q() { echo "${1//,/,,}"; }
 # connected; video=Virtual-N:WxHe forces each head on and adds WxH as a
 # "userdef" mode (heads >= 1 otherwise offer 5120x2160 as their first mode).
 APPEND="console=ttyS0 quiet loglevel=3 panic=-1"
-for i in $(seq 0 $((HEADS - 1))); do APPEND+=" video=Virtual-$((i + 1)):$(mode_of "$i")e"; done
+# With -g 2 the kernel names gpu1's connectors Virtual-(HEADS+1)... (its
+# connector numbers count on across cards, in probe order: card0 first).
+for c in $(seq 0 $((CARDS - 1))); do
+  for i in $(seq 0 $((HEADS - 1))); do
+    APPEND+=" video=Virtual-$((c * HEADS + i + 1)):$(card_mode_of "$c" "$i")e"
+  done
+done
 if [ $# -gt 0 ]; then
   CMD64=$(printf '%s' "$*" | base64 -w0)
   [ ${#CMD64} -le 1500 ] ||
@@ -125,6 +149,12 @@ QARGS=(-machine q35 "${ACC[@]}" -smp "$CPUS" -m "$MEM"
 if [ -d "$CACHE/libs" ]; then   # libraries of the binaries under test
   QARGS+=(-fsdev "local,id=libs,path=$(q "$(cd "$CACHE/libs" && pwd)"),security_model=none,readonly=on"
     -device virtio-9p-pci,fsdev=libs,mount_tag=libs)
+fi
+# The second card last: its PCI slot comes after every other device's, so
+# with -g 2 the other devices keep the slots (udev ID_PATHs) they have with
+# -g 1, and the guest's virtio_gpu, binding in PCI order, makes it card1.
+if [ "$CARDS" = 2 ]; then
+  QARGS+=(-device "virtio-gpu-pci,id=gpu1,max_outputs=$HEADS,xres=${M1%x*},yres=${M1#*x}")
 fi
 if [ -n "$QMP" ]; then
   case $QMP in /*) ;; *) QMP=$PWD/$QMP ;; esac
@@ -147,7 +177,7 @@ if [ $# -eq 0 ]; then
   exit $?
 fi
 
-echo "run-guest: $ACCEL, $HEADS head(s) $RES, share $SHARE" >&2
+echo "run-guest: $ACCEL, $([ "$CARDS" = 1 ] || echo "$CARDS cards x ")$HEADS head(s) $RES, share $SHARE" >&2
 T0=$(date +%s.%N)
 "${GUARD[@]}" qemu-system-x86_64 "${QARGS[@]}" \
   -chardev "stdio,id=con,signal=off,logfile=$(q "$LOG")" -serial chardev:con </dev/null &
