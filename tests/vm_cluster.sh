@@ -54,19 +54,7 @@ VM_MPI=1 vm_build "$CACHE/mpi" "$W/bin/tessera"
 
 cp configs/walls/vm_two_machines.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
-cat > "$W/loop.json" <<'EOF'
-{"format": "tessera-camera-path", "version": 1, "interpolation": "catmull-rom", "loop": true,
- "keyframes": [
-  {"time": 0, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 0.5, "eye": [-1.414, 3.2, 7.778], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 1, "eye": [-6.5, 3.2, 4.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 1.5, "eye": [-7.778, 3.2, -1.414], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 2, "eye": [-4.5, 3.2, -6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 2.5, "eye": [1.414, 3.2, -7.778], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 3, "eye": [6.5, 3.2, -4.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 3.5, "eye": [7.778, 3.2, 1.414], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 4, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40}]}
-EOF
+cp tests/data/vm_loop.json "$W/loop.json"
 
 # one machine of the wall: rank N drives card N. Both processes run in one guest, so the
 # seat is left out (LIBSEAT_BACKEND=noop: devices opened directly, no VT handling): two

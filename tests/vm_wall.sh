@@ -82,20 +82,7 @@ vm_build "$CACHE" "$W/bin/tessera"
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
-# every other key of configs/paths/orbit.json, twice as fast: one turn in 4 s
-cat > "$W/loop.json" <<'EOF'
-{"format": "tessera-camera-path", "version": 1, "interpolation": "catmull-rom", "loop": true,
- "keyframes": [
-  {"time": 0, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 0.5, "eye": [-1.414, 3.2, 7.778], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 1, "eye": [-6.5, 3.2, 4.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 1.5, "eye": [-7.778, 3.2, -1.414], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 2, "eye": [-4.5, 3.2, -6.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 2.5, "eye": [1.414, 3.2, -7.778], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 3, "eye": [6.5, 3.2, -4.5], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 3.5, "eye": [7.778, 3.2, 1.414], "look_at": [0, 0.6, 0], "fov_deg": 40},
-  {"time": 4, "eye": [4.5, 3.2, 6.5], "look_at": [0, 0.6, 0], "fov_deg": 40}]}
-EOF
+cp tests/data/vm_loop.json "$W/loop.json"
 
 # the guest (busybox sh in the share); the protocol is in the header
 cp tests/vm/guest_lib.sh "$W/"

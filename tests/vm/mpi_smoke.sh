@@ -80,33 +80,8 @@ wait_files() {
     done
   done
 }
-# no_qemu_left: no process still uses the work folder (a /proc scan: minimal
-# Debian images have no pgrep)
-users_of_w() {
-  local p c
-  for p in /proc/[0-9]*; do
-    c=$(tr '\0' ' ' <"$p/cmdline" 2>/dev/null) || continue
-    [[ $c == *"$W"* ]] && echo "${p#/proc/}: $c"
-  done
-  return 0
-}
-no_qemu_left() {
-  local left
-  for _ in $(seq 30); do
-    left=$(users_of_w)
-    [ -n "$left" ] || return 0
-    sleep 0.1
-  done
-  echo "mpi_smoke: left over: $left" >&2
-  return 1
-}
-# size_and_colour IMAGE WxH RRGGBB: the image has that size and only that colour
-size_and_colour() {
-  local got
-  got=$("${QMPY[@]}" colors "$1" 2) || return 1
-  echo "  $1: $got"
-  [ "$got" = "$2 $3:$(( ${2%x*} * ${2#*x} ))" ]
-}
+SELF=mpi_smoke
+. "$HERE/smoke_lib.sh" # users_of_w, no_qemu_left, size_and_colour
 # has_line FILE REGEX: FILE in the share has a line matching REGEX (grep -E)
 has_line() { grep -qE "$2" "$S/$1" 2>/dev/null; }
 

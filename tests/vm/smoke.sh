@@ -58,34 +58,8 @@ wait_file() {
     sleep 0.1
   done
 }
-# no_qemu_left: no process still uses the work folder
-# (a /proc scan: minimal Debian images have no pgrep)
-users_of_w() {
-  local p c
-  for p in /proc/[0-9]*; do
-    c=$(tr '\0' ' ' <"$p/cmdline" 2>/dev/null) || continue
-    [[ $c == *"$W"* ]] && echo "${p#/proc/}: $c"
-  done
-  return 0
-}
-no_qemu_left() {
-  local left
-  for _ in $(seq 30); do
-    left=$(users_of_w)
-    [ -n "$left" ] || return 0
-    sleep 0.1
-  done
-  echo "smoke: left over: $left" >&2
-  return 1
-}
-
-# size_and_colour IMAGE WxH RRGGBB: the image has that size and only that colour
-size_and_colour() {
-  local got
-  got=$("${QMPY[@]}" colors "$1" 2) || return 1
-  echo "  $1: $got"
-  [ "$got" = "$2 $3:$(( ${2%x*} * ${2#*x} ))" ]
-}
+SELF=smoke
+. "$HERE/smoke_lib.sh" # users_of_w, no_qemu_left, size_and_colour
 differ() { ! "${QMPY[@]}" compare "$1" "$2" >/dev/null; }
 send_input() {
   "${Q[@]}" key h && "${Q[@]}" rel 20 10 && "${Q[@]}" abs 16384 8192 && "${Q[@]}" click left
