@@ -771,9 +771,6 @@ static bool drm_show(image_display *d, const frame_image *img, tess_error *err)
     return true;
 }
 
-/* Once per display stage (output 0's display speaks for the card): wait for
- * the previous flips (this paces the pipeline on the display), follow
- * hotplug, flip every live output in one commit. */
 static bool settle(drm_card *c, tess_error *err);
 
 /* Before the display sync (the barrier before the flip of a wall of several machines):
@@ -784,6 +781,9 @@ static bool drm_settle_stage(image_display *d, tess_error *err)
     return dd->output != 0 || settle(dd->card, err);
 }
 
+/* Once per display stage (output 0's display speaks for the card), after settle waited
+ * for the previous flips (this paces the pipeline on the display) and followed hotplug:
+ * flip every live output in one commit. */
 static bool drm_end_stage(image_display *d, tess_error *err)
 {
     drm_display *dd = (drm_display *)d;
