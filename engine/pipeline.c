@@ -1620,7 +1620,10 @@ static int serial_section_steps(pipeline *p)
     /* displays with an end_stage hook are served every step, frames or not (a wall
      * whose monitors are all unplugged still has to notice one coming back) */
     s->frames_queued = any_queued;
-    s->display = (any_queued || (!stop && p->displays_every_stage) || p->display_sync) && !p->display_failed;
+    /* with a display sync (a wall of several machines) the display stage runs every step also
+     * after a display failed: its barrier is one the other processes wait at */
+    s->display = (any_queued || (!stop && p->displays_every_stage) || p->display_sync) &&
+                 (!p->display_failed || p->display_sync);
     if (stop) {
         s->render = s->animate_parallel = false;
         p->exit_after_step = true;
@@ -1705,13 +1708,16 @@ static void display_stage(pipeline *p)
         if (d->ops->settle_stage && !d->ops->settle_stage(d, &err))
             display_failed(p, d, &err);
     }
-    if (p->display_sync && !p->display_failed) { /* the frame lock: every process here before a flip */
+    /* the frame lock: every process here before a flip, also one whose display failed (it
+     * shows nothing more, but the others wait at this barrier; its stop reaches them through
+     * the next frame sync, so that all stop at the same step) */
+    if (p->display_sync) {
         uint64_t shown = UINT64_MAX;
-        for (int i = 0; i < p->channel_count && shown == UINT64_MAX; i++)
+        for (int i = 0; i < p->channel_count && shown == UINT64_MAX && !p->display_failed; i++)
             if (p->channels[i].queued_valid)
                 shown = p->channels[i].buffers[p->channels[i].queued].meta.frame;
         tess_error err = {{0}};
-        if (!p->display_sync(p->display_sync_ctx, shown, &err)) {
+        if (!p->display_sync(p->display_sync_ctx, shown, &err) && !p->display_failed) { /* the first error stays */
             if (!tess_error_is_set(&err))
                 tess_error_set(&err, "the display sync failed without a reason");
             p->display_error = err;

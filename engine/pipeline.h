@@ -377,7 +377,8 @@ typedef struct frame_info {
  *   - the DISPLAY SYNC runs on the display thread in every display stage,
  *     after the show() calls and the settle_stage hooks (where a DRM wall
  *     waits for its last flips) and before the end_stage hooks (where it
- *     commits the next): the frame lock. With it the loop runs a display stage every
+ *     commits the next): the frame lock. It also runs after a display failed
+ *     (the stage then shows nothing; `frame` is UINT64_MAX), up to the stop. With it the loop runs a display stage every
  *     step, the stopping one included, so every process calls it equally
  *     often. `frame`: the frame the stage showed (UINT64_MAX: none). It may
  *     block; false with err stops the run;

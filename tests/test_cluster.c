@@ -381,6 +381,50 @@ Test(cluster, machines_with_the_same_connector_names_make_one_wall, .timeout = 9
     support_remove_tmp_dir(dir);
 }
 
+/* A display that fails on one process (its output folder replaced by a file mid-run) stops
+ * every process at the same step, as a quit would: the failing one still passes the barrier
+ * before the flip the others wait at, and its stop goes through the next frame sync. Before,
+ * the others waited for it there until the sync time-out and gave it up as lost. */
+Test(cluster, a_display_that_fails_on_one_process_stops_every_process_at_the_same_step, .timeout = 900)
+{
+    need_mpirun();
+    char dir[256], cmd[4096], log[16384];
+    support_make_tmp_dir(dir, sizeof dir, "cluster-display-fails");
+    support_write_file(dir, "wall.json",
+                       "{\"format\": \"tessera-wall\", \"version\": 1, \"units\": \"mm\", \"outputs\": ["
+                       "{\"connector\": \"Virtual-1\", \"mode\": \"96x54\", \"grid\": [0, 0], \"size_mm\": [160, 90]},"
+                       "{\"connector\": \"Virtual-2\", \"mode\": \"96x54\", \"grid\": [1, 0], \"size_mm\": [160, 90]}],"
+                       "\"nodes\": [{\"rank\": 0, \"outputs\": [\"Virtual-1\"]}, {\"rank\": 1, \"outputs\": "
+                       "[\"Virtual-2\"]}]}");
+    snprintf(cmd, sizeof cmd, "mkdir -p %s/a %s/b", dir, dir);
+    cr_assert_eq(support_run(cmd), 0);
+    /* once rank 1 wrote frame 3, its folder becomes a file: its next write fails */
+    const char *args = "run --display dump --frames 100000 --threads 1 --sync-timeout 250";
+    snprintf(cmd, sizeof cmd,
+             "(while [ ! -e %s/b/f_0003-Virtual-2.png ]; do sleep 0.05; done; mv %s/b %s/b.gone; touch %s/b) & "
+             MPIRUN " --bind-to none -np 1 %s %s --wall %s/wall.json --out %s/a/f_####.png : -np 1 %s %s --wall "
+             "%s/wall.json --out %s/b/f_####.png; echo status $?",
+             dir, dir, dir, dir, support_tessera_bin(), args, dir, dir, support_tessera_bin(), args, dir, dir);
+    run_logged(dir, "fails", cmd, log, sizeof log);
+    cr_assert(strstr(log, "cannot open for writing"), "rank 1's display did not fail: %s", log);
+    cr_assert_null(strstr(log, " lost "), "a process was given up on: %s", log);
+    cr_assert_null(strstr(log, "gave up"), "%s", log);
+    cr_assert_null(strstr(log, "FAILED"), "%s", log);
+    unsigned long long steps[2] = {0, 0};
+    for (int r = 0; r < 2; r++) {
+        char line[64];
+        snprintf(line, sizeof line, "cluster: rank %d of 2", r);
+        const char *at = strstr(log, line);
+        cr_assert(at, "no counts from rank %d: %s", r, log);
+        const char *colon = strstr(at, "): ");
+        cr_assert(colon && sscanf(colon, "): %llu frames in step", &steps[r]) == 1, "%s", at);
+    }
+    cr_assert_eq(steps[0], steps[1], "rank 0 stopped after %llu steps, rank 1 after %llu: %s", steps[0], steps[1],
+                 log);
+    cr_assert(strstr(log, "status 0") == NULL, "the job ended well although a display failed: %s", log);
+    support_remove_tmp_dir(dir);
+}
+
 /* The checksum is the build's: the same scene built with 1 and 2 threads agrees, another
  * scene does not. */
 Test(cluster, the_accel_checksum_is_the_same_for_the_same_scene)
