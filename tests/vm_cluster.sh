@@ -21,10 +21,11 @@
 #      dump shows a frame the processes' logs put on screen around it;
 #   4. frame lock, from the vblank lines each process logs for every flip
 #      ("flipped to frame F at vblank S (T s)", one guest clock for both): both
-#      flipped the same frames, and no process ever showed frame F + 2 before
-#      every output of the other showed F (which the barrier guarantees: a
-#      process passes the barrier of F + 2 only after the other waited for
-#      its flips of F), whatever the speed of the machine;
+#      flipped the same frames, and no process ever showed frame F + 1 before
+#      every output of the other showed F, whatever the speed of the machine.
+#      The barrier guarantees it: a process reaches the barrier of F + 1 only
+#      after its settle_stage waited for its own flips of F, and commits F + 1
+#      only after every process reached that barrier;
 #   5. SIGTERM to rank 0 stops both at the same frame, exit 0, and the leader
 #      prints the flip skew (no frame out of step) and the scan-out skew (by
 #      vblank time) over the frames both flipped.
@@ -237,23 +238,26 @@ common = sorted(set(flips[0]) & set(flips[1]))
 # the last frame or two may be flipped by one process only as they stop; the frames one
 # flipped and the other did not, below the last common one, break the lock
 gaps = [f for p in flips for f in p if f < common[-1] and f not in common] if common else []
-# no process shows F + 2 before every output of the other showed F
-ahead = []
+# no process shows F + 1 before every output of the other showed F; the smallest margin
+ahead, margin = [], None
 for f in common:
-    if f + 2 not in common:
+    if f + 1 not in common:
         continue
     for a, b in ((0, 1), (1, 0)):
-        if min(flips[a][f + 2]) < max(flips[b][f]):
+        m = min(flips[a][f + 1]) - max(flips[b][f])
+        margin = m if margin is None or m < margin else margin
+        if m < 0:
             ahead.append("rank %d showed %d at %.6f s before rank %d's last output showed %d at %.6f s"
-                         % (a, f + 2, min(flips[a][f + 2]) / 1e6, b, f, max(flips[b][f]) / 1e6))
+                         % (a, f + 1, min(flips[a][f + 1]) / 1e6, b, f, max(flips[b][f]) / 1e6))
 outputs = [min(len(p[f]) for f in common) for p in flips] if common else [0, 0]
 spread = sorted(max(max(p[f]) for p in flips) - min(min(p[f]) for p in flips) for f in common)
 verdict = "ok" if len(common) >= 3 and not gaps and not ahead and outputs == [2, 2] else "bad"
 print("%s: %d frames flipped by both (%d..%d), every one on %s outputs; frames only one flipped: %s; "
-      "ahead by 2: %s; first-to-last output spread median %d us, max %d us (the guest's vblank times)"
+      "a frame ahead of the other: %s (smallest margin %d us); first-to-last output spread median %d us, "
+      "max %d us (the guest's flip times)"
       % (verdict, len(common), common[0] if common else -1, common[-1] if common else -1, outputs,
-         gaps or "none", "; ".join(ahead[:3]) or "never", spread[len(spread) // 2] if spread else -1,
-         spread[-1] if spread else -1))
+         gaps or "none", "; ".join(ahead[:3]) or "never", margin if margin is not None else -1,
+         spread[len(spread) // 2] if spread else -1, spread[-1] if spread else -1))
 EOF
 )
 case $lock in
