@@ -66,7 +66,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
+.PHONY: all deps run test test-isa-caps test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
@@ -169,6 +169,18 @@ test:
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
 	sh tests/vm_cluster.sh
+
+# the kernel, robustness and image tests again as a CPU with only AVX2, then only SSE2, would
+# run them (TESSERA_ISA_MAX, engine/kernels.h): so the paths of a machine without AVX-512 (or
+# AVX2) run on every submission, whatever CPU CI has. An ISA skipped is said on a SKIPPED line.
+ISA_CAPS := avx2 sse2
+ISA_CAP_TESTS := @(kernels|next_hit|iso_kind|robust|render|wall_render)/*
+test-isa-caps:
+	$(MAKE) $(TEST_BIN) tessera
+	cd tests && for cap in $(ISA_CAPS); do \
+	    echo "test-isa-caps: TESSERA_ISA_MAX=$$cap"; \
+	    TESSERA_ISA_MAX=$$cap ../$(TEST_BIN) --filter '$(ISA_CAP_TESTS)' --jobs 2 || exit 1; \
+	done
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan:

@@ -4,13 +4,23 @@
  * Each ISA's table comes from engine/isa/traverse.c compiled with that ISA's
  * flags; kernels_select() picks the best one the CPU supports at run time
  * (TESSERA_ISA=sse2|avx2|avx512 forces one, for tests and comparisons). All
- * tables give bit-identical results. */
+ * tables give bit-identical results.
+ *
+ * TESSERA_ISA_MAX=sse2|avx2|avx512 caps the instruction sets tessera may use:
+ * above the cap an ISA is as unusable as on a CPU that lacks it (kernels_for
+ * gives NULL, kernels_select and accel_use_isa pass it by), so a machine with
+ * AVX-512 runs as one with only AVX2 (or only SSE2) would: CI runs the kernel,
+ * robustness and image tests under each cap (make test-isa-caps). Unset or
+ * empty: no cap. Both variables are read when asked, never cached, except by
+ * kernels_default (once per process). */
 #ifndef TESSERA_KERNELS_H
 #define TESSERA_KERNELS_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
+#include "err.h"
 #include "packet.h"
 #include "ray.h"
 #include "wbvh.h"
@@ -37,9 +47,20 @@ typedef struct kernel_table {
 
 typedef enum kernel_isa { KERNEL_ISA_SSE2, KERNEL_ISA_AVX2, KERNEL_ISA_AVX512, KERNEL_ISA_COUNT } kernel_isa;
 
-/* The table for an ISA, or NULL when this CPU cannot run it. */
+/* The ISA of this name ("sse2", "avx2", "avx512"); KERNEL_ISA_COUNT when none. */
+kernel_isa kernels_isa_by_name(const char *name);
+/* The name of an ISA ("?" for none), whether or not it is usable here. */
+const char *kernels_isa_name(kernel_isa isa);
+/* Whether tessera may use isa here: the CPU runs it and TESSERA_ISA_MAX does
+ * not cap it. If not and why is given, why says so in a phrase ("this CPU
+ * lacks avx512", "TESSERA_ISA_MAX=avx2 caps it"). */
+bool kernels_usable(kernel_isa isa, char *why, size_t why_bytes);
+/* TESSERA_ISA_MAX and TESSERA_ISA, when set, name an ISA; else false and err
+ * names the variable, its value and the choices (the CLI refuses to start). */
+bool kernels_check_env(tess_error *err);
+/* The table for an ISA, or NULL when it is not usable (kernels_usable). */
 const kernel_table *kernels_for(kernel_isa isa);
-/* The best table for this CPU, or the one TESSERA_ISA names (if the CPU runs it). */
+/* The best usable table, or the one TESSERA_ISA names (if usable). */
 const kernel_table *kernels_select(void);
 /* kernels_select(), resolved once per process (thread-safe). */
 const kernel_table *kernels_default(void);

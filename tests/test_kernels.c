@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "isa_skip.h"
 #include "engine/accel.h"
 #include "engine/intersect.h"
 #include "engine/kernels.h"
@@ -224,10 +225,9 @@ static void matches_brute_force(scene *s)
     const char *isas[] = {"sse2", "avx2", "avx512"};
     int tested = 0;
     for (size_t k = 0; k < sizeof isas / sizeof isas[0]; k++) {
-        if (!accel_use_isa(a, isas[k])) {
-            cr_log_warn("this CPU cannot run %s kernels: not tested here", isas[k]);
+        if (isa_skip_note(isas[k]))
             continue;
-        }
+        cr_assert(accel_use_isa(a, isas[k]), "%s: usable but refused", isas[k]);
         tested++;
         long mismatches = 0;
         for (int i = 0; i < rays; i++) {
@@ -324,6 +324,67 @@ Test(kernels, unknown_isa_is_refused)
     scene_destroy(s);
 }
 
+/* TESSERA_ISA_MAX caps what tessera may use as a CPU without the ISAs above
+ * the cap would: kernels_for gives NULL above it, kernels_select and
+ * accel_use_isa pass them by, and kernels_usable says why. Whatever this CPU
+ * has, the verdict is the same: the cap is never exceeded. (Each Criterion
+ * test runs in a process of its own, so setenv here touches no other test.) */
+Test(kernels, the_isa_cap_holds_whatever_the_cpu)
+{
+    static const char *const caps[] = {"sse2", "avx2", "avx512"};
+    rng_state = 1;
+    scene *s = make_scene();
+    tess_error err = {{0}};
+    accel *a = accel_build(s, 1, &err);
+    cr_assert(a, "%s", err.msg);
+    for (int c = 0; c < KERNEL_ISA_COUNT; c++) {
+        cr_assert_eq(setenv("TESSERA_ISA_MAX", caps[c], 1), 0);
+        cr_expect(kernels_check_env(&err), "%s", err.msg);
+        cr_expect_leq(kernels_isa_by_name(kernels_select()->isa_name), c, "cap %s: selected %s", caps[c],
+                      kernels_select()->isa_name);
+        cr_expect(kernels_for(KERNEL_ISA_SSE2), "cap %s: SSE2 (the x86-64 baseline) is always usable", caps[c]);
+        for (int isa = c + 1; isa < KERNEL_ISA_COUNT; isa++) {
+            char why[96];
+            cr_expect_null(kernels_for((kernel_isa)isa), "cap %s: %s usable", caps[c], kernels_isa_name((kernel_isa)isa));
+            cr_expect(!accel_use_isa(a, kernels_isa_name((kernel_isa)isa)), "cap %s: accel took %s", caps[c],
+                      kernels_isa_name((kernel_isa)isa));
+            cr_expect(!kernels_usable((kernel_isa)isa, why, sizeof why));
+            /* the CPU may lack it too; else the cap is named */
+            cr_expect(strstr(why, "lacks") || strstr(why, "TESSERA_ISA_MAX="), "why: '%s'", why);
+        }
+        /* a forced ISA above the cap falls back to the best under it */
+        cr_assert_eq(setenv("TESSERA_ISA", "avx512", 1), 0);
+        cr_expect_leq(kernels_isa_by_name(kernels_select()->isa_name), c);
+        cr_assert_eq(unsetenv("TESSERA_ISA"), 0);
+    }
+    cr_assert_eq(setenv("TESSERA_ISA_MAX", "sse2", 1), 0);
+    cr_expect_str_eq(kernels_select()->isa_name, "sse2");
+    cr_expect(accel_use_isa(a, "sse2"));
+    /* unset or empty: no cap, the best the CPU runs */
+    cr_assert_eq(setenv("TESSERA_ISA_MAX", "", 1), 0);
+    const char *best = kernels_select()->isa_name;
+    cr_assert_eq(unsetenv("TESSERA_ISA_MAX"), 0);
+    cr_expect_str_eq(kernels_select()->isa_name, best);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+Test(kernels, a_bad_isa_variable_is_named)
+{
+    tess_error err = {{0}};
+    cr_assert_eq(setenv("TESSERA_ISA_MAX", "avx1024", 1), 0);
+    cr_expect(!kernels_check_env(&err));
+    cr_expect(strstr(err.msg, "TESSERA_ISA_MAX=avx1024") && strstr(err.msg, "sse2, avx2, avx512"), "%s", err.msg);
+    cr_assert_eq(unsetenv("TESSERA_ISA_MAX"), 0);
+    err.msg[0] = '\0';
+    cr_assert_eq(setenv("TESSERA_ISA", "neon", 1), 0);
+    cr_expect(!kernels_check_env(&err));
+    cr_expect(strstr(err.msg, "TESSERA_ISA=neon"), "%s", err.msg);
+    cr_assert_eq(unsetenv("TESSERA_ISA"), 0);
+    err.msg[0] = '\0';
+    cr_expect(kernels_check_env(&err), "%s", err.msg);
+}
+
 Test(kernels, packet_facts_and_derived_flags)
 {
     static ray_packet p;
@@ -389,8 +450,10 @@ Test(kernels, primary_directions_match_the_camera_bit_for_bit)
     long differ = 0;
     for (int isa = 0; isa < KERNEL_ISA_COUNT; isa++) {
         const kernel_table *k = kernels_for((kernel_isa)isa);
-        if (!k)
+        if (!k) {
+            isa_skip_note(kernels_isa_name((kernel_isa)isa));
             continue;
+        }
         for (int y = 0; y < 61; y += 8)
             for (int x = 0; x < 83; x += 8) {
                 int w = 83 - x < 8 ? 83 - x : 8, h = 61 - y < 8 ? 61 - y : 8;

@@ -37,6 +37,7 @@
 
 #include "cli.h"
 #include "engine/accel.h"
+#include "engine/kernels.h"
 #include "engine/frame_state.h"
 #include "engine/mesh_cache.h"
 #include "engine/part_tree.h"
@@ -474,7 +475,9 @@ static bool prepare(bench_options *o, cli_scene *cs)
                      : cli_scene_prepare_with(o->scene_path, &load, o->threads, cs)))
         return false;
     if (o->isa && !accel_use_isa(cs->accel, o->isa)) {
-        cli_error("--isa: this CPU cannot run the %s kernels", o->isa);
+        char why[96];
+        kernels_usable(kernels_isa_by_name(o->isa), why, sizeof why);
+        cli_error("--isa %s: cannot use these kernels here: %s", o->isa, why);
         return false;
     }
     if (!cli_scene_camera(cs, o->have_camera ? &o->camera : NULL, o->width_px, o->height_px, &o->camera))

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "engine/kernels.h"
 #include "engine/progress.h"
 #include "wall/drm.h"
 
@@ -55,6 +56,11 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
         usage(stdout);
         return 0;
+    }
+    tess_error env_err = {{0}};
+    if (!kernels_check_env(&env_err)) {
+        cli_error("%s", env_err.msg);
+        return 2;
     }
     progress_set_quiet(false); /* loading and building report progress on stderr (engine/progress.h) */
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
