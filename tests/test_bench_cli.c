@@ -333,6 +333,26 @@ Test(bench_cli, isa_option_picks_the_kernels)
     cr_expect_str_eq(field_text(line, "isa", buf, sizeof buf), "sse2");
 }
 
+/* TESSERA_ISA_MAX caps the kernels as a CPU without the ISAs above it would:
+ * the bench picks SSE2 under TESSERA_ISA_MAX=sse2, --isa above the cap is
+ * refused saying why (the cap, or a CPU that lacks it too), and a value that
+ * names no ISA stops tessera before anything runs. */
+Test(bench_cli, the_isa_cap_holds_and_a_bad_one_is_named)
+{
+    char line[OUTPUT_BYTES], buf[64];
+    cr_assert_eq(setenv("TESSERA_ISA_MAX", "sse2", 1), 0); /* inherited by the bench process */
+    run_ok("--size 32x18 --threads 1 --frames 1", line);
+    cr_expect_str_eq(field_text(line, "isa", buf, sizeof buf), "sse2");
+    char out[OUTPUT_BYTES], err[OUTPUT_BYTES];
+    int code = run_bench(out, err, "--size 16x16 --threads 1 --frames 1 --isa avx2");
+    cr_expect_eq(code, 1, "exit %d: %s", code, err);
+    cr_expect(strstr(err, "--isa avx2") && (strstr(err, "TESSERA_ISA_MAX=sse2 caps it") || strstr(err, "lacks avx2")),
+              "%s", err);
+    cr_assert_eq(setenv("TESSERA_ISA_MAX", "avx3", 1), 0);
+    EXPECT_ERROR(2, "--size 16x16", "TESSERA_ISA_MAX=avx3", "not an instruction set", "sse2, avx2, avx512");
+    cr_assert_eq(unsetenv("TESSERA_ISA_MAX"), 0);
+}
+
 Test(bench_cli, bad_options_give_one_line)
 {
     EXPECT_ERROR(2, "--bogus", "unknown option", "--bogus");
