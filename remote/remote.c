@@ -55,9 +55,13 @@ typedef struct viewer {
 
 /* What lws keeps per connection (zeroed by lws when it starts): which viewer
  * it is, as slot + 1 (0: none, also for a connection refused before it
- * became a viewer), and for the page, how far it is written. */
+ * became a viewer), why a WebSocket is refused (0: it is not; else its close
+ * code, REMOTE_CLOSE_*: the handshake completes and the socket is closed
+ * with that code and a reason, because a browser's WebSocket cannot see a
+ * refused handshake's status), and for the page, how far it is written. */
 typedef struct session {
     int slot_plus_1;
+    int refuse;
     size_t page_written;
 } session;
 
@@ -207,7 +211,9 @@ static int viewer_attach(remote_view *v, struct lws *wsi, session *ss)
             slot = i;
     if (slot < 0) { /* filtered before, so two connections raced for the last place */
         v->stats.refused_full++;
-        return -1;
+        ss->refuse = REMOTE_CLOSE_FULL;
+        lws_callback_on_writable(wsi);
+        return 0;
     }
     viewer *vw = &v->viewers[slot];
     memset(vw, 0, sizeof *vw);
@@ -471,10 +477,13 @@ static int http_writeable(remote_view *v, struct lws *wsi, session *ss)
     return 0;
 }
 
-/* A WebSocket upgrade: the right path, the token, a free place. */
-static int filter_viewer(remote_view *v, struct lws *wsi)
+/* A WebSocket upgrade: the right path (else refused in the handshake), the
+ * token and a free place (else let through, to be closed at once with a
+ * code and a reason the page can show: refused_close). */
+static int filter_viewer(remote_view *v, struct lws *wsi, session *ss)
 {
     char uri[256];
+    ss->refuse = 0;
     if (lws_hdr_copy(wsi, uri, (int)sizeof uri, WSI_TOKEN_GET_URI) <= 0 || strcmp(uri, "/ws") != 0) {
         v->stats.refused_other++;
         return 1;
@@ -482,16 +491,26 @@ static int filter_viewer(remote_view *v, struct lws *wsi)
     if (!request_token_ok(v, wsi)) {
         v->stats.refused_token++;
         log_warn("remote view: a viewer with a wrong or missing token was refused");
-        lws_return_http_status(wsi, HTTP_STATUS_FORBIDDEN, "tessera remote view: a wrong or missing token");
-        return 1;
-    }
-    if (v->viewer_count >= v->cfg.max_viewers) {
+        ss->refuse = REMOTE_CLOSE_TOKEN;
+    } else if (v->viewer_count >= v->cfg.max_viewers) {
         v->stats.refused_full++;
         log_warn("remote view: a viewer was refused: %d viewers already (remote.max_viewers)", v->viewer_count);
-        lws_return_http_status(wsi, HTTP_STATUS_SERVICE_UNAVAILABLE, "tessera remote view: too many viewers");
-        return 1;
+        ss->refuse = REMOTE_CLOSE_FULL;
     }
     return 0;
+}
+
+/* A refused WebSocket's one write: the close frame with its code and reason
+ * (docs/remote-protocol.md, "Refusals"); nothing else is ever sent to it. */
+static int refused_close(remote_view *v, struct lws *wsi, int code)
+{
+    char reason[120];
+    if (code == REMOTE_CLOSE_FULL)
+        snprintf(reason, sizeof reason, "too many viewers (%d max)", v->cfg.max_viewers);
+    else
+        snprintf(reason, sizeof reason, "a wrong or missing token");
+    lws_close_reason(wsi, (enum lws_close_status)code, (unsigned char *)reason, strlen(reason));
+    return -1;
 }
 
 static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len)
@@ -507,9 +526,13 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_HTTP_WRITEABLE:
         return http_writeable(v, wsi, ss);
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
-        return filter_viewer(v, wsi);
+        return filter_viewer(v, wsi, ss);
     case LWS_CALLBACK_ESTABLISHED:
         ss->slot_plus_1 = 0;
+        if (ss->refuse) { /* closed in its first writeable callback, with the reason */
+            lws_callback_on_writable(wsi);
+            return 0;
+        }
         return viewer_attach(v, wsi, ss);
     case LWS_CALLBACK_CLOSED:
         viewer_detach(v, ss);
@@ -519,6 +542,8 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
             viewer_receive(v, wsi, &v->viewers[ss->slot_plus_1 - 1], in, len);
         return 0;
     case LWS_CALLBACK_SERVER_WRITEABLE:
+        if (ss->refuse)
+            return refused_close(v, wsi, ss->refuse);
         return ss->slot_plus_1 > 0 ? viewer_writeable(v, &v->viewers[ss->slot_plus_1 - 1]) : 0;
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED: /* a new frame was encoded (or stop) */
         if (v->viewer_count > 0)

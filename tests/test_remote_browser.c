@@ -183,12 +183,13 @@ Test(remote_browser, the_page_shows_frames_and_a_wrong_token_is_refused, .timeou
     cr_assert_eq(cdp_eval_number(p, "fetch('/other?token=' + new URLSearchParams(location.search).get('token'))"
                                     ".then(r => r.status)"),
                  404.0);
-    /* a socket with a wrong token never opens */
+    /* a socket with a wrong token gets no hello and no frame: only a close with its reason */
     cr_assert(cdp_eval_bool(p, "new Promise(done => { const w = new WebSocket('ws://' + location.host + "
-                               "'/ws?token=wrong', 'tessera-remote-1'); let opened = false;"
-                               " w.onopen = () => { opened = true; w.close(); };"
-                               " w.onclose = () => done(!opened); })"),
-              "a WebSocket with a wrong token opened");
+                               "'/ws?token=wrong', 'tessera-remote-1'); let got = 0;"
+                               " w.onmessage = () => { got++; };"
+                               " w.onclose = (e) => done(got === 0 && e.code === 4403 &&"
+                               "                         e.reason === 'a wrong or missing token'); })"),
+              "a WebSocket with a wrong token got something, or no close code 4403 with its reason");
     cdp_close(b);
     cr_assert_eq(kiosk_stop(&k, true), 0);
     char text[16384];
@@ -420,7 +421,24 @@ Test(remote_browser, a_client_that_stops_reading_does_not_hold_the_wall, .timeou
     support_remove_tmp_dir(dir);
 }
 
-/* A wrong token, and more viewers than allowed, are refused in the handshake. */
+/* A refused viewer's socket: the handshake completes (101), then the first
+ * and only frame is a close with `code` and `reason`. */
+static void expect_refusal(int fd, int status, int code, const char *reason)
+{
+    cr_assert_eq(status, 101, "a refused viewer's handshake completes, to carry the close's reason");
+    uint8_t payload[256];
+    int op;
+    size_t len;
+    cr_assert(ws_read(fd, &op, payload, sizeof payload - 1, &len), "no close frame came");
+    cr_assert_eq(op, 8, "the first frame is a close, not opcode %d", op);
+    cr_assert_geq(len, 2);
+    payload[len] = 0;
+    cr_assert_eq(payload[0] << 8 | payload[1], code);
+    cr_assert_str_eq((const char *)payload + 2, reason);
+}
+
+/* A wrong token, and more viewers than allowed, are refused: the socket is
+ * closed at once with a code and a reason (docs/remote-protocol.md). */
 Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 120)
 {
     char dir[256];
@@ -433,7 +451,7 @@ Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 1
     kiosk_start(&k, dir, args);
     int status, fds[3];
     int bad = ws_connect(k.port, "0123456789abcdef0123456789abcdef", &status);
-    cr_assert_neq(status, 101, "a wrong token was let in");
+    expect_refusal(bad, status, 4403, "a wrong or missing token");
     close(bad);
     for (int i = 0; i < 2; i++) {
         fds[i] = ws_connect(k.port, k.token, &status);
@@ -441,7 +459,7 @@ Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 1
         read_frames(fds[i], 1); /* it is attached: its first frame came */
     }
     fds[2] = ws_connect(k.port, k.token, &status);
-    cr_assert_neq(status, 101, "a third viewer over max_viewers 2 was let in");
+    expect_refusal(fds[2], status, 4503, "too many viewers (2 max)");
     /* malformed messages are dropped and the connection stays */
     ws_send_text(fds[0], "not json");
     ws_send_text(fds[0], "{\"t\":\"warp\"}");
