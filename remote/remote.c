@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/random.h>
+#include <time.h>
 
 #include "engine/clock.h"
 #include "engine/log.h"
@@ -84,9 +85,11 @@ struct remote_view {
     pthread_t thread;
     bool started;
     atomic_bool stop;
-    bool stopping;                     /* remote_view_stop is closing the connections: the run is
-                                          over, nothing more goes to input (so a recording ends
-                                          with what the wall showed) */
+    atomic_bool server_done;           /* the server thread has said goodbye to its viewers */
+    bool stopping;                     /* the connections are being closed (by the server thread,
+                                          then remote_view_stop): the run is over, nothing more
+                                          goes to input (so a recording ends with what the wall
+                                          showed) or to the pipeline */
     viewer viewers[INPUT_MAX_VIEWERS]; /* server thread */
     int viewer_count;                  /* server thread */
     int following;                     /* server thread: viewers following the wall */
@@ -544,6 +547,11 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_SERVER_WRITEABLE:
         if (ss->refuse)
             return refused_close(v, wsi, ss->refuse);
+        if (v->stopping) { /* say_goodbye */
+            static const char bye[] = "the kiosk stopped";
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_GOINGAWAY, (unsigned char *)bye, sizeof bye - 1);
+            return -1;
+        }
         return ss->slot_plus_1 > 0 ? viewer_writeable(v, &v->viewers[ss->slot_plus_1 - 1]) : 0;
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED: /* a new frame was encoded (or stop) */
         if (v->viewer_count > 0)
@@ -572,13 +580,38 @@ static void encoded(void *ctx)
     pthread_mutex_unlock(&v->context_lock);
 }
 
+#define GOODBYE_US 2000000 /* how long the viewers have to take the close and answer it */
+
+/* The run is over: every viewer is sent a close, 1001 "the kiosk stopped"
+ * (docs/remote-protocol.md), so its page says the wall stopped rather than
+ * that the connection was lost, and their answers are awaited for at most
+ * GOODBYE_US (remote_view_stop wakes this loop meanwhile: lws_service would
+ * otherwise sleep until a close's own 5 s time-out). One that cannot take the
+ * close (it stopped reading) is cut after a second. */
+static void say_goodbye(remote_view *v)
+{
+    v->stopping = true;
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        if (v->viewers[i].used) {
+            lws_set_timeout(v->viewers[i].wsi, PENDING_TIMEOUT_USER_OK, 1);
+            lws_callback_on_writable(v->viewers[i].wsi);
+        }
+    uint64_t end = clock_monotonic_us() + GOODBYE_US;
+    while (v->viewer_count > 0 && clock_monotonic_us() < end)
+        if (lws_service(v->context, 0) < 0)
+            break;
+}
+
 static void *server_main(void *arg)
 {
     remote_view *v = arg;
     thread_name_set("tess-remote");
-    while (!atomic_load(&v->stop))
-        if (lws_service(v->context, 0) < 0)
-            break;
+    bool ok = true;
+    while (ok && !atomic_load(&v->stop))
+        ok = lws_service(v->context, 0) >= 0;
+    if (ok)
+        say_goodbye(v);
+    atomic_store(&v->server_done, true);
     return NULL;
 }
 
@@ -604,6 +637,7 @@ remote_view *remote_view_create(const remote_config *c, tess_error *err)
     }
     v->cfg = *c;
     atomic_init(&v->stop, false);
+    atomic_init(&v->server_done, false);
     pthread_mutex_init(&v->context_lock, NULL);
     if (c->token[0]) {
         snprintf(v->token, sizeof v->token, "%s", c->token);
@@ -733,7 +767,12 @@ void remote_view_stop(remote_view *v)
     pthread_mutex_lock(&v->context_lock);
     atomic_store(&v->stop, true); /* no wake-up from the encoder after this */
     pthread_mutex_unlock(&v->context_lock);
-    lws_cancel_service(v->context);
+    /* wake the server thread until it is done: it says goodbye to the viewers, for a bounded time */
+    while (!atomic_load(&v->server_done)) {
+        lws_cancel_service(v->context);
+        struct timespec tick = {0, 50 * 1000000L};
+        nanosleep(&tick, NULL);
+    }
     pthread_join(v->thread, NULL);
     v->started = false;
     for (int i = 0; i < INPUT_MAX_VIEWERS; i++) /* still connected: what they missed */

@@ -466,6 +466,17 @@ Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 1
     ws_send_text(fds[0], "{\"t\":\"down\",\"x\":0.5,\"y\":0.5,\"button\":7}");
     read_frames(fds[0], 3);
     cr_assert_eq(kiosk_stop(&k, true), 0);
+    /* each viewer was told why it goes: after what was on its way, a close 1001 with its reason */
+    for (int i = 0; i < 2; i++) {
+        static uint8_t payload[4 << 20];
+        int op = 0;
+        size_t len = 0;
+        while (op != 8)
+            cr_assert(ws_read(fds[i], &op, payload, sizeof payload - 1, &len), "viewer %d: no close came", i);
+        payload[len] = 0;
+        cr_assert(len >= 2 && (payload[0] << 8 | payload[1]) == 1001, "viewer %d: close code", i);
+        cr_assert_str_eq((const char *)payload + 2, "the kiosk stopped");
+    }
     for (int i = 0; i < 3; i++)
         close(fds[i]);
     char text[16384];
