@@ -198,6 +198,131 @@ Test(remote_browser, the_page_shows_frames_and_a_wrong_token_is_refused, .timeou
     support_remove_tmp_dir(dir);
 }
 
+/* Hooks run in a page before its own script: every WebSocket it makes is
+ * made with window.__token instead of its token when that is set, to
+ * window.__host instead of the kiosk when that is set, records
+ * the status line at the moment it is made (window.__statusAtConnect), and
+ * while window.__hold is true keeps the frames it gets (window.__held) from
+ * the page until the test lets them through. */
+#define PAGE_HOOKS                                                                                              \
+    "window.__held = []; window.__hold = !!window.__hold;"                                                       \
+    "window.WebSocket = class extends WebSocket {"                                                               \
+    " constructor(url, protocols) {"                                                                             \
+    "  const s = document.getElementById('status');"                                                             \
+    "  window.__statusAtConnect = document.getElementById('status-line').textContent + (s.hidden ? '|hidden' : '|shown');" \
+    "  if (window.__token !== undefined) url = url.replace(/token=[^&]*/, 'token=' + window.__token);"            \
+    "  if (window.__host !== undefined) url = url.replace(/\\/\\/[^/]+/, '//' + window.__host);"                  \
+    "  super(url, protocols);"                                                                                   \
+    " }"                                                                                                         \
+    " set onmessage(f) { super.onmessage = (m) => {"                                                             \
+    "  if (window.__hold && typeof m.data !== 'string') window.__held.push(() => f(m)); else f(m); }; }"         \
+    " get onmessage() { return super.onmessage; }"                                                               \
+    "};"
+
+/* The status over the canvas is there for a person: not hidden, laid out, on the screen. */
+#define STATUS_VISIBLE                                                                                          \
+    "(() => { const s = document.getElementById('status'), r = s.getBoundingClientRect();"                       \
+    " return !s.hidden && getComputedStyle(s).display !== 'none' && getComputedStyle(s).visibility !== 'hidden'" \
+    " && r.width > 100 && r.height > 20 && r.top >= 0 && r.bottom <= innerHeight; })()"
+
+static void status_text(cdp_page *p, char *out, size_t out_bytes)
+{
+    json_object *v;
+    char why[512];
+    cr_assert(cdp_eval(p, "document.getElementById('status-line').textContent", &v, why, sizeof why), "%s", why);
+    snprintf(out, out_bytes, "%s", v ? json_object_get_string(v) : "");
+    json_object_put(v);
+}
+
+/* What the page says before its first frame, when it is refused (too many
+ * viewers: it retries and gets in when a place frees; a wrong token: it
+ * stops and says so), when nobody answers, that it says nothing once frames
+ * show, and that it says the wall stopped when the kiosk stops. */
+Test(remote_browser, the_page_says_what_it_waits_for_and_why_it_is_refused, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-status");
+    char cfg[512], text[256], why[1024];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 320, \"height\": 180, \"max_viewers\": 1}}");
+    const char *args[] = {"--config", cfg, "--display", "null", "--size", "320x180", "--threads", "1",
+                          "--time", "fixed", "--rate", "30", NULL};
+    cdp_browser *b = browser_or_skip();
+    kiosk k;
+    kiosk_start(&k, dir, args);
+
+    /* before the socket opens, and connected with its frames held back */
+    cdp_page *a = cdp_open_page_scripted(b, k.url, "window.__hold = true;" PAGE_HOOKS, why, sizeof why);
+    cr_assert(a, "%s", why);
+    json_object *v;
+    cr_assert(cdp_eval(a, "window.__statusAtConnect", &v, why, sizeof why), "%s", why);
+    cr_assert_str_eq(v ? json_object_get_string(v) : "", "Connecting to the wall…|shown");
+    json_object_put(v);
+    wait_js(a, "window.tessera.connected && window.__held.length > 0");
+    cr_assert(cdp_eval_bool(a, STATUS_VISIBLE), "the status is not visible while waiting");
+    status_text(a, text, sizeof text);
+    cr_assert_str_eq(text, "Connected — waiting for the first frame");
+    cr_assert(cdp_eval_bool(a, "window.tessera.status === 'waiting' && window.tessera.framesShown === 0"));
+    cr_assert(cdp_eval_bool(a, "(() => { const s = document.getElementById('status');"
+                               " return s.getAttribute('role') === 'status' && s.getAttribute('aria-live') === 'polite'; })()"),
+              "the status is not announced (role=status, aria-live=polite)");
+    /* the frames let through: the status goes */
+    cr_assert(cdp_eval_bool(a, "window.__hold = false; window.__held.splice(0).forEach(g => g()); true"));
+    wait_js(a, "window.tessera.framesShown >= 2 && window.tessera.status === 'shown'");
+    cr_assert_not(cdp_eval_bool(a, STATUS_VISIBLE), "the status still covers the picture");
+
+    /* a second viewer over max_viewers 1: refused, with the limit, and it retries */
+    cdp_page *full = open_page(b, k.url);
+    wait_js(full, "window.tessera.status === 'refused-full' && /^Refused: too many viewers \\(1 max\\) — retrying in"
+                  " \\d+ s$/.test(document.getElementById('status-line').textContent)");
+    cr_assert(cdp_eval_bool(full, STATUS_VISIBLE));
+    cr_assert(cdp_eval_bool(full, "window.tessera.closeCode === 4503 && window.tessera.refused"));
+    cr_assert(cdp_eval_bool(full, "document.getElementById('status-retry').getAttribute('aria-hidden') === 'true'"),
+              "the countdown would be read out every second");
+
+    /* a page whose socket carries a wrong token (as after a kiosk restarted with a new one) */
+    cdp_page *bad = cdp_open_page_scripted(b, k.url, "window.__token = 'wrong';" PAGE_HOOKS, why, sizeof why);
+    cr_assert(bad, "%s", why);
+    wait_js(bad, "window.tessera.status === 'refused-token'");
+    cr_assert(cdp_eval_bool(bad, STATUS_VISIBLE));
+    status_text(bad, text, sizeof text);
+    cr_assert_str_eq(text, "Refused: wrong or missing token", "no retry: the same token would be refused again");
+    cr_assert(cdp_eval_bool(bad, "document.getElementById('retry').hidden && window.tessera.retryInS === 0 &&"
+                                 " /reload/.test(document.getElementById('status-detail').textContent)"),
+              "a refused token says to reload and schedules no retry");
+
+    /* a page whose socket finds nobody (as when the kiosk is not running) */
+    cdp_page *nobody = cdp_open_page_scripted(b, k.url, "window.__host = '127.0.0.1:1';" PAGE_HOOKS, why, sizeof why);
+    cr_assert(nobody, "%s", why);
+    wait_js(nobody, "window.tessera.status === 'unreachable' && /^Cannot reach the wall — retrying in \\d+ s$/.test("
+                    "document.getElementById('status-line').textContent)");
+    cr_assert(cdp_eval_bool(nobody, STATUS_VISIBLE));
+
+    /* the first viewer leaves: the refused one gets in on a retry, and its status goes */
+    cr_assert(cdp_eval_bool(a, "setTimeout(() => { location.href = 'about:blank'; }, 0); true"));
+    wait_js(full, "window.tessera.status === 'shown' && window.tessera.framesShown >= 1");
+    cr_assert_not(cdp_eval_bool(full, STATUS_VISIBLE));
+
+    /* the kiosk stops: it says so (close 1001), and the page keeps saying so while its retries find nobody */
+    double connects = cdp_eval_number(full, "window.tessera.connects");
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    char until[512];
+    snprintf(until, sizeof until,
+             "window.tessera.status === 'stopped' && window.tessera.connects > %.0f && window.tessera.closeCode === 1006"
+             " && /^The wall stopped — retrying in \\d+ s$/.test(document.getElementById('status-line').textContent)",
+             connects);
+    wait_js(full, until);
+    cr_assert(cdp_eval_bool(full, "(() => { const s = window.tessera.statuses;"
+                                  " return s.indexOf('stopped') > s.lastIndexOf('shown'); })()"),
+              "the stop was not said");
+    cr_assert(cdp_eval_bool(full, STATUS_VISIBLE));
+    cdp_close(b);
+    char log[16384];
+    support_read_text(k.err_path, log, sizeof log);
+    cr_assert(strstr(log, "refused: 1 token, "), "the wrong token is counted once: %s", log);
+    support_remove_tmp_dir(dir);
+}
+
 /* The canvas's centre in CSS pixels, and its size. */
 static void canvas_box(cdp_page *p, double *cx, double *cy, double *w, double *h)
 {
