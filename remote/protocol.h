@@ -22,6 +22,10 @@
 #define REMOTE_RATE_BURST 200.0       /* and in a burst (the token bucket's depth) */
 #define REMOTE_FRAME_HEADER_BYTES 32
 #define REMOTE_FRAME_MAGIC 0x46525354u /* "TSRF" in little-endian memory */
+/* A refused viewer's WebSocket is opened, then closed with one of these codes
+ * (RFC 6455's private range) and a reason (docs/remote-protocol.md). */
+#define REMOTE_CLOSE_TOKEN 4403 /* a wrong or missing token */
+#define REMOTE_CLOSE_FULL 4503  /* max_viewers are connected; reason "too many viewers (N max)" */
 #define REMOTE_DEVICE_BASE 1000        /* input device number of viewer slot s: REMOTE_DEVICE_BASE + s */
 
 /* Why a message was dropped (counted per reason by the server). */

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/random.h>
+#include <time.h>
 
 #include "engine/clock.h"
 #include "engine/log.h"
@@ -55,9 +56,13 @@ typedef struct viewer {
 
 /* What lws keeps per connection (zeroed by lws when it starts): which viewer
  * it is, as slot + 1 (0: none, also for a connection refused before it
- * became a viewer), and for the page, how far it is written. */
+ * became a viewer), why a WebSocket is refused (0: it is not; else its close
+ * code, REMOTE_CLOSE_*: the handshake completes and the socket is closed
+ * with that code and a reason, because a browser's WebSocket cannot see a
+ * refused handshake's status), and for the page, how far it is written. */
 typedef struct session {
     int slot_plus_1;
+    int refuse;
     size_t page_written;
 } session;
 
@@ -80,9 +85,11 @@ struct remote_view {
     pthread_t thread;
     bool started;
     atomic_bool stop;
-    bool stopping;                     /* remote_view_stop is closing the connections: the run is
-                                          over, nothing more goes to input (so a recording ends
-                                          with what the wall showed) */
+    atomic_bool server_done;           /* the server thread has said goodbye to its viewers */
+    bool stopping;                     /* the connections are being closed (by the server thread,
+                                          then remote_view_stop): the run is over, nothing more
+                                          goes to input (so a recording ends with what the wall
+                                          showed) or to the pipeline */
     viewer viewers[INPUT_MAX_VIEWERS]; /* server thread */
     int viewer_count;                  /* server thread */
     int following;                     /* server thread: viewers following the wall */
@@ -207,7 +214,9 @@ static int viewer_attach(remote_view *v, struct lws *wsi, session *ss)
             slot = i;
     if (slot < 0) { /* filtered before, so two connections raced for the last place */
         v->stats.refused_full++;
-        return -1;
+        ss->refuse = REMOTE_CLOSE_FULL;
+        lws_callback_on_writable(wsi);
+        return 0;
     }
     viewer *vw = &v->viewers[slot];
     memset(vw, 0, sizeof *vw);
@@ -471,10 +480,13 @@ static int http_writeable(remote_view *v, struct lws *wsi, session *ss)
     return 0;
 }
 
-/* A WebSocket upgrade: the right path, the token, a free place. */
-static int filter_viewer(remote_view *v, struct lws *wsi)
+/* A WebSocket upgrade: the right path (else refused in the handshake), the
+ * token and a free place (else let through, to be closed at once with a
+ * code and a reason the page can show: refused_close). */
+static int filter_viewer(remote_view *v, struct lws *wsi, session *ss)
 {
     char uri[256];
+    ss->refuse = 0;
     if (lws_hdr_copy(wsi, uri, (int)sizeof uri, WSI_TOKEN_GET_URI) <= 0 || strcmp(uri, "/ws") != 0) {
         v->stats.refused_other++;
         return 1;
@@ -482,16 +494,26 @@ static int filter_viewer(remote_view *v, struct lws *wsi)
     if (!request_token_ok(v, wsi)) {
         v->stats.refused_token++;
         log_warn("remote view: a viewer with a wrong or missing token was refused");
-        lws_return_http_status(wsi, HTTP_STATUS_FORBIDDEN, "tessera remote view: a wrong or missing token");
-        return 1;
-    }
-    if (v->viewer_count >= v->cfg.max_viewers) {
+        ss->refuse = REMOTE_CLOSE_TOKEN;
+    } else if (v->viewer_count >= v->cfg.max_viewers) {
         v->stats.refused_full++;
         log_warn("remote view: a viewer was refused: %d viewers already (remote.max_viewers)", v->viewer_count);
-        lws_return_http_status(wsi, HTTP_STATUS_SERVICE_UNAVAILABLE, "tessera remote view: too many viewers");
-        return 1;
+        ss->refuse = REMOTE_CLOSE_FULL;
     }
     return 0;
+}
+
+/* A refused WebSocket's one write: the close frame with its code and reason
+ * (docs/remote-protocol.md, "Refusals"); nothing else is ever sent to it. */
+static int refused_close(remote_view *v, struct lws *wsi, int code)
+{
+    char reason[120];
+    if (code == REMOTE_CLOSE_FULL)
+        snprintf(reason, sizeof reason, "too many viewers (%d max)", v->cfg.max_viewers);
+    else
+        snprintf(reason, sizeof reason, "a wrong or missing token");
+    lws_close_reason(wsi, (enum lws_close_status)code, (unsigned char *)reason, strlen(reason));
+    return -1;
 }
 
 static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in, size_t len)
@@ -507,9 +529,13 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
     case LWS_CALLBACK_HTTP_WRITEABLE:
         return http_writeable(v, wsi, ss);
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
-        return filter_viewer(v, wsi);
+        return filter_viewer(v, wsi, ss);
     case LWS_CALLBACK_ESTABLISHED:
         ss->slot_plus_1 = 0;
+        if (ss->refuse) { /* closed in its first writeable callback, with the reason */
+            lws_callback_on_writable(wsi);
+            return 0;
+        }
         return viewer_attach(v, wsi, ss);
     case LWS_CALLBACK_CLOSED:
         viewer_detach(v, ss);
@@ -519,6 +545,13 @@ static int callback(struct lws *wsi, enum lws_callback_reasons reason, void *use
             viewer_receive(v, wsi, &v->viewers[ss->slot_plus_1 - 1], in, len);
         return 0;
     case LWS_CALLBACK_SERVER_WRITEABLE:
+        if (ss->refuse)
+            return refused_close(v, wsi, ss->refuse);
+        if (v->stopping) { /* say_goodbye */
+            static const char bye[] = "the kiosk stopped";
+            lws_close_reason(wsi, LWS_CLOSE_STATUS_GOINGAWAY, (unsigned char *)bye, sizeof bye - 1);
+            return -1;
+        }
         return ss->slot_plus_1 > 0 ? viewer_writeable(v, &v->viewers[ss->slot_plus_1 - 1]) : 0;
     case LWS_CALLBACK_EVENT_WAIT_CANCELLED: /* a new frame was encoded (or stop) */
         if (v->viewer_count > 0)
@@ -547,13 +580,38 @@ static void encoded(void *ctx)
     pthread_mutex_unlock(&v->context_lock);
 }
 
+#define GOODBYE_US 2000000 /* how long the viewers have to take the close and answer it */
+
+/* The run is over: every viewer is sent a close, 1001 "the kiosk stopped"
+ * (docs/remote-protocol.md), so its page says the wall stopped rather than
+ * that the connection was lost, and their answers are awaited for at most
+ * GOODBYE_US (remote_view_stop wakes this loop meanwhile: lws_service would
+ * otherwise sleep until a close's own 5 s time-out). One that cannot take the
+ * close (it stopped reading) is cut after a second. */
+static void say_goodbye(remote_view *v)
+{
+    v->stopping = true;
+    for (int i = 0; i < INPUT_MAX_VIEWERS; i++)
+        if (v->viewers[i].used) {
+            lws_set_timeout(v->viewers[i].wsi, PENDING_TIMEOUT_USER_OK, 1);
+            lws_callback_on_writable(v->viewers[i].wsi);
+        }
+    uint64_t end = clock_monotonic_us() + GOODBYE_US;
+    while (v->viewer_count > 0 && clock_monotonic_us() < end)
+        if (lws_service(v->context, 0) < 0)
+            break;
+}
+
 static void *server_main(void *arg)
 {
     remote_view *v = arg;
     thread_name_set("tess-remote");
-    while (!atomic_load(&v->stop))
-        if (lws_service(v->context, 0) < 0)
-            break;
+    bool ok = true;
+    while (ok && !atomic_load(&v->stop))
+        ok = lws_service(v->context, 0) >= 0;
+    if (ok)
+        say_goodbye(v);
+    atomic_store(&v->server_done, true);
     return NULL;
 }
 
@@ -579,6 +637,7 @@ remote_view *remote_view_create(const remote_config *c, tess_error *err)
     }
     v->cfg = *c;
     atomic_init(&v->stop, false);
+    atomic_init(&v->server_done, false);
     pthread_mutex_init(&v->context_lock, NULL);
     if (c->token[0]) {
         snprintf(v->token, sizeof v->token, "%s", c->token);
@@ -708,7 +767,12 @@ void remote_view_stop(remote_view *v)
     pthread_mutex_lock(&v->context_lock);
     atomic_store(&v->stop, true); /* no wake-up from the encoder after this */
     pthread_mutex_unlock(&v->context_lock);
-    lws_cancel_service(v->context);
+    /* wake the server thread until it is done: it says goodbye to the viewers, for a bounded time */
+    while (!atomic_load(&v->server_done)) {
+        lws_cancel_service(v->context);
+        struct timespec tick = {0, 50 * 1000000L};
+        nanosleep(&tick, NULL);
+    }
     pthread_join(v->thread, NULL);
     v->started = false;
     for (int i = 0; i < INPUT_MAX_VIEWERS; i++) /* still connected: what they missed */

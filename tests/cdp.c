@@ -269,6 +269,11 @@ static const char *string_member(json_object *o, const char *key)
 
 cdp_page *cdp_open_page(cdp_browser *b, const char *url, char *why, size_t why_bytes)
 {
+    return cdp_open_page_scripted(b, url, NULL, why, why_bytes);
+}
+
+cdp_page *cdp_open_page_scripted(cdp_browser *b, const char *url, const char *js_before, char *why, size_t why_bytes)
+{
     if (b->page_count == CDP_PAGES_MAX) {
         say(why, why_bytes, "too many pages");
         return NULL;
@@ -298,6 +303,12 @@ cdp_page *cdp_open_page(cdp_browser *b, const char *url, char *why, size_t why_b
     if (!cdp_call(b, p, "Page.enable", NULL, NULL, 30.0, why, why_bytes) ||
         !cdp_call(b, p, "Runtime.enable", NULL, NULL, 30.0, why, why_bytes))
         return NULL;
+    if (js_before) {
+        params = json_object_new_object();
+        json_object_object_add(params, "source", json_object_new_string(js_before));
+        if (!cdp_call(b, p, "Page.addScriptToEvaluateOnNewDocument", params, NULL, 30.0, why, why_bytes))
+            return NULL;
+    }
     params = json_object_new_object();
     json_object_object_add(params, "url", json_object_new_string(url));
     if (!cdp_call(b, p, "Page.navigate", params, &r, 60.0, why, why_bytes))

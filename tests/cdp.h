@@ -25,6 +25,9 @@ void cdp_close(cdp_browser *b);
 
 /* A new page showing `url`, loaded (the load event came). NULL with why. */
 cdp_page *cdp_open_page(cdp_browser *b, const char *url, char *why, size_t why_bytes);
+/* The same, with `js_before` run in the page before any of its own scripts
+ * (Page.addScriptToEvaluateOnNewDocument): a test's hooks. */
+cdp_page *cdp_open_page_scripted(cdp_browser *b, const char *url, const char *js_before, char *why, size_t why_bytes);
 
 /* Call `method` with `params` (taken; NULL: {}) in the page's session (page
  * NULL: the browser's), wait up to timeout_s for its reply. *result (may be

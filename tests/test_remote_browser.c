@@ -183,17 +183,143 @@ Test(remote_browser, the_page_shows_frames_and_a_wrong_token_is_refused, .timeou
     cr_assert_eq(cdp_eval_number(p, "fetch('/other?token=' + new URLSearchParams(location.search).get('token'))"
                                     ".then(r => r.status)"),
                  404.0);
-    /* a socket with a wrong token never opens */
+    /* a socket with a wrong token gets no hello and no frame: only a close with its reason */
     cr_assert(cdp_eval_bool(p, "new Promise(done => { const w = new WebSocket('ws://' + location.host + "
-                               "'/ws?token=wrong', 'tessera-remote-1'); let opened = false;"
-                               " w.onopen = () => { opened = true; w.close(); };"
-                               " w.onclose = () => done(!opened); })"),
-              "a WebSocket with a wrong token opened");
+                               "'/ws?token=wrong', 'tessera-remote-1'); let got = 0;"
+                               " w.onmessage = () => { got++; };"
+                               " w.onclose = (e) => done(got === 0 && e.code === 4403 &&"
+                               "                         e.reason === 'a wrong or missing token'); })"),
+              "a WebSocket with a wrong token got something, or no close code 4403 with its reason");
     cdp_close(b);
     cr_assert_eq(kiosk_stop(&k, true), 0);
     char text[16384];
     support_read_text(k.err_path, text, sizeof text);
     cr_assert(strstr(text, "refused: 1 token"), "the refusal is counted: %s", text);
+    support_remove_tmp_dir(dir);
+}
+
+/* Hooks run in a page before its own script: every WebSocket it makes is
+ * made with window.__token instead of its token when that is set, to
+ * window.__host instead of the kiosk when that is set, records
+ * the status line at the moment it is made (window.__statusAtConnect), and
+ * while window.__hold is true keeps the frames it gets (window.__held) from
+ * the page until the test lets them through. */
+#define PAGE_HOOKS                                                                                              \
+    "window.__held = []; window.__hold = !!window.__hold;"                                                       \
+    "window.WebSocket = class extends WebSocket {"                                                               \
+    " constructor(url, protocols) {"                                                                             \
+    "  const s = document.getElementById('status');"                                                             \
+    "  window.__statusAtConnect = document.getElementById('status-line').textContent + (s.hidden ? '|hidden' : '|shown');" \
+    "  if (window.__token !== undefined) url = url.replace(/token=[^&]*/, 'token=' + window.__token);"            \
+    "  if (window.__host !== undefined) url = url.replace(/\\/\\/[^/]+/, '//' + window.__host);"                  \
+    "  super(url, protocols);"                                                                                   \
+    " }"                                                                                                         \
+    " set onmessage(f) { super.onmessage = (m) => {"                                                             \
+    "  if (window.__hold && typeof m.data !== 'string') window.__held.push(() => f(m)); else f(m); }; }"         \
+    " get onmessage() { return super.onmessage; }"                                                               \
+    "};"
+
+/* The status over the canvas is there for a person: not hidden, laid out, on the screen. */
+#define STATUS_VISIBLE                                                                                          \
+    "(() => { const s = document.getElementById('status'), r = s.getBoundingClientRect();"                       \
+    " return !s.hidden && getComputedStyle(s).display !== 'none' && getComputedStyle(s).visibility !== 'hidden'" \
+    " && r.width > 100 && r.height > 20 && r.top >= 0 && r.bottom <= innerHeight; })()"
+
+static void status_text(cdp_page *p, char *out, size_t out_bytes)
+{
+    json_object *v;
+    char why[512];
+    cr_assert(cdp_eval(p, "document.getElementById('status-line').textContent", &v, why, sizeof why), "%s", why);
+    snprintf(out, out_bytes, "%s", v ? json_object_get_string(v) : "");
+    json_object_put(v);
+}
+
+/* What the page says before its first frame, when it is refused (too many
+ * viewers: it retries and gets in when a place frees; a wrong token: it
+ * stops and says so), when nobody answers, that it says nothing once frames
+ * show, and that it says the wall stopped when the kiosk stops. */
+Test(remote_browser, the_page_says_what_it_waits_for_and_why_it_is_refused, .timeout = 300)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "remote-status");
+    char cfg[512], text[256], why[1024];
+    snprintf(cfg, sizeof cfg, "%s/cfg.json", dir);
+    write_file(cfg, "{\"remote\": {\"width\": 320, \"height\": 180, \"max_viewers\": 1}}");
+    const char *args[] = {"--config", cfg, "--display", "null", "--size", "320x180", "--threads", "1",
+                          "--time", "fixed", "--rate", "30", NULL};
+    cdp_browser *b = browser_or_skip();
+    kiosk k;
+    kiosk_start(&k, dir, args);
+
+    /* before the socket opens, and connected with its frames held back */
+    cdp_page *a = cdp_open_page_scripted(b, k.url, "window.__hold = true;" PAGE_HOOKS, why, sizeof why);
+    cr_assert(a, "%s", why);
+    json_object *v;
+    cr_assert(cdp_eval(a, "window.__statusAtConnect", &v, why, sizeof why), "%s", why);
+    cr_assert_str_eq(v ? json_object_get_string(v) : "", "Connecting to the wall…|shown");
+    json_object_put(v);
+    wait_js(a, "window.tessera.connected && window.__held.length > 0");
+    cr_assert(cdp_eval_bool(a, STATUS_VISIBLE), "the status is not visible while waiting");
+    status_text(a, text, sizeof text);
+    cr_assert_str_eq(text, "Connected — waiting for the first frame");
+    cr_assert(cdp_eval_bool(a, "window.tessera.status === 'waiting' && window.tessera.framesShown === 0"));
+    cr_assert(cdp_eval_bool(a, "(() => { const s = document.getElementById('status');"
+                               " return s.getAttribute('role') === 'status' && s.getAttribute('aria-live') === 'polite'; })()"),
+              "the status is not announced (role=status, aria-live=polite)");
+    /* the frames let through: the status goes */
+    cr_assert(cdp_eval_bool(a, "window.__hold = false; window.__held.splice(0).forEach(g => g()); true"));
+    wait_js(a, "window.tessera.framesShown >= 2 && window.tessera.status === 'shown'");
+    cr_assert_not(cdp_eval_bool(a, STATUS_VISIBLE), "the status still covers the picture");
+
+    /* a second viewer over max_viewers 1: refused, with the limit, and it retries */
+    cdp_page *full = open_page(b, k.url);
+    wait_js(full, "window.tessera.status === 'refused-full' && /^Refused: too many viewers \\(1 max\\) — retrying in"
+                  " \\d+ s$/.test(document.getElementById('status-line').textContent)");
+    cr_assert(cdp_eval_bool(full, STATUS_VISIBLE));
+    cr_assert(cdp_eval_bool(full, "window.tessera.closeCode === 4503 && window.tessera.refused"));
+    cr_assert(cdp_eval_bool(full, "document.getElementById('status-retry').getAttribute('aria-hidden') === 'true'"),
+              "the countdown would be read out every second");
+
+    /* a page whose socket carries a wrong token (as after a kiosk restarted with a new one) */
+    cdp_page *bad = cdp_open_page_scripted(b, k.url, "window.__token = 'wrong';" PAGE_HOOKS, why, sizeof why);
+    cr_assert(bad, "%s", why);
+    wait_js(bad, "window.tessera.status === 'refused-token'");
+    cr_assert(cdp_eval_bool(bad, STATUS_VISIBLE));
+    status_text(bad, text, sizeof text);
+    cr_assert_str_eq(text, "Refused: wrong or missing token", "no retry: the same token would be refused again");
+    cr_assert(cdp_eval_bool(bad, "document.getElementById('retry').hidden && window.tessera.retryInS === 0 &&"
+                                 " /reload/.test(document.getElementById('status-detail').textContent)"),
+              "a refused token says to reload and schedules no retry");
+
+    /* a page whose socket finds nobody (as when the kiosk is not running) */
+    cdp_page *nobody = cdp_open_page_scripted(b, k.url, "window.__host = '127.0.0.1:1';" PAGE_HOOKS, why, sizeof why);
+    cr_assert(nobody, "%s", why);
+    wait_js(nobody, "window.tessera.status === 'unreachable' && /^Cannot reach the wall — retrying in \\d+ s$/.test("
+                    "document.getElementById('status-line').textContent)");
+    cr_assert(cdp_eval_bool(nobody, STATUS_VISIBLE));
+
+    /* the first viewer leaves: the refused one gets in on a retry, and its status goes */
+    cr_assert(cdp_eval_bool(a, "setTimeout(() => { location.href = 'about:blank'; }, 0); true"));
+    wait_js(full, "window.tessera.status === 'shown' && window.tessera.framesShown >= 1");
+    cr_assert_not(cdp_eval_bool(full, STATUS_VISIBLE));
+
+    /* the kiosk stops: it says so (close 1001), and the page keeps saying so while its retries find nobody */
+    double connects = cdp_eval_number(full, "window.tessera.connects");
+    cr_assert_eq(kiosk_stop(&k, true), 0);
+    char until[512];
+    snprintf(until, sizeof until,
+             "window.tessera.status === 'stopped' && window.tessera.connects > %.0f && window.tessera.closeCode === 1006"
+             " && /^The wall stopped — retrying in \\d+ s$/.test(document.getElementById('status-line').textContent)",
+             connects);
+    wait_js(full, until);
+    cr_assert(cdp_eval_bool(full, "(() => { const s = window.tessera.statuses;"
+                                  " return s.indexOf('stopped') > s.lastIndexOf('shown'); })()"),
+              "the stop was not said");
+    cr_assert(cdp_eval_bool(full, STATUS_VISIBLE));
+    cdp_close(b);
+    char log[16384];
+    support_read_text(k.err_path, log, sizeof log);
+    cr_assert(strstr(log, "refused: 1 token, "), "the wrong token is counted once: %s", log);
     support_remove_tmp_dir(dir);
 }
 
@@ -420,7 +546,24 @@ Test(remote_browser, a_client_that_stops_reading_does_not_hold_the_wall, .timeou
     support_remove_tmp_dir(dir);
 }
 
-/* A wrong token, and more viewers than allowed, are refused in the handshake. */
+/* A refused viewer's socket: the handshake completes (101), then the first
+ * and only frame is a close with `code` and `reason`. */
+static void expect_refusal(int fd, int status, int code, const char *reason)
+{
+    cr_assert_eq(status, 101, "a refused viewer's handshake completes, to carry the close's reason");
+    uint8_t payload[256];
+    int op;
+    size_t len;
+    cr_assert(ws_read(fd, &op, payload, sizeof payload - 1, &len), "no close frame came");
+    cr_assert_eq(op, 8, "the first frame is a close, not opcode %d", op);
+    cr_assert_geq(len, 2);
+    payload[len] = 0;
+    cr_assert_eq(payload[0] << 8 | payload[1], code);
+    cr_assert_str_eq((const char *)payload + 2, reason);
+}
+
+/* A wrong token, and more viewers than allowed, are refused: the socket is
+ * closed at once with a code and a reason (docs/remote-protocol.md). */
 Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 120)
 {
     char dir[256];
@@ -433,7 +576,7 @@ Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 1
     kiosk_start(&k, dir, args);
     int status, fds[3];
     int bad = ws_connect(k.port, "0123456789abcdef0123456789abcdef", &status);
-    cr_assert_neq(status, 101, "a wrong token was let in");
+    expect_refusal(bad, status, 4403, "a wrong or missing token");
     close(bad);
     for (int i = 0; i < 2; i++) {
         fds[i] = ws_connect(k.port, k.token, &status);
@@ -441,13 +584,24 @@ Test(remote_browser, wrong_tokens_and_too_many_viewers_are_refused, .timeout = 1
         read_frames(fds[i], 1); /* it is attached: its first frame came */
     }
     fds[2] = ws_connect(k.port, k.token, &status);
-    cr_assert_neq(status, 101, "a third viewer over max_viewers 2 was let in");
+    expect_refusal(fds[2], status, 4503, "too many viewers (2 max)");
     /* malformed messages are dropped and the connection stays */
     ws_send_text(fds[0], "not json");
     ws_send_text(fds[0], "{\"t\":\"warp\"}");
     ws_send_text(fds[0], "{\"t\":\"down\",\"x\":0.5,\"y\":0.5,\"button\":7}");
     read_frames(fds[0], 3);
     cr_assert_eq(kiosk_stop(&k, true), 0);
+    /* each viewer was told why it goes: after what was on its way, a close 1001 with its reason */
+    for (int i = 0; i < 2; i++) {
+        static uint8_t payload[4 << 20];
+        int op = 0;
+        size_t len = 0;
+        while (op != 8)
+            cr_assert(ws_read(fds[i], &op, payload, sizeof payload - 1, &len), "viewer %d: no close came", i);
+        payload[len] = 0;
+        cr_assert(len >= 2 && (payload[0] << 8 | payload[1]) == 1001, "viewer %d: close code", i);
+        cr_assert_str_eq((const char *)payload + 2, "the kiosk stopped");
+    }
     for (int i = 0; i < 3; i++)
         close(fds[i]);
     char text[16384];
