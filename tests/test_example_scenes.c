@@ -12,12 +12,17 @@
  * (5 columns, 4 rows), so that it is not cut off at another size or
  * aspect (the vertical field of view is kept) either. And it must rest
  * on its floor (the lowest horizontal backdrop quad, "horizontal" along the
- * camera's up): a mesh, sphere set or particle set by its bounds, whose
- * lowest point lies within FLOOR_TOLERANCE of the subject's height from the
- * floor; an iso-surface or a volume rendered directly by the lowest point
- * seen of it (where a ray meets the surface, or where the volume has taken
- * half the light), so a bottom hidden from the camera is not checked. Up
- * side down is NOT checked: nothing here knows which way up a bunny goes.
+ * camera's up, which must be an axis): the lowest point of each part of the
+ * subject within FLOOR_TOLERANCE of its top's height above the floor. For a
+ * mesh, sphere set or particle set the lowest point is its bounds'; for an
+ * iso-surface, or the volumes rendered directly taken together, it is found
+ * by rays straight up from the floor over the box's footprint (the first
+ * hit of the surface, or where the volume has taken half the light), so a
+ * volume's faint or hidden parts under the floor do not count. Up side
+ * down is NOT checked: nothing here knows which way up a bunny goes, nor
+ * whether the picture is pleasing; a bunny's bounding box is not its
+ * silhouette either, so "rests on the floor" for a mesh is "its lowest
+ * vertex is at the floor".
  *
  * The example scenes take their big data from ../shared/data beside the
  * repository, each entry optional. Without it a scene must still load, say
