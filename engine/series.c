@@ -1,6 +1,7 @@
 /* series.c - a time series loaded one step ahead (series.h). */
 #include "series.h"
 
+#include <errno.h>
 #include <glob.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -247,11 +248,22 @@ void series_done(series *S)
     pthread_mutex_unlock(&S->lock);
 }
 
+/* glob's error callback: a folder of the pattern that does not exist (or is
+ * not a folder) holds no match, as an empty one (so an optional series whose
+ * folder is missing is skipped, not an error); any other failure to read a
+ * folder stops the listing. With GLOB_ERR glob would stop at a missing folder
+ * too. */
+static int glob_error(const char *path, int error)
+{
+    (void)path;
+    return error != ENOENT && error != ENOTDIR;
+}
+
 bool series_paths_glob(const char *pattern, series_paths *out, tess_error *err)
 {
     memset(out, 0, sizeof *out);
     glob_t g;
-    int rc = glob(pattern, GLOB_ERR, NULL, &g);
+    int rc = glob(pattern, 0, glob_error, &g);
     if (rc == GLOB_NOMATCH) {
         globfree(&g);
         return tess_error_set(err, "no file matches '%s'", pattern);

@@ -91,8 +91,8 @@ typedef struct series_paths {
     uint32_t count;
     bool failed; /* listing failed (not merely: nothing matched) */
 } series_paths;
-/* False with err ("no file matches 'P'", too many, a directory that cannot
- * be read); *out is empty then. */
+/* False with err ("no file matches 'P'", also when a folder of P does not
+ * exist; too many; a directory that cannot be read); *out is empty then. */
 bool series_paths_glob(const char *pattern, series_paths *out, tess_error *err);
 void series_paths_free(series_paths *p);
 

@@ -429,6 +429,37 @@ Test(particles, a_series_pattern_that_matches_nothing_is_named)
     support_remove_tmp_dir(dir);
 }
 
+/* A pattern whose folder does not exist matches nothing, as an empty
+ * folder: an error naming the pattern, or with "optional" a skip (the
+ * example scenes name ../shared/data folders that need not be there). */
+Test(particles, a_series_pattern_in_a_missing_folder_matches_nothing)
+{
+    char dir[256], scene_path[512];
+    support_make_tmp_dir(dir, sizeof dir, "steps-nofolder");
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    FILE *f = fopen(scene_path, "w");
+    cr_assert(f);
+    fprintf(f, "{\"particles\": [{\"files\": \"absent/deeper/step_*.dump\"}]}\n");
+    fclose(f);
+    tess_error err = {{0}};
+    cr_assert_null(scene_load(scene_path, &err));
+    char want[1024];
+    snprintf(want, sizeof want, "%s: field 'particles[0].files': no file matches '%s/absent/deeper/step_*.dump'",
+             scene_path, dir);
+    cr_assert_str_eq(err.msg, want);
+    f = fopen(scene_path, "w");
+    cr_assert(f);
+    fprintf(f, "{\"particles\": [{\"files\": \"absent/deeper/step_*.dump\", \"optional\": true}],"
+               " \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}]}\n");
+    fclose(f);
+    scene *s = scene_load(scene_path, &err);
+    cr_assert_not_null(s, "%s", err.msg);
+    cr_expect_eq(s->spheres.count, 1u);
+    cr_expect_eq(s->geometry_count, 1u, "the skipped series added a geometry");
+    scene_destroy(s);
+    support_remove_tmp_dir(dir);
+}
+
 /* A "particles" entry's mistakes name the field. */
 Test(particles, scene_file_mistakes_name_the_field)
 {
