@@ -167,7 +167,7 @@ Test(frame_state, opacity_starts_opaque_and_allocates_only_below_1)
     frame_state before = st;
     err = (tess_error){{0}};
     cr_expect_not(txn_apply(&past, &st, &err));
-    cr_expect(strstr(err.msg, "opacity: geometries 99..100: there are 100 geometries (ids 0..99)"), "%s", err.msg);
+    cr_expect(strstr(err.msg, "opacity: instances 99..100: the scene has 100 instances (ids 0..99)"), "%s", err.msg);
     cr_expect(memcmp(&st, &before, sizeof st) == 0);
     frame_state_finish(&st);
     cr_expect(st.part_opacity == NULL && st.translucent_count == 0);

@@ -345,6 +345,7 @@ int cli_render(int argc, char **argv)
         return 2;
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
+    s.input.replay_strict = true; /* a replayed record refused: exit 1, no image (run logs and counts it) */
     cli_check_ignored_render_run(&given, &s, "render");
     int done = run_job(&s, scene_path, false, NULL);
     cli_cluster_end();

@@ -994,7 +994,8 @@ void cli_pipeline_report(pipeline *p, const cli_pipeline_spec *s)
             "tessera: pipeline: %llu frames rendered, %llu displayed, %llu transactions (%llu refused, %llu slow), "
             "%d channel%s, %d threads\n",
             (unsigned long long)st.frames_rendered, (unsigned long long)st.frames_displayed,
-            (unsigned long long)st.transactions_applied, (unsigned long long)st.transactions_rejected,
+            (unsigned long long)st.transactions_applied,
+            (unsigned long long)(st.transactions_rejected + st.transactions_invalid),
             (unsigned long long)st.slow_callbacks, pipeline_channel_count(p), pipeline_channel_count(p) == 1 ? "" : "s",
             s->threads);
     if (s->budget_ms > 0.0)
