@@ -49,6 +49,20 @@ Test(cli, help_lists_commands_and_options)
     cr_expect_eq(run_tessera(out, sizeof out, "run --help"), 0);
 }
 
+/* The help states each command's own defaults of --time and --rate (the README's table):
+ * render fixed at 30 Hz, run fixed at 24 Hz headless and real time on a DRM wall. */
+Test(cli, help_gives_each_commands_time_default)
+{
+    char out[16384];
+    cr_expect_eq(run_tessera(out, sizeof out, "render --help"), 0);
+    cr_expect(strstr(out, "(reproducible; default fixed)\n"), "%s", out);
+    cr_expect(strstr(out, "fixed mode (default 30)"), "%s", out);
+    cr_expect_eq(run_tessera(out, sizeof out, "run --help"), 0);
+    cr_expect(strstr(out, "(reproducible; default fixed; real on a DRM wall)"), "%s", out);
+    cr_expect(strstr(out, "fixed mode (default 24)"), "%s", out);
+    cr_expect(strstr(out, "default real)") == NULL, "%s", out);
+}
+
 Test(cli, renders_default_scene_to_png_and_exr)
 {
     char out[8192];

@@ -609,13 +609,16 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     return cli_input_option(argc, argv, i, &s->input, handled);
 }
 
-void cli_pipeline_usage(FILE *f)
+void cli_pipeline_usage(FILE *f, const char *time_default, const char *rate_default)
 {
-    fputs("pipeline options (a --config file sets the same; the command line wins):\n"
-          "  --config FILE    pipeline config (JSON; docs/pipeline-config.md): components, channels\n"
-          "  --threads N      render threads (default: the number of CPUs)\n"
-          "  --time real|fixed  frame time: the clock, or frame / rate (reproducible; default real)\n"
-          "  --rate HZ        frames per second of time in fixed mode (default 30)\n"
+    fprintf(f,
+            "pipeline options (a --config file sets the same; the command line wins):\n"
+            "  --config FILE    pipeline config (JSON; docs/pipeline-config.md): components, channels\n"
+            "  --threads N      render threads (default: the number of CPUs)\n"
+            "  --time real|fixed  frame time: the clock, or frame / rate (reproducible; default %s)\n"
+            "  --rate HZ        frames per second of time in fixed mode (default %s)\n",
+            time_default, rate_default);
+    fputs("  --tile-size N    tile edge in pixels, 4..256 (default 16)\n"
           "  --tile-size N    tile edge in pixels, 4..256 (default 16)\n"
           "  --tile-order O   order tiles are handed out: rows, columns, morton, hilbert, spiral,\n"
           "                   shuffle (default rows; the image does not depend on it)\n"
