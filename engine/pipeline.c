@@ -606,8 +606,8 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     if (!have_memory) {
         channel_free(c);
         memset(c, 0, sizeof *c);
-        tess_error_set(err, "pipeline: channel %d: out of memory for %dx%d frame buffers", p->channel_count,
-                       width_px, height_px);
+        tess_error_set(err, "pipeline: channel %d: out of memory for its %dx%d frame buffers (%d of %.1f GiB each)",
+                       p->channel_count, width_px, height_px, BUFFER_COUNT, (double)bytes / (1024.0 * 1024 * 1024));
         return -1;
     }
     c->pending = 0;

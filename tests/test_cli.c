@@ -127,6 +127,32 @@ Test(cli, missing_scene_file)
     EXPECT_ERROR("render --scene %s/nope.ply --out %s/a.png", "nope.ply");
 }
 
+/* A frame too big for the memory the process may have: one line naming the channel, the size
+ * and what did not fit (it once said "channel 0: pipeline: channel 0: out of memory"), exit 1,
+ * no image. Run under a 3 GB address-space limit (16384x16384 needs 3 frame buffers of 3 GiB);
+ * an AddressSanitizer build needs terabytes of address space to start, so it is not run there. */
+Test(cli, a_frame_too_big_for_memory_says_so_once)
+{
+    if (strstr(support_tessera_bin(), "asan"))
+        return; /* cannot start under an address-space limit */
+    char cmd[2048], log_path[512], out[8192];
+    snprintf(log_path, sizeof log_path, "%s/oom.log", tmp_dir);
+    snprintf(cmd, sizeof cmd,
+             "ulimit -v 3000000 && timeout %d %s render --size 16384x16384 --threads 1 --out %s/big.png > %s 2>&1",
+             CLI_TIMEOUT_S, support_tessera_bin(), tmp_dir, log_path);
+    int code = support_run(cmd);
+    support_read_text(log_path, out, sizeof out);
+    cr_expect_eq(code, 1, "%s", out);
+    cr_expect(strstr(out, "error: pipeline: channel 0: out of memory for its 16384x16384 frame buffers (3 of 3.0 GiB "
+                          "each)\n"),
+              "%s", out);
+    const char *first = strstr(out, "channel 0");
+    cr_expect(first && !strstr(first + 1, "channel 0"), "the channel is named twice: %s", out);
+    char path[512];
+    snprintf(path, sizeof path, "%s/big.png", tmp_dir);
+    cr_expect(access(path, F_OK) != 0, "an image was written");
+}
+
 Test(cli, unwritable_output_path)
 {
     EXPECT_ERROR("render --size 8x8 --out %s/no/such/dir/a.png", "no/such/dir", "does not exist");

@@ -884,9 +884,13 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
         image_display *d = display_create(ch->display, ch->out, s->frames != 1, &err);
         if (d && s->wrap_display)
             d = s->wrap_display(s->wrap_ctx, i, d, &err);
-        int added = d ? pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) : -1;
-        if (added < 0) {
+        if (!d) {
             cli_error("channel %d: %s", i, err.msg);
+            pipeline_destroy(p);
+            return NULL;
+        }
+        if (pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) < 0) {
+            cli_error("%s", err.msg); /* the pipeline's errors name the channel */
             pipeline_destroy(p);
             return NULL;
         }
