@@ -197,6 +197,30 @@ Test(cli, broken_scene_and_mesh_files)
     EXPECT_ERROR("render --scene %s/cut.ply --out %s/a.png", "cut.ply");
 }
 
+/* Scenes with nothing to draw say what they are: a PLY of points without points, a mesh without
+ * triangles; a directory is named as one (not assimp's "No suitable reader found"). */
+Test(cli, empty_point_sets_meshes_and_directories_say_what_they_are)
+{
+    write_text("nopoints.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                               "property float z\nend_header\n");
+    EXPECT_ERROR("render --scene %s/nopoints.ply --out %s/a.png --size 8x8",
+                 "nopoints.ply: scene has no geometry (the point set has no points: 0 vertices)");
+    write_text("notris.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n");
+    EXPECT_ERROR("render --scene %s/notris.ply --out %s/a.png --size 8x8",
+                 "notris.ply: scene has no geometry (the mesh has no triangles)");
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/scenes", tmp_dir);
+    cr_assert_eq(mkdir(dir, 0777), 0);
+    EXPECT_ERROR("render --scene %s/scenes --out %s/a.png --size 8x8", "scenes: is a directory (a scene is a file");
+    snprintf(dir, sizeof dir, "%s/d.json", tmp_dir);
+    cr_assert_eq(mkdir(dir, 0777), 0);
+    EXPECT_ERROR("render --scene %s/d.json --out %s/a.png --size 8x8", "d.json: is a directory");
+    char path[512];
+    snprintf(path, sizeof path, "%s/a.png", tmp_dir);
+    cr_expect(access(path, F_OK) != 0, "an image was written");
+}
+
 Test(cli, run_writes_frames_and_reports_rate)
 {
     char out[8192];
