@@ -550,6 +550,10 @@ static void *import_on_deep_stack(void *arg)
 const struct aiScene *assimp_import_file(const char *path, unsigned flags, tess_error *err)
 {
     struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        tess_error_set(err, "%s: is a directory, not a file", path);
+        return NULL;
+    }
     const char *slash = strrchr(path, '/');
     const char *name = slash ? slash + 1 : path;
     char what[PROGRESS_WHAT_BYTES];

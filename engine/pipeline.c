@@ -606,8 +606,8 @@ int pipeline_add_channel_window(pipeline *p, const camera_desc *camera, float pl
     if (!have_memory) {
         channel_free(c);
         memset(c, 0, sizeof *c);
-        tess_error_set(err, "pipeline: channel %d: out of memory for %dx%d frame buffers", p->channel_count,
-                       width_px, height_px);
+        tess_error_set(err, "pipeline: channel %d: out of memory for its %dx%d frame buffers (%d of %.1f GiB each)",
+                       p->channel_count, width_px, height_px, BUFFER_COUNT, (double)bytes / (1024.0 * 1024 * 1024));
         return -1;
     }
     c->pending = 0;
@@ -815,9 +815,7 @@ static bool record_in_range(const pipeline *p, const txn_record *r, tess_error *
                                                                                                  : NULL;
     uint32_t count = p->state.geometry_count;
     if (g && (uint64_t)g->first + g->count > count)
-        return tess_error_set(err, "%s geometries %u..%llu: there are %u geometries (ids 0..%u)",
-                              txn_kind_name(r->kind), g->first, (unsigned long long)g->first + g->count - 1, count,
-                              count ? count - 1 : 0);
+        return txn_range_error(txn_kind_name(r->kind), g, count, err);
     int channel = r->kind == TXN_CAMERA ? r->args.camera.channel
                   : r->kind == TXN_CHANNEL_ACTIVE ? r->args.channel.channel
                                                   : TXN_ALL_CHANNELS;
@@ -848,15 +846,22 @@ static bool submit(pipeline *p, const txn_record *r, tess_error *err)
     return true;
 }
 
-bool pipeline_submit(pipeline *p, const txn_record *r)
+bool pipeline_check(const pipeline *p, const txn_record *r, tess_error *err) { return record_ok(p, r, err); }
+
+bool pipeline_submit_from(pipeline *p, const txn_record *r, const char *origin)
 {
     tess_error err = {{0}};
     if (!record_ok(p, r, &err)) {
-        log_error("pipeline: transaction refused: %s", err.msg);
+        log_error("pipeline: transaction refused: %s%s%s", origin ? origin : "", origin ? ": " : "", err.msg);
+        pthread_mutex_lock(&p->stats_lock);
+        p->stats.transactions_invalid++;
+        pthread_mutex_unlock(&p->stats_lock);
         return false;
     }
     return submit(p, r, &err); /* a refusal by the queue is logged there */
 }
+
+bool pipeline_submit(pipeline *p, const txn_record *r) { return pipeline_submit_from(p, r, NULL); }
 
 static void compose_status(pipeline *p);
 
@@ -866,7 +871,7 @@ static bool apply_record(pipeline *p, const txn_record *r)
 {
     tess_error err = {{0}};
     if (!txn_apply(r, &p->state, &err)) {
-        log_error("pipeline: %s refused: %s", txn_kind_name(r->kind), err.msg);
+        log_error("pipeline: transaction refused: %s", err.msg);
         return false;
     }
     if (p->record_observer)
@@ -909,7 +914,7 @@ bool pipeline_apply(pipeline *p, const txn_record *r)
         return false;
     tess_error err = {{0}};
     if (!record_ok(p, r, &err)) {
-        log_error("pipeline: %s refused: %s", txn_kind_name(r->kind), err.msg);
+        log_error("pipeline: transaction refused: %s", err.msg);
         return false;
     }
     return apply_record(p, r);

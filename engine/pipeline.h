@@ -304,6 +304,13 @@ bool pipeline_stop_requested(const pipeline *p);
  * ranges; input-level kinds are refused): false, logged, when invalid or
  * refused as pipeline_transaction is. */
 bool pipeline_submit(pipeline *p, const txn_record *r);
+/* The same, the refusal logged as coming from `origin` (e.g. "rec.txt:12":
+ * the file and line a replayed record came from; NULL: none). */
+bool pipeline_submit_from(pipeline *p, const txn_record *r, const char *origin);
+/* The checks pipeline_submit makes (txn_validate, this pipeline's instance
+ * and channel ranges, an engine kind), without queueing, logging or counting:
+ * false with err naming the field. Any thread. */
+bool pipeline_check(const pipeline *p, const txn_record *r, tess_error *err);
 
 /* The setting-by-setting calls below build a record and submit it. */
 
@@ -468,6 +475,9 @@ typedef struct pipeline_stats {
     /* of the rejected: the queue was full; the pipeline was stopping or had stopped
      * (the rest: more than PIPELINE_ARGS_MAX bytes of arguments) */
     uint64_t rejected_queue_full, rejected_stopped;
+    /* records pipeline_submit refused as invalid for this pipeline (an instance
+     * or channel it does not have, ...): never queued, not among the rejected */
+    uint64_t transactions_invalid;
     /* accepted, then never run: still queued when the loop ended (queued after the
      * last barrier that ran transactions, before the stop was asked for). So every
      * accepted transaction is counted once: applied + discarded. */

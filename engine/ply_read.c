@@ -448,6 +448,19 @@ ply_element *ply_find_element(ply_file *f, enum ply_element_kind kind)
     return NULL;
 }
 
+bool ply_probe_counts(const char *path, uint64_t *vertices, int64_t *faces, tess_error *err)
+{
+    ply_file f;
+    bool ok = ply_open(&f, path, err, NULL, NULL);
+    if (ok) {
+        const ply_element *v = ply_find_element(&f, PLY_ELEMENT_VERTEX), *fe = ply_find_element(&f, PLY_ELEMENT_FACE);
+        *vertices = v ? v->count : 0;
+        *faces = !fe ? -1 : fe->count > INT64_MAX ? INT64_MAX : (int64_t)fe->count;
+    }
+    ply_close(&f);
+    return ok;
+}
+
 /* ---- header ------------------------------------------------------------ */
 
 /* Split a header line into at most max whitespace-separated words (in place);

@@ -144,6 +144,11 @@ void ply_close(ply_file *f);
 /* The element of `kind` (vertex or face), or NULL. */
 ply_element *ply_find_element(ply_file *f, enum ply_element_kind kind);
 
+/* Read only the header of `path`: the counts its vertex and face elements
+ * declare (0 without a vertex element; -1 without a face element: a point
+ * set). False with err when the header cannot be read. */
+bool ply_probe_counts(const char *path, uint64_t *vertices, int64_t *faces, tess_error *err);
+
 /* Set "PATH:LINE: what" (or "PATH: what"); returns false. */
 bool ply_fail(ply_file *f, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 

@@ -8,10 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "mesh_cache.h"
 #include "mesh_tree.h"
 #include "parallel.h"
+#include "ply_read.h"
 #include "part_tree.h"
 #include "particles/particle_kind.h"
 
@@ -561,7 +563,13 @@ static scene *scene_load_mesh_file(const char *path, bool spatial_splits, tess_e
     if (m->triangle_count == 0) {
         mesh_cache_abandon(&cached);
         mesh_destroy(m);
-        tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
+        uint64_t vertices = 0;
+        int64_t faces = 0;
+        tess_error probe = {{0}};
+        if (has_extension(path, ".ply") && ply_probe_counts(path, &vertices, &faces, &probe) && faces < 0)
+            tess_error_set(err, "%s: scene has no geometry (the point set has no points: 0 vertices)", path);
+        else
+            tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
         return NULL;
     }
     scene *s = scene_create();
@@ -650,6 +658,12 @@ scene *scene_load(const char *path, tess_error *err) { return scene_load_with(pa
 
 scene *scene_load_with(const char *path, const scene_load_options *opts, tess_error *err)
 {
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        tess_error_set(err, "%s: is a directory (a scene is a file: .json, a mesh, an assembly or a particle file)",
+                       path);
+        return NULL;
+    }
     const scene_load_options none = {0};
     if (!opts)
         opts = &none;

@@ -165,6 +165,11 @@ typedef struct scene {
     uint32_t instance_count, instance_capacity;
     scene_medium *media;     /* participating media (above); NULL while there are none */
     uint32_t medium_count, medium_capacity;
+    /* the volume files a scene file placed ("volumes" entries, each shown by
+     * iso-surface geometries, a medium or both) and their samples (a
+     * series: its first step's); what the summary line counts */
+    uint32_t volume_count;
+    uint64_t volume_voxels;
     /* PARTS. The part tree of an assembly (part_tree.h), or NULL when the
      * scene has none (then it costs nothing). Instances with a part come in
      * preorder of their parts (part ids never decrease along the instances

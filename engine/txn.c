@@ -239,9 +239,9 @@ txn_record txn_simple(txn_kind kind) { return blank(kind); }
 static bool geoms_valid(const char *kind, const txn_geoms *g, tess_error *err)
 {
     if (g->count == 0)
-        return tess_error_set(err, "%s: count: 0 geometries (at least 1)", kind);
+        return tess_error_set(err, "%s: count: 0 instances (at least 1)", kind);
     if ((uint64_t)g->first + g->count > UINT32_MAX)
-        return tess_error_set(err, "%s: first %u + count %u is past the largest geometry id", kind, g->first,
+        return tess_error_set(err, "%s: first %u + count %u is past the largest instance id", kind, g->first,
                               g->count);
     return true;
 }
@@ -411,12 +411,25 @@ bool txn_validate(const txn_record *r, tess_error *err)
     return tess_error_set(err, "kind: %d is not a transaction kind", (int)r->kind);
 }
 
+bool txn_range_error(const char *kind, const txn_geoms *g, uint32_t count, tess_error *err)
+{
+    unsigned long long last = (unsigned long long)g->first + g->count - 1;
+    char range[48];
+    if (g->count == 1)
+        snprintf(range, sizeof range, "instance %u", g->first);
+    else
+        snprintf(range, sizeof range, "instances %u..%llu", g->first, last);
+    if (count == 0)
+        return tess_error_set(err, "%s: %s: the scene has no instances", kind, range);
+    if (count == 1)
+        return tess_error_set(err, "%s: %s: the scene has 1 instance (id 0)", kind, range);
+    return tess_error_set(err, "%s: %s: the scene has %u instances (ids 0..%u)", kind, range, count, count - 1);
+}
+
 static bool geoms_in(const frame_state *st, const char *kind, const txn_geoms *g, tess_error *err)
 {
     if ((uint64_t)g->first + g->count > st->geometry_count)
-        return tess_error_set(err, "%s: geometries %u..%llu: there are %u geometries (ids 0..%u)", kind, g->first,
-                              (unsigned long long)g->first + g->count - 1, st->geometry_count,
-                              st->geometry_count ? st->geometry_count - 1 : 0);
+        return txn_range_error(kind, g, st->geometry_count, err);
     return true;
 }
 
@@ -429,7 +442,7 @@ static bool channel_in(const frame_state *st, const char *kind, int channel, tes
 
 static bool out_of_memory(const char *kind, tess_error *err)
 {
-    return tess_error_set(err, "%s: out of memory for the per-geometry flags", kind);
+    return tess_error_set(err, "%s: out of memory for the per-instance flags", kind);
 }
 
 bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
@@ -526,7 +539,7 @@ bool txn_apply(const txn_record *r, frame_state *st, tess_error *err)
             return false;
         if (!frame_state_set_opacity(st, r->args.opacity.geoms.first, r->args.opacity.geoms.count,
                                      r->args.opacity.a))
-            return tess_error_set(err, "opacity: out of memory for the per-geometry opacities");
+            return tess_error_set(err, "opacity: out of memory for the per-instance opacities");
         return true;
     case TXN_CLIP_PLANE: {
         const float *p = r->args.clip_plane.point, *n = r->args.clip_plane.normal;
@@ -865,8 +878,8 @@ static bool geoms_text(reader *r, const char *kind, txn_geoms *g)
 {
     char what[48], msg[96];
     double first, count;
-    snprintf(what, sizeof what, "%s geometry id", kind);
-    snprintf(msg, sizeof msg, "%s: the geometry id must be a whole number >= 0", kind);
+    snprintf(what, sizeof what, "%s instance id", kind);
+    snprintf(msg, sizeof msg, "%s: the instance id must be a whole number >= 0", kind);
     if (!whole(r, 0.0, 4294967294.0, &first, what, msg))
         return false;
     snprintf(what, sizeof what, "%s count", kind);
@@ -932,8 +945,8 @@ static bool decode_args(reader *r, txn_text_version version, txn_record *t)
         return flag(r, &t->args.flag.on, "tour on/off");
     case TXN_HIDE:
         if (version == TXN_TEXT_V1) { /* one geometry */
-            if (!whole(r, 0.0, 4294967294.0, &v, "hide geometry id",
-                       "hide: the geometry id must be a whole number >= 0"))
+            if (!whole(r, 0.0, 4294967294.0, &v, "hide instance id",
+                       "hide: the instance id must be a whole number >= 0"))
                 return false;
             t->args.geoms = (txn_geoms){(uint32_t)v, 1};
             return true;

@@ -290,6 +290,11 @@ txn_record txn_simple(txn_kind kind); /* show-all, quit */
 /* The checks that need no scene; false with err naming the field. */
 bool txn_validate(const txn_record *r, tess_error *err);
 
+/* Set err to "KIND: instances F..L: the scene has N instances (ids 0..N-1)"
+ * for g past count (geometry ids are what users see as instances: a part
+ * covers a range of them); returns false. */
+bool txn_range_error(const char *kind, const txn_geoms *g, uint32_t count, tess_error *err);
+
 /* Validate and apply r to st (st->... as frame_state.h says); false with
  * err, st unchanged, for an invalid record, one out of st's range (a
  * geometry id past its geometry count, a channel it does not have), an

@@ -26,6 +26,7 @@ bool input_record_write(FILE *f, double time_s, const input_txn *t)
 void input_record_free(input_record *r)
 {
     free(r->entries);
+    free(r->name);
     *r = (input_record){0};
 }
 
@@ -129,10 +130,16 @@ bool input_record_parse(const char *name, const char *text, size_t len, input_re
             goto fail;
         }
         last_s = e->time_s;
+        e->line = line;
         rec.count++;
     }
     if (!header) {
         tess_error_set(err, "%s: empty file (expected the line \"" INPUT_RECORD_HEADER "\")", name);
+        goto fail;
+    }
+    rec.name = strdup(name);
+    if (!rec.name) {
+        tess_error_set(err, "%s: out of memory", name);
         goto fail;
     }
     *out = rec;

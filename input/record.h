@@ -49,10 +49,12 @@
 typedef struct input_record_entry {
     double time_s;
     input_txn txn;
+    size_t line;                 /* the file's line it was read from (0: not read from a file) */
 } input_record_entry;
 
 typedef struct input_record {
     input_record_entry *entries; /* malloc'ed */
+    char *name;                  /* the file's name as given to input_record_parse (malloc'ed; NULL: none) */
     size_t count, capacity;
     size_t cut_line;             /* the last line, left out because it had no newline; 0: none */
     tess_error warning;          /* with cut_line: one line saying so (input_record_load logs it) */

@@ -130,6 +130,8 @@ static void tour_step(pipeline *p, void *ctx, const frame_info *fi)
     show_camera(s, p, &cam);
 }
 
+#define SINK_ORIGIN_BYTES 512 /* "--replay-input FILE:LINE" (a longer name is cut) */
+
 /* ---- any thread: queueing ------------------------------------------------------------ */
 
 static void count_refused(input_sink *s, bool queued)
@@ -164,11 +166,20 @@ static void queue_mail(input_sink *s, const input_txn *t)
     }
 }
 
-/* Queue one transaction (live or replayed; a status text is also printed).
- * The wall's camera and the cursor go through the mailbox, tour and quit are
- * carried out here (input-level kinds), every other record is submitted to
- * the pipeline as it is. */
-static void queue(input_sink *s, const input_txn *t)
+/* Submit a record to the pipeline; a replayed one's refusal names its file and line. */
+static void submit(input_sink *s, const input_txn *t, const input_record_entry *from)
+{
+    char origin[SINK_ORIGIN_BYTES];
+    if (from && from->line && s->replay.name)
+        snprintf(origin, sizeof origin, "--replay-input %s:%zu", s->replay.name, from->line);
+    count_refused(s, pipeline_submit_from(s->p, t, from && from->line && s->replay.name ? origin : NULL));
+}
+
+/* Queue one transaction (live, or replayed `from` a record entry; a status
+ * text is also printed). The wall's camera and the cursor go through the
+ * mailbox, tour and quit are carried out here (input-level kinds), every
+ * other record is submitted to the pipeline as it is. */
+static void queue(input_sink *s, const input_txn *t, const input_record_entry *from)
 {
     if (s->cfg.print_status && t->kind == TXN_STATUS && t->args.status.text[0]) {
         printf("status: %s\n", t->args.status.text);
@@ -177,7 +188,7 @@ static void queue(input_sink *s, const input_txn *t)
     switch (t->kind) {
     case TXN_CAMERA:
         if (t->args.camera.channel != TXN_ALL_CHANNELS) { /* one channel's (a private view's, or replayed) */
-            count_refused(s, pipeline_submit(s->p, t));
+            submit(s, t, from);
             break;
         }
         queue_mail(s, t);
@@ -199,7 +210,7 @@ static void queue(input_sink *s, const input_txn *t)
         count_refused(s, pipeline_transaction(s->p, "input quit", apply_quit, NULL, 0));
         break;
     default:
-        count_refused(s, pipeline_submit(s->p, t));
+        submit(s, t, from);
         break;
     }
 }
@@ -225,7 +236,7 @@ void input_sink_emit(input_sink *s, const input_txn *t)
         }
         pthread_mutex_unlock(&s->record_lock);
     }
-    queue(s, t);
+    queue(s, t, NULL);
 }
 
 camera_desc input_sink_current_camera(input_sink *s)
@@ -315,7 +326,8 @@ static void replay_frame(pipeline *p, void *ctx, const frame_info *fi)
     input_sink *s = ctx;
     if (s->replay_next < s->replay.count) {
         atomic_fetch_add(&s->replayed, 1);
-        queue(s, &s->replay.entries[s->replay_next++].txn);
+        const input_record_entry *e = &s->replay.entries[s->replay_next++];
+        queue(s, &e->txn, e);
     }
 }
 
@@ -337,7 +349,7 @@ static void *replay_main(void *arg)
             nanosleep(&ts, NULL);
         }
         atomic_fetch_add(&s->replayed, 1);
-        queue(s, &s->replay.entries[i].txn);
+        queue(s, &s->replay.entries[i].txn, &s->replay.entries[i]);
     }
     return NULL;
 }
@@ -352,11 +364,13 @@ bool input_sink_replay(input_sink *s, const input_record *rec, input_replay_spee
     if (rec->count)
         memcpy(s->replay.entries, rec->entries, rec->count * sizeof *rec->entries);
     s->replay.count = s->replay.capacity = rec->count;
+    if (rec->name && !(s->replay.name = strdup(rec->name)))
+        return tess_error_set(err, "--replay-input: out of memory");
     switch (speed) {
     case INPUT_REPLAY_ALL:
         for (size_t i = 0; i < rec->count; i++) {
             atomic_fetch_add(&s->replayed, 1);
-            queue(s, &rec->entries[i].txn);
+            queue(s, &s->replay.entries[i].txn, &s->replay.entries[i]);
         }
         return true;
     case INPUT_REPLAY_FRAMES:

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "engine/assembly_load.h"
 #include "engine/mesh.h"
@@ -647,4 +648,38 @@ Test(parts_cli, errors)
     support_expect_error(scratch_dir, 30, "parts", (const char *const[]){"needs a FILE", NULL});
     support_expect_error(scratch_dir, 30, "parts %s/a.gltf --depth 0", (const char *const[]){"--depth", NULL});
     support_expect_error(scratch_dir, 30, "parts %s/a.gltf --frobnicate", (const char *const[]){"--frobnicate", NULL});
+}
+
+/* A PLY without faces is a point set: it has no parts, said in those words (assimp said
+ * "Mesh contains no faces"); an empty one says what it lacks; a directory is named as one. */
+Test(parts_cli, point_sets_empty_files_and_directories)
+{
+    static const char header[] = "ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+                                 "property float z\n%send_header\n%s";
+    char text[512];
+    snprintf(text, sizeof text, header, 3, "", "0 0 0\n1 0 0\n0 1 0\n");
+    support_write_file(scratch_dir, "points.ply", text);
+    support_expect_error(scratch_dir, 30, "parts %s/points.ply",
+                         (const char *const[]){"points.ply: a point set (3 points, no faces) has no parts",
+                                               "draws it as particles", NULL});
+    snprintf(text, sizeof text, header, 0, "", "");
+    support_write_file(scratch_dir, "none.ply", text);
+    support_expect_error(scratch_dir, 30, "parts %s/none.ply",
+                         (const char *const[]){"none.ply: no geometry (0 vertices, no faces): it has no parts", NULL});
+    snprintf(text, sizeof text, header, 0, "element face 0\nproperty list uchar int vertex_indices\n", "");
+    support_write_file(scratch_dir, "nofaces.ply", text);
+    support_expect_error(scratch_dir, 30, "parts %s/nofaces.ply",
+                         (const char *const[]){"nofaces.ply: no geometry (0 vertices, 0 faces)", NULL});
+    /* a mesh PLY is one part, as before */
+    snprintf(text, sizeof text, header, 3, "element face 1\nproperty list uchar int vertex_indices\n",
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    support_write_file(scratch_dir, "tri.ply", text);
+    char out[8192], err[8192];
+    int code = support_tessera_split(scratch_dir, 30, out, err, sizeof out, "parts", "%s/tri.ply");
+    cr_expect_eq(code, 0, "%s", err);
+    cr_expect(strstr(out, "parts=1 meshes=1 materials=1 instances=1 triangles_stored=1"), "%s", out);
+    char dir[PATH_BYTES];
+    snprintf(dir, sizeof dir, "%s/folder", scratch_dir);
+    cr_assert_eq(mkdir(dir, 0777), 0);
+    support_expect_error(scratch_dir, 30, "parts %s/folder", (const char *const[]){"folder: is a directory", NULL});
 }

@@ -49,6 +49,20 @@ Test(cli, help_lists_commands_and_options)
     cr_expect_eq(run_tessera(out, sizeof out, "run --help"), 0);
 }
 
+/* The help states each command's own defaults of --time and --rate (the README's table):
+ * render fixed at 30 Hz, run fixed at 24 Hz headless and real time on a DRM wall. */
+Test(cli, help_gives_each_commands_time_default)
+{
+    char out[16384];
+    cr_expect_eq(run_tessera(out, sizeof out, "render --help"), 0);
+    cr_expect(strstr(out, "(reproducible; default fixed)\n"), "%s", out);
+    cr_expect(strstr(out, "fixed mode (default 30)"), "%s", out);
+    cr_expect_eq(run_tessera(out, sizeof out, "run --help"), 0);
+    cr_expect(strstr(out, "(reproducible; default fixed; real on a DRM wall)"), "%s", out);
+    cr_expect(strstr(out, "fixed mode (default 24)"), "%s", out);
+    cr_expect(strstr(out, "default real)") == NULL, "%s", out);
+}
+
 Test(cli, renders_default_scene_to_png_and_exr)
 {
     char out[8192];
@@ -113,6 +127,32 @@ Test(cli, missing_scene_file)
     EXPECT_ERROR("render --scene %s/nope.ply --out %s/a.png", "nope.ply");
 }
 
+/* A frame too big for the memory the process may have: one line naming the channel, the size
+ * and what did not fit (it once said "channel 0: pipeline: channel 0: out of memory"), exit 1,
+ * no image. Run under a 3 GB address-space limit (16384x16384 needs 3 frame buffers of 3 GiB);
+ * an AddressSanitizer build needs terabytes of address space to start, so it is not run there. */
+Test(cli, a_frame_too_big_for_memory_says_so_once)
+{
+    if (strstr(support_tessera_bin(), "asan"))
+        return; /* cannot start under an address-space limit */
+    char cmd[2048], log_path[512], out[8192];
+    snprintf(log_path, sizeof log_path, "%s/oom.log", tmp_dir);
+    snprintf(cmd, sizeof cmd,
+             "ulimit -v 3000000 && timeout %d %s render --size 16384x16384 --threads 1 --out %s/big.png > %s 2>&1",
+             CLI_TIMEOUT_S, support_tessera_bin(), tmp_dir, log_path);
+    int code = support_run(cmd);
+    support_read_text(log_path, out, sizeof out);
+    cr_expect_eq(code, 1, "%s", out);
+    cr_expect(strstr(out, "error: pipeline: channel 0: out of memory for its 16384x16384 frame buffers (3 of 3.0 GiB "
+                          "each)\n"),
+              "%s", out);
+    const char *first = strstr(out, "channel 0");
+    cr_expect(first && !strstr(first + 1, "channel 0"), "the channel is named twice: %s", out);
+    char path[512];
+    snprintf(path, sizeof path, "%s/big.png", tmp_dir);
+    cr_expect(access(path, F_OK) != 0, "an image was written");
+}
+
 Test(cli, unwritable_output_path)
 {
     EXPECT_ERROR("render --size 8x8 --out %s/no/such/dir/a.png", "no/such/dir", "does not exist");
@@ -155,6 +195,30 @@ Test(cli, broken_scene_and_mesh_files)
     fwrite(face_start, sizeof face_start, 1, f);
     fclose(f);
     EXPECT_ERROR("render --scene %s/cut.ply --out %s/a.png", "cut.ply");
+}
+
+/* Scenes with nothing to draw say what they are: a PLY of points without points, a mesh without
+ * triangles; a directory is named as one (not assimp's "No suitable reader found"). */
+Test(cli, empty_point_sets_meshes_and_directories_say_what_they_are)
+{
+    write_text("nopoints.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                               "property float z\nend_header\n");
+    EXPECT_ERROR("render --scene %s/nopoints.ply --out %s/a.png --size 8x8",
+                 "nopoints.ply: scene has no geometry (the point set has no points: 0 vertices)");
+    write_text("notris.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                             "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n");
+    EXPECT_ERROR("render --scene %s/notris.ply --out %s/a.png --size 8x8",
+                 "notris.ply: scene has no geometry (the mesh has no triangles)");
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/scenes", tmp_dir);
+    cr_assert_eq(mkdir(dir, 0777), 0);
+    EXPECT_ERROR("render --scene %s/scenes --out %s/a.png --size 8x8", "scenes: is a directory (a scene is a file");
+    snprintf(dir, sizeof dir, "%s/d.json", tmp_dir);
+    cr_assert_eq(mkdir(dir, 0777), 0);
+    EXPECT_ERROR("render --scene %s/d.json --out %s/a.png --size 8x8", "d.json: is a directory");
+    char path[512];
+    snprintf(path, sizeof path, "%s/a.png", tmp_dir);
+    cr_expect(access(path, F_OK) != 0, "an image was written");
 }
 
 Test(cli, run_writes_frames_and_reports_rate)

@@ -6,6 +6,7 @@
  * image bit for bit. These also run under ThreadSanitizer (make test-tsan). */
 #include <criterion/criterion.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -167,7 +168,7 @@ Test(frame_state, opacity_starts_opaque_and_allocates_only_below_1)
     frame_state before = st;
     err = (tess_error){{0}};
     cr_expect_not(txn_apply(&past, &st, &err));
-    cr_expect(strstr(err.msg, "opacity: geometries 99..100: there are 100 geometries (ids 0..99)"), "%s", err.msg);
+    cr_expect(strstr(err.msg, "opacity: instances 99..100: the scene has 100 instances (ids 0..99)"), "%s", err.msg);
     cr_expect(memcmp(&st, &before, sizeof st) == 0);
     frame_state_finish(&st);
     cr_expect(st.part_opacity == NULL && st.translucent_count == 0);
@@ -439,6 +440,18 @@ Test(frame_state, submit_checks_records_against_the_pipeline)
     cr_expect_not(pipeline_submit(p, &tour));
     cr_expect_not(pipeline_submit(p, &bad));
     cr_expect(pipeline_submit(p, &ok));
+    /* those four were refused as invalid: counted apart from the queue's refusals */
+    pipeline_stats st = pipeline_get_stats(p);
+    cr_expect_eq(st.transactions_invalid, 4u);
+    cr_expect_eq(st.transactions_rejected, 0u);
+    /* the same checks without queueing or counting, the range in instances */
+    tess_error err = {{0}};
+    cr_expect_not(pipeline_check(p, &past, &err));
+    char want[128];
+    snprintf(want, sizeof want, "hide: instances %u..%u: the scene has %u instances (ids 0..%u)", n - 1, n, n, n - 1);
+    cr_expect_str_eq(err.msg, want);
+    cr_expect(pipeline_check(p, &ok, &err));
+    cr_expect_eq(pipeline_get_stats(p).transactions_invalid, 4u);
     /* part opacity is checked against the geometries; the global one needs none */
     txn_record past_opacity = txn_opacity(n - 1, 2, 0.5f), part_opacity = txn_opacity(n - 1, 1, 0.5f),
                all_opacity = txn_opacity_all(0.5f);

@@ -840,13 +840,13 @@ Test(input, bad_record_files_name_the_line_and_the_problem)
         {INPUT_RECORD_HEADER "\n0.1 cursor 1 0.1 0\n", "rec.txt:2: cursor x: 0.10000000000000001 is not exactly a float"},
         {INPUT_RECORD_HEADER "\n0.1 status \"abc\n", "rec.txt:2: status: the text has no closing quote"},
         {INPUT_RECORD_HEADER "\n0.1 status \"a\\q\"\n", "rec.txt:2: status: unknown escape"},
-        {INPUT_RECORD_HEADER "\n0.1 hide -1 1\n", "rec.txt:2: hide: the geometry id must be a whole number"},
-        {INPUT_RECORD_HEADER_V1 "\n0.1 hide -1\n", "rec.txt:2: hide: the geometry id must be a whole number"},
+        {INPUT_RECORD_HEADER "\n0.1 hide -1 1\n", "rec.txt:2: hide: the instance id must be a whole number"},
+        {INPUT_RECORD_HEADER_V1 "\n0.1 hide -1\n", "rec.txt:2: hide: the instance id must be a whole number"},
         {INPUT_RECORD_HEADER "\n0.1 tour 1 extra\n", "rec.txt:2: unexpected text after the transaction"},
         {INPUT_RECORD_HEADER "\n-1 quit\n", "rec.txt:2: the time is negative"},
         /* found by fuzzing (tests/fuzz/corpus/record/crash-control-char): words
          * with control characters are quoted as '?', so the message stays one line */
-        {INPUT_RECORD_HEADER "\n0.1 hide 3\x14\n", "rec.txt:2: hide geometry id: expected a finite number, got '3?'"},
+        {INPUT_RECORD_HEADER "\n0.1 hide 3\x14\n", "rec.txt:2: hide instance id: expected a finite number, got '3?'"},
         {INPUT_RECORD_HEADER "\n0.1 zo\x1b[2Jom\r\n", "rec.txt:2: unknown transaction kind 'zo?[2Jom'"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {

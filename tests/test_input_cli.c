@@ -213,6 +213,30 @@ Test(input_cli, a_broken_record_names_the_file_the_line_and_the_problem)
                  "noheader.rec:1:", INPUT_RECORD_HEADER);
 }
 
+/* A record the scene cannot take (an instance or a channel it does not have): render's replay
+ * is a reproduction, so that is an error naming the line, before anything is rendered; run
+ * (a kiosk) logs it with its line, counts it in the summary and goes on. */
+Test(input_cli, a_replayed_record_the_scene_refuses)
+{
+    write_record("past.rec", "0.75 hide 0 1\n0.75 hide 99 5\n0.8 camera 5 0x1p+0 0x1p+0 0x1p+0 0x0p+0 0x0p+0 "
+                             "0x0p+0 0x0p+0 0x1p+0 0x0p+0 0x1.ep+5\n0.9 show-all\n");
+    EXPECT_ERROR(1, "render --replay-input %s/past.rec --out %s/a.png --size 32x18 --threads 1",
+                 "--replay-input", "past.rec:5: hide: instances 99..103: the scene has",
+                 "past.rec:6: camera: no channel 5 (there are 1)", "2 of 5 records refused", "nothing rendered");
+    char text[64];
+    read_file("a.png", text, sizeof text);
+    cr_expect(text[0] == '\0', "an image was written anyway");
+    /* run: logged with the line, counted, the run goes on */
+    cr_assert_eq(run("run --replay-input %s/past.rec --replay-speed all --display null --frames 2 --size 32x18 "
+                     "--threads 1"),
+                 0, "%s", err_text);
+    cr_expect(strstr(err_text, "transaction refused: --replay-input") && strstr(err_text, "past.rec:5: hide: "
+                                                                                        "instances 99..103"),
+              "%s", err_text);
+    cr_expect(strstr(err_text, "past.rec:6: camera: no channel 5"), "%s", err_text);
+    cr_expect(strstr(err_text, "(2 refused, "), "the summary does not count them: %s", err_text);
+}
+
 Test(input_cli, path_and_replay_together_are_refused)
 {
     write_record("ok.rec", "");

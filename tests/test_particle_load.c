@@ -646,11 +646,14 @@ Test(particle_load, lammps_errors)
     expect_error(particles_load_lammps, path, "column name 'c_a_column_name_of_32_characters' longer than 31 characters");
 
     write_dump(path, "absurd.dump", "1000000", "pp pp pp", "id x y z", "1 0 0 0\n");
-    expect_error(particles_load_lammps, path,
-                 "NUMBER OF ATOMS 1000000: the rest of the file (8 bytes) cannot hold that many lines of 4 columns");
+    /* an absurd count is the count's line's fault (line 4), not the ATOMS line's (9) */
+    expect_error(particles_load_lammps, path, at_line(where, path, 4),
+                 "NUMBER OF ATOMS 1000000: the rest of the file after line 9 (8 bytes) cannot hold that many lines of "
+                 "4 columns");
 
     write_dump(path, "over_max.dump", "3000000000", "pp pp pp", "id x y z", "1 0 0 0\n");
-    expect_error(particles_load_lammps, path, "NUMBER OF ATOMS 3000000000: more than a particle set can hold");
+    expect_error(particles_load_lammps, path, at_line(where, path, 4),
+                 "NUMBER OF ATOMS 3000000000: more than a particle set can hold");
 
     write_dump(path, "minus.dump", "-3", "pp pp pp", "id x y z", "1 0 0 0\n");
     expect_error(particles_load_lammps, path, at_line(where, path, 4), "ITEM: NUMBER OF ATOMS: expected a count, got '-3'");

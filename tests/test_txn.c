@@ -184,7 +184,7 @@ Test(txn, the_binary_layout_is_little_endian_as_documented)
     b[8] = 0; /* count 0 */
     err = (tess_error){{0}};
     cr_expect_not(txn_decode_binary(b, &back, &err));
-    cr_expect(strstr(err.msg, "highlight: count: 0 geometries"), "%s", err.msg);
+    cr_expect(strstr(err.msg, "highlight: count: 0 instances"), "%s", err.msg);
 }
 
 Test(txn, bad_values_are_refused_naming_the_field)
@@ -211,7 +211,7 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_cursor(true, NAN, 0.f), "cursor: sx: nan is not finite"},
         {txn_cursor(false, 0.f, -INFINITY), "cursor: sy: -inf is not finite"},
         {unterminated, "status: text: not terminated"},
-        {txn_geoms_record(TXN_HIDE, 0, 0), "hide: count: 0 geometries"},
+        {txn_geoms_record(TXN_HIDE, 0, 0), "hide: count: 0 instances"},
         {txn_geoms_record(TXN_SHOW, UINT32_MAX, 2), "show: first 4294967295 + count 2 is past"},
         {txn_geoms_record(TXN_ISOLATE, 1, 0), "isolate: count: 0"},
         {txn_highlight(0, 0, true), "highlight: count: 0"},
@@ -227,7 +227,7 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_opacity_all(-0.1f), "opacity: a: -0.1 is not a finite value in [0, 1]"},
         {txn_opacity_all(1.5f), "opacity: a: 1.5 is not a finite value in [0, 1]"},
         {txn_opacity(0, 1, NAN), "opacity: a: nan is not"},
-        {txn_opacity(0, 0, 0.5f), "opacity: count: 0 geometries"},
+        {txn_opacity(0, 0, 0.5f), "opacity: count: 0 instances"},
         {txn_opacity(UINT32_MAX, 2, 0.5f), "opacity: first 4294967295 + count 2 is past"},
         {all_with_range, "opacity: first/count: 2 1 with all (must be 0 0)"},
         {txn_clip_plane(-1, true, origin, up), "clip-plane: index: -1 is not in 0..7"},
@@ -238,10 +238,10 @@ Test(txn, bad_values_are_refused_naming_the_field)
         {txn_crop(0, 1, true, NAN, 1.f), "crop: lo: nan is not finite"},
         {txn_crop(0, 1, true, 0.f, INFINITY), "crop: hi: inf is not finite"},
         {txn_crop(0, 1, true, 2.f, 1.f), "crop: lo 2 is above hi 1"},
-        {txn_crop(0, 0, false, 0.f, 1.f), "crop: count: 0 geometries"},
+        {txn_crop(0, 0, false, 0.f, 1.f), "crop: count: 0 instances"},
         {txn_value(0, 1, NAN), "value: v: nan is not finite"},
         {txn_colormap(0, 1, "jet"), "colormap: name: no built-in map 'jet'"},
-        {txn_colormap(0, 0, "magma"), "colormap: count: 0 geometries"},
+        {txn_colormap(0, 0, "magma"), "colormap: count: 0 instances"},
         {txn_transfer("viridis"), "transfer: name: no built-in transfer function 'viridis' (one with opacity)"},
         {txn_pointer(8, true, 0.f, 0.f), "pointer: slot: 8 is not in 0..7"},
         {txn_pointer(-1, false, 0.f, 0.f), "pointer: slot: -1 is not in 0..7"},
@@ -279,7 +279,7 @@ Test(txn, bad_text_names_the_field)
         {"cursor 1 0.1 0", "cursor x: 0.10000000000000001 is not exactly a float"},
         {"hide 1", "hide count is missing"},
         {"isolate 1 0", "isolate: the count must be a whole number >= 1"},
-        {"show 1.5 1", "show: the geometry id must be a whole number >= 0"},
+        {"show 1.5 1", "show: the instance id must be a whole number >= 0"},
         {"highlight 1 1 2", "highlight on/off: expected 0 or 1, got '2'"},
         {"colour 1 1 rest", "colour r: expected a finite number, got 'rest'"},
         {"status \"a\\x00b\"", "status: the text holds a NUL byte"},
@@ -291,7 +291,7 @@ Test(txn, bad_text_names_the_field)
         {"status \"a", "status: the text has no closing quote"},
         {"opacity all", "opacity a is missing"},
         {"opacity all 2", "opacity: a: 2 is not a finite value in [0, 1]"},
-        {"opacity al 0.5", "opacity geometry id: expected a finite number, got 'al'"},
+        {"opacity al 0.5", "opacity instance id: expected a finite number, got 'al'"},
         {"opacity 1 0 0.5", "opacity: the count must be a whole number >= 1"},
         {"opacity 1 1 0.1", "opacity a: 0.10000000000000001 is not exactly a float"},
         {"opacity all 0.5 1", "unexpected text after the transaction"},
@@ -355,7 +355,7 @@ Test(txn, every_engine_kind_applies_to_a_frame_state)
     txn_record past = txn_geoms_record(TXN_HIDE, GEOMS - 1, 2);
     err = (tess_error){{0}};
     cr_expect_not(txn_apply(&past, &st, &err));
-    cr_expect(strstr(err.msg, "hide: geometries 9..10: there are 10 geometries (ids 0..9)"), "%s", err.msg);
+    cr_expect(strstr(err.msg, "hide: instances 9..10: the scene has 10 instances (ids 0..9)"), "%s", err.msg);
     txn_record ch = txn_channel_active(2, true);
     err = (tess_error){{0}};
     cr_expect_not(txn_apply(&ch, &st, &err));
@@ -467,5 +467,31 @@ Test(txn, a_clip_plane_normal_is_stored_normalised_in_double_rounded_once)
     cr_expect(p[2].normal.x == (float)(1.0 / 3.0) && p[2].normal.y == (float)(2.0 / 3.0));
     cr_expect(p[3].normal.x == 0.f && p[3].normal.y == -1.f && p[3].normal.z == 0.f);
     cr_expect(p[1].normal.x == 1.f);
+    frame_state_finish(&st);
+}
+
+/* Out of range, in user terms: geometry ids are the instances a part covers. */
+Test(txn, an_out_of_range_record_names_instances)
+{
+    static const struct {
+        uint32_t first, count, have;
+        const char *msg;
+    } cases[] = {
+        {99999, 5, 2000, "hide: instances 99999..100003: the scene has 2000 instances (ids 0..1999)"},
+        {3, 1, 1, "hide: instance 3: the scene has 1 instance (id 0)"},
+        {0, 2, 0, "hide: instances 0..1: the scene has no instances"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        tess_error err = {{0}};
+        txn_geoms g = {cases[i].first, cases[i].count};
+        cr_expect_not(txn_range_error("hide", &g, cases[i].have, &err));
+        cr_expect_str_eq(err.msg, cases[i].msg);
+    }
+    frame_state st;
+    frame_state_init(&st, renderer_by_name("raytracer"), true, 1, 1);
+    txn_record past = txn_geoms_record(TXN_ISOLATE, 1, 1);
+    tess_error err = {{0}};
+    cr_expect_not(txn_apply(&past, &st, &err));
+    cr_expect_str_eq(err.msg, "isolate: instance 1: the scene has 1 instance (id 0)");
     frame_state_finish(&st);
 }

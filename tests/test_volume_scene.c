@@ -205,3 +205,36 @@ Test(volume_scene, an_iso_surface_starts_with_its_opacity)
     cr_expect_gt(green[1], 0.2f, "opacity 0.4: the inner surface shows through (%g)", (double)green[1]);
     support_remove_tmp_dir(dir);
 }
+
+/* The scene counts its volumes and their samples, and the run's summary line says so (it said
+ * "2 triangles, 0 spheres, 0 particles" for the MRI head); a scene without volumes is not
+ * told it has none. */
+Test(volume_scene, the_summary_line_counts_volumes)
+{
+    char dir[256];
+    support_make_tmp_dir(dir, sizeof dir, "volsummary");
+    write_ball(dir);
+    tess_error err = {{0}};
+    scene *s = load(dir,
+                    "{\"file\": \"ball.txt\", \"iso\": [{\"value\": 100}, {\"value\": 150}]},"
+                    " {\"file\": \"ball.txt\", \"dvr\": {\"transfer\": \"mri-soft\"}}",
+                    &err);
+    cr_assert(s, "%s", err.msg);
+    cr_expect_eq(s->volume_count, 2u, "two entries, the first with two iso-surfaces");
+    cr_expect_eq(s->volume_voxels, 2u * N * N * N);
+    scene_destroy(s);
+    support_write_file(dir, "scene.json",
+                       "{\"camera\": {\"eye\": [0, 0, 60], \"look_at\": [0, 0, 0], \"fov_deg\": 30},"
+                       " \"lights\": [{\"type\": \"directional\", \"direction\": [0, 0, 1]}], \"volumes\": ["
+                       "{\"file\": \"ball.txt\", \"iso\": [{\"value\": 100}, {\"value\": 150}]},"
+                       " {\"file\": \"ball.txt\", \"dvr\": {\"transfer\": \"mri-soft\"}}]}");
+    char out[8192];
+    int code = support_tessera(dir, 60, out, sizeof out, "render --scene %s/scene.json --size 8x8 --out %s/a.png");
+    cr_expect_eq(code, 0, "%s", out);
+    cr_expect(strstr(out, ": 0 triangles, 0 spheres, 0 particles, 2 volumes (0.0655 M voxels), 1 light; loaded in"),
+              "%s", out);
+    code = support_tessera(dir, 60, out, sizeof out, "render --size 8x8 --out %s/b.png");
+    cr_expect_eq(code, 0, "%s", out);
+    cr_expect(strstr(out, ": 9218 triangles, 7 spheres, 0 particles, 2 lights; loaded in"), "%s", out);
+    support_remove_tmp_dir(dir);
+}

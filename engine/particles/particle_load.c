@@ -285,6 +285,7 @@ typedef struct lammps_loader {
     int64_t timestep;           /* ITEM: TIMESTEP, -1 before it */
     bool have_count;            /* ITEM: NUMBER OF ATOMS was read */
     uint64_t atom_count;        /* its value */
+    uint64_t count_line;        /* the line it was read from (messages about the count cite it) */
     bool have_box;              /* ITEM: BOX BOUNDS was read */
     bool triclinic;             /* the box is tilted ("xy xz yz" or "abc origin") */
     double box_lo[3], box_hi[3]; /* the first two numbers of each box line */
@@ -292,16 +293,34 @@ typedef struct lammps_loader {
 } lammps_loader;
 
 static bool lammps_fail(lammps_loader *ld, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static bool lammps_fail_at(lammps_loader *ld, uint64_t line, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 
-/* Set "PATH:LINE: what"; returns false. */
-static bool lammps_fail(lammps_loader *ld, const char *fmt, ...)
+static bool fail_v(lammps_loader *ld, uint64_t line, const char *fmt, va_list ap)
 {
     char what[TESS_ERROR_MSG_BYTES];
+    vsnprintf(what, sizeof what, fmt, ap);
+    return tess_error_set(ld->err, "%s:%" PRIu64 ": %s", ld->path, line, what);
+}
+
+/* Set "PATH:LINE: what" for the current line; returns false. */
+static bool lammps_fail(lammps_loader *ld, const char *fmt, ...)
+{
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(what, sizeof what, fmt, ap);
+    bool r = fail_v(ld, ld->line, fmt, ap);
     va_end(ap);
-    return tess_error_set(ld->err, "%s:%" PRIu64 ": %s", ld->path, ld->line, what);
+    return r;
+}
+
+/* The same for an earlier line (the count's, when the atoms cannot be what it says). */
+static bool lammps_fail_at(lammps_loader *ld, uint64_t line, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    bool r = fail_v(ld, line, fmt, ap);
+    va_end(ap);
+    return r;
 }
 
 static inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
@@ -389,7 +408,11 @@ static bool lammps_atom_count(lammps_loader *ld)
     if (!ok)
         return lammps_fail(ld, "ITEM: NUMBER OF ATOMS: expected a count, got '%.*s'", QUOTE_CHARS,
                            skip_blanks(line));
+    if (v > PARTICLE_MAX_COUNT)
+        return lammps_fail(ld, "NUMBER OF ATOMS %" PRIu64 ": more than a particle set can hold (%" PRIu32 ")", v,
+                           (uint32_t)PARTICLE_MAX_COUNT);
     ld->atom_count = v;
+    ld->count_line = ld->line;
     ld->have_count = true;
     return true;
 }
@@ -511,17 +534,14 @@ static bool lammps_columns_parse(lammps_loader *ld, char *words, lammps_columns 
  * has at least two characters per column (a digit and a separator). */
 static bool lammps_prepare(lammps_loader *ld, const lammps_columns *c)
 {
-    if (ld->atom_count > PARTICLE_MAX_COUNT)
-        return lammps_fail(ld, "NUMBER OF ATOMS %" PRIu64 ": more than a particle set can hold (%" PRIu32 ")",
-                           ld->atom_count, (uint32_t)PARTICLE_MAX_COUNT);
     uint64_t read = ld->in.base + ld->in.pos;
     uint64_t rest = ld->file_bytes > read ? ld->file_bytes - read : 0;
     uint64_t fit = (rest + 1) / (2 * (uint64_t)c->count); /* the last line may lack its newline */
     if (ld->atom_count > fit)
-        return lammps_fail(ld,
-                           "NUMBER OF ATOMS %" PRIu64 ": the rest of the file (%" PRIu64
-                           " bytes) cannot hold that many lines of %zu columns",
-                           ld->atom_count, rest, c->count);
+        return lammps_fail_at(ld, ld->count_line,
+                              "NUMBER OF ATOMS %" PRIu64 ": the rest of the file after line %" PRIu64 " (%" PRIu64
+                              " bytes) cannot hold that many lines of %zu columns",
+                              ld->atom_count, ld->line, rest, c->count);
     ld->p = particle_set_create();
     if (!ld->p || !particle_set_reserve(ld->p, (uint32_t)ld->atom_count))
         return lammps_fail(ld, "out of memory for %" PRIu64 " atoms", ld->atom_count);

@@ -104,6 +104,7 @@ bool volume_json_add(jr_ctx *c, json_object *obj, volume *v, const char *const *
         return false;
     }
     tess_error why = {{0}};
+    uint64_t voxels = (uint64_t)v->nx * v->ny * v->nz;
     macrocell_grid *grid = macrocell_grid_create(v, (uint32_t)k, &why);
     if (!grid) {
         volume_destroy(v);
@@ -134,5 +135,9 @@ bool volume_json_add(jr_ctx *c, json_object *obj, volume *v, const char *const *
         jr_field_leave(c, outer);
     }
     iso_volume_release(shared); /* the kinds and the medium hold their own */
+    if (ok) {
+        s->volume_count++;
+        s->volume_voxels += voxels;
+    }
     return ok;
 }

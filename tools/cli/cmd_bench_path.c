@@ -645,7 +645,7 @@ static void usage(FILE *f)
           "  --keep-noisy     --scaling: keep runs during which other programs were busy (for a control\n"
           "                   that runs copies side by side); by default such runs are repeated\n",
           f);
-    cli_pipeline_usage(f);
+    cli_pipeline_usage(f, "bench sets it: real for --path, fixed for --scaling", "30");
 }
 
 int cli_bench_path(int argc, char **argv)

@@ -17,11 +17,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli.h"
 #include "engine/assembly_load.h"
 #include "engine/mesh.h"
 #include "engine/part_tree.h"
+#include "engine/ply_read.h"
 
 typedef struct parts_options {
     const char *path;
@@ -233,12 +235,40 @@ static bool print_tree(const parts_options *o, const parts_count *c, double load
     return true;
 }
 
+/* A PLY without faces is a point set: no part tree (assimp would only say "Mesh contains no
+ * faces"). False after saying so; true for any other file (a broken header too: the loader
+ * then says what is wrong with it). */
+static bool not_a_point_set(const char *path)
+{
+    size_t n = strlen(path);
+    if (n < 4 || strcasecmp(path + n - 4, ".ply") != 0)
+        return true;
+    uint64_t vertices;
+    int64_t faces;
+    tess_error err = {{0}};
+    if (!ply_probe_counts(path, &vertices, &faces, &err)) {
+        cli_error("%s", err.msg);
+        return false;
+    }
+    if (faces > 0)
+        return true;
+    if (vertices == 0)
+        cli_error("%s: no geometry (0 vertices, %s): it has no parts", path, faces < 0 ? "no faces" : "0 faces");
+    else
+        cli_error("%s: a point set (%" PRIu64 " points, %s) has no parts: 'tessera render --scene %s' draws it as "
+                  "particles",
+                  path, vertices, faces < 0 ? "no faces" : "0 faces", path);
+    return false;
+}
+
 int cli_parts(int argc, char **argv)
 {
     parts_options o = {.max_depth = PART_MAX_COUNT, .pattern = "**"};
     int code;
     if (!parse_options(argc, argv, &o, &code))
         return code;
+    if (!not_a_point_set(o.path))
+        return 1;
     parts_count c = {.tree = part_tree_create()};
     if (!c.tree) {
         cli_error("out of memory");

@@ -322,7 +322,7 @@ static void render_usage(FILE *f)
           "                   the same view (default 1: no upscaling; a wall: every output); --upscale\n"
           "                   (below) is its filter\n",
           f);
-    cli_pipeline_usage(f);
+    cli_pipeline_usage(f, "fixed", "30");
 }
 
 int cli_render(int argc, char **argv)
@@ -345,6 +345,7 @@ int cli_render(int argc, char **argv)
         return 2;
     if (!s.input.replay_speed_given)
         s.input.replay_speed = INPUT_REPLAY_ALL;
+    s.input.replay_strict = true; /* a replayed record refused: exit 1, no image (run logs and counts it) */
     cli_check_ignored_render_run(&given, &s, "render");
     int done = run_job(&s, scene_path, false, NULL);
     cli_cluster_end();
@@ -377,7 +378,7 @@ static void run_usage(FILE *f)
           "  (headless, run's default time is fixed at 24 Hz: frame k shows time k/24 s; with\n"
           "  drm it is real time: give --time fixed --rate HZ for reproducible frames on a wall)\n",
           f);
-    cli_pipeline_usage(f);
+    cli_pipeline_usage(f, "fixed; real on a DRM wall", "24");
 }
 
 int cli_run(int argc, char **argv)

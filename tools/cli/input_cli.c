@@ -428,6 +428,32 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     return true;
 }
 
+/* Render's replay: every record the pipeline would refuse (an instance or a
+ * channel the scene does not have) is an error naming its line, before any
+ * frame is rendered: an image of a replay that went differently is not what
+ * was asked for. The input-level kinds (tour, quit) are the sink's. */
+static bool replay_checks(const pipeline *p, const input_record *rec)
+{
+    enum { SHOWN = 10 };
+    size_t refused = 0;
+    for (size_t i = 0; i < rec->count; i++) {
+        const input_record_entry *e = &rec->entries[i];
+        tess_error err = {{0}};
+        if (txn_kind_input_level(e->txn.kind) || pipeline_check(p, &e->txn, &err))
+            continue;
+        if (++refused <= SHOWN)
+            cli_error("--replay-input %s:%zu: %s", rec->name ? rec->name : "?", e->line, err.msg);
+    }
+    if (!refused)
+        return true;
+    if (refused > SHOWN)
+        cli_error("--replay-input %s: %zu more refused records not shown", rec->name ? rec->name : "?",
+                  refused - SHOWN);
+    cli_error("--replay-input %s: %zu of %zu record%s refused for this scene: nothing rendered",
+              rec->name ? rec->name : "?", refused, rec->count, rec->count == 1 ? "" : "s");
+    return false;
+}
+
 cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files)
 {
     cli_input *in = calloc(1, sizeof *in);
@@ -460,6 +486,10 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
         input_record rec;
         if (!input_record_load(s->replay_file, &rec, &err)) {
             cli_error("--replay-input %s", err.msg);
+            goto fail;
+        }
+        if (s->replay_strict && !replay_checks(p, &rec)) {
+            input_record_free(&rec);
             goto fail;
         }
         bool ok = input_sink_replay(in->sink, &rec, s->replay_speed, &err);

@@ -33,6 +33,8 @@ typedef struct cli_input_spec {
     char replay_file[CLI_INPUT_PATH_BYTES];
     input_replay_speed replay_speed;
     bool replay_speed_given;
+    bool replay_strict;          /* render: a replayed record the pipeline would refuse is an error of the
+                                  * run (checked before the first frame); run: logged and counted */
     bool enabled_from_config;    /* enabled came from a config's input.enabled (for messages) */
     bool devices_from_cmdline, map_from_cmdline; /* the command line's lists replace the config's */
 } cli_input_spec;

@@ -609,13 +609,16 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
     return cli_input_option(argc, argv, i, &s->input, handled);
 }
 
-void cli_pipeline_usage(FILE *f)
+void cli_pipeline_usage(FILE *f, const char *time_default, const char *rate_default)
 {
-    fputs("pipeline options (a --config file sets the same; the command line wins):\n"
-          "  --config FILE    pipeline config (JSON; docs/pipeline-config.md): components, channels\n"
-          "  --threads N      render threads (default: the number of CPUs)\n"
-          "  --time real|fixed  frame time: the clock, or frame / rate (reproducible; default real)\n"
-          "  --rate HZ        frames per second of time in fixed mode (default 30)\n"
+    fprintf(f,
+            "pipeline options (a --config file sets the same; the command line wins):\n"
+            "  --config FILE    pipeline config (JSON; docs/pipeline-config.md): components, channels\n"
+            "  --threads N      render threads (default: the number of CPUs)\n"
+            "  --time real|fixed  frame time: the clock, or frame / rate (reproducible; default %s)\n"
+            "  --rate HZ        frames per second of time in fixed mode (default %s)\n",
+            time_default, rate_default);
+    fputs("  --tile-size N    tile edge in pixels, 4..256 (default 16)\n"
           "  --tile-size N    tile edge in pixels, 4..256 (default 16)\n"
           "  --tile-order O   order tiles are handed out: rows, columns, morton, hilbert, spiral,\n"
           "                   shuffle (default rows; the image does not depend on it)\n"
@@ -881,9 +884,13 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
         image_display *d = display_create(ch->display, ch->out, s->frames != 1, &err);
         if (d && s->wrap_display)
             d = s->wrap_display(s->wrap_ctx, i, d, &err);
-        int added = d ? pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) : -1;
-        if (added < 0) {
+        if (!d) {
             cli_error("channel %d: %s", i, err.msg);
+            pipeline_destroy(p);
+            return NULL;
+        }
+        if (pipeline_add_channel(p, &cam, ch->width_px, ch->height_px, d, &err) < 0) {
+            cli_error("%s", err.msg); /* the pipeline's errors name the channel */
             pipeline_destroy(p);
             return NULL;
         }
@@ -994,7 +1001,8 @@ void cli_pipeline_report(pipeline *p, const cli_pipeline_spec *s)
             "tessera: pipeline: %llu frames rendered, %llu displayed, %llu transactions (%llu refused, %llu slow), "
             "%d channel%s, %d threads\n",
             (unsigned long long)st.frames_rendered, (unsigned long long)st.frames_displayed,
-            (unsigned long long)st.transactions_applied, (unsigned long long)st.transactions_rejected,
+            (unsigned long long)st.transactions_applied,
+            (unsigned long long)(st.transactions_rejected + st.transactions_invalid),
             (unsigned long long)st.slow_callbacks, pipeline_channel_count(p), pipeline_channel_count(p) == 1 ? "" : "s",
             s->threads);
     if (s->budget_ms > 0.0)

@@ -95,8 +95,9 @@ bool cli_pipeline_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bo
  * command line overrides the file whatever the order). */
 const char *cli_pipeline_find_config(int argc, char **argv);
 
-/* The option help shared by the commands. */
-void cli_pipeline_usage(FILE *f);
+/* The option help shared by the commands, with the command's defaults of
+ * --time and --rate (e.g. "fixed", "30"). */
+void cli_pipeline_usage(FILE *f, const char *time_default, const char *rate_default);
 
 /* The pipeline config the spec describes (threads, time, frames, components). */
 pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene *cs);

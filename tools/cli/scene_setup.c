@@ -31,12 +31,16 @@ bool cli_scene_prepare_with(const char *scene_path, const struct scene_load_opti
     }
     out->load_s = t1 - t0;
     out->build_s = cli_now_s() - t1;
+    const scene *s = out->scene;
+    char volumes[96] = ""; /* only a scene with volumes says so */
+    if (s->volume_count)
+        snprintf(volumes, sizeof volumes, ", %u volume%s (%.3g M voxels)", s->volume_count,
+                 s->volume_count == 1 ? "" : "s", (double)s->volume_voxels * 1e-6);
     fprintf(stderr,
-            "tessera: scene %s: %zu triangles, %u spheres, %zu particles, %u lights; loaded in %.3f s, BVH built in "
+            "tessera: scene %s: %zu triangles, %u spheres, %zu particles%s, %u light%s; loaded in %.3f s, BVH built in "
             "%.3f s (%s kernels)\n",
-            out->name, scene_triangle_count(out->scene), out->scene->spheres.count, scene_point_count(out->scene),
-            out->scene->light_count,
-            out->load_s, out->build_s, accel_isa_name(out->accel));
+            out->name, scene_triangle_count(s), s->spheres.count, scene_point_count(s), volumes, s->light_count,
+            s->light_count == 1 ? "" : "s", out->load_s, out->build_s, accel_isa_name(out->accel));
     return true;
 }
 
