@@ -62,6 +62,20 @@ ao_fastest_within() { # scene metric bound
 }
 ao_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }'; }
 
+# The section's plots from $WORK/ao.tsv (tools/report/replot.sh redraws them alone).
+ao_plots() {
+    off_series="filter-off=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f1-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
+    on_series="filter-5=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f5-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
+    off_frames="frames-filter-off=n8-f1-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f1-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
+    on_frames="frames-filter-5=n8-f5-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f5-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
+    report_plot ao flip "mean FLIP against the reference (0 = identical)" \
+        "Ambient occlusion: frame time against mean FLIP (labels: rays per hit, rays x frames)" '' \
+        "$off_series" "$on_series" "$off_frames" "$on_frames"
+    report_plot ao rmse "RMSE against the reference (linear RGB)" \
+        "Ambient occlusion: frame time against RMSE (labels: rays per hit, rays x frames)" '' \
+        "$off_series" "$on_series" "$off_frames" "$on_frames"
+}
+
 knob_ao() { # scene labels...
     out=$WORK/section_ao.md
     ao_load_before=$(cat /proc/loadavg)
@@ -90,16 +104,7 @@ knob_ao() { # scene labels...
         # shellcheck disable=SC2086
         report_curve ao "$scene" $set_list
     done
-    off_series="filter-off=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f1-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
-    on_series="filter-5=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f5-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
-    off_frames="frames-filter-off=n8-f1-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f1-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
-    on_frames="frames-filter-5=n8-f5-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f5-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
-    report_plot ao flip "mean FLIP against the reference (0 = identical)" \
-        "Ambient occlusion: frame time against mean FLIP (labels: rays per hit, rays x frames)" '' \
-        "$off_series" "$on_series" "$off_frames" "$on_frames"
-    report_plot ao rmse "RMSE against the reference (linear RGB)" \
-        "Ambient occlusion: frame time against RMSE (labels: rays per hit, rays x frames)" '' \
-        "$off_series" "$on_series" "$off_frames" "$on_frames"
+    ao_plots
     cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
     ao_load_after=$(cat /proc/loadavg)
     {
