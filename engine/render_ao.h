@@ -21,8 +21,9 @@
  * response is applied to each AO frame's filtered A before frames are
  * averaged (by renderer.ao.frames or the governor's accumulation), so for
  * e > 1 the accumulation converges to the mean of A_f^e, slightly brighter
- * than A^e where an N-ray estimate still varies (Jensen); e = 1 keeps the
- * exact convergence of FRAMES below. raytracer-ao ignores e: its term is
+ * than A^e where an N-ray estimate still varies (Jensen; dragon, 16 rays x
+ * 16 frames: 0.7 of 255 codes on average, 3 at the 99th percentile); e = 1
+ * keeps the exact convergence of FRAMES below. raytracer-ao ignores e: its term is
  * light (TERM), linear in A.
  *
  * DEFAULTS (render_settings_default; issue 33, docs/inspection.md has the
