@@ -393,6 +393,9 @@ static bool settings_validate(const render_settings *s, tess_error *err)
     if (s->ao_frames < 1 || s->ao_frames > PIPELINE_AO_FRAMES_MAX)
         return tess_error_set(err, "pipeline: settings.ao_frames: %d is not in 1..%d", s->ao_frames,
                               PIPELINE_AO_FRAMES_MAX);
+    if (!(s->ao_exponent >= 1.f && s->ao_exponent <= RENDER_AO_EXPONENT_MAX))
+        return tess_error_set(err, "pipeline: settings.ao_exponent: %g is not in [1, %g]", (double)s->ao_exponent,
+                              (double)RENDER_AO_EXPONENT_MAX);
     return true;
 }
 

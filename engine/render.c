@@ -1009,11 +1009,12 @@ render_settings render_settings_default(void)
     s.transparent_shadows = true;
     s.caps = true;
     s.cap_style = RENDER_CAP_TINT;
-    s.ao_rays = 8;
+    s.ao_rays = 16;
     s.ao_distance = 0.f;
     s.ao_interleave = 4;
     s.ao_filter_px = 5;
     s.ao_frames = 1;
+    s.ao_exponent = RENDER_AO_EXPONENT_DEFAULT;
     s.ao_frame_base = 0;
     return s;
 }

@@ -54,16 +54,22 @@ typedef struct render_settings {
     bool caps;                /* draw the cut faces of closed parts */
     render_cap_style cap_style;
     /* ambient occlusion (renderers "ao" and "raytracer-ao") */
-    int ao_rays;              /* rays per hit, 1..64 */
-    float ao_distance;        /* world units; <= 0: 0.1 x the scene's bounding-box diagonal */
+    int ao_rays;              /* rays per hit, 1..64 (default 16: render_ao.h, DEFAULTS) */
+    float ao_distance;        /* world units; <= 0: RENDER_AO_DISTANCE_FRACTION x the scene's bounding-box
+                                 diagonal */
     int ao_interleave;        /* K: a K x K pixel pattern of direction sets, 1..8 */
     int ao_filter_px;         /* discontinuity filter edge (odd, 1 = off), <= 9 */
     int ao_frames;            /* F: AO frames averaged per pixel sample, 1..64 (render_ao.h, FRAMES) */
+    float ao_exponent;        /* renderer "ao" shows kd x A^exponent, 1..8 (render_ao.h, RESPONSE); 1: linear */
     uint32_t ao_frame_base;   /* first AO frame (render_ao.h, FRAMES); 0 but in tests */
 } render_settings;
 
 #define RENDER_MIN_TRANSMITTANCE_DEFAULT (1.f / 255.f)
 #define RENDER_MAX_LAYERS_DEFAULT 16
+/* ambient occlusion's defaults and limits (render_ao.h, DEFAULTS) */
+#define RENDER_AO_DISTANCE_FRACTION 0.2f /* of the scene box's diagonal, when ao_distance <= 0 */
+#define RENDER_AO_EXPONENT_DEFAULT 2.2f
+#define RENDER_AO_EXPONENT_MAX 8.f
 
 render_settings render_settings_default(void);
 

@@ -61,6 +61,7 @@ typedef struct ao_params {
     int frames;      /* F, 1 .. AO_MAX_FRAMES (render_ao.h, FRAMES) */
     uint32_t frame_base;
     float distance;  /* AO ray length, world units (unit directions) */
+    float exponent;  /* renderer ao: the pixel is kd x A^exponent (render_ao.h, RESPONSE); 1 exactly: kd x A */
     bool term;       /* raytracer-ao: occlusion darkens the raytracer's ambient light (render_ao.h, TERM);
                         false: renderer ao, occlusion alone */
 } ao_params;
@@ -113,7 +114,7 @@ float render_ao_distance(const render_view *v)
     vec3 lo, hi;
     if (!accel_scene_bounds(v->accel, &lo, &hi))
         return 0.f;
-    return 0.1f * v3_length(v3_sub(hi, lo));
+    return RENDER_AO_DISTANCE_FRACTION * v3_length(v3_sub(hi, lo));
 }
 
 static ao_params resolve_params(const render_view *v, bool term)
@@ -130,6 +131,8 @@ static ao_params resolve_params(const render_view *v, bool term)
     p.frames = st->ao_frames < 1 ? 1 : st->ao_frames > AO_MAX_FRAMES ? AO_MAX_FRAMES : st->ao_frames;
     p.frame_base = st->ao_frame_base;
     p.distance = render_ao_distance(v);
+    p.exponent = st->ao_exponent < 1.f ? 1.f : st->ao_exponent > RENDER_AO_EXPONENT_MAX ? RENDER_AO_EXPONENT_MAX
+                                                                                       : st->ao_exponent;
     p.term = term;
     return p;
 }
@@ -391,7 +394,7 @@ static vec3 filtered_colour(const render_view *v, const ao_params *ap, int apron
     const float open = sum / (float)taken;
     if (ap->term) /* unoccluded (open 1): the raytracer's colour exactly */
         return v3_sub(rg->colour[at], v3_scale(rg->scaled[at], 1.f - open));
-    return v3_scale(rg->scaled[at], open);
+    return v3_scale(rg->scaled[at], ap->exponent == 1.f ? open : powf(open, ap->exponent));
 }
 
 /* The stratum index of stratum (i, j) of sampler s: 0 for single. */

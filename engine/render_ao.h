@@ -2,20 +2,47 @@
  * "ao", occlusion alone, and "raytracer-ao", the raytracer with an AO term.
  *
  * Pixel value of "ao" (linear RGB):
- *   hit:  kd x A, where A is the filtered unoccluded fraction below and kd
- *         the surface's diffuse colour (surface_describe: vertex colour,
- *         material, frame-state colour and highlight): parts keep their
- *         colour and darken in creases. (Grey AO alone is a white kd.)
+ *   hit:  kd x A^e, where A is the filtered unoccluded fraction below, e
+ *         settings.ao_exponent (RESPONSE) and kd the surface's diffuse
+ *         colour (surface_describe: vertex colour, material, frame-state
+ *         colour and highlight): parts keep their colour and darken in
+ *         creases. (Grey AO alone is a white kd.)
  *   miss: the scene's background.
  * Lights, the ambient colour and materials' ambient factors play no part.
+ *
+ * RESPONSE (settings.ao_exponent e, 1..8, default 2.2). With e = 1 the pixel
+ * is the light a surface would get under a uniform white sky: physically
+ * right, but the display's sRGB curve (about linear^(1/2.2)) then shows
+ * A = 0.7 at 0.85 of the open surface's code, and a lone object, whose
+ * surface is mostly open, looks flat (the bunny's 5th-95th percentile codes
+ * 196-218). With e = 2.2 the displayed code is about kd's code x A: a surface
+ * that is 30 % occluded shows 30 % darker, so occlusion reads in proportion.
+ * Exactly 1.0 stays 1.0 (open surfaces are kd exactly) and 0 stays 0. The
+ * response is applied to each AO frame's filtered A before frames are
+ * averaged (by renderer.ao.frames or the governor's accumulation), so for
+ * e > 1 the accumulation converges to the mean of A_f^e, slightly brighter
+ * than A^e where an N-ray estimate still varies (Jensen; dragon, 16 rays x
+ * 16 frames: 0.7 of 255 codes on average, 3 at the 99th percentile); e = 1
+ * keeps the exact convergence of FRAMES below. raytracer-ao ignores e: its term is
+ * light (TERM), linear in A.
+ *
+ * DEFAULTS (render_settings_default; issue 33, docs/inspection.md has the
+ * measurements): 16 rays, distance 0.2 x the scene box's diagonal, interleave
+ * 4, filter 5, exponent 2.2. The exponent and the distance make the shape
+ * read (on the dragon the 5th-95th percentile codes span 122 against 55 at 8
+ * rays, 0.1 x, e = 1; past 0.2 x the spread grows little: 126 at 0.3 x); the
+ * 16 rays keep the 4 x 4 interleave's pattern, which the response makes
+ * twice as visible, below what 8 rays leave (mean FLIP 0.0099 against 0.0116
+ * on the dragon against a 1024-ray reference at the same response); K = 2 or
+ * 1 and a 7 x 7 filter measured worse.
  *
  * RAW TERM. At a primary hit, N = settings.ao_rays rays leave the surface
  * (origin ray_offset_origin along the geometric normal n facing the
  * viewer) in cosine-distributed directions about n from the pixel's
  * interleaved direction set (ao.h: set (x mod K, y mod K), frame = the pixel
  * sampler's stratum), rotated into the world by ao_basis_from_normal(n), with
- * length settings.ao_distance (<= 0: 0.1 x the diagonal of the scene's box,
- * accel_scene_bounds). raw = 1 - occluded / N: the cosine-weighted
+ * length settings.ao_distance (<= 0: RENDER_AO_DISTANCE_FRACTION, 0.2, x the
+ * diagonal of the scene's box, accel_scene_bounds). raw = 1 - occluded / N: the cosine-weighted
  * unoccluded fraction of the hemisphere within that distance.
  *
  * FILTER (discontinuity buffer; Keller and Heidrich 2001, Wald et al.
@@ -95,7 +122,8 @@
 #define AO_FILTER_PLANE_REL 0.01f
 
 /* The AO ray length a view uses (world units): its settings' ao_distance, or
- * 0.1 x the scene box's diagonal when that is <= 0 (0 for an empty scene). */
+ * RENDER_AO_DISTANCE_FRACTION (0.2) x the scene box's diagonal when that is
+ * <= 0 (0 for an empty scene). */
 float render_ao_distance(const render_view *v);
 
 /* The filter edge AO frame `frame` uses for a configured odd edge

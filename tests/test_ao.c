@@ -2,7 +2,10 @@
  * engine/render_ao.h) against analytic results, and its images' independence
  * of threads, tiles and the filter where nothing is occluded.
  *
- * Materials are white (kd = 1), so a pixel's value is the AO term itself. */
+ * Materials are white (kd = 1), so a pixel's value is the AO term A itself
+ * under the linear response (settings.ao_exponent 1), which the tests against
+ * closed forms and frame sums set; the default response shows A^2.2
+ * (render_ao.h, RESPONSE), which the ao_look tests hold to what it promises. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -13,6 +16,7 @@
 #include "engine/render.h"
 #include "engine/render_ao.h"
 #include "engine/scene.h"
+#include "engine/srgb.h"
 
 static const double pi_d = 3.14159265358979323846;
 
@@ -281,6 +285,7 @@ static double mean_over_the_point(const char *name, const scene *s, const accel 
     st.ao_interleave = 1;
     st.ao_filter_px = 1;
     st.ao_distance = length;
+    st.ao_exponent = 1.f; /* the frames' mean is then the mean of A (of A^e it would not be A^e) */
     const int k = 8;
     double sum = 0.0;
     for (int f = 0; f < k * k; f++) {
@@ -431,6 +436,7 @@ static void plate_and_wall(bool one_mesh)
     render_settings st = render_settings_default();
     st.ao_distance = 2.f;
     st.ao_filter_px = AO_MAX_FILTER_PX;
+    st.ao_exponent = 1.f; /* pixel = A, as the closed form gives it */
     camera_desc cam = {v3(0.f, 0.f, 0.f), v3(0.f, 0.f, -1.f), v3(0.f, 1.f, 0.f), 40.f};
     const int w = 96, h = 96;
     ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
@@ -460,7 +466,8 @@ static void plate_and_wall(bool one_mesh)
 Test(ao, filter_does_not_bleed_across_parts) { plate_and_wall(false); }
 Test(ao, filter_does_not_bleed_across_depth_edges) { plate_and_wall(true); }
 
-Test(ao, default_distance_is_a_tenth_of_the_scene_diagonal)
+/* 0.2 x the diagonal since issue 33 (0.1 before): render_ao.h, DEFAULTS. */
+Test(ao, default_distance_is_a_fifth_of_the_scene_diagonal)
 {
     int mat;
     scene *s = white_scene(&mat);
@@ -469,7 +476,7 @@ Test(ao, default_distance_is_a_tenth_of_the_scene_diagonal)
     render_settings st = render_settings_default();
     camera_desc cam = {v3(0.f, 0.f, 5.f), v3(0.f, 0.f, 0.f), v3(0.f, 1.f, 0.f), 40.f};
     render_view v = {s, a, camera_basis_make(&cam, 4, 4), false, RENDER_SHADE_PHONG, NULL, &st};
-    cr_expect_float_eq(render_ao_distance(&v), 0.5f, 1e-6f);
+    cr_expect_float_eq(render_ao_distance(&v), 1.f, 1e-6f);
     st.ao_distance = 2.5f;
     cr_expect_eq(render_ao_distance(&v), 2.5f);
     accel_destroy(a);
@@ -534,6 +541,8 @@ Test(ao, frames_converge_to_the_many_ray_picture)
     st.ao_interleave = 1;
     st.ao_rays = 4;
     st.ao_frames = 8;
+    st.ao_exponent = 1.f; /* F frames are the N F-ray picture for the linear response only: the mean of
+                             (N-ray A)^e over frames is not (N F-ray A)^e */
     ao_image frames = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
     st.ao_rays = 32;
     st.ao_frames = 1;
@@ -547,6 +556,7 @@ Test(ao, frames_converge_to_the_many_ray_picture)
     st = render_settings_default();
     st.ao_distance = 1.f;
     st.ao_filter_px = 1;
+    st.ao_exponent = 1.f;
     st.ao_rays = 64;
     st.ao_frames = 16;
     ao_image ref = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
@@ -648,6 +658,7 @@ Test(ao_term, is_the_ao_pictures_fraction_of_the_ambient_light)
     camera_desc cam = {v3(-2.f, 1.5f, 3.f), v3(0.f, 0.3f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
     render_settings st = render_settings_default();
     st.ao_distance = 1.f;
+    st.ao_exponent = 1.f; /* the ao picture's value is then A itself, the fraction the term uses */
     const int w = 75, h = 53;
     ao_image plain = render_with("raytracer", s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
     ao_image occl = render_with("ao", s, a, cam, w, h, &st, pixel_sampler_single(), 1, RENDER_TILE_PX);
@@ -756,6 +767,113 @@ Test(ao, accumulated_frames_with_the_filter_converge_to_the_unfiltered_reference
     }
     cr_expect(filtered < 1.25 * unfiltered, "64 frames: filtered RMSE %g, unfiltered %g", filtered, unfiltered);
     free(ref.rgb);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+/* ---- the default look: what the eye reads (render_ao.h, DEFAULTS) -------- */
+
+/* A ball of radius R resting on the floor y = 0 at the origin; the floor
+ * |x|, |z| <= 3. Default settings: the AO rays are 0.2 x the box's diagonal
+ * sqrt(6^2 + 1^2 + 6^2) = 1.709 long. */
+#define BALL_R 0.5f
+static scene *ball_on_floor(void)
+{
+    int mat;
+    scene *s = white_scene(&mat);
+    add_floor(s, mat, 3.f);
+    cr_assert(scene_add_sphere(s, v3(0.f, BALL_R, 0.f), BALL_R, (uint32_t)mat) >= 0);
+    return s;
+}
+
+/* A linear value as the display shows it: its sRGB code, 0..1. */
+static double display_code(float linear)
+{
+    return srgb_curve_encode(linear < 0.f ? 0.0 : linear > 1.f ? 1.0 : (double)linear);
+}
+
+/* The default still picture (16 accumulated AO frames, ao_frames) of the
+ * one pixel looking straight down at the floor point (x, 0, z), as the
+ * display shows it. */
+static double shown_at(const scene *s, const accel *a, float x, float z)
+{
+    render_settings st = render_settings_default();
+    st.ao_frames = 16;
+    ao_image im = render(s, a, look_down(x, z, 0.01f), 1, 1, &st, pixel_sampler_single(), 1, 16);
+    double code = display_code(im.rgb[0]);
+    free(im.rgb);
+    return code;
+}
+
+/* A floor point at distance rho from the contact point sees the ball (centre
+ * at height R, distance D = sqrt(rho^2 + R^2), wholly above the floor's
+ * plane) with the form factor of a differential area to a sphere,
+ * (R / D)^2 cos(theta) with cos(theta) = R / D: the cosine-weighted occluded
+ * fraction is (R / D)^3 when the rays reach the ball's far side (D + R <=
+ * the ray length). At rho = 1.1 R: A = 1 - 0.304 = 0.696. The default
+ * response must show that crease at most at A x the open floor's code (+
+ * 0.05 for the estimate): occlusion must read on the screen in proportion.
+ * The linear response (the old default) showed it at 0.86 x: a flat picture. */
+Test(ao_look, a_crease_shows_as_dark_as_it_is_occluded)
+{
+    scene *s = ball_on_floor();
+    accel *a = build(s);
+    const double rho = 1.1 * BALL_R, d = sqrt(rho * rho + (double)BALL_R * BALL_R);
+    const double open_fraction = 1.0 - pow((double)BALL_R / d, 3.0);
+    cr_assert(d + BALL_R < 1.7, "the rays reach the ball's far side");
+    const double open_floor = shown_at(s, a, 2.5f, 2.5f); /* 3.0 from the ball: out of the rays' reach */
+    const double crease = shown_at(s, a, (float)rho, 0.f);
+    cr_expect(fabs(open_floor - 1.0) < 1e-9, "open floor shown at %.17g, expected white", open_floor);
+    cr_expect(crease <= (open_fraction + 0.05) * open_floor,
+              "the crease (unoccluded %.3f) is shown at %.3f of the open floor's code, expected <= %.3f", open_fraction,
+              crease / open_floor, open_fraction + 0.05);
+    cr_expect(crease >= (open_fraction - 0.1) * open_floor, "the crease is shown at %.3f: darker than it is occluded",
+              crease / open_floor);
+    accel_destroy(a);
+    scene_destroy(s);
+}
+
+static int compare_doubles(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* The default image (default settings, one frame, pixel centres) of the ball
+ * on the floor seen from above at an angle: its surface pixels' display codes
+ * span at least a third of the range between their 5th and 95th percentiles.
+ * The view holds open floor (A = 1, white) and the band around the contact
+ * where the floor under the ball's overhang and the ball's underside face
+ * each other (A well below 0.5 there); a response that shows occlusion in
+ * proportion spreads them over the range, the linear response squeezed them
+ * into its top. */
+Test(ao_look, the_default_image_spans_the_range)
+{
+    scene *s = ball_on_floor();
+    accel *a = build(s);
+    render_settings st = render_settings_default();
+    camera_desc cam = {v3(0.f, 1.1f, 1.6f), v3(0.f, 0.2f, 0.f), v3(0.f, 1.f, 0.f), 50.f};
+    const int w = 160, h = 120;
+    double spread[2];
+    for (int linear = 0; linear < 2; linear++) {
+        st.ao_exponent = linear ? 1.f : render_settings_default().ao_exponent;
+        ao_image im = render(s, a, cam, w, h, &st, pixel_sampler_single(), 2, RENDER_TILE_PX);
+        double *codes = malloc((size_t)w * h * sizeof *codes);
+        cr_assert(codes);
+        int n = 0;
+        for (int p = 0; p < w * h; p++) {
+            const float *c = im.rgb + 3 * p;
+            if (!(c[0] == 0.25f && c[1] == 0.5f && c[2] == 0.75f)) /* not the background */
+                codes[n++] = display_code(c[0]);
+        }
+        cr_assert(n > w * h / 2, "the floor and ball cover %d of %d pixels", n, w * h);
+        qsort(codes, (size_t)n, sizeof *codes, compare_doubles);
+        spread[linear] = codes[n * 95 / 100] - codes[n * 5 / 100];
+        free(codes);
+        free(im.rgb);
+    }
+    cr_expect(spread[0] >= 1.0 / 3.0, "default: 5th-95th percentile codes span %.3f, expected >= 1/3", spread[0]);
+    cr_expect(spread[1] < spread[0], "the linear response spans %.3f, the default %.3f", spread[1], spread[0]);
     accel_destroy(a);
     scene_destroy(s);
 }

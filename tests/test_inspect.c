@@ -702,6 +702,7 @@ Test(transparency, ao_term_weights_the_first_surface_by_its_opacity)
     fixture fx;
     fixture_open(&fx, s);
     fx.set.ao_distance = 1.f;
+    fx.set.ao_exponent = 1.f; /* the ao picture's value is then A itself, the fraction the term uses */
     camera_desc cam = {v3(0.5f, -4.f, 3.f), v3(0.f, 0.f, -0.5f), v3(0.f, 0.f, 1.f), 55.f};
     const int w = 72, h = 56;
     float *occl = render_renderer(&fx, "ao", cam, w, h, true, 1, RENDER_TILE_PX);

@@ -31,7 +31,7 @@ static bool same_settings(const render_settings *a, const render_settings *b)
            a->transparent_shadows == b->transparent_shadows && a->caps == b->caps && a->cap_style == b->cap_style &&
            a->ao_rays == b->ao_rays && a->ao_distance == b->ao_distance && a->ao_interleave == b->ao_interleave &&
            a->ao_filter_px == b->ao_filter_px && a->ao_frames == b->ao_frames &&
-           a->ao_frame_base == b->ao_frame_base;
+           a->ao_frame_base == b->ao_frame_base && a->ao_exponent == b->ao_exponent;
 }
 
 static const char full_config[] =
@@ -39,7 +39,8 @@ static const char full_config[] =
     " \"renderer\": {\"name\": \"raytracer\",\n"
     "   \"transparency\": {\"min_transmittance\": 0.015625, \"max_layers\": 4, \"shadows\": false},\n"
     "   \"caps\": {\"on\": false, \"style\": \"hatch\"},\n"
-    "   \"ao\": {\"rays\": 16, \"distance\": 2.5, \"interleave\": 2, \"filter_px\": 3, \"frames\": 4}},\n"
+    "   \"ao\": {\"rays\": 32, \"distance\": 2.5, \"interleave\": 2, \"filter_px\": 3, \"frames\": 4,\n"
+    "          \"exponent\": 1}},\n"
     " \"cutting_planes\": [{\"point\": [0, 0.5, 0], \"normal\": [0, 2, 0]},\n"
     "                    {\"point\": [1, 0, -1], \"normal\": [3, 0, 4], \"on\": false}]}\n";
 
@@ -52,9 +53,9 @@ Test(pipeline_config, absent_keys_keep_the_defaults)
     cr_expect_eq(s.settings.min_transmittance, 1.f / 255.f);
     cr_expect_eq(s.settings.max_layers, 16);
     cr_expect(s.settings.transparent_shadows && s.settings.caps && s.settings.cap_style == RENDER_CAP_TINT);
-    cr_expect(s.settings.ao_rays == 8 && s.settings.ao_interleave == 4 && s.settings.ao_filter_px == 5 &&
-              s.settings.ao_frames == 1);
-    cr_expect_eq(s.settings.ao_distance, 0.f, "absent: 0.1 x the scene's diagonal (the renderer's rule)");
+    cr_expect(s.settings.ao_rays == 16 && s.settings.ao_interleave == 4 && s.settings.ao_filter_px == 5 &&
+              s.settings.ao_frames == 1 && s.settings.ao_exponent == RENDER_AO_EXPONENT_DEFAULT);
+    cr_expect_eq(s.settings.ao_distance, 0.f, "absent: 0.2 x the scene's diagonal (the renderer's rule)");
     cr_expect_eq(s.opacity, 1.f);
     for (int i = 0; i < CLIP_MAX_PLANES; i++)
         cr_expect(!s.clip[i].on && s.clip[i].normal.x == 0.f && s.clip[i].normal.y == 0.f &&
@@ -72,8 +73,9 @@ Test(pipeline_config, every_inspection_key_is_read)
     cr_expect_not(s.settings.transparent_shadows);
     cr_expect_not(s.settings.caps);
     cr_expect_eq(s.settings.cap_style, RENDER_CAP_HATCH);
-    cr_expect_eq(s.settings.ao_rays, 16);
+    cr_expect_eq(s.settings.ao_rays, 32);
     cr_expect_eq(s.settings.ao_distance, 2.5f);
+    cr_expect_eq(s.settings.ao_exponent, 1.f);
     cr_expect_eq(s.settings.ao_interleave, 2);
     cr_expect_eq(s.settings.ao_filter_px, 3);
     cr_expect_eq(s.settings.ao_frames, 4);
@@ -109,6 +111,8 @@ Test(pipeline_config, bad_values_are_refused)
         "{\"renderer\": {\"ao\": {\"filter_px\": 11}}}",
         "{\"renderer\": {\"ao\": {\"frames\": 0}}}",
         "{\"renderer\": {\"ao\": {\"frames\": 65}}}",
+        "{\"renderer\": {\"ao\": {\"exponent\": 0.5}}}",
+        "{\"renderer\": {\"ao\": {\"exponent\": 9}}}",
         "{\"renderer\": {\"ao\": {\"in_raytracer\": true}}}",
         "{\"opacity\": -0.1}",
         "{\"opacity\": 1.01}",
@@ -223,8 +227,8 @@ Test(pipeline_config, pipeline_config_validate_names_the_setting)
     struct {
         pipeline_config cfg;
         const char *expect;
-    } cases[8];
-    for (int i = 0; i < 8; i++)
+    } cases[9];
+    for (int i = 0; i < 9; i++)
         cases[i].cfg = ok;
     cases[0].cfg.settings.min_transmittance = 0.f;
     cases[0].expect = "pipeline: settings.min_transmittance: 0 is not in (0, 1)";
@@ -243,7 +247,9 @@ Test(pipeline_config, pipeline_config_validate_names_the_setting)
     cases[6].expect = "pipeline: clip[0]: clip-plane: point.x: inf is not finite";
     cases[7].cfg.settings.ao_interleave = 0;
     cases[7].expect = "pipeline: settings.ao_interleave: 0 is not in 1..8";
-    for (int i = 0; i < 8; i++) {
+    cases[8].cfg.settings.ao_exponent = 0.5f;
+    cases[8].expect = "pipeline: settings.ao_exponent: 0.5 is not in [1, 8]";
+    for (int i = 0; i < 9; i++) {
         err = (tess_error){{0}};
         cr_expect_not(pipeline_config_validate(&cases[i].cfg, &err), "case %d", i);
         cr_expect(strstr(err.msg, cases[i].expect), "case %d: '%s' lacks '%s'", i, err.msg, cases[i].expect);

@@ -53,6 +53,10 @@
 #define BENCH_DEFAULT_HEIGHT_PX 1080
 #define BENCH_DEFAULT_FRAMES 5
 #define BENCH_DEFAULT_WARMUP 1
+/* --renderer ao: the Embree peer's workload (tools/bench_ao.sh, BENCHMARKS.md), not the renderer's
+ * look defaults (render.h): 8 rays of 0.1 x the scene box's diagonal unless asked otherwise */
+#define BENCH_AO_RAYS 8
+#define BENCH_AO_DISTANCE_FRACTION 0.1f
 #define BENCH_MAX_FRAMES 100000
 #define BENCH_MAX_PART_TXNS 100000
 /* --part-txns: the checks trace a grid of this many rays across the image */
@@ -821,6 +825,7 @@ int cli_bench(int argc, char **argv)
     bench_options o = {.width_px = BENCH_DEFAULT_WIDTH_PX, .height_px = BENCH_DEFAULT_HEIGHT_PX,
                        .threads = online_cpus(), .frames = BENCH_DEFAULT_FRAMES, .warmup = BENCH_DEFAULT_WARMUP,
                        .settings = render_settings_default(), .opacity = 1.f, .tile_px = RENDER_TILE_PX};
+    o.settings.ao_rays = BENCH_AO_RAYS;
     int code = 0;
     if (!parse_options(argc, argv, &o, &code))
         return code;
@@ -849,6 +854,11 @@ int cli_bench(int argc, char **argv)
         goto done;
     }
     accel_set_single_rays(cs.accel, o.single_rays);
+    if (o.ao && o.settings.ao_distance <= 0.f) { /* the peer's length, not the renderer's default */
+        vec3 lo, hi;
+        if (accel_scene_bounds(cs.accel, &lo, &hi))
+            o.settings.ao_distance = BENCH_AO_DISTANCE_FRACTION * v3_length(v3_sub(hi, lo));
+    }
     render_view view = {cs.scene, cs.accel, camera_basis_make(&o.camera, o.width_px, o.height_px), o.shadows,
                         RENDER_SHADE_EYELIGHT, NULL, &o.settings};
     frame_state opacity_state;

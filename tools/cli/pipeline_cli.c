@@ -286,21 +286,27 @@ static bool load_caps(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
     return ok;
 }
 
-/* "renderer.ao": {"rays", "distance", "interleave", "filter_px", "frames"}. */
+/* "renderer.ao": {"rays", "distance", "interleave", "filter_px", "frames", "exponent"}. */
 static bool load_ao(jr_ctx *c, json_object *renderer_obj, render_settings *rs)
 {
-    static const char *const fields[] = {"rays", "distance", "interleave", "filter_px", "frames", NULL};
+    static const char *const fields[] = {"rays", "distance", "interleave", "filter_px", "frames", "exponent", NULL};
     json_object *m;
     if (!jr_get_member(renderer_obj, "ao", &m))
         return true;
     size_t saved = jr_field_key(c, "ao");
     int filter_px = rs->ao_filter_px;
+    float exponent = rs->ao_exponent;
     bool ok = jr_expect_object(c, m) && jr_check_fields(c, m, fields) &&
               opt_int(c, m, "rays", 1, PIPELINE_AO_RAYS_MAX, &rs->ao_rays) &&
               jr_opt_number(c, m, "distance", jr_range_positive, &rs->ao_distance) &&
               opt_int(c, m, "interleave", 1, PIPELINE_AO_INTERLEAVE_MAX, &rs->ao_interleave) &&
               opt_int(c, m, "filter_px", 1, PIPELINE_AO_FILTER_PX_MAX, &filter_px) &&
-              opt_int(c, m, "frames", 1, PIPELINE_AO_FRAMES_MAX, &rs->ao_frames);
+              opt_int(c, m, "frames", 1, PIPELINE_AO_FRAMES_MAX, &rs->ao_frames) &&
+              jr_opt_number(c, m, "exponent", jr_range_positive, &exponent);
+    if (ok && !(exponent >= 1.f && exponent <= RENDER_AO_EXPONENT_MAX))
+        ok = jr_member_fail(c, "exponent", "expected a number in [1, 8] (1: linear)");
+    if (ok)
+        rs->ao_exponent = exponent;
     if (ok && filter_px % 2 == 0)
         ok = jr_member_fail(c, "filter_px", "expected an odd filter edge (1 = off, 3, 5, 7 or 9)");
     if (ok)

@@ -28,6 +28,14 @@ aa_samples() { # label -> rays per pixel
 aa_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1f", (b > 0 ? a / b : 0) }'; }
 aa_fall() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.0f", (a > 0 ? 100 * (a - b) / a : 0) }'; }
 
+# The section's plots from $WORK/antialiasing.tsv (tools/report/replot.sh redraws them alone).
+aa_plots() {
+    report_plot antialiasing flip "mean FLIP against the reference (0 = identical)" \
+        "Antialiasing: frame time against mean FLIP (single: the pixel centre, apart)" single
+    report_plot antialiasing rmse "RMSE against the reference (linear RGB)" \
+        "Antialiasing: frame time against RMSE (single: the pixel centre, apart)" single
+}
+
 knob_antialiasing() { # scene labels...
     out=$WORK/section_antialiasing.md
     for scene in "$@"; do
@@ -39,10 +47,7 @@ knob_antialiasing() { # scene labels...
         # shellcheck disable=SC2086
         report_curve antialiasing "$scene" $set_list
     done
-    report_plot antialiasing flip "mean FLIP against the reference (0 = identical)" \
-        "Antialiasing: frame time against mean FLIP (single: the pixel centre, apart)" single
-    report_plot antialiasing rmse "RMSE against the reference (linear RGB)" \
-        "Antialiasing: frame time against RMSE (single: the pixel centre, apart)" single
+    aa_plots
     {
         echo "## Antialiasing: samples per pixel"
         echo

@@ -22,6 +22,14 @@
 # gives, at the pixel centre (renderer.ao.frames; the jittered sampler would
 # move the pixel positions too and mix antialiasing into the error).
 #
+# Issue 33 changed the renderer's defaults (16 rays, 0.2 x the diagonal,
+# renderer.ao.exponent 2.2; docs/inspection.md, Defaults) for how the picture
+# reads, which this knob does not measure. Its configs set rays, filter and
+# frames only, so a new run measures at the new distance and response; but
+# AO_DEFAULT and the verdict's wording below still take 8 rays with the
+# filter as "the default" (the run in REPORT.md predates the change): revise
+# them with the next run.
+#
 # shellcheck shell=sh disable=SC2046,SC2034,SC2154
 # (SC2046: a series' settings are passed as separate words on purpose; SC2034,
 # SC2154: SCENE_ARG_assembly is read by lib.sh, rs and note are set through eval)
@@ -62,6 +70,20 @@ ao_fastest_within() { # scene metric bound
 }
 ao_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }'; }
 
+# The section's plots from $WORK/ao.tsv (tools/report/replot.sh redraws them alone).
+ao_plots() {
+    off_series="filter-off=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f1-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
+    on_series="filter-5=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f5-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
+    off_frames="frames-filter-off=n8-f1-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f1-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
+    on_frames="frames-filter-5=n8-f5-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f5-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
+    report_plot ao flip "mean FLIP against the reference (0 = identical)" \
+        "Ambient occlusion: frame time against mean FLIP (labels: rays per hit, rays x frames)" '' \
+        "$off_series" "$on_series" "$off_frames" "$on_frames"
+    report_plot ao rmse "RMSE against the reference (linear RGB)" \
+        "Ambient occlusion: frame time against RMSE (labels: rays per hit, rays x frames)" '' \
+        "$off_series" "$on_series" "$off_frames" "$on_frames"
+}
+
 knob_ao() { # scene labels...
     out=$WORK/section_ao.md
     ao_load_before=$(cat /proc/loadavg)
@@ -90,16 +112,7 @@ knob_ao() { # scene labels...
         # shellcheck disable=SC2086
         report_curve ao "$scene" $set_list
     done
-    off_series="filter-off=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f1-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
-    on_series="filter-5=$(for n in $AO_RAY_COUNTS; do printf 'n%s-f5-x1:%s,' "$n" "$n"; done | sed 's/,$//')"
-    off_frames="frames-filter-off=n8-f1-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f1-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
-    on_frames="frames-filter-5=n8-f5-x1:,$(for x in $AO_FRAME_COUNTS; do printf 'n8-f5-x%s:8x%s,' "$x" "$x"; done | sed 's/,$//')"
-    report_plot ao flip "mean FLIP against the reference (0 = identical)" \
-        "Ambient occlusion: frame time against mean FLIP (labels: rays per hit, rays x frames)" '' \
-        "$off_series" "$on_series" "$off_frames" "$on_frames"
-    report_plot ao rmse "RMSE against the reference (linear RGB)" \
-        "Ambient occlusion: frame time against RMSE (labels: rays per hit, rays x frames)" '' \
-        "$off_series" "$on_series" "$off_frames" "$on_frames"
+    ao_plots
     cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
     ao_load_after=$(cat /proc/loadavg)
     {

@@ -146,18 +146,8 @@ rs_pair_at() { # scene setting: the budget its frame time
     done
 }
 
-knob_render_scale() { # scene labels...
-    out=$WORK/section_render_scale.md
-    for scene in "$@"; do
-        set_list="1=$(rs_args 1 | tr ' ' '~')"
-        for sc in $RS_SCALES; do
-            for f in $RS_FILTERS; do
-                set_list="$set_list $sc-$f=$(rs_args "$sc-$f" | tr ' ' '~')"
-            done
-        done
-        # shellcheck disable=SC2086
-        report_curve render_scale "$scene" $set_list
-    done
+# The section's plots from $WORK/render_scale.tsv (tools/report/replot.sh redraws them alone).
+rs_plots() {
     series=""
     for f in $RS_FILTERS; do
         spec=""
@@ -175,6 +165,21 @@ knob_render_scale() { # scene labels...
     # shellcheck disable=SC2086
     report_plot render_scale rmse "RMSE against the reference (linear RGB)" \
         "Render scale: frame time against RMSE, per upscale filter" "" $series
+}
+
+knob_render_scale() { # scene labels...
+    out=$WORK/section_render_scale.md
+    for scene in "$@"; do
+        set_list="1=$(rs_args 1 | tr ' ' '~')"
+        for sc in $RS_SCALES; do
+            for f in $RS_FILTERS; do
+                set_list="$set_list $sc-$f=$(rs_args "$sc-$f" | tr ' ' '~')"
+            done
+        done
+        # shellcheck disable=SC2086
+        report_curve render_scale "$scene" $set_list
+    done
+    rs_plots
     width=${SIZE%x*}
     height=${SIZE#*x}
     {

@@ -81,6 +81,18 @@ tr_layers_blended() { # setting
 }
 tr_ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", (b > 0 ? a / b : 0) }'; }
 
+# The section's plots from $WORK/transparency.tsv (tools/report/replot.sh redraws them alone).
+tr_plots() {
+    thr_series="threshold=$(for m in $TR_THRESHOLDS; do printf 'L16-m%s:%s,' "$m" "$(tr_label "$m")"; done | sed 's/,$//')"
+    lay_series="layers=$(for l in $TR_LAYERS; do
+        if [ "$l" = 16 ]; then printf 'L16-m1_255:,'; else printf 'L%s-m1_255:L%s,' "$l" "$l"; fi
+    done | sed 's/,$//')"
+    report_plot transparency flip "mean FLIP against the reference (0 = identical)" \
+        "Transparency at opacity $TR_OPACITY: frame time against mean FLIP" '' "$thr_series" "$lay_series"
+    report_plot transparency rmse "RMSE against the reference (linear RGB)" \
+        "Transparency at opacity $TR_OPACITY: frame time against RMSE" '' "$thr_series" "$lay_series"
+}
+
 knob_transparency() { # scene labels...
     out=$WORK/section_transparency.md
     tr_load_before=$(cat /proc/loadavg)
@@ -108,14 +120,7 @@ knob_transparency() { # scene labels...
         # shellcheck disable=SC2086
         report_curve transparency "$scene" $set_list
     done
-    thr_series="threshold=$(for m in $TR_THRESHOLDS; do printf 'L16-m%s:%s,' "$m" "$(tr_label "$m")"; done | sed 's/,$//')"
-    lay_series="layers=$(for l in $TR_LAYERS; do
-        if [ "$l" = 16 ]; then printf 'L16-m1_255:,'; else printf 'L%s-m1_255:L%s,' "$l" "$l"; fi
-    done | sed 's/,$//')"
-    report_plot transparency flip "mean FLIP against the reference (0 = identical)" \
-        "Transparency at opacity $TR_OPACITY: frame time against mean FLIP" '' "$thr_series" "$lay_series"
-    report_plot transparency rmse "RMSE against the reference (linear RGB)" \
-        "Transparency at opacity $TR_OPACITY: frame time against RMSE" '' "$thr_series" "$lay_series"
+    tr_plots
     cpu=$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)
     tr_load_after=$(cat /proc/loadavg)
     {

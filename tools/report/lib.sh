@@ -327,16 +327,28 @@ report_knee() { # knob scene metric [settings...]
 
 # Plot frame time (x) against one error column (y): one series per scene,
 # each point labelled with its setting, the points joined in the order
-# measured except setting ALONE (a point apart: another kind of setting);
-# log axes where the values span a decade or more. Writes
-# $WORK/plots/KNOB_METRIC.png.
+# measured except setting ALONE (a point apart: another kind of setting).
+# Writes $WORK/plots/KNOB_METRIC.png.
 #
 # With SERIES (ALONE given, '' for none), each scene draws one series per
 # SERIES word instead, NAME=SETTING[:LABEL],SETTING[:LABEL],... : the settings
 # joined in that order, titled 'SCENE, NAME' (no spaces in NAME), each point
 # labelled LABEL (the setting when no ':'; nothing for an empty LABEL, e.g. a
-# point two series share, labelled once). Point shapes tell the series of a
-# scene apart; colours, the scenes and series.
+# point two series share, labelled once).
+#
+# Telling series apart: every series of the plot has a colour of its own
+# (REPORT_PLOT_COLOURS in turn), each scene a dash pattern (solid, dashed,
+# dotted, ...), each series of a scene a point shape; the key sits under the
+# plot, clear of the points. A label has its series' colour and goes beside
+# its point where it covers no other label, point or line
+# (tools/report/plot_labels.awk). Axes: log where the values span a decade or
+# more (max / min >= 10). An error column holding zeros (identical images)
+# whose other values span a decade or more is log too, its zeros drawn on a
+# dotted floor line a decade below the smallest value above zero, ticked "0";
+# any other error axis is linear and starts at 0 (errors are never negative).
+REPORT_PLOT_COLOURS="#0072B2 #D55E00 #009E73 #CC79A7 #E69F00 #56B4E9 #000000 #999933 #882255 #44AA99"
+REPORT_PLOT_W=900
+REPORT_PLOT_H=620
 report_plot() { # knob metric ylabel title [alone [series...]]
     rp_knob=$1
     rp_col=$(report_metric_column "$2")
@@ -347,88 +359,128 @@ report_plot() { # knob metric ylabel title [alone [series...]]
     if [ $# -gt 5 ]; then shift 5; else set --; fi # no SERIES: one series per scene
     mkdir -p "$WORK/plots"
     rp_gp=$WORK/plots/$rp_knob-$rp_metric.gp
+    rp_list=$WORK/plots/$rp_knob-$rp_metric.series # per series: dat, colour, dash, shape, title
+    rp_xlog=$(report_plot_span "$rp_knob" 3)
+    rp_ylog=$(report_plot_span "$rp_knob" "$rp_col")
+    rp_floor=""
+    if [ -z "$rp_ylog" ]; then
+        rp_floor=$(report_plot_floor "$rp_knob" "$rp_col")
+        [ -z "$rp_floor" ] || rp_ylog=log
+    fi
+    : > "$rp_list"
+    rp_colour=0
+    rp_dash=0
+    for rp_scene in $(cut -f1 "$WORK/$rp_knob.tsv" | awk '!seen[$0]++'); do
+        rp_dash=$((rp_dash + 1))
+        if [ $# -eq 0 ]; then
+            rp_dat=$WORK/plots/$rp_knob-$rp_scene.dat
+            # a blank line (gnuplot: break the line) around the setting that stands apart
+            awk -F '\t' -v s="$rp_scene" -v c="$rp_col" -v alone="$rp_alone" -v floor="$rp_floor" '$1 == s {
+                    n++
+                    if ($2 == alone && n > 1) print ""
+                    printf "%s %s \"%s\"\n", $3, (floor != "" && $c + 0 == 0 ? floor : $c), $2
+                    if ($2 == alone) print ""
+                }' "$WORK/$rp_knob.tsv" > "$rp_dat"
+            report_plot_add "$rp_dat" "$rp_scene" 7
+            continue
+        fi
+        rp_n=0
+        for rp_series in "$@"; do
+            rp_n=$((rp_n + 1))
+            rp_name=${rp_series%%=*}
+            rp_dat=$WORK/plots/$rp_knob-$rp_scene-$rp_name.dat
+            # the series' settings in its order; labels quoted (gnuplot: a string column)
+            echo "${rp_series#*=}" | tr ',' '\n' | awk -F '\t' -v s="$rp_scene" -v c="$rp_col" -v floor="$rp_floor" '
+                NR == FNR { if ($1 == s) { x[$2] = $3; y[$2] = (floor != "" && $c + 0 == 0 ? floor : $c) }; next }
+                {
+                    set = $0; label = $0
+                    if (index($0, ":")) { set = substr($0, 1, index($0, ":") - 1); label = substr($0, index($0, ":") + 1) }
+                    if (!(set in x)) { print "no row for " set > "/dev/stderr"; exit 1 }
+                    printf "%s %s \"%s\"\n", x[set], y[set], label
+                }' "$WORK/$rp_knob.tsv" - > "$rp_dat" ||
+                report_fail "report_plot: series $rp_name of $rp_knob names a setting not measured on $rp_scene"
+            # shapes: filled circle, square, triangle, diamond, pentagon, then again
+            case $(((rp_n - 1) % 5)) in
+                1) rp_pt=5 ;;
+                2) rp_pt=9 ;;
+                3) rp_pt=13 ;;
+                4) rp_pt=15 ;;
+                *) rp_pt=7 ;;
+            esac
+            report_plot_add "$rp_dat" "$rp_scene, $rp_name" "$rp_pt"
+        done
+    done
+    # the key under the plot, two entries a row: the plot area's bottom margin fits it
+    rp_keyrows=$((($(wc -l < "$rp_list") + 1) / 2))
+    rp_bottom=$((64 + rp_keyrows * 18)) # pixels
+    rp_top=$((REPORT_PLOT_H * 8 / 100))
     {
-        echo "set terminal $GNUPLOT_TERM size 900,600"
+        echo "set terminal $GNUPLOT_TERM size $REPORT_PLOT_W,$REPORT_PLOT_H"
         echo "set output '$WORK/plots/${rp_knob}_$rp_metric.png'"
         echo "set title \"$rp_title\""
         echo "set xlabel 'frame time (ms, median of $RUNS runs, $THREADS threads, $SIZE)'"
-        echo "set ylabel \"$rp_ylabel\""
+        if [ -n "$rp_floor" ]; then
+            echo "set ylabel \"$rp_ylabel; 0 on the dotted line\""
+        else
+            echo "set ylabel \"$rp_ylabel\""
+        fi
         echo "set grid"
-        echo "set key top right"
-        echo "set offsets graph 0.05, graph 0.12, graph 0.08, graph 0.08"
-        [ "$(report_plot_span "$rp_knob" 3)" = log ] && echo "set logscale x"
-        [ "$(report_plot_span "$rp_knob" "$rp_col")" = log ] && echo "set logscale y"
+        # fixed margins: plot_labels.awk places labels in this area's pixels
+        echo "set lmargin at screen 0.11; set rmargin at screen 0.97"
+        awk -v t="$rp_top" -v b="$rp_bottom" -v h="$REPORT_PLOT_H" \
+            'BEGIN { printf "set tmargin at screen %.4f; set bmargin at screen %.4f\n", 1 - t / h, b / h }'
+        echo "set key at screen 0.54, screen 0.01 center bottom horizontal maxcols 2 samplen 3 width 2"
+        [ "$rp_xlog" = log ] && echo "set logscale x"
+        if [ "$rp_ylog" = log ]; then
+            echo "set logscale y"
+            echo "set format y '%g'"
+        fi
+        if [ -n "$rp_floor" ]; then
+            echo "set ytics add ('0' $rp_floor)"
+            echo "set arrow from graph 0, first $rp_floor to graph 1, first $rp_floor nohead dashtype 3 linecolor rgb '#808080'"
+        fi
+        # ranges and labels
+        awk -v xlog="$rp_xlog" -v ylog="$rp_ylog" -v floor="$rp_floor" \
+            -v pw="$((REPORT_PLOT_W * 86 / 100))" -v ph="$((REPORT_PLOT_H - rp_top - rp_bottom))" \
+            -f tools/report/plot_labels.awk "$rp_list"
         printf 'plot '
-        rp_side=1
-        for rp_scene in $(cut -f1 "$WORK/$rp_knob.tsv" | awk '!seen[$0]++'); do
-            if [ $# -eq 0 ]; then
-                rp_dat=$WORK/plots/$rp_knob-$rp_scene.dat
-                # labels to the right of the first scene's points, to the left of the next one's, and so
-                # on: series of similar settings lie side by side; a blank line (gnuplot: break the
-                # line) around the setting that stands apart
-                awk -F '\t' -v s="$rp_scene" -v c="$rp_col" -v alone="$rp_alone" '$1 == s {
-                        n++
-                        if ($2 == alone && n > 1) print ""
-                        print $3, $c, $2
-                        if ($2 == alone) print ""
-                    }' "$WORK/$rp_knob.tsv" > "$rp_dat"
-                report_plot_series "$rp_dat" "$rp_scene" 7
-                continue
-            fi
-            rp_n=0
-            for rp_series in "$@"; do
-                rp_n=$((rp_n + 1))
-                rp_name=${rp_series%%=*}
-                rp_dat=$WORK/plots/$rp_knob-$rp_scene-$rp_name.dat
-                # the series' settings in its order; labels quoted (gnuplot: a string column)
-                echo "${rp_series#*=}" | tr ',' '\n' | awk -F '\t' -v s="$rp_scene" -v c="$rp_col" '
-                    NR == FNR { if ($1 == s) { x[$2] = $3; y[$2] = $c }; next }
-                    {
-                        set = $0; label = $0
-                        if (index($0, ":")) { set = substr($0, 1, index($0, ":") - 1); label = substr($0, index($0, ":") + 1) }
-                        if (!(set in x)) { print "no row for " set > "/dev/stderr"; exit 1 }
-                        printf "%s %s \"%s\"\n", x[set], y[set], label
-                    }' "$WORK/$rp_knob.tsv" - > "$rp_dat" ||
-                    report_fail "report_plot: series $rp_name of $rp_knob names a setting not measured on $rp_scene"
-                # shapes: filled circle, square, triangle, diamond, then circles again
-                case $rp_n in
-                    2) rp_pt=5 ;;
-                    3) rp_pt=9 ;;
-                    4) rp_pt=13 ;;
-                    *) rp_pt=7 ;;
-                esac
-                report_plot_series "$rp_dat" "$rp_scene, $rp_name" "$rp_pt"
-            done
-        done | sed 's/, $//'
+        awk -F '\t' '{
+                printf "%s'\''%s'\'' using 1:2 with linespoints linewidth 1.5 pointsize 1.3 pointtype %s linecolor rgb '\''%s'\'' dashtype %s title '\''%s'\''",
+                    (NR > 1 ? ", " : ""), $1, $4, $2, $3, $5
+            }' "$rp_list"
         echo
     } > "$rp_gp"
     report_run "$GNUPLOT" "$rp_gp"
 }
 
-# One series of report_plot: the points joined, then their labels, to the
-# right of the points for every other series and to the left for the rest
-# (rp_side, flipped here).
-report_plot_series() { # dat title pointtype
-    printf "'%s' using 1:2 with linespoints pointtype %s title '%s', " "$1" "$3" "$2"
-    if [ "$rp_side" -gt 0 ]; then
-        printf "'%s' using 1:2:3 with labels left offset char 1,0 notitle, " "$1"
-    else
-        printf "'%s' using 1:2:3 with labels right offset char -1,0 notitle, " "$1"
-    fi
-    rp_side=$((-rp_side))
+# One series of report_plot into its list: the next colour, the scene's dash.
+report_plot_add() { # dat title pointtype
+    rp_colour=$((rp_colour + 1))
+    rpa_c=$(echo "$REPORT_PLOT_COLOURS" | tr ' ' '\n' | awk -v n="$rp_colour" '{ c[NR] = $0 } END { print c[(n - 1) % NR + 1] }')
+    printf '%s\t%s\t%s\t%s\t%s\n' "$1" "$rpa_c" "$rp_dash" "$3" "$2" >> "$rp_list"
 }
 
-# "log" when a column of KNOB.tsv spans a decade or more (max / min >= 10).
+# "log" when a column of KNOB.tsv spans a decade or more (max / min >= 10, all > 0).
 report_plot_span() { # knob column
     awk -F '\t' -v c="$2" 'NR == 1 || $c < lo { lo = $c } NR == 1 || $c > hi { hi = $c }
         END { if (lo > 0 && hi / lo >= 10) print "log" }' "$WORK/$1.tsv"
 }
 
+# For a column holding zeros whose values above zero span a decade or more:
+# the floor its zeros are drawn at, a decade below the smallest value above
+# zero, rounded down to a power of ten; nothing otherwise.
+report_plot_floor() { # knob column
+    awk -F '\t' -v c="$2" '$c + 0 == 0 { zero = 1; next } lo == "" || $c < lo { lo = $c } $c > hi { hi = $c }
+        END { if (zero && lo > 0 && hi / lo >= 10) printf "%g\n", 10 ^ (int(log(lo) / log(10) + 100) - 101) }' "$WORK/$1.tsv"
+}
+
 # A side-by-side crop of two settings of a knob on a scene, with their FLIP
 # maps, around where setting A differs most from the reference: row 1 the
-# reference, A, B; row 2 nothing, A's map, B's map. Sets CROP (file name in
-# report/), CROP_X, CROP_Y, CROP_PX, CROP_ZOOM.
-report_crops() { # knob scene A B
+# reference, A, B; row 2 nothing, A's map, B's map; captioned
+# (report_caption_montage) with the settings' names (or A_NAME, B_NAME), frame
+# times and mean FLIP. Sets CROP (file name in report/), CROP_X, CROP_Y,
+# CROP_PX, CROP_ZOOM.
+report_crops() { # knob scene A B [A_NAME B_NAME]
     rx_knob=$1
     rx_label=$2
     report_ref_for "$rx_knob" "$rx_label"
@@ -448,6 +500,50 @@ report_crops() { # knob scene A B
     CROP_Y=$(cut -d' ' -f2 "$WORK/cmd.out")
     mkdir -p "$WORK/plots"
     CROP=${rx_knob}_crop_$rx_label.png
-    report_run "$REPORT_IMG" montage "$WORK/plots/$CROP" "$CROP_X" "$CROP_Y" "$CROP_PX" "$CROP_ZOOM" 3 \
+    report_run "$REPORT_IMG" montage "$WORK/plots/bare_$CROP" "$CROP_X" "$CROP_Y" "$CROP_PX" "$CROP_ZOOM" 3 \
         "$REF" "$rx_a.exr" "$rx_b.exr" - "$rx_a-map.png" "$rx_b-map.png"
+    rx_an=${5:-$3}
+    rx_bn=${6:-$4}
+    report_row "$rx_knob" "$rx_label" "$3"
+    rx_at="$rx_an|$MS ms, mean FLIP $FLIP"
+    report_row "$rx_knob" "$rx_label" "$4"
+    report_caption_montage "$WORK/plots/bare_$CROP" "$WORK/plots/$CROP" $((CROP_PX * CROP_ZOOM)) \
+        "reference" "$rx_at" "$rx_bn|$MS ms, mean FLIP $FLIP" \
+        "FLIP maps:|black 0, pale yellow 1" "FLIP map of|$rx_an" "FLIP map of|$rx_bn"
+}
+
+# Captions for a report_crops montage IN (2 rows of 3 cells of CELL pixels,
+# 4 apart): a white band above the top row names its three pictures, one
+# under the bottom row its three (the first cell of that row is empty), two
+# lines each at most ('|' breaks the line); the pictures are copied pixel for
+# pixel (gnuplot, pngcairo). Writes OUT.
+report_caption_montage() { # in out cell top1 top2 top3 bottom1 bottom2 bottom3
+    rc_in=$1
+    rc_band=40
+    rc_w=$((3 * $3 + 8))
+    rc_h=$((2 * $3 + 4))
+    rc_gp=$WORK/plots/caption.gp
+    {
+        echo "set terminal $GNUPLOT_TERM size $rc_w,$((rc_h + 2 * rc_band))"
+        echo "set output '$2'"
+        echo "unset border; unset tics; unset key"
+        echo "set lmargin at screen 0; set rmargin at screen 1; set tmargin at screen 1; set bmargin at screen 0"
+        # pixel centres at integer coordinates: the image covers [-0.5, w - 0.5]
+        echo "set xrange [-0.5:$rc_w - 0.5]"
+        echo "set yrange [-0.5 - $rc_band:$rc_h - 0.5 + $rc_band]"
+        echo "set object 1 rectangle from screen 0, screen 0 to screen 1, screen 1 fillcolor rgb 'white' fillstyle solid behind"
+        rc_i=0
+        shift 3
+        for rc_text in "$@"; do
+            rc_col=$((rc_i % 3))
+            rc_x=$((rc_col * (rc_w + 4) / 3 + 4))
+            # a label's position is its first line's: 12 pixels into its band
+            if [ "$rc_i" -lt 3 ]; then rc_y=$((rc_h + rc_band - 12)); else rc_y=-12; fi
+            rc_text=$(printf '%s\n' "$rc_text" | sed 's/["\\]/\\&/g; s/|/\\n/g')
+            printf 'set label %s "%s" at %s, %s left front\n' $((rc_i + 1)) "$rc_text" "$rc_x" "$rc_y"
+            rc_i=$((rc_i + 1))
+        done
+        echo "plot '$rc_in' binary filetype=png with rgbimage"
+    } > "$rc_gp"
+    report_run "$GNUPLOT" "$rc_gp"
 }
