@@ -66,7 +66,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
+.PHONY: all deps run test test-unit test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
@@ -162,13 +162,18 @@ run: deps
 # qemu guest (tests/vm_wall.sh), input driving it there (tests/vm_input.sh) and a wall of two
 # machines on two cards under mpirun there (tests/vm_cluster.sh): each its own summary line;
 # SKIPPED, said so, when qemu cannot be installed
+# (.ci/run runs these same parts one by one, to time each: keep it in step)
 test:
-	@sh tools/deps.sh --test
-	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
-	cd tests && ../$(TEST_BIN) --jobs 2
+	$(MAKE) test-unit
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
 	sh tests/vm_cluster.sh
+
+# the unit suite alone (what make test runs before the VM tests)
+test-unit:
+	@sh tools/deps.sh --test
+	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
+	cd tests && ../$(TEST_BIN) --jobs 2
 
 # the suite again under AddressSanitizer + UBSan, in its own build tree
 test-asan:
