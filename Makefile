@@ -191,10 +191,10 @@ test-asan:
 TSAN_TESTS := tests/test_pipeline.c tests/test_overlay.c tests/test_input.c tests/test_governor.c \
               tests/test_frame_state.c tests/test_volume_series.c
 TSAN_BIN := build-tsan/tessera_tsan_tests
+# (both TSan binaries in one make, so that make -j builds the CLI's objects beside the rest)
 test-tsan: deps
-	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)
+	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN) tessera-tsan
 	cd tests && TSAN_OPTIONS="halt_on_error=1 exitcode=66 second_deadlock_stack=1" ../$(TSAN_BIN)
-	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" tessera-tsan
 	$(MAKE) $(TEST_BIN)
 	cd tests && TESSERA_BIN=../tessera-tsan \
 	    TSAN_OPTIONS="halt_on_error=1 exitcode=66 suppressions=$(CURDIR)/tests/tsan_mpi.supp" \
@@ -257,10 +257,12 @@ clean-fuzz:
 # every header compiles on its own
 HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
-check-headers:
-	@for h in $(HEADERS); do \
-	    echo "#include \"$$h\"" | $(CC) $(CPPFLAGS) -std=c11 $(WARN) -x c -fsyntax-only - || exit 1; \
-	done
+# (one target a header, so that make -j checks them side by side)
+HEADER_CHECKS := $(addprefix check-header/,$(HEADERS))
+.PHONY: $(HEADER_CHECKS)
+check-headers: $(HEADER_CHECKS)
+$(HEADER_CHECKS): check-header/%:
+	@echo '#include "$*"' | $(CC) $(CPPFLAGS) -std=c11 $(WARN) -x c -fsyntax-only -
 
 bench:
 	@sh tools/deps.sh --bench
