@@ -66,7 +66,7 @@ TEST_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TEST_SRC))
 LIB := $(BUILD)/libtessera.a
 TEST_BIN := $(BUILD)/tessera_tests
 
-.PHONY: all deps run test test-isa-caps test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
+.PHONY: all deps run test test-unit test-isa-caps test-asan test-fault test-tsan bench bench-remote bench-cluster bench-ao bench-particles bench-parts report-volumes report-remote bench-pipeline bench-wall scaling-model clean check-headers unrobust \
         gen-assembly ply-replicate bench-massive bench-sbvh
 
 all: tessera
@@ -162,13 +162,18 @@ run: deps
 # qemu guest (tests/vm_wall.sh), input driving it there (tests/vm_input.sh) and a wall of two
 # machines on two cards under mpirun there (tests/vm_cluster.sh): each its own summary line;
 # SKIPPED, said so, when qemu cannot be installed
+# (.ci/run runs these same parts one by one, to time each: keep it in step)
 test:
-	@sh tools/deps.sh --test
-	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
-	cd tests && ../$(TEST_BIN) --jobs 2
+	$(MAKE) test-unit
 	sh tests/vm_wall.sh
 	sh tests/vm_input.sh
 	sh tests/vm_cluster.sh
+
+# the unit suite alone (what make test runs before the VM tests)
+test-unit:
+	@sh tools/deps.sh --test
+	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
+	cd tests && ../$(TEST_BIN) --jobs 2
 
 # the kernel, robustness and image tests again as a CPU with only AVX2, then only SSE2, would
 # run them (TESSERA_ISA_MAX, engine/kernels.h): so the paths of a machine without AVX-512 (or
@@ -198,10 +203,10 @@ test-asan:
 TSAN_TESTS := tests/test_pipeline.c tests/test_overlay.c tests/test_input.c tests/test_governor.c \
               tests/test_frame_state.c tests/test_volume_series.c
 TSAN_BIN := build-tsan/tessera_tsan_tests
+# (both TSan binaries in one make, so that make -j builds the CLI's objects beside the rest)
 test-tsan: deps
-	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN)
+	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" $(TSAN_BIN) tessera-tsan
 	cd tests && TSAN_OPTIONS="halt_on_error=1 exitcode=66 second_deadlock_stack=1" ../$(TSAN_BIN)
-	$(MAKE) BUILD=build-tsan OPT=-O1 SAN="-fsanitize=thread" tessera-tsan
 	$(MAKE) $(TEST_BIN)
 	cd tests && TESSERA_BIN=../tessera-tsan \
 	    TSAN_OPTIONS="halt_on_error=1 exitcode=66 suppressions=$(CURDIR)/tests/tsan_mpi.supp" \
@@ -264,10 +269,12 @@ clean-fuzz:
 # every header compiles on its own
 HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
-check-headers:
-	@for h in $(HEADERS); do \
-	    echo "#include \"$$h\"" | $(CC) $(CPPFLAGS) -std=c11 $(WARN) -x c -fsyntax-only - || exit 1; \
-	done
+# (one target a header, so that make -j checks them side by side)
+HEADER_CHECKS := $(addprefix check-header/,$(HEADERS))
+.PHONY: $(HEADER_CHECKS)
+check-headers: $(HEADER_CHECKS)
+$(HEADER_CHECKS): check-header/%:
+	@echo '#include "$*"' | $(CC) $(CPPFLAGS) -std=c11 $(WARN) -x c -fsyntax-only -
 
 bench:
 	@sh tools/deps.sh --bench

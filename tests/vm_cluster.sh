@@ -51,7 +51,7 @@ MIN_FRAMES=3
 
 mkdir -p "$W/bin"
 copy_tessera
-VM_MPI=1 vm_build "$CACHE/mpi" "$W/bin/tessera"
+vm_guest
 
 cp configs/walls/vm_two_machines.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
@@ -84,7 +84,7 @@ else
     echo $? > mpirun.rc
 fi
 EOF
-tests/vm/run-guest.sh -c "$CACHE/mpi" -s "$W" -q "$W/qmp.sock" -g 2 -n 2 -r 640x480 -t 3000 -- 'sh guest.sh' \
+tests/vm/run-guest.sh -c "$GUEST" -s "$W" -q "$W/qmp.sock" -g 2 -n 2 -r 640x480 -t 3000 -- 'sh guest.sh' \
     > "$W/guest.console" 2>&1 &
 GPID=$!
 

@@ -68,8 +68,9 @@
 # cannot be installed, never silently.
 #
 # Run from the repository root by `make test` after ./tessera is built. The
-# guest lives in $TESSERA_VM_CACHE/vm-input (default /tmp/tessera-vm-cache),
-# downloads are shared with vm_wall.sh. VM_KEEP=1 keeps the work folder.
+# guest (tests/vm/host_lib.sh: vm_guest) is the one vm_wall.sh and vm_cluster.sh
+# boot too, in $TESSERA_VM_CACHE (default /tmp/tessera-vm-cache), built by the
+# first of them. VM_KEEP=1 keeps the work folder.
 set -u
 cd "$(dirname "$0")/.." || exit 1
 NAME=vm_input
@@ -78,12 +79,7 @@ W=$(mktemp -d /tmp/tessera-vm-input.XXXXXX)
 
 mkdir -p "$W/bin"
 copy_tessera
-if ! gcc -std=c11 -O2 -Wall -Wextra -o "$W/bin/uinput_touch" tests/vm/uinput_touch.c > "$W/cc.log" 2>&1; then
-    cat "$W/cc.log"
-    echo "vm_input: FAIL: tests/vm/uinput_touch.c does not build"
-    exit 1
-fi
-vm_build "$CACHE/vm-input" "$W/bin/tessera" "$W/bin/uinput_touch"
+vm_guest
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
@@ -198,7 +194,7 @@ alive $tpid && echo quit > /tmp/touch.fifo
 wait $tpid
 EOF
 # (the time limit only ends a hung guest: every wait below has its own, in frames)
-tests/vm/run-guest.sh -c "$CACHE/vm-input" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 3000 -- 'sh guest.sh' \
+tests/vm/run-guest.sh -c "$GUEST" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 3000 -- 'sh guest.sh' \
     > "$W/guest.console" 2>&1 &
 GPID=$!
 

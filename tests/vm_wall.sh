@@ -78,7 +78,7 @@ MIN_FRAMES=3
 
 mkdir -p "$W/bin"
 copy_tessera
-vm_build "$CACHE" "$W/bin/tessera"
+vm_guest
 
 cp configs/walls/vm_2x2.json "$W/wall.json"
 cp tests/data/vm_spheres.json "$W/scene.json"
@@ -114,7 +114,7 @@ TESSERA_DRM_NO_ATOMIC=1 TESSERA_LOG=debug tessera run --wall wall.json --scene s
 echo $? > legacy.rc
 exec 3<&-
 EOF
-tests/vm/run-guest.sh -c "$CACHE" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 3000 -- 'sh guest.sh' \
+tests/vm/run-guest.sh -c "$GUEST" -s "$W" -q "$W/qmp.sock" -n 4 -r 640x480 -t 3000 -- 'sh guest.sh' \
     > "$W/guest.console" 2>&1 &
 GPID=$!
 

@@ -49,6 +49,43 @@ vm_build() {
     fi
 }
 
+# vm_guest: the one guest the three VM tests boot, into GUEST: the binary under test
+# ($W/bin/tessera, copy_tessera), tests/vm/uinput_touch.c built here ($W/bin/uinput_touch)
+# and OpenMPI (VM_MPI=1). It lives in $CACHE/guest-KEY, KEY a hash of everything that goes
+# into it (those two binaries, the build and init scripts, their settings, the host's
+# installed packages: the libraries shipped with them), so it is built once and the next
+# test (make test runs three in a row) finds it made and boots it as is; a different
+# binary gets its own folder (folders unused for a day are removed).
+guest_key() {
+    { cat tests/vm/build-guest.sh tests/vm/guest-init.sh "$W/bin/tessera" "$W/bin/uinput_touch"
+      echo "${VM_COMPRESS:-} ${VM_LIBS:-} ${VM_EXTRA_MODULES:-}"
+      stat -c '%Y %s' /var/lib/dpkg/status 2>/dev/null; } | sha256sum | cut -c1-16
+}
+vm_guest() {
+    if ! gcc -std=c11 -O2 -Wall -Wextra -o "$W/bin/uinput_touch" tests/vm/uinput_touch.c > "$W/cc.log" 2>&1; then
+        cat "$W/cc.log"
+        echo "$NAME: FAIL: tests/vm/uinput_touch.c does not build"
+        exit 1
+    fi
+    GUEST=$CACHE/guest-$(guest_key)
+    find "$CACHE" -maxdepth 1 -name 'guest-*' -mtime +0 -exec rm -rf {} + 2>/dev/null
+    if [ -f "$GUEST/ready" ]; then
+        touch "$GUEST"
+        echo "$NAME: guest $GUEST already built, reused"
+        return 0
+    fi
+    _t=$(date +%s)
+    rm -rf "$GUEST.tmp.$$"
+    _tmp=$GUEST.tmp.$$
+    VM_MPI=1 vm_build "$_tmp" "$W/bin/tessera" "$W/bin/uinput_touch"
+    : > "$_tmp/ready"
+    # filed under the key as it is now: the build may have installed qemu & co. on the host
+    GUEST=$CACHE/guest-$(guest_key)
+    # another test building the same guest at the same time: the first one stays
+    mv -T "$_tmp" "$GUEST" 2>/dev/null || rm -rf "$_tmp"
+    echo "$NAME: guest $GUEST built in $(($(date +%s) - _t)) s"
+}
+
 # wait_for FILE SECS: until FILE is in the share; 1 when the guest is gone or time ran out
 wait_for() {
     _n=0
