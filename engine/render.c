@@ -563,12 +563,11 @@ static float ray_jitter(const ray *r)
  * over [r->t_near, r->t_far] (world space, already cut by the planes):
  * their colour (associated) and the transmittance left, nearest medium
  * first; false (nothing written) when no medium meets the segment. */
-static bool media_segment(const scene *s, const ray *r, vec3 *rgb_out, float *transmittance_out)
+uint32_t render_media_spans(const scene *s, const ray *r, render_media_span spans[RENDER_MEDIA_SPANS_MAX])
 {
-    /* entries of the media along the ray, nearest first (few media: insertion order) */
-    float enter[8], leave[8];
-    uint32_t which[8], n = 0;
-    for (uint32_t m = 0; m < s->medium_count && n < 8; m++) {
+    /* few media: insertion order */
+    uint32_t n = 0;
+    for (uint32_t m = 0; m < s->medium_count && n < RENDER_MEDIA_SPANS_MAX; m++) {
         const scene_medium *md = &s->media[m];
         aabb box;
         if (!md->ops->bounds(md->data, &box))
@@ -579,22 +578,29 @@ static bool media_segment(const scene *s, const ray *r, vec3 *rgb_out, float *tr
         if (!intersect_box_span(&local, &d, &box, &t0, &t1))
             continue;
         uint32_t k = n++;
-        while (k > 0 && enter[k - 1] > t0) {
-            enter[k] = enter[k - 1], leave[k] = leave[k - 1], which[k] = which[k - 1];
+        while (k > 0 && spans[k - 1].enter > t0) {
+            spans[k] = spans[k - 1];
             k--;
         }
-        enter[k] = t0, leave[k] = t1, which[k] = m;
+        spans[k] = (render_media_span){t0, t1, m};
     }
+    return n;
+}
+
+static bool media_segment(const scene *s, const ray *r, vec3 *rgb_out, float *transmittance_out)
+{
+    render_media_span spans[RENDER_MEDIA_SPANS_MAX];
+    uint32_t n = render_media_spans(s, r, spans);
     if (n == 0)
         return false;
     vec3 sum = v3(0.f, 0.f, 0.f);
     float through = 1.f; /* transmittance so far */
     float jitter = ray_jitter(r);
     for (uint32_t k = 0; k < n && through > 0.f; k++) {
-        const scene_medium *md = &s->media[which[k]];
+        const scene_medium *md = &s->media[spans[k].medium];
         ray local = md->identity ? *r : affine3_ray(&md->to_object, r);
-        local.t_near = enter[k];
-        local.t_far = leave[k];
+        local.t_near = spans[k].enter;
+        local.t_far = spans[k].leave;
         vec3 rgb;
         float trans;
         md->ops->integrate(md->data, &local, jitter, &rgb, &trans);

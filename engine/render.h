@@ -163,6 +163,16 @@ typedef struct render_first_surfaces {
 void render_trace_primary(const render_view *v, ray_packet *p, vec3 colour[PACKET_MAX_RAYS],
                           render_first_surfaces *first, render_counts *counts);
 
+/* The stretches of ray r (world space) through the scene's participating
+ * media (scene.h, PARTICIPATING MEDIA), nearest entry first, as the renderers
+ * composite them: at most RENDER_MEDIA_SPANS_MAX; their count. */
+#define RENDER_MEDIA_SPANS_MAX 8
+typedef struct render_media_span {
+    float enter, leave; /* along r */
+    uint32_t medium;    /* index into the scene's media */
+} render_media_span;
+uint32_t render_media_spans(const struct scene *s, const ray *r, render_media_span spans[RENDER_MEDIA_SPANS_MAX]);
+
 /* The renderer called `name`, or NULL. */
 const renderer *renderer_by_name(const char *name);
 

@@ -227,38 +227,21 @@ static bool is_backdrop(const scene *s, uint32_t instance)
 }
 
 /* The opacity the volumes rendered directly give ray r over [t_near, t_far]
- * (nearest first, as render.c composites them), and where along r the light
+ * (nearest first, render_media_spans: as the renderers composite them), and where along r the light
  * left first fell below one half (*t_seen, INFINITY when it never did). */
 static float media_opacity(const scene *s, const ray *r, float *t_seen)
 {
     *t_seen = INFINITY;
-    float enter[8], leave[8];
-    uint32_t which[8], n = 0;
-    for (uint32_t m = 0; m < s->medium_count && n < 8; m++) {
-        const scene_medium *md = &s->media[m];
-        aabb box;
-        if (!md->ops->bounds(md->data, &box))
-            continue;
-        ray local = md->identity ? *r : affine3_ray(&md->to_object, r);
-        ray_derived d = ray_derive(&local);
-        float t0, t1;
-        if (!intersect_box_span(&local, &d, &box, &t0, &t1))
-            continue;
-        uint32_t k = n++;
-        while (k > 0 && enter[k - 1] > t0) {
-            enter[k] = enter[k - 1], leave[k] = leave[k - 1], which[k] = which[k - 1];
-            k--;
-        }
-        enter[k] = t0, leave[k] = t1, which[k] = m;
-    }
+    render_media_span spans[RENDER_MEDIA_SPANS_MAX];
+    uint32_t n = render_media_spans(s, r, spans);
     float through = 1.f;
     for (uint32_t k = 0; k < n; k++) {
-        const scene_medium *md = &s->media[which[k]];
+        const scene_medium *md = &s->media[spans[k].medium];
         ray local = md->identity ? *r : affine3_ray(&md->to_object, r);
-        float step = (leave[k] - enter[k]) / MEDIUM_CHUNKS;
+        float step = (spans[k].leave - spans[k].enter) / MEDIUM_CHUNKS;
         for (int c = 0; c < MEDIUM_CHUNKS && through > 1e-3f; c++) {
-            local.t_near = enter[k] + step * (float)c;
-            local.t_far = c == MEDIUM_CHUNKS - 1 ? leave[k] : local.t_near + step;
+            local.t_near = spans[k].enter + step * (float)c;
+            local.t_far = c == MEDIUM_CHUNKS - 1 ? spans[k].leave : local.t_near + step;
             vec3 rgb;
             float trans;
             md->ops->integrate(md->data, &local, 0.5f, &rgb, &trans);
@@ -317,15 +300,24 @@ static float lowest_above_floor(const scene *s, const accel *a, uint32_t inst, c
     return lowest;
 }
 
+/* The scene's accel (*a, the caller destroys it), its own camera at W x H
+ * (*cam) and the picture from it (the caller frees it). */
+static float *render_own_camera(const char *name, scene *s, accel **a, camera_basis *cam)
+{
+    cr_assert(s->has_camera, "%s: an example scene has its own camera", name);
+    *cam = camera_basis_make(&s->camera, W, H);
+    tess_error err = {{0}};
+    *a = accel_build(s, THREADS, &err);
+    cr_assert_not_null(*a, "%s: accel_build: %s", name, err.msg);
+    return render(s, *a, cam);
+}
+
 /* The render checks of one scene whose data are all there. */
 static void check_picture(const char *name, scene *s)
 {
-    cr_assert(s->has_camera, "%s: an example scene has its own camera", name);
-    camera_basis cam = camera_basis_make(&s->camera, W, H);
-    tess_error err = {{0}};
-    accel *a = accel_build(s, THREADS, &err);
-    cr_assert_not_null(a, "%s: accel_build: %s", name, err.msg);
-    float *rgb = render(s, a, &cam);
+    accel *a;
+    camera_basis cam;
+    float *rgb = render_own_camera(name, s, &a, &cam);
     vec3 up = v3_normalize(s->camera.up);
 
     /* which pixels show the subject */
@@ -414,12 +406,9 @@ static void check_picture(const char *name, scene *s)
  * (at least the floor shows). */
 static void check_not_empty(const char *name, scene *s)
 {
-    cr_assert(s->has_camera, "%s: an example scene has its own camera", name);
-    camera_basis cam = camera_basis_make(&s->camera, W, H);
-    tess_error err = {{0}};
-    accel *a = accel_build(s, THREADS, &err);
-    cr_assert_not_null(a, "%s: accel_build: %s", name, err.msg);
-    float *rgb = render(s, a, &cam);
+    accel *a;
+    camera_basis cam;
+    float *rgb = render_own_camera(name, s, &a, &cam);
     int shown = 0;
     for (int i = 0; i < W * H; i++)
         shown += !is_background(s, rgb + 3 * i);
