@@ -3,8 +3,11 @@
 
 CC  ?= gcc
 CXX ?= g++
-PKGS := libdrm libudev libseat libsystemd libinput libevdev OpenImageIO json-c assimp libxxhash libwebsockets \
+PKGS := libdrm libudev libseat libsystemd libinput libevdev json-c assimp libxxhash libwebsockets \
         libturbojpeg ompi-c
+# OpenImageIO is linked into the image module only, never into an executable (wall/dump_module.h:
+# its 260 libraries cost every process start 0.33 s of CPU)
+IMAGE_PKGS := OpenImageIO
 TEST_PKGS := criterion
 
 BUILD := build
@@ -20,13 +23,14 @@ WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Wmissing-prototypes
 ifeq ($(WERROR),1)
 WARN += -Werror
 endif
-CPPFLAGS := -D_POSIX_C_SOURCE=200809L -I. $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+CPPFLAGS := -D_POSIX_C_SOURCE=200809L -I. $(shell pkg-config --cflags $(PKGS) $(IMAGE_PKGS) 2>/dev/null)
 ifeq ($(UNROBUST),1)
 CPPFLAGS += -DTESSERA_UNROBUST
 endif
 CFLAGS := -std=c11 $(OPT) -g $(WARN) -ffp-contract=off -fno-math-errno -pthread $(SAN)
 CXXFLAGS := -std=c++17 $(OPT) -g -Wall -Wextra $(if $(filter 1,$(WERROR)),-Werror) -pthread $(SAN)
-LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -lm -pthread
+LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ldl -lm -pthread
+IMAGE_LDLIBS := $(shell pkg-config --libs $(IMAGE_PKGS) 2>/dev/null)
 TEST_LDLIBS := $(shell pkg-config --libs $(TEST_PKGS) 2>/dev/null)
 
 ENGINE_SRC := $(wildcard engine/*.c engine/particles/*.c engine/volume/*.c)
@@ -58,7 +62,7 @@ ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
 
 LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(ENGINE_SRC) $(WALL_SRC) $(SEAT_SRC) $(INPUT_SRC) $(REMOTE_SRC) $(CLUSTER_SRC) $(METRICS_SRC) $(ROBUST_SRC)) \
-           $(patsubst %.cpp,$(BUILD)/%.o,$(WALL_CXX)) $(ISA_OBJ) $(BUILD)/remote/page_html.o
+           $(ISA_OBJ) $(BUILD)/remote/page_html.o $(BUILD)/wall/dump_module_blob.o
 CLI_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(CLI_SRC))
 GEN_ASSEMBLY_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(GEN_ASSEMBLY_SRC))
 TILE_CONTENTION_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(TILE_CONTENTION_SRC))
@@ -93,6 +97,25 @@ $(BUILD)/remote/page_html.o: $(BUILD)/gen/remote/page_html.c
 $(BUILD)/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -MMD -MP -c $< -o $@
+
+# the image module (wall/dump_module.h): dump_oiio.cpp with its own copies of err.c and
+# srgb8.c, position-independent, every symbol hidden but its entry; embedded in libtessera.a
+# by dump_module_blob.S (so each tree's executables carry their own tree's module)
+IMAGE_MODULE := $(BUILD)/wall/dump_oiio.so
+IMAGE_MODULE_OBJ := $(patsubst %.cpp,$(BUILD)/pic/%.o,$(WALL_CXX)) $(BUILD)/pic/engine/err.o $(BUILD)/pic/wall/srgb8.o
+$(BUILD)/pic/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+$(BUILD)/pic/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+# (-z defs: every symbol resolved at link time; not under a sanitizer, whose runtime the
+# executable brings)
+$(IMAGE_MODULE): $(IMAGE_MODULE_OBJ)
+	$(CXX) -shared $(LDFLAGS) -pthread $(SAN) $(if $(SAN),,-Wl,-z,defs) -o $@ $^ $(IMAGE_LDLIBS) -lm
+$(BUILD)/wall/dump_module_blob.o: wall/dump_module_blob.S $(IMAGE_MODULE)
+	@mkdir -p $(dir $@)
+	$(CC) -DTESS_DUMP_MODULE_FILE='"$(IMAGE_MODULE)"' -c $< -o $@
 
 $(LIB): $(LIB_OBJ)
 	@rm -f $@
@@ -187,15 +210,18 @@ test-isa-caps:
 	    TESSERA_ISA_MAX=$$cap ../$(TEST_BIN) --filter '$(ISA_CAP_TESTS)' --jobs 2 || exit 1; \
 	done
 
-# the suite again under AddressSanitizer + UBSan, in its own build tree
+# the suite again under AddressSanitizer + UBSan, in its own build tree (the image module
+# loaded from its file, so that a report inside it names its lines: wall/dump_module.h)
 test-asan:
 	@sh tools/deps.sh --test
 	$(MAKE) BUILD=build-asan OPT=-O1 SAN="-fsanitize=address,undefined -fno-omit-frame-pointer" \
 	    build-asan/tessera_tests tessera-asan build-asan/tessera_fault_tests build-asan/gen-assembly \
 	    build-asan/ply-replicate
 	cd tests && TESSERA_BIN=../tessera-asan TESSERA_GEN_ASSEMBLY=../build-asan/gen-assembly \
+	    TESSERA_IMAGE_MODULE=$(CURDIR)/build-asan/wall/dump_oiio.so \
 	    TESSERA_PLY_REPLICATE=../build-asan/ply-replicate ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_tests --jobs 2
-	cd tests && ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_fault_tests --jobs 2
+	cd tests && TESSERA_IMAGE_MODULE=$(CURDIR)/build-asan/wall/dump_oiio.so \
+	    ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=lsan.supp ../build-asan/tessera_fault_tests --jobs 2
 
 # the threaded tests under ThreadSanitizer; any report fails the run. Criterion
 # cannot start under TSan (its issue #274), so these files are compiled against
@@ -257,7 +283,7 @@ FUZZ_S ?= 60
 FUZZ_TARGETS ?=
 fuzz-build:
 	@sh tools/deps.sh --fuzz
-	$(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='$(CPPFLAGS)' LDLIBS='$(LDLIBS)' WARN='$(WARN)'
+	$(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='$(CPPFLAGS)' LDLIBS='$(LDLIBS)' IMAGE_LDLIBS='$(IMAGE_LDLIBS)' WARN='$(WARN)'
 fuzz: fuzz-build
 	sh tests/fuzz/run.sh $(FUZZ_S) $(FUZZ_TARGETS)
 fuzz-smoke:

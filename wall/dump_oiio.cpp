@@ -1,6 +1,9 @@
-/* dump_oiio.cpp - wall/dump.h on top of OpenImageIO (the project's one C++ file).
+/* dump_oiio.cpp - wall/dump.h's image files on top of OpenImageIO (the project's one C++
+ * file), built as the image module that wall/dump.c loads on first use (why a module:
+ * wall/dump_module.h). Its one export, tessera_dump_module, hands out the table of the
+ * functions below; it is linked with its own copies of engine/err.c and wall/srgb8.c.
  *
- * Boundary rule: every extern "C" function runs its body inside guarded(), so
+ * Boundary rule: every function of the table runs its body inside guarded(), so
  * no C++ exception ever unwinds into C; exceptions and OIIO failures become a
  * tess_error "PATH: what failed: OIIO's message". Every OIIO call that can
  * fail is checked, including close(), and a file left behind by a failed
@@ -9,6 +12,7 @@
 #include "engine/err.h"
 #include "engine/srgb.h"
 #include "wall/dump.h"
+#include "wall/dump_module.h"
 #include "wall/srgb8.h"
 
 #include <OpenImageIO/filesystem.h>
@@ -30,6 +34,9 @@
 #include <vector>
 
 namespace {
+
+/* the host's I/O calls (dump_module.h), set by tessera_dump_module before any other call */
+const dump_module_io *host_io;
 
 const char *shown(const char *s) { return s ? s : "(null)"; }
 
@@ -126,7 +133,7 @@ public:
     const char *proxytype() const override { return "tessera_checked_file"; }
     void close() override
     {
-        if (fd_ >= 0 && ::close(fd_) != 0)
+        if (fd_ >= 0 && host_io->close(fd_) != 0)
             fail(errno);
         fd_ = -1;
         m_mode = Closed;
@@ -157,7 +164,7 @@ public:
     {
         size_t done = 0;
         while (done < size) {
-            ssize_t n = ::pwrite(fd_, (const char *)buf + done, size - done, (off_t)offset + (off_t)done);
+            ssize_t n = host_io->pwrite(fd_, (const char *)buf + done, size - done, (off_t)offset + (off_t)done);
             if (n < 0 && errno == EINTR)
                 continue;
             if (n <= 0) {
@@ -384,122 +391,45 @@ bool read_linear_rgb(const char *path, int *width_px, int *height_px, float **rg
     return true;
 }
 
-/* One frame-number field found in a pattern: pattern[at, at + len) becomes
- * the frame number zero-padded to `digits`. */
-struct frame_field {
-    size_t at, len, digits;
-};
-
-/* Find the frame-number field of `pattern`: *found says whether there is
- * one (then *field is set); false (with err) for a malformed pattern. */
-bool find_field(const char *pattern, frame_field *field, bool *found, tess_error *err)
-{
-    /* Wider than any path; caps %0Nd parsing well below overflow. */
-    const size_t max_digits = 4096;
-    *found = false;
-    for (size_t i = 0; pattern[i];) {
-        frame_field f = {i, 0, 0};
-        if (pattern[i] == '#') {
-            while (pattern[i + f.len] == '#')
-                f.len++;
-            f.digits = f.len;
-        } else if (pattern[i] == '%') {
-            size_t j = i + 1;
-            const bool zero = pattern[j] == '0';
-            size_t width = 0;
-            while (pattern[j] >= '0' && pattern[j] <= '9') {
-                width = width * 10 + (size_t)(pattern[j++] - '0');
-                if (width > max_digits)
-                    return tess_error_set(err, "%s: frame-number field width too large", pattern);
-            }
-            if (pattern[j] == 'd') {
-                if (width > 0 && !zero)
-                    return tess_error_set(err, "%s: space-padded '%%Nd' is not supported, use '%%0Nd' or '#'",
-                                          pattern);
-                f.len = j + 1 - i;
-                f.digits = width > 0 ? width : 1;
-            }
-        }
-        if (f.len == 0) { /* any other character, including a lone '%', is literal */
-            i++;
-            continue;
-        }
-        if (*found)
-            return tess_error_set(err, "%s: more than one frame-number field", pattern);
-        *field = f;
-        *found = true;
-        i += f.len;
-    }
-    return true;
-}
-
-bool frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes, tess_error *err)
-{
-    if (!pattern || !out || out_bytes == 0)
-        return tess_error_set(err, "%s: frame path: NULL argument or empty buffer", shown(pattern));
-    out[0] = '\0';
-    if (frame < 0)
-        return tess_error_set(err, "%s: frame number %d is negative", pattern, frame);
-
-    frame_field field = {0, 0, 0};
-    bool found;
-    if (!find_field(pattern, &field, &found, err))
-        return false;
-
-    std::string path = pattern;
-    if (found || sequence) {
-        if (!found) { /* "_NNNN" before the extension of the last component */
-            const char *base = std::strrchr(pattern, '/');
-            base = base ? base + 1 : pattern;
-            const char *dot = std::strrchr(base, '.');
-            field.at = (dot && dot != base) ? (size_t)(dot - pattern) : path.size();
-            field.len = 0;
-            field.digits = 4;
-            path.insert(field.at, "_");
-            field.at++;
-        }
-        std::string number = std::to_string(frame);
-        if (number.size() < field.digits)
-            number.insert(0, field.digits - number.size(), '0');
-        path.replace(field.at, field.len, number);
-    }
-    if (path.size() >= out_bytes)
-        return tess_error_set(err, "%s: frame %d path needs %zu bytes, buffer has %zu", pattern, frame,
-                              path.size() + 1, out_bytes);
-    std::memcpy(out, path.c_str(), path.size() + 1);
-    return true;
-}
-
 } // namespace
 
 extern "C" {
 
-bool dump_write_rgb(const char *path, int width_px, int height_px, const float *rgb_linear, tess_error *err)
+namespace {
+bool module_write_rgb(const char *path, int width_px, int height_px, const float *rgb_linear, tess_error *err)
 {
     return guarded(path, err, [&] { return write_rgb(path, width_px, height_px, rgb_linear, err); });
 }
 
-bool dump_read_rgb8(const char *path, int *width_px, int *height_px, uint8_t **rgb_out, tess_error *err)
+bool module_read_rgb8(const char *path, int *width_px, int *height_px, uint8_t **rgb_out, tess_error *err)
 {
     return guarded(path, err,
                    [&] { return read_rgb<uint8_t>(path, OIIO::TypeDesc::UINT8, width_px, height_px, rgb_out, err); });
 }
 
-bool dump_read_rgbf(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
+bool module_read_rgbf(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
 {
     return guarded(path, err,
                    [&] { return read_rgb<float>(path, OIIO::TypeDesc::FLOAT, width_px, height_px, rgb_out, err); });
 }
 
-bool dump_read_linear_rgb(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
+bool module_read_linear_rgb(const char *path, int *width_px, int *height_px, float **rgb_out, tess_error *err)
 {
     return guarded(path, err, [&] { return read_linear_rgb(path, width_px, height_px, rgb_out, err); });
 }
 
-bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, size_t out_bytes,
-                     tess_error *err)
+const dump_module_ops module_ops = {DUMP_MODULE_ABI, module_write_rgb, module_read_rgb8, module_read_rgbf,
+                                    module_read_linear_rgb};
+} // namespace
+
+/* the module's one export (dump_module.h); the host calls it once, before any other call */
+__attribute__((visibility("default"))) const dump_module_ops *tessera_dump_module(const dump_module_io *io);
+const dump_module_ops *tessera_dump_module(const dump_module_io *io)
 {
-    return guarded(pattern, err, [&] { return frame_path(pattern, frame, sequence, out, out_bytes, err); });
+    if (!io || io->abi != DUMP_MODULE_ABI || !io->pwrite || !io->close)
+        return nullptr;
+    host_io = io;
+    return &module_ops;
 }
 
 } // extern "C"

@@ -1,5 +1,5 @@
 # fuzz.mk - the libFuzzer build (tests/fuzz/README.md), run by `make fuzz` as
-#   $(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='...' LDLIBS='...' WARN='...'
+#   $(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='...' LDLIBS='...' IMAGE_LDLIBS='...' WARN='...'
 # from the top directory, with the Makefile's CPPFLAGS (pkg-config), LDLIBS
 # and WARN, so the fuzzed code is compiled as the product is, by clang with
 # libFuzzer, ASan and UBSan (every report fatal), in its own tree build-fuzz/.
@@ -18,7 +18,7 @@ FZ_BINS := $(addprefix $(FZ)/fuzz_,$(FZ_TARGETS))
 
 # the whole product but main(), as one archive: a target links what it uses
 FZ_LIB_C := $(wildcard engine/*.c engine/particles/*.c engine/volume/*.c wall/*.c seat/*.c input/*.c remote/*.c cluster/*.c metrics/*.c) $(filter-out tools/cli/main.c,$(wildcard tools/cli/*.c))
-FZ_LIB_OBJ := $(patsubst %.c,$(FZ)/%.o,$(FZ_LIB_C)) $(patsubst %.cpp,$(FZ)/%.o,$(wildcard wall/*.cpp)) \
+FZ_LIB_OBJ := $(patsubst %.c,$(FZ)/%.o,$(FZ_LIB_C)) $(FZ)/wall/dump_module_blob.o \
               $(FZ)/engine/isa/traverse_sse2.o $(FZ)/engine/isa/traverse_avx2.o $(FZ)/engine/isa/traverse_avx512.o \
               $(FZ)/remote/page_html.o
 FZ_LIB := $(FZ)/libtessera_fuzz.a
@@ -49,6 +49,21 @@ $(FZ)/remote/page_html.o: $(FZ)/gen/remote/page_html.c
 $(FZ)/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(FZ_CXX) $(CPPFLAGS) $(FZ_CXXFLAGS) -MMD -MP -c $< -o $@
+
+# the image module (wall/dump_module.h), as the Makefile builds it: dump_oiio.cpp with its own
+# err.c and srgb8.c, linked with IMAGE_LDLIBS, embedded by dump_module_blob.S
+FZ_MODULE := $(FZ)/wall/dump_oiio.so
+$(FZ)/pic/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+$(FZ)/pic/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(FZ_CXX) $(CPPFLAGS) $(FZ_CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+$(FZ_MODULE): $(patsubst %.cpp,$(FZ)/pic/%.o,$(wildcard wall/*.cpp)) $(FZ)/pic/engine/err.o $(FZ)/pic/wall/srgb8.o
+	$(FZ_CXX) -shared $(FZ_SAN) -pthread -o $@ $^ $(IMAGE_LDLIBS) -lm
+$(FZ)/wall/dump_module_blob.o: wall/dump_module_blob.S $(FZ_MODULE)
+	@mkdir -p $(dir $@)
+	$(FZ_CC) -DTESS_DUMP_MODULE_FILE='"$(FZ_MODULE)"' -c $< -o $@
 
 $(FZ_LIB): $(FZ_LIB_OBJ)
 	@rm -f $@
