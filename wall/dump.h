@@ -2,8 +2,10 @@
  *
  * The format follows the file extension: .png (and other 8-bit formats such as
  * .jpg, .tif, .ppm) get 8-bit sRGB-encoded values; .exr gets linear float.
- * Implemented in dump_oiio.cpp; every C++ exception is caught there and
- * becomes a tess_error naming the path and OpenImageIO's message. */
+ * Implemented in dump.c (frame paths) and the image module dump_oiio.cpp, which
+ * dump.c loads on the first image read or write (dump_module.h); every C++
+ * exception is caught there and becomes a tess_error naming the path and
+ * OpenImageIO's message. */
 #ifndef TESSERA_DUMP_H
 #define TESSERA_DUMP_H
 
