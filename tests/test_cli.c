@@ -1,7 +1,10 @@
 /* test_cli.c - the tessera binary end to end: every bad input gets one clear
  * line and a non-zero exit, never a crash or a hang; good input writes images.
  * Runs ../tessera (or $TESSERA_BIN) from the tests/ directory. */
+#define _GNU_SOURCE /* dladdr */
 #include <criterion/criterion.h>
+#include <dlfcn.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +64,41 @@ Test(cli, help_gives_each_commands_time_default)
     cr_expect(strstr(out, "(reproducible; default fixed; real on a DRM wall)"), "%s", out);
     cr_expect(strstr(out, "fixed mode (default 24)"), "%s", out);
     cr_expect(strstr(out, "default real)") == NULL, "%s", out);
+}
+
+/* Images go through a module loaded on first use (wall/dump.c). When it cannot load, a run that
+ * writes an image fails before it renders, naming the image and why: a module file that is
+ * missing, a file that is no shared object, and a shared object that is not the module (libm,
+ * found by dladdr, so the test names no path of this machine). */
+Test(cli, image_module_that_does_not_load_is_an_error_naming_the_image)
+{
+    char missing[512], not_elf[512];
+    snprintf(missing, sizeof missing, "%s/missing.so", tmp_dir);
+    snprintf(not_elf, sizeof not_elf, "%s/not_elf.so", tmp_dir);
+    write_text("not_elf.so", "this is not a shared object\n");
+    Dl_info libm;
+    cr_assert(dladdr((void *)&cos, &libm) && libm.dli_fname, "dladdr(cos) found no library");
+    const struct {
+        const char *module, *why;
+    } cases[] = {
+        {missing, "missing.so: "}, /* then dlerror()'s words */
+        {not_elf, "not_elf.so: "},
+        {libm.dli_fname, "not an image module of this build (no tessera_dump_module)"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        cr_assert_eq(setenv("TESSERA_IMAGE_MODULE", cases[i].module, 1), 0);
+        EXPECT_ERROR("render --size 16x12 --out %s/a.png", "a.png: images cannot be read or written",
+                     "the OpenImageIO module did not load", cases[i].why);
+        char path[512];
+        struct stat st;
+        snprintf(path, sizeof path, "%s/a.png", tmp_dir);
+        cr_expect(stat(path, &st) != 0, "%s: an image was written without the module", cases[i].module);
+    }
+    /* a command that reads and writes no image never loads the module */
+    write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    char out[4096];
+    cr_expect_eq(run_tessera(out, sizeof out, "parts %s/tri.obj"), 0, "%s", out);
+    cr_expect(strstr(out, "triangles_stored=1 "), "%s", out);
 }
 
 Test(cli, renders_default_scene_to_png_and_exr)
