@@ -2,6 +2,7 @@
 # run.sh - run the libFuzzer targets built by `make fuzz` (tests/fuzz/README.md).
 # Usage: tests/fuzz/run.sh [SECONDS [TARGET...]]   (default 60 s, every target)
 #        FUZZ_RUNS=N: stop a target after N executions instead (SECONDS stays a cap)
+#        FUZZ_JOBS=N: N processes on each target at once (one per CPU), sharing its corpus
 # From the top directory. Each target runs alone, under nice, from its seed
 # corpus tests/fuzz/corpus/TARGET (read only) and what earlier runs found
 # (build-fuzz/corpus/TARGET, where new inputs go). Any crash, sanitizer report,
@@ -45,28 +46,32 @@ timeout_reproduces() {
     return 1
 }
 
-failed=""
-printf '%-16s %12s %8s %8s %8s %8s  %s\n' target executions exec/s edges features corpus result
-for t in $targets; do
-    bin=$FZ/fuzz_$t
-    seeds=tests/fuzz/corpus/$t
-    work=$FZ/corpus/$t
-    art=$FZ/artifacts/$t
-    log=$FZ/logs/$t.log
-    mkdir -p "$work" "$art" "$FZ/logs"
-    [ -x "$bin" ] || { echo "fuzz: $bin is missing" >&2; failed="$failed $t"; continue; }
+# the larger of two counts, either of which may be "?" or empty (not known)
+larger() {
+    case "$1" in '' | *[!0-9]*) echo "$2"; return ;; esac
+    case "$2" in '' | *[!0-9]*) echo "$1"; return ;; esac
+    if [ "$2" -gt "$1" ]; then echo "$2"; else echo "$1"; fi
+}
+
+# fuzz_job TARGET LOG RUNS: one libFuzzer process after another on TARGET (restarted
+# after a stall) until the time is up or RUNS executions are done (RUNS empty: no
+# limit); its log is LOG. Writes "EXECS STALLS EDGES FEATURES CORPUS" to LOG.sum
+# and, when it found something, the result line to LOG.finding.
+fuzz_job() {
+    t=$1 log=$2 want=$3
+    bin=$FZ/fuzz_$t seeds=tests/fuzz/corpus/$t work=$FZ/corpus/$t art=$FZ/artifacts/$t
     dict=""
     [ -f "tests/fuzz/$t.dict" ] && dict="-dict=tests/fuzz/$t.dict"
-    start=$(date +%s)
-    execs=0 stalls=0 result="" edges="" feats="" corpus=""
+    execs=0 stalls=0 edges="" feats="" corpus=""
     : >"$log"
+    rm -f "$log.finding"
     while :; do
         left=$((seconds - ($(date +%s) - start)))
         [ "$left" -gt 0 ] || break
         runs=""
-        if [ -n "${FUZZ_RUNS:-}" ]; then
-            [ "$execs" -lt "$FUZZ_RUNS" ] || break
-            runs="-runs=$((FUZZ_RUNS - execs))"
+        if [ -n "$want" ]; then
+            [ "$execs" -lt "$want" ] || break
+            runs="-runs=$((want - execs))"
         fi
         seg=$log.part
         # -close_fd_mask=2: the parsers' own stderr (cli_error) goes to /dev/null;
@@ -93,11 +98,53 @@ for t in $targets; do
             fi ;;
         esac
         what=$(grep -o -m 1 -E 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer): [a-z-]+|runtime error|fuzz: FINDING' "$seg")
-        result="FINDING (exit $rc: ${what:-see $log}) input: ${artifact:-none} log: $log"
-        failed="$failed $t"
+        echo "FINDING (exit $rc: ${what:-see $log}) input: ${artifact:-none} log: $log" >"$log.finding"
         break
     done
     rm -f "$log.part"
+    echo "$execs $stalls ${edges:-?} ${feats:-?} ${corpus:-?}" >"$log.sum"
+}
+
+# FUZZ_JOBS=N runs N processes on each target at once (default 1), sharing its corpus
+# directory (libFuzzer reloads it, so each sees what the others found); each has its own
+# log (T.log for one job, T.1.log ... T.N.log for more) and 1/N of FUZZ_RUNS. The row
+# sums their executions; edges, features and corpus are the largest any job reached.
+jobs=${FUZZ_JOBS:-1}
+case "$jobs" in '' | *[!0-9]* | 0) echo "fuzz: FUZZ_JOBS must be a positive number, got '$jobs'" >&2; exit 2 ;; esac
+
+failed=""
+printf '%-16s %12s %8s %8s %8s %8s  %s\n' target executions exec/s edges features corpus result
+for t in $targets; do
+    mkdir -p "$FZ/corpus/$t" "$FZ/artifacts/$t" "$FZ/logs"
+    [ -x "$FZ/fuzz_$t" ] || { echo "fuzz: $FZ/fuzz_$t is missing" >&2; failed="$failed $t"; continue; }
+    start=$(date +%s)
+    logs=""
+    if [ "$jobs" -eq 1 ]; then
+        logs=$FZ/logs/$t.log
+        (fuzz_job "$t" "$logs" "${FUZZ_RUNS:-}")
+    else
+        # background jobs ignore SIGINT in sh: stop them (the whole group) when we are stopped
+        trap 'trap - INT TERM; kill 0; exit 130' INT TERM
+        for j in $(seq "$jobs"); do
+            want=""
+            # the first jobs take the remainder, so the runs add up to FUZZ_RUNS
+            [ -n "${FUZZ_RUNS:-}" ] && want=$((FUZZ_RUNS / jobs + (j <= FUZZ_RUNS % jobs ? 1 : 0)))
+            fuzz_job "$t" "$FZ/logs/$t.$j.log" "$want" &
+            logs="$logs $FZ/logs/$t.$j.log"
+        done
+        wait
+        trap - INT TERM
+    fi
+    execs=0 stalls=0 edges="" feats="" corpus="" result=""
+    for l in $logs; do
+        n=0 s=0 e="" f="" c=""
+        [ -f "$l.sum" ] && read -r n s e f c <"$l.sum"
+        execs=$((execs + n)) stalls=$((stalls + s))
+        edges=$(larger "$edges" "$e") feats=$(larger "$feats" "$f") corpus=$(larger "$corpus" "$c")
+        [ -f "$l.finding" ] && [ -z "$result" ] && result=$(cat "$l.finding")
+        rm -f "$l.sum" "$l.finding"
+    done
+    [ -n "$result" ] && failed="$failed $t"
     elapsed=$(($(date +%s) - start))
     rate=$((execs / (elapsed > 0 ? elapsed : 1)))
     if [ -z "$result" ]; then
