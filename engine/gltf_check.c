@@ -18,6 +18,13 @@
  *    other character outside the alphabet as if it were one, giving wrong
  *    bytes without a word. A data URI payload holding anything but A-Z a-z
  *    0-9 + / and '=' is refused with its offset and the character.
+ *  - its data URI parser keeps the offsets of the parts of "data:...,PAYLOAD"
+ *    in the string's first bytes, as a (signed) char: a header of 127 bytes
+ *    or more before the ',' makes the payload's offset negative or wrapped,
+ *    so assimp decodes bytes from before the string (or the header itself)
+ *    as the buffer, giving wrong data without a word, or a leak when they are
+ *    not base64 (tests/fuzz/corpus/gltf/crash-leak-long-data-uri-header). A
+ *    data URI whose payload would start past byte 127 is refused.
  *
  * The JSON text (a .gltf file, or the JSON chunk of a .glb) is read once as a
  * stream of bytes by a small lexer that knows strings and their escapes and
@@ -55,6 +62,7 @@ typedef struct gltf_lexer {
     bool high_surrogate;   /* the last character was a \uD800-\uDBFF escape */
     long long string_at;   /* offset of the current string's opening quote */
     size_t decoded;        /* characters of the current string so far */
+    size_t header_bytes;   /* UTF-8 bytes of the current string so far, as assimp counts them */
     char head[8];          /* its first 5 characters ("data:"?) */
     char tail[8];          /* the last 7 characters before the ',' (";base64"?) */
     enum { URI_OTHER, URI_HEADER, URI_PAYLOAD } state;
@@ -67,11 +75,19 @@ static bool is_base64(unsigned c)
            c == '=';
 }
 
+/* The payload of a data URI must start at most this many bytes into the
+ * string: assimp 5.2 stores the offset in a char (glTFCommon's ParseDataURI). */
+#define DATA_URI_PAYLOAD_MAX_OFFSET 127
+
 /* One decoded character `c` of the current string (a code point; values
- * >= 0x80 are whatever a multi-byte character or a \u escape made). */
-static bool take_char(gltf_lexer *x, unsigned c, tess_error *err)
+ * >= 0x80 are whatever a multi-byte character or a \u escape made), which
+ * is `bytes` bytes of the string assimp's parser sees (a raw byte: 1; a \u
+ * escape: its UTF-8 length). */
+static bool take_char(gltf_lexer *x, unsigned c, unsigned bytes, tess_error *err)
 {
     size_t i = x->decoded++;
+    size_t at_byte = x->header_bytes; /* where this character starts in assimp's string */
+    x->header_bytes += bytes;
     switch (x->state) {
     case URI_OTHER:
         return true;
@@ -83,6 +99,11 @@ static bool take_char(gltf_lexer *x, unsigned c, tess_error *err)
             return true;
         }
         if (c == ',') {
+            if (at_byte + 1 > DATA_URI_PAYLOAD_MAX_OFFSET)
+                return tess_error_set(err, "%s: byte %lld: the data URI (string at byte %lld) has %zu bytes before "
+                                           "its ',' (at most %d: assimp's glTF reader misplaces the data after a "
+                                           "longer media type and parameters)",
+                                      x->path, x->offset, x->string_at, at_byte, DATA_URI_PAYLOAD_MAX_OFFSET - 1);
             x->state = memcmp(x->tail, ";base64", 7) == 0 ? URI_PAYLOAD : URI_OTHER;
             return true;
         }
@@ -112,7 +133,9 @@ static bool take_escaped(gltf_lexer *x, unsigned code, tess_error *err)
                                    "(the glTF reader's JSON parser refuses it)",
                               x->path, x->offset);
     x->high_surrogate = code >= 0xD800 && code <= 0xDBFF;
-    return x->high_surrogate || take_char(x, code, err);
+    /* UTF-8 length; a low surrogate ends a pair, 4 bytes in all */
+    unsigned bytes = code < 0x80 ? 1 : code < 0x800 ? 2 : low ? 4 : 3;
+    return x->high_surrogate || take_char(x, code, bytes, err);
 }
 
 /* A byte between strings: JSON's structure, white space, numbers and the
@@ -144,6 +167,7 @@ static bool take_byte(gltf_lexer *x, unsigned char b, tess_error *err)
         x->in_string = true;
         x->string_at = x->offset;
         x->decoded = 0;
+        x->header_bytes = 0;
         x->state = URI_HEADER;
         x->last = '"';
         memset(x->tail, 0, sizeof x->tail);
@@ -163,7 +187,7 @@ static bool take_byte(gltf_lexer *x, unsigned char b, tess_error *err)
                                   b >= 0x20 && b < 0x7f ? (int)b : '?');
         if (x->high_surrogate)
             return take_escaped(x, (unsigned char)meaning[s - simple], err);
-        return take_char(x, (unsigned char)meaning[s - simple], err);
+        return take_char(x, (unsigned char)meaning[s - simple], 1, err);
     }
     if (x->escape >= 2) {
         unsigned digit = b >= '0' && b <= '9'   ? b - 0x30u
@@ -193,7 +217,7 @@ static bool take_byte(gltf_lexer *x, unsigned char b, tess_error *err)
     if (b < 0x20)
         return tess_error_set(err, "%s: byte %lld: control character 0x%02x inside a string (JSON needs it escaped)",
                               x->path, x->offset, b);
-    return take_char(x, b, err);
+    return take_char(x, b, 1, err);
 }
 
 /* ---- the tree ------------------------------------------------------------ */
