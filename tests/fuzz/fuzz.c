@@ -6,6 +6,7 @@
 
 #include <dirent.h>
 #include <sanitizer/allocator_interface.h>
+#include <sanitizer/lsan_interface.h>
 #include <stdbool.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -162,4 +163,64 @@ void fuzz_check_mesh(const mesh *m, const char *name)
                 fuzz_fail("%s: material %u: diffuse %g outside [0, 1]", name, i, (double)m->materials[i].diffuse_rgb[k]);
     }
     (void)sink;
+}
+
+/* The last inputs (fuzz_watch_leaks), oldest at recent_next once the ring is full. Only the
+ * fuzzing thread touches them. The copies are reachable from here, so they are no leak. */
+static struct recent_input {
+    uint8_t *bytes;
+    size_t size;
+} recent[FUZZ_RECENT_INPUTS];
+static unsigned recent_next;      /* ring slot the next input goes to */
+static unsigned long inputs_seen; /* inputs since the process began */
+
+static void write_suspects(void)
+{
+    const char *dir = getenv("FUZZ_SUSPECT_DIR");
+    if (!dir || !dir[0])
+        dir = ".";
+    unsigned kept = inputs_seen < FUZZ_RECENT_INPUTS ? (unsigned)inputs_seen : FUZZ_RECENT_INPUTS;
+    unsigned first = inputs_seen < FUZZ_RECENT_INPUTS ? 0 : recent_next;
+    for (unsigned k = 0; k < kept; k++) {
+        const struct recent_input *in = &recent[(first + k) % FUZZ_RECENT_INPUTS];
+        char path[512];
+        snprintf(path, sizeof path, "%s/leak-suspect-%u", dir, k + 1);
+        FILE *f = fopen(path, "wb");
+        bool written = f && (in->size == 0 || fwrite(in->bytes, 1, in->size, f) == in->size);
+        if (f && fclose(f) != 0)
+            written = false;
+        printf("fuzz: leak suspect %u of %u (%zu bytes): %s%s\n", k + 1, kept, in->size, path,
+               written ? "" : " (could not be written)");
+    }
+    fflush(stdout);
+}
+
+static void check_leaks(const char *when)
+{
+    if (inputs_seen == 0 || !__lsan_do_recoverable_leak_check())
+        return;
+    write_suspects();
+    fuzz_fail("LeakSanitizer found a leak %s (report above); one of the %lu inputs before it "
+              "leaks: run each leak-suspect-K alone", when,
+              inputs_seen < FUZZ_RECENT_INPUTS ? inputs_seen : (unsigned long)FUZZ_RECENT_INPUTS);
+}
+
+static void check_leaks_at_exit(void) { check_leaks("at exit"); }
+
+void fuzz_watch_leaks(const uint8_t *data, size_t size)
+{
+    if (inputs_seen == 0)
+        atexit(check_leaks_at_exit);
+    struct recent_input *in = &recent[recent_next];
+    uint8_t *copy = realloc(in->bytes, size ? size : 1);
+    if (!copy)
+        fuzz_fail("harness: out of memory keeping an input of %zu bytes", size);
+    if (size)
+        memcpy(copy, data, size);
+    in->bytes = copy;
+    in->size = size;
+    recent_next = (recent_next + 1) % FUZZ_RECENT_INPUTS;
+    inputs_seen++;
+    if (inputs_seen % FUZZ_RECENT_INPUTS == 0)
+        check_leaks("after an input");
 }

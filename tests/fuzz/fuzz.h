@@ -43,4 +43,14 @@ void fuzz_check_error(const tess_error *err, const char *name);
  * sees any array shorter than its count. */
 void fuzz_check_mesh(const struct mesh *m, const char *name);
 
+/* Call at the end of every input of a target whose library may leak (assimp). libFuzzer's own
+ * per-input leak check runs only when an input made more allocations than frees, is skipped
+ * for the last input of a run, and is switched off for good after 1,000 tries; a leak it misses
+ * is found at exit with no input to show for it. This keeps the last FUZZ_RECENT_INPUTS inputs,
+ * runs LeakSanitizer after every FUZZ_RECENT_INPUTS-th one and at exit, and on a leak writes
+ * those inputs to $FUZZ_SUSPECT_DIR (else the working directory) as leak-suspect-K (K = 1 the
+ * oldest) before aborting as a finding. Each suspect is then run alone to find the leaking one. */
+#define FUZZ_RECENT_INPUTS 16
+void fuzz_watch_leaks(const uint8_t *data, size_t size);
+
 #endif

@@ -78,5 +78,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!assembly_load(path, &sink, &err))
         fuzz_check_error(&err, path);
     part_tree_destroy(s.parts);
+    fuzz_watch_leaks(data, size);
     return 0;
 }

@@ -35,5 +35,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     else
         fuzz_check_error(&err, obj_path);
     mesh_destroy(m);
+    fuzz_watch_leaks(data, size);
     return 0;
 }

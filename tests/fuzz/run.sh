@@ -63,6 +63,10 @@ fuzz_job() {
     dict=""
     [ -f "tests/fuzz/$t.dict" ] && dict="-dict=tests/fuzz/$t.dict"
     execs=0 stalls=0 edges="" feats="" corpus=""
+    # fuzz_watch_leaks (fuzz.h) writes the inputs before a leak it finds here
+    suspects=$art/${log##*/}.suspects
+    rm -rf "$suspects"
+    mkdir -p "$suspects"
     : >"$log"
     rm -f "$log.finding"
     while :; do
@@ -77,7 +81,7 @@ fuzz_job() {
         # -close_fd_mask=2: the parsers' own stderr (cli_error) goes to /dev/null;
         # libFuzzer and the sanitizers keep a copy of stderr for their reports
         # shellcheck disable=SC2086
-        nice -n 10 "$bin" -max_total_time="$left" -timeout=1 -rss_limit_mb=2048 -malloc_limit_mb=2048 \
+        FUZZ_SUSPECT_DIR=$suspects nice -n 10 "$bin" -max_total_time="$left" -timeout=1 -rss_limit_mb=2048 -malloc_limit_mb=2048 \
             -detect_leaks=1 -print_final_stats=1 -close_fd_mask=2 -artifact_prefix="$art/" $runs $dict \
             "$work" "$seeds" >"$seg" 2>&1
         rc=$?
@@ -98,10 +102,22 @@ fuzz_job() {
             fi ;;
         esac
         what=$(grep -o -m 1 -E 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer): [a-z-]+|runtime error|fuzz: FINDING' "$seg")
+        if [ -n "$(ls "$suspects")" ]; then
+            # a leak seen by the harness's own check: the input is the suspect that leaks alone
+            artifact="none of the suspects in $suspects leaks alone"
+            for suspect in "$suspects"/leak-suspect-*; do
+                if ! "$bin" -runs=1 -detect_leaks=1 "$suspect" >/dev/null 2>&1; then
+                    artifact=$art/leak-$(sha1sum <"$suspect" | cut -d' ' -f1)
+                    cp "$suspect" "$artifact"
+                    break
+                fi
+            done
+        fi
         echo "FINDING (exit $rc: ${what:-see $log}) input: ${artifact:-none} log: $log" >"$log.finding"
         break
     done
     rm -f "$log.part"
+    rmdir "$suspects" 2>/dev/null # kept when it holds suspects
     echo "$execs $stalls ${edges:-?} ${feats:-?} ${corpus:-?}" >"$log.sum"
 }
 
