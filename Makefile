@@ -278,11 +278,15 @@ clean-soak:
 # build-fuzz/ (tests/fuzz/fuzz.mk, with this file's CPPFLAGS, LDLIBS and WARN), then each
 # target for FUZZ_S seconds (default 60) alone; any crash, leak, hang > 1 s or OOM > 2 GiB
 # fails. FUZZ_TARGETS="ply obj" picks targets. fuzz-smoke (3 s a target) is what CI runs.
-.PHONY: fuzz fuzz-build fuzz-smoke clean-fuzz
+# fuzz-build-tree runs in a make of its own, started after deps.sh: this make's pkg-config
+# flags were read before deps.sh installed the packages, and on a fresh machine are empty.
+.PHONY: fuzz fuzz-build fuzz-build-tree fuzz-smoke clean-fuzz
 FUZZ_S ?= 60
 FUZZ_TARGETS ?=
 fuzz-build:
 	@sh tools/deps.sh --fuzz
+	$(MAKE) fuzz-build-tree
+fuzz-build-tree:
 	$(MAKE) -f tests/fuzz/fuzz.mk CPPFLAGS='$(CPPFLAGS)' LDLIBS='$(LDLIBS)' IMAGE_LDLIBS='$(IMAGE_LDLIBS)' WARN='$(WARN)'
 fuzz: fuzz-build
 	sh tests/fuzz/run.sh $(FUZZ_S) $(FUZZ_TARGETS)

@@ -35,6 +35,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -269,6 +270,66 @@ static bool check_obj_indices(obj_check *c, const char *keyword, char **save)
     return true;
 }
 
+/* Why assimp 5.2's reader would read number `token` of a vertex-data line
+ * differently from strtod, or NULL when both read it alike. The spellings
+ * both read alike: an optional sign, digits with an optional point and
+ * fraction (or, after a sign, a point and a fraction), an optional exponent.
+ * assimp differs on the others, each checked against it:
+ *  - it does not count ".5" as a number when it counts a line's numbers, so
+ *    "v .5 0 0" holds 2 to it and the vertex is dropped, shifting every later
+ *    index (found by fuzzing: an index then got past the count check and
+ *    assimp leaked a half-built mesh on it); "-.5" and "+.5" it counts;
+ *  - it reads "0x10" as 0 and "1,5" as 1.5 (strtod: 16, 1);
+ *  - it reads the digits before the point into a 64-bit integer without an
+ *    overflow check: 21 digits come out wrong by a factor;
+ *  - the words "nan" and "inf" are strtod's: refused as not finite later.
+ * Past its 15th fraction digit assimp drops the rest: "0.0000000000000001"
+ * is 0 to it, an error of 1e-16 at most that no scene of floats can see. */
+static const char *obj_number_problem(const char *token)
+{
+    const char *p = token;
+    const bool sign = *p == '-' || *p == '+';
+    p += sign;
+    if (p[0] == 'n' || p[0] == 'N' || p[0] == 'i' || p[0] == 'I') {
+        char *end;
+        double v = strtod(token, &end);
+        /* nan, inf, infinity: refused as not finite, with their own message */
+        return end > token && *end == '\0' && !isfinite(v) ? NULL : "expected a number";
+    }
+    const char *digits = p;
+    while (*p >= '0' && *p <= '9')
+        p++;
+    const char *point = p;
+    if (*p == '.') {
+        p++;
+        while (*p >= '0' && *p <= '9')
+            p++;
+    }
+    const bool fraction = p > point + 1;
+    if (point == digits && !fraction)
+        return "expected a number";
+    if (*p == 'e' || *p == 'E') {
+        p++;
+        p += *p == '-' || *p == '+';
+        const char *exponent = p;
+        while (*p >= '0' && *p <= '9')
+            p++;
+        if (p == exponent)
+            return "expected a number";
+    }
+    if (*p != '\0')
+        return "expected a number";
+    if (point == digits && !sign)
+        return "a number needs a digit before its point (assimp's reader does not count '.5' as a number and "
+               "drops the line: write 0.5)";
+    while (digits < point && *digits == '0')
+        digits++;
+    if (point - digits > 19)
+        return "more than 19 digits before the point (assimp's reader overflows on them: write it with an "
+               "exponent, like 1.5e20)";
+    return NULL;
+}
+
 /* Check one line as assimp 5.2's OBJ reader will read it: it classifies a
  * line by its first character alone, without skipping blanks ('v' then a
  * blank, 't' or 'n': vertex data; 'f', 'l', 'p': an element, whatever the
@@ -324,14 +385,18 @@ static bool check_obj_line(obj_check *c, char *line)
     c->count[k]++;
     int count = 0;
     for (char *token; (token = strtok_r(NULL, OBJ_SPACE, &save)) && token[0] != '#'; count++) {
-        char *end;
-        double v = strtod(token, &end);
-        if (end == token || *end != '\0')
-            return tess_error_set(err, "%s:%lu: '%s' line: expected a number, got '%.40s'", path, line_no,
-                                  kind->keyword, token);
+        const char *problem = obj_number_problem(token);
+        if (problem)
+            return tess_error_set(err, "%s:%lu: '%s' line: %s, got '%.40s'", path, line_no, kind->keyword, problem,
+                                  token);
+        double v = strtod(token, NULL);
         if (!isfinite(v))
             return tess_error_set(err, "%s:%lu: '%s' line: value %d is %.40s (must be finite)", path, line_no,
                                   kind->keyword, count + 1, token);
+        if (fabs(v) > FLT_MAX)
+            return tess_error_set(err, "%s:%lu: '%s' line: value %d is %.40s, beyond a float's range (must be at "
+                                       "most %g in magnitude)",
+                                  path, line_no, kind->keyword, count + 1, token, (double)FLT_MAX);
     }
     if (count > 30 || !(kind->counts >> count & 1u))
         return tess_error_set(err, "%s:%lu: '%s' line: expected %s numbers, got %d", path, line_no, kind->keyword,
