@@ -17,7 +17,8 @@
  *    check must therefore read every line as assimp does: assimp classifies a
  *    line by its first character without skipping blanks ("fx 1 2 5" is a
  *    face, an indented "  v 0 1 0" is skipped), drops a "v" line of 2, 5 or 7
- *    numbers, reads a corner "-30-1" as two indices and a byte-order mark as
+ *    numbers (counting ".5" as none and a comment's numbers as the line's),
+ *    reads a corner "-30-1" as two indices and a byte-order mark as
  *    text (each found by fuzzing, each a way an index got past the check):
  *    check_obj_line refuses what assimp would read differently, reads
  *    corners strictly, counts the data of each kind and checks every index;
@@ -384,7 +385,9 @@ static bool check_obj_line(obj_check *c, char *line)
     const struct obj_vertex_data *kind = &obj_vertex_data[k == OBJ_VERTEX ? 0 : k == OBJ_NORMAL ? 1 : 2];
     c->count[k]++;
     int count = 0;
-    for (char *token; (token = strtok_r(NULL, OBJ_SPACE, &save)) && token[0] != '#'; count++) {
+    double value[4] = {0, 0, 0, 1};
+    char *token;
+    for (; (token = strtok_r(NULL, OBJ_SPACE, &save)) && token[0] != '#'; count++) {
         const char *problem = obj_number_problem(token);
         if (problem)
             return tess_error_set(err, "%s:%lu: '%s' line: %s, got '%.40s'", path, line_no, kind->keyword, problem,
@@ -397,10 +400,30 @@ static bool check_obj_line(obj_check *c, char *line)
             return tess_error_set(err, "%s:%lu: '%s' line: value %d is %.40s, beyond a float's range (must be at "
                                        "most %g in magnitude)",
                                   path, line_no, kind->keyword, count + 1, token, (double)FLT_MAX);
+        if (count < 4)
+            value[count] = v;
     }
+    /* assimp counts the numbers of a "v" or "vt" line to the line's end, a
+     * comment's too: "v 1 2 3 # 4" holds 4 to it, and it then fails on the
+     * '#' (a "vn" line it reads as 3 numbers without counting) */
+    for (; token && k != OBJ_NORMAL; token = strtok_r(NULL, OBJ_SPACE, &save))
+        if ((token[0] >= '0' && token[0] <= '9') || token[0] == '-' || token[0] == '+' ||
+            strncasecmp(token, "nan", 3) == 0 || strncasecmp(token, "inf", 3) == 0)
+            return tess_error_set(err, "%s:%lu: '%s' line: a number in the comment ('%.40s'; assimp's reader counts "
+                                       "it with the line's numbers)",
+                                  path, line_no, kind->keyword, token);
     if (count > 30 || !(kind->counts >> count & 1u))
         return tess_error_set(err, "%s:%lu: '%s' line: expected %s numbers, got %d", path, line_no, kind->keyword,
                               kind->allowed, count);
+    /* x y z w: assimp divides x, y and z by w, in floats */
+    if (k == OBJ_VERTEX && count == 4) {
+        const float w = (float)value[3];
+        for (int i = 0; i < 3; i++)
+            if (w == 0.f || !isfinite((float)value[i] / w))
+                return tess_error_set(err, "%s:%lu: 'v' line: x y z w with w = %g: x, y and z divided by w "
+                                           "(as assimp's reader does) are not finite floats",
+                                      path, line_no, value[3]);
+    }
     return true;
 }
 

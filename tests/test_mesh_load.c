@@ -1069,6 +1069,21 @@ Test(mesh_load, obj_errors)
     /* beyond a float, assimp reads inf: refused at its line */
     write_text(path, "huge.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n");
     expect_error(mesh_load_assimp, path, at_line(line, path, 2), "value 1 is 1e39, beyond a float's range");
+    /* assimp counts a comment's numbers with the line's, then fails on the '#' */
+    write_text(path, "comment.obj", "v 0 0 0\nv 1 0 0 # 4\nv 0 1 0 # one\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 2), "a number in the comment ('4'");
+    /* x y z w: assimp divides by w */
+    write_text(path, "vn_comment.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1 # 4\nf 1//1 2//1 3//1\n");
+    m = load_ok(mesh_load_assimp, path);
+    mesh_destroy(m);
+    write_text(path, "w_zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0 0\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 3), "w = 0", "not finite floats");
+    write_text(path, "w_tiny.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0 1e-40\nf 1 2 3\n");
+    expect_error(mesh_load_assimp, path, at_line(line, path, 3), "w = 1e-40");
+    write_text(path, "w_two.obj", "v 0 0 0\nv 2 0 0 2 # w\nv 0 1 0\nf 1 2 3\n");
+    m = load_ok(mesh_load_assimp, path);
+    cr_expect_eq(m->positions[3], 1.f, "x / w");
+    mesh_destroy(m);
     /* the spellings both read alike load, with the values assimp gives them */
     write_text(path, "spellings.obj",
                "v -.5 +.25 1.\nv 1.e1 +1E+1 -0\nv 000000000000000000000002 1.5e-1 1234567890123456789\n"
