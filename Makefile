@@ -14,7 +14,7 @@ BUILD := build
 WERROR ?= 0
 OPT ?= -O2
 SAN ?=
-# UNROBUST=1: the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST), only ever
+# UNROBUST=1: the fast, non-robust kernels (engine/accel/intersect.h: TESSERA_UNROBUST), only ever
 # in their own tree (make unrobust: build-unrobust/tessera)
 UNROBUST ?= 0
 
@@ -33,7 +33,9 @@ LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ldl -lm -pthread
 IMAGE_LDLIBS := $(shell pkg-config --libs $(IMAGE_PKGS) 2>/dev/null)
 TEST_LDLIBS := $(shell pkg-config --libs $(TEST_PKGS) 2>/dev/null)
 
-ENGINE_SRC := $(wildcard engine/*.c engine/particles/*.c engine/volume/*.c)
+# the engine in layers (engine/LAYERS.md): every .c below engine/ but the kernels' one source,
+# which is compiled once per instruction set (ISA_OBJ)
+ENGINE_SRC := $(sort $(filter-out engine/accel/isa/%,$(shell find engine -name '*.c')))
 WALL_SRC := $(wildcard wall/*.c)
 # the seat (libseat): who may open the DRM card and the input devices; wall/ and input/ both use it
 SEAT_SRC := $(wildcard seat/*.c)
@@ -54,9 +56,9 @@ TILE_CONTENTION_SRC := tools/scaling/tile_contention.c
 TEST_SRC := $(wildcard tests/*.c)
 
 # traversal kernels: one source compiled per instruction set, picked at run time
-# (engine/kernels.c); no FMA anywhere, so every ISA gives bit-identical results
-ISA_OBJ := $(BUILD)/engine/isa/traverse_sse2.o $(BUILD)/engine/isa/traverse_avx2.o \
-           $(BUILD)/engine/isa/traverse_avx512.o
+# (engine/accel/kernels.c); no FMA anywhere, so every ISA gives bit-identical results
+ISA_OBJ := $(BUILD)/engine/accel/isa/traverse_sse2.o $(BUILD)/engine/accel/isa/traverse_avx2.o \
+           $(BUILD)/engine/accel/isa/traverse_avx512.o
 ISA_FLAGS_sse2 := -DTESS_ISA_SSE2
 ISA_FLAGS_avx2 := -DTESS_ISA_AVX2 -mavx2 -mno-fma
 ISA_FLAGS_avx512 := -DTESS_ISA_AVX512 -mavx512f -mavx512vl -mavx512dq -mavx512bw -mno-fma
@@ -82,7 +84,7 @@ $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -MP -c $< -o $@
 
-$(BUILD)/engine/isa/traverse_%.o: engine/isa/traverse.c
+$(BUILD)/engine/accel/isa/traverse_%.o: engine/accel/isa/traverse.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(ISA_FLAGS_$*) -MMD -MP -c $< -o $@
 
@@ -102,7 +104,7 @@ $(BUILD)/%.o: %.cpp
 # srgb8.c, position-independent, every symbol hidden but its entry; embedded in libtessera.a
 # by dump_module_blob.S (so each tree's executables carry their own tree's module)
 IMAGE_MODULE := $(BUILD)/wall/dump_oiio.so
-IMAGE_MODULE_OBJ := $(patsubst %.cpp,$(BUILD)/pic/%.o,$(WALL_CXX)) $(BUILD)/pic/engine/err.o $(BUILD)/pic/wall/srgb8.o
+IMAGE_MODULE_OBJ := $(patsubst %.cpp,$(BUILD)/pic/%.o,$(WALL_CXX)) $(BUILD)/pic/engine/base/err.o $(BUILD)/pic/engine/base/srgb8.o
 $(BUILD)/pic/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
@@ -139,7 +141,7 @@ ply-replicate: $(PLY_REPLICATE)
 $(BUILD)/tile-contention: $(TILE_CONTENTION_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TILE_CONTENTION_OBJ) $(LIB) $(LDLIBS)
 
-# the fast, non-robust kernels (engine/intersect.h: TESSERA_UNROBUST) for the report's robustness
+# the fast, non-robust kernels (engine/accel/intersect.h: TESSERA_UNROBUST) for the report's robustness
 # knob: their own tree build-unrobust/ and binary build-unrobust/tessera; never ./tessera
 unrobust:
 	$(MAKE) BUILD=build-unrobust UNROBUST=1 build-unrobust/tessera
@@ -199,7 +201,7 @@ test-unit:
 	cd tests && ../$(TEST_BIN) --jobs 2
 
 # the kernel, robustness and image tests again as a CPU with only AVX2, then only SSE2, would
-# run them (TESSERA_ISA_MAX, engine/kernels.h): so the paths of a machine without AVX-512 (or
+# run them (TESSERA_ISA_MAX, engine/accel/kernels.h): so the paths of a machine without AVX-512 (or
 # AVX2) run on every submission, whatever CPU CI has. An ISA skipped is said on a SKIPPED line.
 ISA_CAPS := avx2 sse2
 ISA_CAP_TESTS := @(kernels|next_hit|iso_kind|robust|render|wall_render)/*
@@ -297,7 +299,7 @@ clean-fuzz:
 	rm -rf build-fuzz
 
 # every header compiles on its own
-HEADERS := $(wildcard engine/*.h engine/particles/*.h engine/volume/*.h wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
+HEADERS := $(sort $(filter-out engine/accel/isa/%,$(shell find engine -name '*.h'))) $(wildcard wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 # (one target a header, so that make -j checks them side by side)
 HEADER_CHECKS := $(addprefix check-header/,$(HEADERS))

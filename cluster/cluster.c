@@ -1,6 +1,6 @@
 /* cluster.c (cluster) - one wall over several processes (cluster.h). */
 #define _DEFAULT_SOURCE /* gethostname */
-#include "cluster/cluster.h"
+#include "cluster.h"
 
 #include <inttypes.h>
 #include <math.h>
@@ -11,11 +11,11 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/clock.h"
-#include "engine/log.h"
-#include "engine/sample_ring.h"
-#include "engine/pipeline.h"
-#include "engine/txn.h"
+#include "engine/base/clock.h"
+#include "engine/base/log.h"
+#include "engine/base/sample_ring.h"
+#include "engine/frame/pipeline.h"
+#include "engine/frame/txn.h"
 
 #define FLIPS_KEPT 4096
 #define SPINS_BEFORE_SLEEP 200 /* MPI_Test calls before the waiter starts sleeping between them */

@@ -62,7 +62,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 struct pipeline;
 

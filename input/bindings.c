@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/json_read.h"
+#include "engine/base/json_read.h"
 
 /* A bindings file is a page of text; a larger file is most likely a mistake. */
 #define BINDINGS_FILE_MAX_BYTES (1u << 20)

@@ -27,7 +27,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 typedef enum input_action {
     INPUT_ACTION_NONE,

@@ -1,5 +1,5 @@
 /* controller.c - input events to input transactions (controller.h). */
-#include "input/controller.h"
+#include "controller.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/colormap.h"
-#include "input/navigate.h"
+#include "engine/base/colormap.h"
+#include "navigate.h"
 
 #define TOUCH_SLOTS 20            /* touches tracked at once, over all devices */
 #define TAP_MAX_S 0.30            /* a tap is shorter than this ... */

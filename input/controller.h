@@ -50,7 +50,7 @@
  *    INPUT_OPACITY_PARTS ranges, the oldest forgotten first; a range set
  *    forgets the ranges inside it, which it overwrote). At a limit only the
  *    status line says so;
- *  - CUTTING PLANES (engine/clip.h; "clip-plane" records). plane-place [C,
+ *  - CUTTING PLANES (engine/accel/clip.h; "clip-plane" records). plane-place [C,
  *    three-finger tap] puts a plane through the point picked under the
  *    cursor with its normal the unit vector from that point towards the eye
  *    (computed in double, rounded once): it removes what lies between the
@@ -140,17 +140,17 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "engine/camera.h"
-#include "engine/clip.h"
-#include "engine/geometry.h"
-#include "engine/txn.h"
-#include "engine/vec3.h"
-#include "input/bindings.h"
-#include "input/event.h"
+#include "engine/base/camera.h"
+#include "engine/accel/clip.h"
+#include "engine/accel/geometry.h"
+#include "engine/frame/txn.h"
+#include "engine/base/vec3.h"
+#include "bindings.h"
+#include "event.h"
 
 #define INPUT_TEXT_BYTES TXN_TEXT_BYTES /* status text, as PIPELINE_STATUS_BYTES */
 
-/* What input asks the renderer to do: a transaction record (engine/txn.h),
+/* What input asks the renderer to do: a transaction record (engine/frame/txn.h),
  * the same records the pipeline applies (pipeline_submit) and the record
  * file stores (input/record.h). The controller emits camera (always
  * TXN_ALL_CHANNELS: the wall's camera), cursor, status, hide, show and
@@ -165,7 +165,7 @@ typedef txn_kind input_txn_kind;
 
 /* A part as input acts on it: the instance ids of its whole subtree (a
  * scene's part tree numbers instances in preorder, so a subtree is one
- * range: engine/scene.h, PARTS) and what the status line calls it. Without a
+ * range: engine/scene/scene.h, PARTS) and what the status line calls it. Without a
  * part tree every instance is its own part: (geom_id, 1). */
 typedef struct input_part {
     uint32_t first, count;             /* instance ids [first, first + count); count >= 1 */

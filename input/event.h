@@ -47,7 +47,7 @@ typedef enum input_event_kind {
                                    (0..INPUT_MAX_VIEWERS-1), pressed = shown, x, y its plane point;
                                    drawn on the wall and every view in the viewer's colour */
     INPUT_PRIVATE_VIEW,         /* device (a remote viewer's) steers channel `code` (a private
-                                   channel: engine/frame_state.h) from now on, until the device is
+                                   channel: engine/scene/frame_state.h) from now on, until the device is
                                    removed; its events then go to a private view's controller
                                    (runner.h; controller.h, PRIVATE VIEW) */
 } input_event_kind;

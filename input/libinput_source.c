@@ -1,6 +1,6 @@
 /* libinput_source.c - libinput devices as an input source (libinput_source.h). */
 #define _XOPEN_SOURCE 700 /* realpath */
-#include "input/libinput_source.h"
+#include "libinput_source.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -15,8 +15,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "engine/clock.h"
-#include "engine/log.h"
+#include "engine/base/clock.h"
+#include "engine/base/log.h"
 #include "seat/session.h"
 
 #define PATH_RETRY_S 1.0

@@ -15,8 +15,8 @@
 #ifndef TESSERA_INPUT_LIBINPUT_SOURCE_H
 #define TESSERA_INPUT_LIBINPUT_SOURCE_H
 
-#include "engine/err.h"
-#include "input/source.h"
+#include "engine/base/err.h"
+#include "source.h"
 
 struct session;
 

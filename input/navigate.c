@@ -4,21 +4,21 @@
  * there, rounds to float once at the end, and returns its input unchanged
  * when the rounded result fails camera_validate (or when the input itself
  * does, or an argument is not finite). The camera frame is built as
- * camera_basis_window builds it (engine/camera.c), only in double:
+ * camera_basis_window builds it (engine/base/camera.c), only in double:
  *   forward = normalize(look_at - eye), right = normalize(forward x up),
  *   up_img = right x forward,
  * so plane coordinates here and pixels of the renderer agree. */
-#include "input/navigate.h"
+#include "navigate.h"
 
-#include "engine/camera_path.h"
-#include "engine/dvec3.h"
+#include "engine/frame/camera_path.h"
+#include "engine/base/dvec3.h"
 
 #include <math.h>
 #include <stddef.h>
 
 static const double pi = 3.14159265358979323846;
 
-/* ---- double vectors (engine/dvec3.h) ------------------------------------ */
+/* ---- double vectors (engine/base/dvec3.h) ------------------------------------ */
 
 /* Rodrigues: v turned by angle_rad about the unit axis (right-handed). */
 static dvec3 dv_rotate(dvec3 v, dvec3 axis, double angle_rad)

@@ -1,5 +1,5 @@
 /* navigate.h - camera motions of interactive exploration, pure functions of a
- * camera_desc (engine/camera.h): orbit about a pivot, pan, dolly towards a
+ * camera_desc (engine/base/camera.h): orbit about a pivot, pan, dolly towards a
  * point, flight, fly-to, and the ray through a point of the image plane.
  *
  * Conventions. A camera's view direction is look_at - eye; its "view
@@ -18,9 +18,9 @@
 
 #include <stdbool.h>
 
-#include "engine/camera.h"
-#include "engine/err.h"
-#include "engine/vec3.h"
+#include "engine/base/camera.h"
+#include "engine/base/err.h"
+#include "engine/base/vec3.h"
 
 /* Highest elevation an orbit reaches above or below the plane normal to the
  * camera's up hint, so the view never becomes parallel to up. */

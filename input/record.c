@@ -1,13 +1,13 @@
 /* record.c - the input record file (record.h). */
-#include "input/record.h"
+#include "record.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/json_read.h"
-#include "engine/log.h"
+#include "engine/base/json_read.h"
+#include "engine/base/log.h"
 
 #define RECORD_MAX_BYTES (256u << 20)
 

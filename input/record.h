@@ -40,8 +40,8 @@
 #include <stddef.h>
 #include <stdio.h>
 
-#include "engine/err.h"
-#include "input/controller.h"
+#include "engine/base/err.h"
+#include "controller.h"
 
 #define INPUT_RECORD_HEADER "tessera-input-record 2"    /* what input_sink writes */
 #define INPUT_RECORD_HEADER_V1 "tessera-input-record 1" /* older recordings: read only */

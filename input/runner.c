@@ -1,5 +1,5 @@
 /* runner.c - the input thread (runner.h). */
-#include "input/runner.h"
+#include "runner.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -13,9 +13,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/clock.h"
-#include "engine/thread_name.h"
-#include "engine/log.h"
+#include "engine/base/clock.h"
+#include "engine/base/thread_name.h"
+#include "engine/base/log.h"
 #include "seat/session.h"
 
 #define SEAT_CHECK_MS 200 /* with a seat: how often the input thread looks whether it is still ours */

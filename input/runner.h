@@ -21,10 +21,10 @@
 #ifndef TESSERA_INPUT_RUNNER_H
 #define TESSERA_INPUT_RUNNER_H
 
-#include "engine/err.h"
-#include "input/controller.h"
-#include "input/sink.h"
-#include "input/source.h"
+#include "engine/base/err.h"
+#include "controller.h"
+#include "sink.h"
+#include "source.h"
 
 struct session;
 

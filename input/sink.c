@@ -1,5 +1,5 @@
 /* sink.c - input transactions into a pipeline (sink.h). */
-#include "input/sink.h"
+#include "sink.h"
 
 #include <errno.h>
 #include <math.h>
@@ -10,10 +10,10 @@
 #include <string.h>
 #include <time.h>
 
-#include "engine/clock.h"
-#include "engine/thread_name.h"
-#include "engine/log.h"
-#include "input/navigate.h"
+#include "engine/base/clock.h"
+#include "engine/base/thread_name.h"
+#include "engine/base/log.h"
+#include "navigate.h"
 
 struct input_sink {
     pipeline *p;

@@ -21,7 +21,7 @@
  * camera the wall shows, for the hand-over.
  *
  * RECORDING. Every record emitted goes to the record file but those that
- * name a private channel (engine/frame_state.h: a remote viewer's own view's
+ * name a private channel (engine/scene/frame_state.h: a remote viewer's own view's
  * camera and its switching on and off): a recording holds what the wall
  * showed, and plays back without a remote view.
  *
@@ -35,11 +35,11 @@
 
 #include <stdbool.h>
 
-#include "engine/camera_path.h"
-#include "engine/err.h"
-#include "engine/pipeline.h"
-#include "input/controller.h"
-#include "input/record.h"
+#include "engine/frame/camera_path.h"
+#include "engine/base/err.h"
+#include "engine/frame/pipeline.h"
+#include "controller.h"
+#include "record.h"
 
 typedef struct input_sink_config {
     const camera_path *tour;  /* NULL: no tour; kept by the caller while the sink lives */

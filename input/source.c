@@ -1,5 +1,5 @@
 /* source.c - what every input source shares (source.h). */
-#include "input/source.h"
+#include "source.h"
 
 void input_area_point(const camera_window *a, double fx, double fy, double *sx, double *sy)
 {

@@ -15,8 +15,8 @@
 
 #include <stdbool.h>
 
-#include "engine/camera.h"
-#include "input/event.h"
+#include "engine/base/camera.h"
+#include "event.h"
 
 #define INPUT_MAX_OUTPUTS 16
 #define INPUT_MAX_SOURCES 4 /* sources one input thread polls */

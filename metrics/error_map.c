@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/srgb.h"
+#include "engine/base/srgb.h"
 
 /* matplotlib's magma at 0, 1/8, ..., 1 (sRGB-encoded). */
 #define MAGMA_SAMPLES 9

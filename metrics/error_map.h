@@ -8,7 +8,7 @@
 
 #include <stdbool.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 /* Height in pixels of the legend strip added under a map `width_px` wide
  * (20 pixels below 640 pixels of width, and 20 more per 320 pixels). */

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/parallel.h"
+#include "engine/base/parallel.h"
 
 #define FLIP_PI 3.14159265358979323846
 

@@ -40,7 +40,7 @@
 
 #include <stdbool.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 /* FLIP's default viewer: 0.7 m from a 0.7 m wide monitor of 3840 pixels,
  * ppd = distance * pixels_per_m * pi / 180 = 67.02 pixels per degree. */

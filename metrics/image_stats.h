@@ -7,7 +7,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 /* Pooled values of an error map. Percentiles are the plain (unweighted)
  * order statistics, interpolated linearly at p * (n - 1) of the sorted values

@@ -1,16 +1,16 @@
 /* encoder.c (remote) - the remote channels' displays and the JPEG encoder
  * thread (encoder.h). */
-#include "remote/encoder.h"
+#include "encoder.h"
 
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/clock.h"
-#include "engine/log.h"
-#include "engine/sample_ring.h"
-#include "engine/thread_name.h"
-#include "wall/srgb8.h"
+#include "engine/base/clock.h"
+#include "engine/base/log.h"
+#include "engine/base/sample_ring.h"
+#include "engine/base/thread_name.h"
+#include "engine/base/srgb8.h"
 
 
 /* One 8-bit frame and what the page is told about it. */

@@ -19,10 +19,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "engine/display.h"
-#include "engine/err.h"
+#include "engine/render/display.h"
+#include "engine/base/err.h"
 #include "input/event.h"
-#include "remote/jpeg.h"
+#include "jpeg.h"
 
 #define REMOTE_CHANNELS_MAX (1 + INPUT_MAX_VIEWERS) /* channels one encoder serves: the follow channel and
                                                       one private channel a viewer at most */

@@ -1,5 +1,5 @@
 /* jpeg.c (remote) - TurboJPEG compression of XRGB8888 frames (jpeg.h). */
-#include "remote/jpeg.h"
+#include "jpeg.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 /* jpeg.h (remote) - frames as JPEG for the remote view: 8-bit sRGB pixels
- * (XRGB8888 words as wall/srgb8.h encodes them, what the page shows) in,
+ * (XRGB8888 words as engine/base/srgb8.h encodes them, what the page shows) in,
  * a JPEG file in memory out, through libjpeg-turbo's TurboJPEG API (its SIMD
  * encoder; browsers decode JPEG natively). Quality and chroma subsampling are
  * the knobs (REPORT.md: bytes and encode time against FLIP).
@@ -13,7 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 /* Chroma subsampling: 4:4:4 keeps every pixel's colour, 4:2:2 halves the
  * colour horizontally, 4:2:0 both ways (a quarter of the colour samples). */

@@ -1,6 +1,6 @@
 /* protocol.c (remote) - the page's messages, their events, the rate limit
  * and the frame header (protocol.h, docs/remote-protocol.md). */
-#include "remote/protocol.h"
+#include "protocol.h"
 
 #include <json-c/json.h>
 #include <linux/input-event-codes.h>

@@ -14,7 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "engine/camera.h"
+#include "engine/base/camera.h"
 #include "input/event.h"
 
 #define REMOTE_MESSAGE_MAX_BYTES 1024 /* a longer page->server message is dropped (REMOTE_DROP_TOO_LONG) */

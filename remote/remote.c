@@ -1,7 +1,7 @@
 /* remote.c (remote) - the remote view's server: libwebsockets on its own
  * thread, the page, viewers, frames out, messages in (remote.h). */
 #define _DEFAULT_SOURCE /* getifaddrs */
-#include "remote/remote.h"
+#include "remote.h"
 
 #include <arpa/inet.h>
 #include <ifaddrs.h>
@@ -15,14 +15,14 @@
 #include <sys/random.h>
 #include <time.h>
 
-#include "engine/clock.h"
-#include "engine/log.h"
-#include "engine/overlay.h"
-#include "engine/pipeline.h"
-#include "engine/thread_name.h"
-#include "remote/encoder.h"
-#include "remote/page.h"
-#include "remote/source.h"
+#include "engine/base/clock.h"
+#include "engine/base/log.h"
+#include "engine/render/overlay.h"
+#include "engine/frame/pipeline.h"
+#include "engine/base/thread_name.h"
+#include "encoder.h"
+#include "page.h"
+#include "source.h"
 
 #define PROTOCOL_NAME "tessera-remote-1"
 #define TEXT_MAX 512 /* a server->page text message */

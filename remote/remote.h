@@ -8,7 +8,7 @@
  *     display is remote_view_display (remote/encoder.h: JPEG off the render
  *     path);
  *   - PRIVATE VIEWS: up to private_views PRIVATE CHANNELS of the same size
- *     (engine/frame_state.h: the wall's camera passes them by, they draw no
+ *     (engine/scene/frame_state.h: the wall's camera passes them by, they draw no
  *     cursor or pointers), each lent to one viewer that asked for a camera
  *     of its own ({"t":"view","private":true}). The viewer's held input is
  *     released in the wall's controller, then its device is given a private
@@ -45,11 +45,11 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "engine/display.h"
-#include "engine/err.h"
+#include "engine/render/display.h"
+#include "engine/base/err.h"
 #include "input/source.h"
-#include "remote/jpeg.h"
-#include "remote/protocol.h"
+#include "jpeg.h"
+#include "protocol.h"
 
 struct pipeline;
 

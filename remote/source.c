@@ -1,5 +1,5 @@
 /* source.c (remote) - remote viewers' input as an input source (source.h). */
-#include "remote/source.h"
+#include "source.h"
 
 #include <errno.h>
 #include <pthread.h>
@@ -8,7 +8,7 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
-#include "engine/log.h"
+#include "engine/base/log.h"
 
 struct remote_source {
     input_source base;

@@ -13,7 +13,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 #include "input/source.h"
 
 #define REMOTE_SOURCE_QUEUE 4096 /* events waiting at most */

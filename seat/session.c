@@ -14,8 +14,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/clock.h"
-#include "engine/log.h"
+#include "engine/base/clock.h"
+#include "engine/base/log.h"
 
 #define SESSION_MAX_DEVICES 64
 #define SESSION_ENABLE_WAIT_MS 5000 /* a seat that is not ours by then: run without it */

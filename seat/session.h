@@ -19,7 +19,7 @@
 
 #include <stdbool.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 typedef struct session session;
 

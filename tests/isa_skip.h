@@ -11,7 +11,7 @@
 #include <criterion/logging.h>
 #include <stdio.h>
 
-#include "engine/kernels.h"
+#include "engine/accel/kernels.h"
 
 /* When tessera may not use the ISA named isa_name here, say so for the
  * running test (suite::name) and return true: the caller skips that ISA. */

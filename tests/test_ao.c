@@ -1,5 +1,5 @@
-/* test_ao.c - the ambient-occlusion renderer and its sampling (engine/ao.h,
- * engine/render_ao.h) against analytic results, and its images' independence
+/* test_ao.c - the ambient-occlusion renderer and its sampling (engine/render/ao.h,
+ * engine/render/render_ao.h) against analytic results, and its images' independence
  * of threads, tiles and the filter where nothing is occluded.
  *
  * Materials are white (kd = 1), so a pixel's value is the AO term A itself
@@ -11,12 +11,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/ao.h"
-#include "engine/render.h"
-#include "engine/render_ao.h"
-#include "engine/scene.h"
-#include "engine/srgb.h"
+#include "engine/scene/accel.h"
+#include "engine/render/ao.h"
+#include "engine/render/render.h"
+#include "engine/render/render_ao.h"
+#include "engine/scene/scene.h"
+#include "engine/base/srgb.h"
 
 static const double pi_d = 3.14159265358979323846;
 

@@ -1,4 +1,4 @@
-/* test_assembly_load.c - engine/assembly_load.h on glTF and OBJ files written
+/* test_assembly_load.c - engine/load/assembly_load.h on glTF and OBJ files written
  * here (glTF with its buffer embedded as a base64 data URI), through a sink
  * that records every call; and `tessera parts` on such a file.
  *
@@ -14,9 +14,9 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "engine/assembly_load.h"
-#include "engine/mesh.h"
-#include "engine/part_tree.h"
+#include "engine/load/assembly_load.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/scene/part_tree.h"
 #include "support.h"
 
 #define PATH_BYTES 512
@@ -389,7 +389,7 @@ Test(assembly_load, broken_inputs)
     char path[PATH_BYTES];
     expect_load_error(scratch_path(path, "absent.gltf"), "assimp");
     /* not JSON: refused before assimp (which would offer it to every other
-     * importer: engine/gltf_check.c) */
+     * importer: engine/load/gltf_check.c) */
     support_write_file(scratch_dir, "text.gltf", "hello, not a model\n");
     expect_load_error(scratch_path(path, "text.gltf"), "byte 0: 'h' outside a string is not JSON");
     /* truncated JSON */
@@ -516,7 +516,7 @@ Test(assembly_load, data_uri_header_at_most_126_bytes)
 
 /* A base64 data URI holding a character outside the alphabet is refused
  * before assimp reads it (assimp 5.2 leaks the buffer of one with a byte >=
- * 0x80 and decodes other strangers as data: engine/gltf_check.c), in a
+ * 0x80 and decodes other strangers as data: engine/load/gltf_check.c), in a
  * .gltf and in a .glb's JSON chunk; JSON escapes of base64 characters are
  * data like any other. */
 Test(assembly_load, data_uri_checked)

@@ -12,8 +12,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "engine/mesh.h"
-#include "engine/scene.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/scene/scene.h"
 #include "support.h"
 #include "wall/dump.h"
 

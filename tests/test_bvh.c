@@ -1,5 +1,5 @@
-/* test_bvh.c - the binned-SAH BVH builder (engine/bvh.c) and the parallel loops
- * it runs on (engine/parallel.c).
+/* test_bvh.c - the binned-SAH BVH builder (engine/accel/bvh.c) and the parallel loops
+ * it runs on (engine/base/parallel.c).
  *
  * Every input is generated here from a fixed seed. check_bvh() walks a built tree
  * and asserts everything bvh.h promises: each primitive exactly once, each node's
@@ -16,9 +16,9 @@
 #include <sys/resource.h>
 #include <time.h>
 
-#include "engine/bvh.h"
-#include "engine/wbvh.h"
-#include "engine/parallel.h"
+#include "engine/accel/bvh.h"
+#include "engine/accel/wbvh.h"
+#include "engine/base/parallel.h"
 
 static const int thread_counts[] = {1, 2, 3, 7};
 #define THREAD_VARIANTS (sizeof thread_counts / sizeof thread_counts[0])

@@ -1,4 +1,4 @@
-/* test_cache_file.c - the acceleration-structure cache's file (engine/cache_file.h): a
+/* test_cache_file.c - the acceleration-structure cache's file (engine/base/cache_file.h): a
  * written file opens with every section's bytes, 64-byte aligned; every way a file can be
  * wrong (another key, another version, truncated, extended, empty, not a cache, a flipped
  * byte anywhere, a table that lies with valid checksums) is refused with its own status and a
@@ -20,7 +20,7 @@
 #include <unistd.h>
 #include <xxhash.h>
 
-#include "engine/cache_file.h"
+#include "engine/base/cache_file.h"
 #include "support.h"
 
 static char tmp_dir[256];

@@ -1,4 +1,4 @@
-/* test_camera_path.c - camera path files (engine/camera_path.h): parse errors,
+/* test_camera_path.c - camera path files (engine/frame/camera_path.h): parse errors,
  * evaluation (exact keys, continuity, Catmull-Rom C1 and straight lines,
  * clamping and looping), recording, save/load round trips, and the example
  * paths in ../configs/paths (the suite runs in tests/) against the built-in
@@ -13,8 +13,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/camera_path.h"
-#include "engine/scene.h"
+#include "engine/frame/camera_path.h"
+#include "engine/scene/scene.h"
 #include "support.h"
 
 #define EXAMPLE_PATHS_DIR "../configs/paths"

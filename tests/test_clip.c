@@ -1,4 +1,4 @@
-/* test_clip.c - cutting planes (engine/clip.h) and closed parts.
+/* test_clip.c - cutting planes (engine/accel/clip.h) and closed parts.
  *
  * Clipping: analytic cases against the EXACTNESS rule of clip.h (t_far is the
  * largest float not above the crossing, t_near the largest float below it),
@@ -25,11 +25,11 @@
 #include <string.h>
 #include <time.h>
 
-#include "engine/clip.h"
-#include "engine/geometry.h"
-#include "engine/intersect.h"
-#include "engine/mesh.h"
-#include "engine/scene.h"
+#include "engine/accel/clip.h"
+#include "engine/accel/geometry.h"
+#include "engine/accel/intersect.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/scene/scene.h"
 
 TestSuite(clip);
 

@@ -19,9 +19,9 @@
 #include <unistd.h>
 
 #include "cluster/cluster.h"
-#include "engine/accel.h"
-#include "engine/scene.h"
-#include "engine/txn.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/scene.h"
+#include "engine/frame/txn.h"
 #include "input/record.h"
 #include "support.h"
 #include "wall/wall_config.h"

@@ -1,4 +1,4 @@
-/* test_colormap.c - colour maps and transfer functions (engine/colormap.h):
+/* test_colormap.c - colour maps and transfer functions (engine/base/colormap.h):
  * the built-ins against published values, lightness order, interpolation,
  * clamping and the odd inputs (NaN, infinities, lo == hi), the baked table
  * against exact evaluation, and the JSON form with every error message. */
@@ -9,9 +9,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/colormap.h"
-#include "engine/json_read.h"
-#include "engine/srgb.h"
+#include "engine/base/colormap.h"
+#include "engine/base/json_read.h"
+#include "engine/base/srgb.h"
 
 TestSuite(colormap);
 

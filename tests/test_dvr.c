@@ -1,4 +1,4 @@
-/* test_dvr.c - the volume integrator (engine/volume/dvr.h) against closed
+/* test_dvr.c - the volume integrator (engine/geometry/volume/dvr.h) against closed
  * forms and an independent fine quadrature: a constant field for every
  * step, jitter, spacing and both paths; a linear field's convergence with
  * the step, classic against pre-integrated; empty-space skipping against
@@ -10,10 +10,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/colormap.h"
-#include "engine/volume/dvr.h"
-#include "engine/volume/macrocell.h"
-#include "engine/volume/volume.h"
+#include "engine/base/colormap.h"
+#include "engine/geometry/volume/dvr.h"
+#include "engine/geometry/volume/macrocell.h"
+#include "engine/geometry/volume/volume.h"
 
 TestSuite(dvr);
 

@@ -47,11 +47,11 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/intersect.h"
-#include "engine/log.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/intersect.h"
+#include "engine/base/log.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 #include "support.h"
 
 #define SCENES_DIR "../configs/scenes"

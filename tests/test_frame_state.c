@@ -1,4 +1,4 @@
-/* test_frame_state.c - the pipeline's frame state (engine/frame_state.h):
+/* test_frame_state.c - the pipeline's frame state (engine/scene/frame_state.h):
  * version and serial bumps, per-geometry arrays only when used, the accel's
  * hidden flags changed only where they differ, and through a running
  * pipeline: a record queued during frame f is seen from frame f+1 and never
@@ -10,11 +10,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/frame_state.h"
-#include "engine/pipeline.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/frame_state.h"
+#include "engine/frame/pipeline.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 
 #define W 48
 #define H 27

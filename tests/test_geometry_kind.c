@@ -11,15 +11,15 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/camera.h"
-#include "engine/frame_state.h"
-#include "engine/txn.h"
-#include "engine/geometry.h"
-#include "engine/mesh.h"
-#include "engine/packet.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/base/camera.h"
+#include "engine/scene/frame_state.h"
+#include "engine/frame/txn.h"
+#include "engine/accel/geometry.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/accel/packet.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 
 /* ---- the disc kind: centre, unit normal, radius per disc ---------------- */
 

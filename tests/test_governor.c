@@ -1,4 +1,4 @@
-/* test_governor.c - the frame-budget governor (engine/governor.h) and the
+/* test_governor.c - the frame-budget governor (engine/frame/governor.h) and the
  * pipeline carrying out its plans (pipeline.h, GOVERNOR): the cost model
  * settles on the budget within a few frames and then moves by at most one
  * rung; a still picture converges to jittered:k bit for bit; any camera
@@ -15,11 +15,11 @@
 #include <string.h>
 #include <time.h>
 
-#include "engine/accel.h"
-#include "engine/governor.h"
-#include "engine/pipeline.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/frame/governor.h"
+#include "engine/frame/pipeline.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 
 /* ------------------------------------------------------------------ the state machine */
 

@@ -15,12 +15,12 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/camera.h"
-#include "engine/camera_path.h"
-#include "engine/clock.h"
-#include "engine/pipeline.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/base/camera.h"
+#include "engine/frame/camera_path.h"
+#include "engine/base/clock.h"
+#include "engine/frame/pipeline.h"
+#include "engine/scene/scene.h"
 #include "input/controller.h"
 #include "input/navigate.h"
 #include "input/record.h"

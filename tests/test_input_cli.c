@@ -15,7 +15,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "engine/camera.h"
+#include "engine/base/camera.h"
 #include "input/controller.h"
 #include "input/record.h"
 #include "support.h"

@@ -22,7 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/camera.h"
+#include "engine/base/camera.h"
 #include "input/controller.h"
 #include "input/record.h"
 

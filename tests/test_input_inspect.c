@@ -13,9 +13,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/colormap.h"
-#include "engine/frame_state.h"
-#include "engine/render.h"
+#include "engine/base/colormap.h"
+#include "engine/scene/frame_state.h"
+#include "engine/render/render.h"
 #include "input/controller.h"
 #include "input/navigate.h"
 #include "input/record.h"

@@ -11,10 +11,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/mesh.h"
-#include "engine/part_tree.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/scene/part_tree.h"
+#include "engine/scene/scene.h"
 #include "input/controller.h"
 #include "tools/cli/input_pick.h"
 

@@ -10,13 +10,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/clip.h"
-#include "engine/frame_state.h"
-#include "engine/packet.h"
-#include "engine/render.h"
-#include "engine/render_ao.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/clip.h"
+#include "engine/scene/frame_state.h"
+#include "engine/accel/packet.h"
+#include "engine/render/render.h"
+#include "engine/render/render_ao.h"
+#include "engine/scene/scene.h"
 
 static scene *bare_scene(vec3 background, vec3 ambient)
 {

@@ -1,4 +1,4 @@
-/* test_iso_kind.c - direct iso-surfaces as a geometry kind (engine/volume/
+/* test_iso_kind.c - direct iso-surfaces as a geometry kind (engine/geometry/volume/
  * iso_kind.h) over a distance field made here: a 48^3 float volume whose
  * sample is the distance to an off-grid centre, so the iso-surface at r is
  * close to a sphere of radius r. Hits equal iso_volume_first_hit's roots,
@@ -13,14 +13,14 @@
 #include <string.h>
 
 #include "isa_skip.h"
-#include "engine/accel.h"
-#include "engine/camera.h"
-#include "engine/geometry.h"
-#include "engine/mesh.h"
-#include "engine/packet.h"
-#include "engine/render.h"
-#include "engine/scene.h"
-#include "engine/volume/iso_kind.h"
+#include "engine/scene/accel.h"
+#include "engine/base/camera.h"
+#include "engine/accel/geometry.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/accel/packet.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
+#include "engine/geometry/volume/iso_kind.h"
 
 #define N 48
 /* off the grid's points and cell centres, so no ray runs along a symmetry */

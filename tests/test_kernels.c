@@ -8,11 +8,11 @@
 #include <string.h>
 
 #include "isa_skip.h"
-#include "engine/accel.h"
-#include "engine/intersect.h"
-#include "engine/kernels.h"
-#include "engine/particles/particle_kind.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/intersect.h"
+#include "engine/accel/kernels.h"
+#include "engine/geometry/particles/particle_kind.h"
+#include "engine/scene/scene.h"
 
 /* xorshift64*: a fixed, portable stream so failures reproduce */
 static uint64_t rng_state;

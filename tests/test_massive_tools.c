@@ -20,8 +20,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/err.h"
-#include "engine/mesh.h"
+#include "engine/base/err.h"
+#include "engine/geometry/triangles/mesh.h"
 #include "support.h"
 
 #define TEXT_BYTES 8192

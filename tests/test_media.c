@@ -7,11 +7,11 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "engine/accel.h"
-#include "engine/frame_state.h"
-#include "engine/render.h"
-#include "engine/scene.h"
-#include "engine/txn.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/frame_state.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
+#include "engine/frame/txn.h"
 
 #define SIGMA 0.7f
 

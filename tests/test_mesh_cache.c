@@ -14,9 +14,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/mesh_cache.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/geometry/triangles/mesh_cache.h"
+#include "engine/scene/scene.h"
 
 static char dir[64];
 static char cache_dir_path[128];

@@ -16,7 +16,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/mesh.h"
+#include "engine/geometry/triangles/mesh.h"
 #include "support.h"
 
 #define PATH_BYTES 512

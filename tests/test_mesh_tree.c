@@ -8,11 +8,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/intersect.h"
-#include "engine/mesh.h"
-#include "engine/mesh_tree.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/intersect.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/geometry/triangles/mesh_tree.h"
+#include "engine/scene/scene.h"
 
 static uint64_t rng_state;
 static uint32_t rng_u32(void)

@@ -3,7 +3,7 @@
  * (grab: the dragged point follows the cursor), dolly (composition, point
  * fixed in the image, scale invariance), flight, fly-to, blend and ease, the
  * refusal of invalid motions, and the plane ray against the renderer's basis
- * (engine/camera.h). Plane positions are measured through camera_basis_window,
+ * (engine/base/camera.h). Plane positions are measured through camera_basis_window,
  * independently of navigate.c's own frame. Random cases come from a fixed
  * seed per test, so every run checks the same cameras. */
 #include <criterion/criterion.h>
@@ -12,7 +12,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "engine/camera.h"
+#include "engine/base/camera.h"
 #include "input/navigate.h"
 
 static const double pi = 3.14159265358979323846;

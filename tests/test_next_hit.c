@@ -11,9 +11,9 @@
 #include <string.h>
 
 #include "isa_skip.h"
-#include "engine/accel.h"
-#include "engine/intersect.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/intersect.h"
+#include "engine/scene/scene.h"
 
 static uint64_t rng_state;
 static uint32_t rng_u32(void)

@@ -1,4 +1,4 @@
-/* test_overlay.c - the overlay (status line, cursor; engine/overlay.h) and
+/* test_overlay.c - the overlay (status line, cursor; engine/render/overlay.h) and
  * hidden geometries (accel_set_hidden, pipeline_queue_hide): where things
  * are drawn, that channels of one plane agree, that clearing restores the
  * plain image bit for bit, that images do not depend on threads, tile size
@@ -15,12 +15,12 @@
 #include <string.h>
 #include <time.h>
 
-#include "engine/accel.h"
-#include "engine/overlay.h"
-#include "engine/packet.h"
-#include "engine/pipeline.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/render/overlay.h"
+#include "engine/accel/packet.h"
+#include "engine/frame/pipeline.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 
 #define GRAB_MAX 64
 

@@ -1,4 +1,4 @@
-/* test_part_tree.c - engine/part_tree.h: preorder enforcement, names, paths,
+/* test_part_tree.c - engine/scene/part_tree.h: preorder enforcement, names, paths,
  * find, subtree ranges, sibling uniquifying, glob patterns, and 100,000 parts
  * (correctness and memory, no timing). */
 #include <criterion/criterion.h>
@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/part_tree.h"
+#include "engine/scene/part_tree.h"
 
 /* An assertion for hot loops: Criterion reports every passing cr_assert to
  * its runner, which costs more than the tree operations checked. */

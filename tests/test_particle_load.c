@@ -1,4 +1,4 @@
-/* test_particle_load.c - the particle loaders (engine/particles/particle_load.c)
+/* test_particle_load.c - the particle loaders (engine/load/particle_load.c)
  * on PLY point sets and LAMMPS dumps written here.
  *
  * Every test writes its files into a fresh mkdtemp directory, removed after
@@ -15,7 +15,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "engine/particles/particles.h"
+#include "engine/geometry/particles/particles.h"
 #include "support.h"
 
 #define PATH_BYTES 512

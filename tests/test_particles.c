@@ -1,4 +1,4 @@
-/* test_particles.c - particles as a geometry kind (engine/particles/):
+/* test_particles.c - particles as a geometry kind (engine/geometry/particles/):
  * cropping by an attribute without a rebuild, next-hit walks through
  * overlapping particles, the memory a particle costs, and the set's own
  * operations. Every set is generated here. (Bit-identical hits against
@@ -13,13 +13,13 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/frame_state.h"
-#include "engine/particles/particle_kind.h"
-#include "engine/render.h"
-#include "engine/scene.h"
-#include "engine/txn.h"
-#include "tests/support.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/frame_state.h"
+#include "engine/geometry/particles/particle_kind.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
+#include "engine/frame/txn.h"
+#include "support.h"
 #include "tools/cli/input_pick.h"
 
 /* A scene holding only `set` as particles (options as given), and its accel. */

@@ -13,10 +13,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/pipeline.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/frame/pipeline.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 
 /* Small images: these tests are about the pipeline, not the renderer. */
 #define TEST_W 72

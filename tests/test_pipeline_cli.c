@@ -9,7 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/camera_path.h"
+#include "engine/frame/camera_path.h"
 #include "support.h"
 #include "wall/dump.h"
 

@@ -12,11 +12,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/frame_state.h"
-#include "engine/pipeline.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/frame_state.h"
+#include "engine/frame/pipeline.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 #include "tools/cli/pipeline_cli.h"
 
 static bool parse(const char *text, cli_pipeline_spec *s)

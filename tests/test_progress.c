@@ -1,4 +1,4 @@
-/* test_progress.c - the progress reporter (engine/progress.h): the exact
+/* test_progress.c - the progress reporter (engine/base/progress.h): the exact
  * text of lines, bar and summary; the rate, time-left and percentage
  * arithmetic; silence for short tasks, when quiet and under TESSERA_LOG=warn;
  * an unknown (0) total; percentages that never go back while several threads
@@ -13,9 +13,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/bvh.h"
-#include "engine/ply_read.h"
-#include "engine/progress.h"
+#include "engine/accel/bvh.h"
+#include "engine/load/ply_read.h"
+#include "engine/base/progress.h"
 
 /* A clock the test sets by hand. */
 typedef struct fake_clock {

@@ -12,9 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/render.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
 #include "wall/dump.h"
 
 #define REF_MAX_CHANNEL_DIFF 2   /* 8-bit levels: allows libm/rounding differences between machines */

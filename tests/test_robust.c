@@ -19,11 +19,11 @@
 #include <string.h>
 
 #include "isa_skip.h"
-#include "engine/accel.h"
-#include "engine/camera.h"
-#include "engine/intersect.h"
-#include "engine/packet.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/base/camera.h"
+#include "engine/accel/intersect.h"
+#include "engine/accel/packet.h"
+#include "engine/scene/scene.h"
 #include "tools/robust/hard_cases.h"
 
 /* u: the unit roundoff of float, the relative error of one rounding. */

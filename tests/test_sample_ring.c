@@ -1,7 +1,7 @@
-/* test_sample_ring.c - measurements and their median (engine/sample_ring.h). */
+/* test_sample_ring.c - measurements and their median (engine/base/sample_ring.h). */
 #include <criterion/criterion.h>
 
-#include "engine/sample_ring.h"
+#include "engine/base/sample_ring.h"
 
 Test(sample_ring, the_median_of_what_is_kept_and_the_maximum_of_all)
 {

@@ -11,11 +11,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/packet.h"
-#include "engine/render.h"
-#include "engine/sampler.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/packet.h"
+#include "engine/render/render.h"
+#include "engine/render/sampler.h"
+#include "engine/scene/scene.h"
 
 /* ---- parsing ---- */
 

@@ -16,15 +16,15 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/bvh.h"
-#include "engine/bvh_spatial.h"
-#include "engine/intersect.h"
-#include "engine/mesh.h"
-#include "engine/mesh_cache.h"
-#include "engine/packet.h"
-#include "engine/scene.h"
-#include "engine/wbvh.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/bvh.h"
+#include "engine/accel/bvh_spatial.h"
+#include "engine/accel/intersect.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/geometry/triangles/mesh_cache.h"
+#include "engine/accel/packet.h"
+#include "engine/scene/scene.h"
+#include "engine/accel/wbvh.h"
 
 static uint64_t seed;
 static float rnd(void) /* uniform in [0, 1) */

@@ -15,8 +15,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "engine/part_tree.h"
-#include "engine/scene.h"
+#include "engine/scene/part_tree.h"
+#include "engine/scene/scene.h"
 
 #define EXAMPLE_SCENES_DIR "../configs/scenes"
 

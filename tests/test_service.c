@@ -27,10 +27,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/clock.h"
-#include "engine/pipeline.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/base/clock.h"
+#include "engine/frame/pipeline.h"
+#include "engine/scene/scene.h"
 #include "support.h"
 #include "wall/service.h"
 

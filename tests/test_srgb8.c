@@ -1,4 +1,4 @@
-/* test_srgb8.c - the 8-bit sRGB encoder (wall/srgb8.h) without OpenImageIO:
+/* test_srgb8.c - the 8-bit sRGB encoder (engine/base/srgb8.h) without OpenImageIO:
  * known codes, monotone over 2^16 inputs, the bulk and scan-out row entry
  * points equal to the one-value one. (Its exactness against the curve at
  * every rounding boundary, and over every float with TESSERA_EXHAUSTIVE=1,
@@ -7,7 +7,7 @@
 #include <math.h>
 #include <stdint.h>
 
-#include "wall/srgb8.h"
+#include "engine/base/srgb8.h"
 
 Test(srgb8, known_codes)
 {

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/tile_order.h"
+#include "engine/render/tile_order.h"
 
 typedef struct grid {
     int x, y;

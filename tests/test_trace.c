@@ -15,9 +15,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
+#include "engine/scene/accel.h"
 #include "support.h"
-#include "engine/scene.h"
+#include "engine/scene/scene.h"
 
 /* Seconds one run of the binary may take before it counts as a hang. */
 #define TRACE_TIMEOUT_S 60

@@ -1,4 +1,4 @@
-/* test_txn.c - transaction records (engine/txn.h): every kind validates,
+/* test_txn.c - transaction records (engine/frame/txn.h): every kind validates,
  * applies to a frame state, and survives the text and binary round trips bit
  * for bit; bad values are refused with the field named; the binary layout is
  * the documented one. */
@@ -7,9 +7,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/frame_state.h"
-#include "engine/render.h"
-#include "engine/txn.h"
+#include "engine/scene/frame_state.h"
+#include "engine/render/render.h"
+#include "engine/frame/txn.h"
 
 #define GEOMS 10u
 

@@ -1,4 +1,4 @@
-/* test_upscale.c - render scale and its upscaling filters (engine/upscale.h):
+/* test_upscale.c - render scale and its upscaling filters (engine/render/upscale.h):
  * scale 1 is a copy bit for bit; a constant image stays exactly constant;
  * bilinear reproduces a linear ramp (exactly where the weights are dyadic),
  * clamped-cubic too in the interior; clamped-cubic never leaves the range of
@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/upscale.h"
+#include "engine/render/upscale.h"
 
 static const upscale_filter filters[] = {UPSCALE_BILINEAR, UPSCALE_CLAMPED_CUBIC};
 #define FILTER_COUNT (sizeof filters / sizeof filters[0])

@@ -1,4 +1,4 @@
-/* test_volume.c - the regular volume and its readers (engine/volume/volume.h):
+/* test_volume.c - the regular volume and its readers (engine/geometry/volume/volume.h):
  * raw data with a text header and NRRD (detached and attached), on files
  * written here, and every refusal a broken header must give: one line that
  * names the file, the field and the problem, and no volume.
@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/volume/volume.h"
+#include "engine/geometry/volume/volume.h"
 #include "support.h"
 
 #define PATH_BYTES 512

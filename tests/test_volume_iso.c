@@ -1,5 +1,5 @@
 /* test_volume_iso.c - ray / trilinear-cell intersection
- * (engine/volume/iso_cell.h) on analytic fields: single cells with known
+ * (engine/geometry/volume/iso_cell.h) on analytic fields: single cells with known
  * roots (two crossings between ends of one sign, a tangent double root,
  * three crossings), random cells against a dense brute-force search of the
  * trilinear field itself (not the cubic), and a sphere's distance field
@@ -15,9 +15,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "engine/volume/iso_cell.h"
-#include "engine/volume/macrocell.h"
-#include "engine/volume/volume.h"
+#include "engine/geometry/volume/iso_cell.h"
+#include "engine/geometry/volume/macrocell.h"
+#include "engine/geometry/volume/volume.h"
 
 static uint64_t rng_state;
 

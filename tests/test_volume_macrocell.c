@@ -1,5 +1,5 @@
 /* test_volume_macrocell.c - the min/max grid and the 3D-DDA
- * (engine/volume/macrocell.h) against brute force on random volumes and
+ * (engine/geometry/volume/macrocell.h) against brute force on random volumes and
  * random rays: every macrocell's range against its samples scanned directly,
  * every walk against the boxes the ray meets, clipped one by one. */
 #include <criterion/criterion.h>
@@ -9,8 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/volume/macrocell.h"
-#include "engine/volume/volume.h"
+#include "engine/geometry/volume/macrocell.h"
+#include "engine/geometry/volume/volume.h"
 
 /* a small deterministic generator (splitmix64), so failures reproduce */
 static uint64_t rng_state;

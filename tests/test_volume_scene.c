@@ -1,4 +1,4 @@
-/* test_volume_scene.c - volumes in scene files (engine/volume/volume_json.c,
+/* test_volume_scene.c - volumes in scene files (engine/load/volume_json.c,
  * docs/scene-format.md "Volumes"): a generated 32^3 ball (8-bit, value 200
  * inside a radius-10 sphere falling to 0 outside) shown as an iso-surface
  * and rendered directly, the iso-value changed by a value record without a
@@ -9,13 +9,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/frame_state.h"
-#include "engine/render.h"
-#include "engine/scene.h"
-#include "engine/txn.h"
-#include "engine/volume/iso_kind.h"
-#include "tests/support.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/frame_state.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
+#include "engine/frame/txn.h"
+#include "engine/geometry/volume/iso_kind.h"
+#include "support.h"
 
 #define N 32
 

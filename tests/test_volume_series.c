@@ -1,5 +1,5 @@
 /* test_volume_series.c - a volume as a time series ("files": a pattern;
- * engine/volume/iso_kind.h TIME STEPS, engine/series.h): small float NRRD
+ * engine/geometry/volume/iso_kind.h TIME STEPS, engine/base/series.h): small float NRRD
  * volumes written here, step k a ball of its own radius, shown as two
  * iso-surfaces and rendered directly; a time step swaps every one of them
  * at the sync; a step of another layout or a broken file is an error
@@ -14,15 +14,15 @@
 #include <string.h>
 #include <time.h>
 
-#include "engine/accel.h"
-#include "engine/frame_state.h"
-#include "engine/render.h"
-#include "engine/scene.h"
-#include "engine/series.h"
-#include "engine/txn.h"
-#include "engine/volume/dvr_medium.h"
-#include "engine/volume/iso_kind.h"
-#include "tests/support.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/frame_state.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
+#include "engine/base/series.h"
+#include "engine/frame/txn.h"
+#include "engine/render/dvr_medium.h"
+#include "engine/geometry/volume/iso_kind.h"
+#include "support.h"
 
 /* samples per axis: sample (i, j, k) at (i, j, k) - 8, so the centre and
  * the axes through it are samples and the field along an axis is exact */
@@ -274,7 +274,7 @@ Test(volume_series, destroy_while_the_loader_is_busy, .timeout = 60)
     }
 }
 
-/* ---- the series itself (engine/series.h) ------------------------------------ */
+/* ---- the series itself (engine/base/series.h) ------------------------------------ */
 
 /* Step data that counts how many exist at once (shown + pending). */
 typedef struct step_count {

@@ -10,7 +10,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/camera.h"
+#include "engine/base/camera.h"
 #include "support.h"
 #include "wall/dump.h"
 #include "wall/wall_config.h"

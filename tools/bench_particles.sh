@@ -9,7 +9,7 @@
 # for none). `make bench` runs it; `make bench-particles` alone.
 #
 # The workload is the same ray for ray: both programs give a point set
-# without a radius 0.001 x its box diagonal (engine/particles, the peer's
+# without a radius 0.001 x its box diagonal (engine/geometry/particles, the peer's
 # rule), tessera bench frames the set by the peer's rule and its camera is
 # handed to the peer, and the script checks that both hit the same number of
 # primary rays (within 0.1 %). The shading is the peer's eye-light shade.

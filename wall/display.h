@@ -9,8 +9,8 @@
 
 #include <stdbool.h>
 
-#include "engine/display.h"
-#include "engine/err.h"
+#include "engine/render/display.h"
+#include "engine/base/err.h"
 
 /* A display that only counts frames. */
 image_display *display_null_create(void);

@@ -9,8 +9,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "engine/display.h"
-#include "engine/err.h"
+#include "engine/render/display.h"
+#include "engine/base/err.h"
 #include "wall_config.h"
 
 /* The options a backend takes (display_backend.options). */

@@ -15,8 +15,8 @@
 #include <xf86drm.h>
 #include <xf86drmMode.h>
 
-#include "engine/log.h"
-#include "engine/pipeline.h"
+#include "engine/base/log.h"
+#include "engine/frame/pipeline.h"
 #include "seat/session.h"
 #include "xrgb.h"
 

@@ -12,7 +12,7 @@
  * drm_card_close (restores the saved CRTCs, frees the buffers).
  *
  * Frames: each output is a pipeline channel. Its display's write_tile hook
- * (engine/display.h) has the render threads convert each finished tile into
+ * (engine/render/display.h) has the render threads convert each finished tile into
  * the scan-out buffer of that frame (frame f -> buffer f % 4; 8-bit sRGB,
  * rotated to the panel's scan-out orientation), each pixel written once and
  * never read back (scan-out memory may be write-combined). At the end of each
@@ -34,8 +34,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "engine/display.h"
-#include "engine/err.h"
+#include "engine/render/display.h"
+#include "engine/base/err.h"
 #include "wall_config.h"
 
 typedef struct drm_card drm_card;

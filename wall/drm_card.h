@@ -18,7 +18,7 @@
 
 #include "drm.h"
 #include "edid.h"
-#include "engine/err.h"
+#include "engine/base/err.h"
 #include "wall_config.h"
 
 struct udev;

@@ -9,9 +9,9 @@
  * Threads: the load runs once (pthread_once); `module_ops` and `module_error` are written
  * only inside it and read only after it, so they need no lock. */
 #define _GNU_SOURCE /* memfd_create */
-#include "wall/dump.h"
+#include "dump.h"
 
-#include "wall/dump_module.h"
+#include "dump_module.h"
 
 #include <dlfcn.h>
 #include <errno.h>

@@ -13,8 +13,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "engine/err.h"
-#include "srgb8.h"
+#include "engine/base/err.h"
+#include "engine/base/srgb8.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -51,7 +51,7 @@ bool dump_frame_path(const char *pattern, int frame, bool sequence, char *out, s
                      tess_error *err);
 
 /* The code 8-bit files get for one linear value (clamped to [0, 1], rounded to nearest):
- * srgb8_encode (wall/srgb8.h), the encoder scan-out shares. */
+ * srgb8_encode (engine/base/srgb8.h), the encoder scan-out shares. */
 static inline uint8_t dump_srgb_encode_u8(float linear) { return srgb8_encode(linear); }
 
 #ifdef __cplusplus

@@ -23,7 +23,7 @@
 #include <stdint.h>
 #include <sys/types.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 #ifdef __cplusplus
 extern "C" {

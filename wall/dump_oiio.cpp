@@ -1,7 +1,7 @@
 /* dump_oiio.cpp - wall/dump.h's image files on top of OpenImageIO (the project's one C++
  * file), built as the image module that wall/dump.c loads on first use (why a module:
  * wall/dump_module.h). Its one export, tessera_dump_module, hands out the table of the
- * functions below; it is linked with its own copies of engine/err.c and wall/srgb8.c.
+ * functions below; it is linked with its own copies of engine/base/err.c and engine/base/srgb8.c.
  *
  * Boundary rule: every function of the table runs its body inside guarded(), so
  * no C++ exception ever unwinds into C; exceptions and OIIO failures become a
@@ -9,11 +9,11 @@
  * fail is checked, including close(), and a file left behind by a failed
  * write is removed so a partial frame is never mistaken for a good one. */
 
-#include "engine/err.h"
-#include "engine/srgb.h"
-#include "wall/dump.h"
-#include "wall/dump_module.h"
-#include "wall/srgb8.h"
+#include "engine/base/err.h"
+#include "engine/base/srgb.h"
+#include "dump.h"
+#include "dump_module.h"
+#include "engine/base/srgb8.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>

@@ -10,10 +10,10 @@
 
 #include <systemd/sd-daemon.h>
 
-#include "engine/clock.h"
-#include "engine/log.h"
-#include "engine/thread_name.h"
-#include "engine/pipeline.h"
+#include "engine/base/clock.h"
+#include "engine/base/log.h"
+#include "engine/base/thread_name.h"
+#include "engine/frame/pipeline.h"
 
 #define SERVICE_MESSAGE_BYTES 256 /* one datagram: a few assignments and a status line */
 #define SERVICE_STATUS_BYTES 160

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/json_read.h"
+#include "engine/base/json_read.h"
 
 /* A wall file is a few dozen lines; a larger file is most likely a mistake. */
 #define WALL_FILE_MAX_BYTES (1u << 20)

@@ -9,7 +9,7 @@
  *
  * WALL FILE FORMAT (docs/wall-format.md holds the same reference)
  *
- * One JSON object, read as strictly as scene files (engine/json_read.h):
+ * One JSON object, read as strictly as scene files (engine/base/json_read.h):
  * comments allowed, an unknown field or a key given twice is an error, numbers
  * finite and within float range.
  *
@@ -84,7 +84,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "engine/err.h"
+#include "engine/base/err.h"
 
 #define WALL_MAX_OUTPUTS 16
 #define WALL_CONNECTOR_BYTES 32      /* name up to 31 chars + NUL */

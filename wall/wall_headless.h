@@ -9,9 +9,9 @@
 
 #include <stdbool.h>
 
-#include "engine/camera.h"
-#include "engine/display.h"
-#include "engine/err.h"
+#include "engine/base/camera.h"
+#include "engine/render/display.h"
+#include "engine/base/err.h"
 #include "wall_config.h"
 
 /* Width / height of the wall's image plane: its bounding box in mm. */

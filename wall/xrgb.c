@@ -1,7 +1,7 @@
 /* xrgb.c - see xrgb.h. */
 #include "xrgb.h"
 
-#include "srgb8.h"
+#include "engine/base/srgb8.h"
 
 /* Scan-out pixel (u, v) shows mounted pixel (x, y):
  *     0: x = u,          y = v

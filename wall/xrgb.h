@@ -1,5 +1,5 @@
 /* xrgb.h - float frames to the 32-bit XRGB8888 words monitors scan out:
- * 8-bit sRGB (wall/srgb8.h, the same encoding as 8-bit files get),
+ * 8-bit sRGB (engine/base/srgb8.h, the same encoding as 8-bit files get),
  * rotated from the image as mounted to the panel's scan-out orientation.
  * Shared by the DRM display and the convert display that stands in for it. */
 #ifndef TESSERA_XRGB_H

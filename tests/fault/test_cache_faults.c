@@ -1,4 +1,4 @@
-/* test_cache_faults.c - the acceleration-structure cache (engine/cache_file.h) when the disk
+/* test_cache_faults.c - the acceleration-structure cache (engine/base/cache_file.h) when the disk
  * fails under a write (a full disk: ENOSPC from pwrite, at the start and mid-file; a lost
  * write reported by close) and when memory runs out (every allocation of a write and of an
  * open, in turn). A failed write names the file and the problem, leaves no file and no
@@ -12,8 +12,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/cache_file.h"
-#include "tests/fault/fault.h"
+#include "engine/base/cache_file.h"
+#include "fault.h"
 
 static char dir[64];
 static char path[128];

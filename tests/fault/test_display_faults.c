@@ -13,10 +13,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "engine/accel.h"
-#include "engine/pipeline.h"
-#include "engine/scene.h"
-#include "tests/fault/fault.h"
+#include "engine/scene/accel.h"
+#include "engine/frame/pipeline.h"
+#include "engine/scene/scene.h"
+#include "fault.h"
 #include "wall/display.h"
 #include "wall/dump.h"
 

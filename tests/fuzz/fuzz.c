@@ -2,7 +2,7 @@
 #define _GNU_SOURCE /* memfd_create */
 #include "fuzz.h"
 
-#include "engine/mesh.h"
+#include "engine/geometry/triangles/mesh.h"
 
 #include <dirent.h>
 #include <sanitizer/allocator_interface.h>

@@ -17,9 +17,9 @@ FZ_TARGETS := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FZ_BINS := $(addprefix $(FZ)/fuzz_,$(FZ_TARGETS))
 
 # the whole product but main(), as one archive: a target links what it uses
-FZ_LIB_C := $(wildcard engine/*.c engine/particles/*.c engine/volume/*.c wall/*.c seat/*.c input/*.c remote/*.c cluster/*.c metrics/*.c) $(filter-out tools/cli/main.c,$(wildcard tools/cli/*.c))
+FZ_LIB_C := $(filter-out engine/accel/isa/%,$(shell find engine -name '*.c')) $(wildcard wall/*.c seat/*.c input/*.c remote/*.c cluster/*.c metrics/*.c) $(filter-out tools/cli/main.c,$(wildcard tools/cli/*.c))
 FZ_LIB_OBJ := $(patsubst %.c,$(FZ)/%.o,$(FZ_LIB_C)) $(FZ)/wall/dump_module_blob.o \
-              $(FZ)/engine/isa/traverse_sse2.o $(FZ)/engine/isa/traverse_avx2.o $(FZ)/engine/isa/traverse_avx512.o \
+              $(FZ)/engine/accel/isa/traverse_sse2.o $(FZ)/engine/accel/isa/traverse_avx2.o $(FZ)/engine/accel/isa/traverse_avx512.o \
               $(FZ)/remote/page_html.o
 FZ_LIB := $(FZ)/libtessera_fuzz.a
 FZ_ISA_sse2 := -DTESS_ISA_SSE2
@@ -35,7 +35,7 @@ $(FZ)/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) -MMD -MP -c $< -o $@
 
-$(FZ)/engine/isa/traverse_%.o: engine/isa/traverse.c
+$(FZ)/engine/accel/isa/traverse_%.o: engine/accel/isa/traverse.c
 	@mkdir -p $(dir $@)
 	$(FZ_CC) $(CPPFLAGS) $(FZ_CFLAGS) $(FZ_ISA_$*) -MMD -MP -c $< -o $@
 
@@ -59,7 +59,7 @@ $(FZ)/pic/%.o: %.c
 $(FZ)/pic/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(FZ_CXX) $(CPPFLAGS) $(FZ_CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
-$(FZ_MODULE): $(patsubst %.cpp,$(FZ)/pic/%.o,$(wildcard wall/*.cpp)) $(FZ)/pic/engine/err.o $(FZ)/pic/wall/srgb8.o
+$(FZ_MODULE): $(patsubst %.cpp,$(FZ)/pic/%.o,$(wildcard wall/*.cpp)) $(FZ)/pic/engine/base/err.o $(FZ)/pic/engine/base/srgb8.o
 	$(FZ_CXX) -shared $(FZ_SAN) -pthread -o $@ $^ $(IMAGE_LDLIBS) -lm
 $(FZ)/wall/dump_module_blob.o: wall/dump_module_blob.S $(FZ_MODULE)
 	@mkdir -p $(dir $@)

@@ -1,4 +1,4 @@
-/* fuzz_cache.c - acceleration-structure cache files (engine/cache_file.c), opened with
+/* fuzz_cache.c - acceleration-structure cache files (engine/base/cache_file.c), opened with
  * cache_open as a start does. Each input is opened twice: as it is (random bytes almost never
  * carry valid checksums, so this explores the header's checks), then *made plausible*: magic,
  * byte order, versions, key and file size set to what is expected and every checksum
@@ -18,7 +18,7 @@
 #include <string.h>
 #include <xxhash.h>
 
-#include "engine/cache_file.h"
+#include "engine/base/cache_file.h"
 
 static const cache_key FUZZ_KEY = {.lo = 0x1111111111111111ull, .hi = 0x2222222222222222ull};
 #define FUZZ_VERSION 1u

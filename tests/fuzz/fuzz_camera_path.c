@@ -1,4 +1,4 @@
-/* fuzz_camera_path.c - camera path files (engine/camera_path.c) through
+/* fuzz_camera_path.c - camera path files (engine/frame/camera_path.c) through
  * camera_path_parse. A path that parses must keep the header's promises:
  * strictly increasing times, valid key cameras, camera_path_eval valid at any
  * time (between keys, outside them, NaN, infinite), and save-then-load giving
@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/camera_path.h"
+#include "engine/frame/camera_path.h"
 
 static void check_eval(const camera_path *p, double t, const char *name)
 {

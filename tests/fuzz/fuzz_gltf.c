@@ -1,4 +1,4 @@
-/* fuzz_gltf.c - glTF files through assembly_load (engine/assembly_load.c):
+/* fuzz_gltf.c - glTF files through assembly_load (engine/load/assembly_load.c):
  * assimp's glTF 2.0 reader, then tessera's walk of the node tree. The input
  * is written to in.gltf in a scratch directory (buffers come as data URIs in
  * the seeds). The sink checks what assembly_load.h promises: parts in
@@ -12,9 +12,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/assembly_load.h"
-#include "engine/mesh.h"
-#include "engine/part_tree.h"
+#include "engine/load/assembly_load.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/scene/part_tree.h"
 
 typedef struct fuzz_sink {
     const char *path;

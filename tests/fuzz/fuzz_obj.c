@@ -1,4 +1,4 @@
-/* fuzz_obj.c - OBJ meshes through mesh_load_assimp (engine/mesh_assimp.c):
+/* fuzz_obj.c - OBJ meshes through mesh_load_assimp (engine/load/mesh_assimp.c):
  * tessera's number check, then assimp's OBJ and MTL readers. The input is
  * written to in.obj in a scratch directory; a line "#--mtl--" splits it, and
  * what follows goes to in.mtl beside it (seeds say "mtllib in.mtl"), so the
@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/mesh.h"
+#include "engine/geometry/triangles/mesh.h"
 
 #define MTL_SPLIT "\n#--mtl--\n"
 

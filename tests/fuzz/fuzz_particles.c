@@ -1,4 +1,4 @@
-/* fuzz_particles.c - particle files (engine/particles/particle_load.c): PLY
+/* fuzz_particles.c - particle files (engine/load/particle_load.c): PLY
  * point sets and LAMMPS text dumps. The input is the file, handed over as a
  * memfd (the readers want a regular file); its path has no extension, so
  * particles_load chooses by the first line, and each loader is also run on
@@ -9,7 +9,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "engine/particles/particles.h"
+#include "engine/geometry/particles/particles.h"
 
 /* What a loaded set promises (particles.h): counts within capacity, finite
  * positions and values, each attribute's min and max bounding its values,

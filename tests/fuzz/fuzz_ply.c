@@ -1,9 +1,9 @@
-/* fuzz_ply.c - PLY meshes (engine/mesh_ply.c), ascii and binary: the input is
+/* fuzz_ply.c - PLY meshes (engine/load/mesh_ply.c), ascii and binary: the input is
  * the file, handed over as a memfd (the reader takes a path and wants a
  * regular file). */
 #include "fuzz.h"
 
-#include "engine/mesh.h"
+#include "engine/geometry/triangles/mesh.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

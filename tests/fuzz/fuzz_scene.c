@@ -1,4 +1,4 @@
-/* fuzz_scene.c - JSON scene files (engine/scene_json.c over engine/json_read.c)
+/* fuzz_scene.c - JSON scene files (engine/load/scene_json.c over engine/base/json_read.c)
  * through scene_parse_json. The scene is named scene.json in a scratch
  * directory holding two tiny PLY meshes, quad.ply (with normals) and tri.ply,
  * so that seeds naming them reach the mesh and transform paths. No OBJ: one
@@ -10,7 +10,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "engine/scene.h"
+#include "engine/scene/scene.h"
 
 static const char quad_ply[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
                                "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"

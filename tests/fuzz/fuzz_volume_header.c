@@ -1,4 +1,4 @@
-/* fuzz_volume_header.c - volume headers (engine/volume/volume.c): NRRD
+/* fuzz_volume_header.c - volume headers (engine/geometry/volume/volume.c): NRRD
  * (detached or attached) when the input starts with "NRRD", else the text
  * header of a raw file. The input is written to in.nrrd or in.txt in a
  * scratch directory; a line "#--data--" splits it, and what follows goes to
@@ -19,9 +19,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/volume/iso_cell.h"
-#include "engine/volume/macrocell.h"
-#include "engine/volume/volume.h"
+#include "engine/geometry/volume/iso_cell.h"
+#include "engine/geometry/volume/macrocell.h"
+#include "engine/geometry/volume/volume.h"
 
 #define DATA_SPLIT "\n#--data--\n"
 

@@ -47,9 +47,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/clock.h"
-#include "engine/pipeline.h"
-#include "engine/scene.h"
+#include "engine/base/clock.h"
+#include "engine/frame/pipeline.h"
+#include "engine/scene/scene.h"
 #include "input/record.h"
 #include "input/sink.h"
 #include "tools/cli/cli.h"
@@ -457,7 +457,7 @@ static int open_fds_once(void)
 
 /* Whether a task of this process is one of the pipeline's threads: the one
  * that runs the frame loop (this process's main thread: cli_run_with is called
- * from main) and the render threads it starts (engine/thread_name.h). */
+ * from main) and the render threads it starts (engine/base/thread_name.h). */
 static bool pipeline_task(const char *tid)
 {
     if (strtol(tid, NULL, 10) == (long)getpid())

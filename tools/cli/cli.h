@@ -8,7 +8,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "engine/camera.h"
+#include "engine/base/camera.h"
 
 /* Largest image edge accepted, in pixels (a 16K wall output). */
 #define CLI_MAX_IMAGE_EDGE_PX 16384
@@ -18,7 +18,7 @@ bool cli_parse_int(const char *option, const char *text, int min, int max, int *
 bool cli_parse_double(const char *option, const char *text, double min, double max, double *out);
 bool cli_parse_size(const char *option, const char *text, int *width_px, int *height_px);
 bool cli_parse_camera(const char *option, const char *text, camera_desc *out);
-/* A render scale in (0, 1] (engine/upscale.h): a fraction of two unsigned
+/* A render scale in (0, 1] (engine/render/upscale.h): a fraction of two unsigned
  * decimal numbers ("3/4", "1/3") or one ("0.75", "1"); no signs, spaces or
  * exponents. */
 bool cli_parse_scale(const char *option, const char *text, double *out);

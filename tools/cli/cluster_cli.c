@@ -10,8 +10,8 @@
 #include "pipeline_cli.h"
 #include "cluster/cluster.h"
 #include "wall/drm.h"
-#include "engine/log.h"
-#include "engine/pipeline.h"
+#include "engine/base/log.h"
+#include "engine/frame/pipeline.h"
 #include "wall/wall_config.h"
 
 /* The cluster of this process (one a process). */

@@ -17,7 +17,7 @@
 
 #include <stdbool.h>
 
-#include "engine/accel.h"
+#include "engine/scene/accel.h"
 #include "pipeline_cli.h"
 
 struct pipeline;

@@ -36,15 +36,15 @@
 #endif
 
 #include "cli.h"
-#include "engine/accel.h"
-#include "engine/kernels.h"
-#include "engine/frame_state.h"
-#include "engine/mesh_cache.h"
-#include "engine/part_tree.h"
-#include "engine/render.h"
-#include "engine/render_ao.h"
-#include "engine/scene.h"
-#include "engine/txn.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/kernels.h"
+#include "engine/scene/frame_state.h"
+#include "engine/geometry/triangles/mesh_cache.h"
+#include "engine/scene/part_tree.h"
+#include "engine/render/render.h"
+#include "engine/render/render_ao.h"
+#include "engine/scene/scene.h"
+#include "engine/frame/txn.h"
 #include "wall/dump.h"
 
 /* Defaults: the size, frames and warm-up of the peer's 1920x1080 runs
@@ -129,7 +129,7 @@ static void bench_usage(FILE *f)
           "                   surfaces they cross front to back (docs/inspection.md), with the\n"
           "                   default limits (transmittance 1/255, 16 layers)\n"
           "  --renderer NAME  eyelight (the default: the peer's shade) or ao: the ambient-occlusion\n"
-          "                   renderer (engine/render_ao.h), the peer's --ao workload: per hit N\n"
+          "                   renderer (engine/render/render_ao.h), the peer's --ao workload: per hit N\n"
           "                   cosine-distributed any-hit rays\n"
           "  --tile-size N    tile edge in pixels, 4..256, as the pipeline's (default 16)\n"
           "  --ao-rays N      AO rays per hit, 1..64 (default 8)\n"

@@ -12,9 +12,9 @@
 #include <time.h>
 
 #include "cli.h"
-#include "engine/render.h"
-#include "engine/scene.h"
-#include "engine/srgb.h"
+#include "engine/render/render.h"
+#include "engine/scene/scene.h"
+#include "engine/base/srgb.h"
 #include "metrics/flip.h"
 #include "option_check.h"
 #include "pipeline_cli.h"

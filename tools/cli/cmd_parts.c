@@ -1,7 +1,7 @@
 /* cmd_parts.c - `tessera parts FILE`: the part tree of an assembly
- * (engine/assembly_load.h) with what each part holds, for finding the paths
+ * (engine/load/assembly_load.h) with what each part holds, for finding the paths
  * a scene's overrides name. A counting sink: meshes are counted and freed as
- * they come, parts go into a part_tree (engine/part_tree.h), instances are
+ * they come, parts go into a part_tree (engine/scene/part_tree.h), instances are
  * counted on their part.
  *
  * Output (stdout), one header line then one line per part in preorder,
@@ -20,10 +20,10 @@
 #include <strings.h>
 
 #include "cli.h"
-#include "engine/assembly_load.h"
-#include "engine/mesh.h"
-#include "engine/part_tree.h"
-#include "engine/ply_read.h"
+#include "engine/load/assembly_load.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/scene/part_tree.h"
+#include "engine/load/ply_read.h"
 
 typedef struct parts_options {
     const char *path;

@@ -1,7 +1,7 @@
 /* cmd_render.c - `tessera render` (headless frames of one camera) and
  * `tessera run` (the main job: with no DRM output it runs the pipeline with
  * the dump display into out/, the camera orbiting or following a path). Both
- * run the parallel pipeline (engine/pipeline.h) with components chosen by
+ * run the parallel pipeline (engine/frame/pipeline.h) with components chosen by
  * name (pipeline_cli.h). */
 #include <errno.h>
 #include <signal.h>
@@ -13,8 +13,8 @@
 #include <unistd.h>
 
 #include "cli.h"
-#include "engine/accel.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/scene.h"
 #include "option_check.h"
 #include "pipeline_cli.h"
 #include "cluster_cli.h"
@@ -24,7 +24,7 @@
 #include "wall/dump.h"
 #include "wall/service.h"
 
-/* render's own option: --scale (engine/upscale.h; --upscale is a pipeline option). False
+/* render's own option: --scale (engine/render/upscale.h; --upscale is a pipeline option). False
  * after an error for a bad value; *handled when argv[*i] was one. */
 static bool render_scale_option(int argc, char **argv, int *i, cli_pipeline_spec *s, bool *handled)
 {

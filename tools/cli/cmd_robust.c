@@ -2,7 +2,7 @@
  * tools/robust/hard_cases.h (the generators tests/test_robust.c uses),
  * counting wrong answers and measuring the speed over the same rays. It is
  * what the report's robustness knob runs against both builds: this one and
- * build-unrobust/tessera (engine/intersect.h, TESSERA_UNROBUST).
+ * build-unrobust/tessera (engine/accel/intersect.h, TESSERA_UNROBUST).
  *
  * One line per case on stdout:
  *   case=NAME rays=N wrong_hits=W leaks=L per_million=X mrays_s=M checked=C build=B isa=I threads=T
@@ -26,11 +26,11 @@
 #include <string.h>
 
 #include "cli.h"
-#include "engine/accel.h"
-#include "engine/camera.h"
-#include "engine/intersect.h"
-#include "engine/packet.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/base/camera.h"
+#include "engine/accel/intersect.h"
+#include "engine/accel/packet.h"
+#include "engine/scene/scene.h"
 #include "tools/robust/hard_cases.h"
 
 #define ROBUST_MAX_THREADS 256
@@ -612,7 +612,7 @@ static void robust_usage(FILE *f)
           "silhouette or tie not counted);\n"
           "per_million = (W + L) * 1e6 / C; mrays_s: rays / tracing wall time (set-up and checks not timed; a\n"
           "timed run traces the case as many times over as takes >= 0.25 s).\n"
-          "build: robust, or fast for build-unrobust/tessera (make unrobust: engine/intersect.h).\n",
+          "build: robust, or fast for build-unrobust/tessera (make unrobust: engine/accel/intersect.h).\n",
           f);
 }
 

@@ -23,9 +23,9 @@
 #include <unistd.h>
 
 #include "cli.h"
-#include "engine/accel.h"
-#include "engine/packet.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/accel/packet.h"
+#include "engine/scene/scene.h"
 
 #define TRACE_RAY_BYTES 32u /* 8 float32 */
 #define TRACE_HIT_BYTES 20u /* t, prim_id, geom_id, u, v */

@@ -6,12 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/camera_path.h"
-#include "engine/colormap.h"
-#include "engine/frame_state.h"
-#include "engine/log.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/frame/camera_path.h"
+#include "engine/base/colormap.h"
+#include "engine/scene/frame_state.h"
+#include "engine/base/log.h"
+#include "engine/scene/scene.h"
 #include "input/bindings.h"
 #include "input/controller.h"
 #include "input/navigate.h"

@@ -9,9 +9,9 @@
 #include <stdio.h>
 
 #include "cli.h"
-#include "engine/camera_path.h"
-#include "engine/json_read.h"
-#include "engine/pipeline.h"
+#include "engine/frame/camera_path.h"
+#include "engine/base/json_read.h"
+#include "engine/frame/pipeline.h"
 #include "input/bindings.h"
 #include "input/sink.h"
 #include "input/libinput_source.h"

@@ -5,10 +5,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "engine/accel.h"
-#include "engine/part_tree.h"
-#include "engine/particles/particle_kind.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/part_tree.h"
+#include "engine/geometry/particles/particle_kind.h"
+#include "engine/scene/scene.h"
 
 /* A path is at most this long before its label is cut (deeper paths than
  * this are not worth showing whole on a status line anyway). */

@@ -17,7 +17,7 @@
 #ifndef TESSERA_CLI_INPUT_PICK_H
 #define TESSERA_CLI_INPUT_PICK_H
 
-#include "engine/vec3.h"
+#include "engine/base/vec3.h"
 #include "input/controller.h"
 
 struct scene;

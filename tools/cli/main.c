@@ -3,8 +3,8 @@
 #include <string.h>
 
 #include "cli.h"
-#include "engine/kernels.h"
-#include "engine/progress.h"
+#include "engine/accel/kernels.h"
+#include "engine/base/progress.h"
 #include "wall/drm.h"
 
 /* tessera outputs: what the cards offer, to help write a wall config. */
@@ -62,7 +62,7 @@ int main(int argc, char **argv)
         cli_error("%s", env_err.msg);
         return 2;
     }
-    progress_set_quiet(false); /* loading and building report progress on stderr (engine/progress.h) */
+    progress_set_quiet(false); /* loading and building report progress on stderr (engine/base/progress.h) */
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         if (!strcmp(argv[1], commands[i].name))
             return commands[i].run(argc - 1, argv + 1);

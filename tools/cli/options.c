@@ -1,6 +1,6 @@
 #include "cli.h"
-#include "engine/clock.h"
-#include "engine/upscale.h"
+#include "engine/base/clock.h"
+#include "engine/render/upscale.h"
 
 #include <errno.h>
 #include <math.h>

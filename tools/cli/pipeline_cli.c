@@ -11,9 +11,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "engine/json_read.h"
-#include "engine/log.h"
-#include "engine/scene.h"
+#include "engine/base/json_read.h"
+#include "engine/base/log.h"
+#include "engine/scene/scene.h"
 #include "option_check.h"
 #include "wall/display_backend.h"
 #include "wall/drm.h"

@@ -10,9 +10,9 @@
 #include <stdio.h>
 
 #include "cli.h"
-#include "engine/camera_path.h"
-#include "engine/pipeline.h"
-#include "engine/upscale.h"
+#include "engine/frame/camera_path.h"
+#include "engine/frame/pipeline.h"
+#include "engine/render/upscale.h"
 #include "input_cli.h"
 #include "remote/remote.h"
 #include "input/source.h"
@@ -49,7 +49,7 @@ typedef struct cli_pipeline_spec {
     bool display_given, frames_given, time_given; /* on the command line or in --config */
     cli_input_spec input;        /* --input ..., the config's "input" object */
     remote_config remote;        /* --remote ..., the config's "remote" object (port -1: none) */
-    /* render --scale / --upscale (engine/upscale.h; pipeline.h, RENDER SCALE): every channel
+    /* render --scale / --upscale (engine/render/upscale.h; pipeline.h, RENDER SCALE): every channel
      * renders at render_scale of its size, the same view, and the render threads upscale it
      * with `upscale`; 1 (nothing scaled) for the other commands */
     double render_scale;         /* (0, 1] */

@@ -5,8 +5,8 @@
 #include <string.h>
 
 #include "cli.h"
-#include "engine/log.h"
-#include "engine/pipeline.h"
+#include "engine/base/log.h"
+#include "engine/frame/pipeline.h"
 
 /* The view of the running command (one a process). */
 static struct {

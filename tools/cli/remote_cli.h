@@ -10,8 +10,8 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-#include "engine/camera.h"
-#include "engine/json_read.h"
+#include "engine/base/camera.h"
+#include "engine/base/json_read.h"
 #include "input/source.h"
 #include "remote/remote.h"
 

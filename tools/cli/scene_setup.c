@@ -4,8 +4,8 @@
 #include <stdio.h>
 
 #include "cli.h"
-#include "engine/accel.h"
-#include "engine/scene.h"
+#include "engine/scene/accel.h"
+#include "engine/scene/scene.h"
 
 bool cli_scene_prepare(const char *scene_path, int threads, cli_scene *out)
 {

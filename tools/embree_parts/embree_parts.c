@@ -37,11 +37,11 @@
 #include <xmmintrin.h>
 #include <pmmintrin.h>
 
-#include "engine/aabb.h"
-#include "engine/assembly_load.h"
-#include "engine/camera.h"
-#include "engine/geometry.h"
-#include "engine/mesh.h"
+#include "engine/base/aabb.h"
+#include "engine/load/assembly_load.h"
+#include "engine/base/camera.h"
+#include "engine/accel/geometry.h"
+#include "engine/geometry/triangles/mesh.h"
 
 #define TILE_PX 16
 

@@ -17,7 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "engine/srgb.h"
+#include "engine/base/srgb.h"
 #include "wall/dump.h"
 
 #define PI 3.14159265358979323846

@@ -24,8 +24,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/err.h"
-#include "engine/mesh.h"
+#include "engine/base/err.h"
+#include "engine/geometry/triangles/mesh.h"
 
 #define MAX_GRID 1000
 #define PLY_MAX_VERTICES 2147483647ull /* indices are PLY `int` */

@@ -1,5 +1,5 @@
 # knob_antialiasing.sh - the antialiasing section of REPORT.md: samples per
-# pixel (the pixel sampler, engine/sampler.h) against frame time and error.
+# pixel (the pixel sampler, engine/render/sampler.h) against frame time and error.
 # Sourced by tools/report/report.sh, which calls knob_antialiasing once with
 # the scenes measured; it writes $WORK/section_antialiasing.md and its
 # pictures into $WORK/plots/ (lib.sh has the shared machinery).

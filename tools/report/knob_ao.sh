@@ -1,7 +1,7 @@
 # knob_ao.sh - the ambient-occlusion section of REPORT.md: the `ao`
 # renderer's rays per hit (renderer.ao.rays), its discontinuity filter
 # (renderer.ao.filter_px) and accumulated frames (renderer.ao.frames,
-# engine/render_ao.h FRAMES) against frame time and error. Sourced by
+# engine/render/render_ao.h FRAMES) against frame time and error. Sourced by
 # tools/report/report.sh, which calls knob_ao once with the scenes measured;
 # it writes $WORK/section_ao.md and its pictures into $WORK/plots/.
 #
@@ -118,7 +118,7 @@ knob_ao() { # scene labels...
     {
         echo "## Ambient occlusion: rays per hit, filter, accumulated frames"
         echo
-        echo "The \`ao\` renderer (engine/render_ao.h), interleave 4 (the default), at the pixel centres"
+        echo "The \`ao\` renderer (engine/render/render_ao.h), interleave 4 (the default), at the pixel centres"
         echo "(\`--sampler single\`). Settings n<rays>-f<filter>-x<frames>: rays per hit"
         echo "$(echo "$AO_RAY_COUNTS" | sed 's/ /, /g') with the discontinuity filter off (\`filter_px\` 1) and on"
         echo "(\`filter_px\` 5), one frame; and the default 8 rays averaged over $(echo "$AO_FRAME_COUNTS" | sed 's/ / and /')"
@@ -272,7 +272,7 @@ knob_ao() { # scene labels...
         echo "(it averages the AO term over neighbours that pass its tests), the floor in the bullets above."
         echo "Accumulated frames do not stay on that floor: the filter shrinks one ring each time the frames"
         echo "averaged quadruple (frame 0 the whole 5 × 5 box, frames 1-3 3 × 3, from frame 4 none;"
-        echo "engine/render_ao.h, render_ao_filter_edge), so a still camera refining over frames converges to"
+        echo "engine/render/render_ao.h, render_ao_filter_edge), so a still camera refining over frames converges to"
         echo "the reference with the filter on as without it (compare the two 8 × 16 points), while its first"
         echo "frames keep the filter's smoothness. So 8 rays with the filter serve both the moving frames and"
         echo "the start of a refinement. *(This reading is written in tools/report/knob_ao.sh; the per-scene"

@@ -2,7 +2,7 @@
 # 13: "the report plots frame time and FLIP per transaction along the path").
 # Per scene one run of `tessera bench --path P --rate 30 --budget-ms B`: a
 # sender thread queues one camera transaction per 1/30 s of the path while the
-# pipeline renders in real time, the governor (engine/governor.h) picking the
+# pipeline renders in real time, the governor (engine/frame/governor.h) picking the
 # render scale of each moving frame; the bench prints per transaction the
 # frame that first showed it, its time, its scale and, for 16 of them spread
 # over the path, the mean FLIP of that frame against the full-size
@@ -150,7 +150,7 @@ knob_governor() { # scene labels...
         echo
         echo "\`tessera bench --path PATH --rate $GV_RATE --size $SIZE --threads $THREADS --budget-ms $BUDGET_MS"
         echo "--flip-samples $GV_FLIP_SAMPLES\`: a sender thread queues one camera transaction per 1/$GV_RATE s of the path, as"
-        echo "a user steering would, while the pipeline renders in real time. The governor (engine/governor.h)"
+        echo "a user steering would, while the pipeline renders in real time. The governor (engine/frame/governor.h)"
         echo "renders each moving frame at the scale of the ladder 1, 7/8, 3/4, 5/8, 1/2, 3/8, 1/4 its cost"
         echo "model predicts within the $BUDGET_MS ms budget (REPORT_BUDGET_MS), upscaled with \`--upscale bilinear\`"
         echo "(its default) on all render threads. Frame time: the loop step that rendered a frame (its"

@@ -1,5 +1,5 @@
 # knob_render_scale.sh - the render-scale section of REPORT.md: the frame
-# rendered at a fraction of the output size and upscaled (engine/upscale.h,
+# rendered at a fraction of the output size and upscaled (engine/render/upscale.h,
 # `tessera render --scale S --upscale F`) against frame time and error, for
 # both upscale filters. Sourced by tools/report/report.sh, which calls
 # knob_render_scale once with the scenes measured; it writes
@@ -29,7 +29,7 @@ rs_series_settings() { # filter -> its settings, full size first
     for sc in $RS_SCALES; do printf ' %s' "$sc-$1"; done
     echo
 }
-# the rendered size of an edge of n pixels at a setting's scale: max(1, round(n s)), as engine/upscale.h
+# the rendered size of an edge of n pixels at a setting's scale: max(1, round(n s)), as engine/render/upscale.h
 rs_px() { # n setting
     awk -v n="$1" -v s="$(rs_scale "$2")" 'BEGIN {
         q = index(s, "/"); f = q ? substr(s, 1, q - 1) / substr(s, q + 1) : s + 0
@@ -188,14 +188,14 @@ knob_render_scale() { # scene labels...
         echo "Settings: render scale S = 1, 3/4, 1/2, 1/3, 1/4 of $SIZE (\`--scale S\`: each edge"
         echo "max(1, round(edge × S)) pixels, same view), upscaled to $SIZE by \`--upscale bilinear\` or"
         echo "\`--upscale clamped-cubic\` (Catmull-Rom clamped to the 2×2 nearest rendered pixels;"
-        echo "engine/upscale.h); one ray through each pixel centre (\`--sampler single\`) throughout. Two"
+        echo "engine/render/upscale.h); one ray through each pixel centre (\`--sampler single\`) throughout. Two"
         echo "series per scene, one per filter, both starting at full size (scale 1, no upscaling)."
         echo
         echo "Frame time: as for every knob, \`tessera render --display null --frames $FRAMES --threads $THREADS\`, the"
         echo "ms/frame it prints (pipeline_run's wall time over the frames rendered), median of $RUNS runs"
         echo "taken in turn over the settings. **The upscale is inside it**: the render threads render the"
         echo "low-res frame, meet at the upscale barrier, then upscale bands of tile rows between them"
-        echo "(engine/pipeline.h, RENDER SCALE; the governor's reduced frames are made the same way). The"
+        echo "(engine/frame/pipeline.h, RENDER SCALE; the governor's reduced frames are made the same way). The"
         echo "upscale column is that stage's time per frame (the \`render scale\` line's ms/frame: per frame"
         echo "the longest thread's share, median of the same runs), a part of the frame time. Error: the"
         echo "upscaled $SIZE image (EXR) against the same full-size reference as every knob."

@@ -2,7 +2,7 @@
 # (watertight test with its double-precision redo, Ize's slab test with
 # containment for zero direction components, the culling margin, the bounded
 # shadow-ray offset) against the fast mode without them (make unrobust:
-# build-unrobust/tessera, engine/intersect.h TESSERA_UNROBUST) on the hard
+# build-unrobust/tessera, engine/accel/intersect.h TESSERA_UNROBUST) on the hard
 # cases of `tessera robust` (tools/robust/hard_cases.h, the generators of
 # tests/test_robust.c). Error: wrong hits and leaks per million rays (not
 # FLIP), against Mrays/s over the same rays. Sourced by report.sh, which calls
@@ -68,7 +68,7 @@ knob_robustness() { # scene labels (unused)
         echo "## Robustness: our kernels against a fast mode"
         echo
         echo "Our kernels against the fast mode of \`make unrobust\` (\`build-unrobust/tessera\`, compiled with"
-        echo "\`TESSERA_UNROBUST\`, engine/intersect.h), which leaves out every robustness rule: the double-precision"
+        echo "\`TESSERA_UNROBUST\`, engine/accel/intersect.h), which leaves out every robustness rule: the double-precision"
         echo "redo of the watertight test where an edge function is within its float error bound; Ize's scale of"
         echo "the far slab distance; the culling margin (relative and absolute); containment for zero direction"
         echo "components (the fast mode takes 1/0 = ±inf and the plain slab test, where (plane − origin) · inf can"

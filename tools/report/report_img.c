@@ -19,7 +19,7 @@
  *       of "-" leaves its cell empty. The region must lie inside every IN.
  *   report_img jpeg IMAGE RUNS QUALITY...
  *       the remote view's JPEG frames (remote/jpeg.h) of IMAGE: the picture
- *       as the page would get it without loss (8-bit sRGB, wall/srgb8.h) is
+ *       as the page would get it without loss (8-bit sRGB, engine/base/srgb8.h) is
  *       compressed at each QUALITY with each chroma subsampling (4:4:4,
  *       4:2:2, 4:2:0), RUNS times; prints one tab-separated line each:
  *       subsampling, quality, JPEG bytes, the median encode time in ms and
@@ -37,13 +37,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "engine/clock.h"
-#include "engine/sample_ring.h"
-#include "engine/srgb.h"
+#include "engine/base/clock.h"
+#include "engine/base/sample_ring.h"
+#include "engine/base/srgb.h"
 #include "metrics/flip.h"
 #include "remote/jpeg.h"
 #include "wall/dump.h"
-#include "wall/srgb8.h"
+#include "engine/base/srgb8.h"
 
 #define GAP_PX 4            /* between montage cells */
 #define GAP_LINEAR 0.2f     /* grey of the gaps and empty cells (linear) */

@@ -1,12 +1,12 @@
 /* hard_cases.c - the generators of hard_cases.h (moved here from
  * tests/test_robust.c, draw for draw, so the tests' cases are unchanged). */
-#include "tools/robust/hard_cases.h"
+#include "hard_cases.h"
 
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 
-#include "engine/intersect.h"
+#include "engine/accel/intersect.h"
 
 /* ---- random numbers ---- */
 

@@ -16,9 +16,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "engine/mesh.h"
-#include "engine/ray.h"
-#include "engine/vec3.h"
+#include "engine/geometry/triangles/mesh.h"
+#include "engine/accel/ray.h"
+#include "engine/base/vec3.h"
 
 /* ---- random numbers: splitmix64 ---- */
 typedef struct rng {
@@ -115,7 +115,7 @@ vec3 lit_plane_light(rng *g, dvec n, double tilt_deg);
  * [-0.95 half, 0.95 half]^2 around `shift` of the plane (e0, e1, n). */
 ray lit_plane_primary(rng *g, dvec shift, dvec e0, dvec e1, dvec n, double half);
 
-/* What engine/render.c does for a triangle hit: the position from the
+/* What engine/render/render.c does for a triangle hit: the position from the
  * barycentrics with its rounding bound (surface_point_triangle: on the surface,
  * unlike org + t dir), and the unit geometric normal turned to face the
  * incoming ray. */

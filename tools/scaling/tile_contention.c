@@ -1,5 +1,5 @@
 /* tile_contention.c - the cost of handing out one tile with the pipeline's
- * dynamic load balancer (engine/traverser.c, the "tiled" traverser: one
+ * dynamic load balancer (engine/render/traverser.c, the "tiled" traverser: one
  * atomic counter over every channel's tiles), at several thread counts.
  *
  * The real code path: a tiled traverser from traverser_tiled_create, its
@@ -40,7 +40,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "engine/traverser.h"
+#include "engine/render/traverser.h"
 
 #define MAX_THREADS 256
 #define MAX_COUNTS 32
