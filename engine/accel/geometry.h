@@ -29,6 +29,9 @@
 #include "ray.h"
 #include "engine/base/vec3.h"
 
+/* a geometry's name (scene_add_geometry), with its terminator */
+#define GEOMETRY_NAME_BYTES 64
+
 /* How a kind's primitives sit in the leaves of its wide BVH (wbvh.h). */
 typedef enum geometry_leaf_layout {
     GEOMETRY_LEAF_SPHERES,   /* wbvh_sphere_block, filled by fill_lane */
@@ -258,8 +261,7 @@ aabb affine3_box(const affine3 *a, aabb b);
 bool geometry_hit_boxes(const geometry_ops *ops, const void *data, int threads, aabb **boxes, uint32_t **ids,
                         uint32_t *kept);
 
-/* The built-in kinds: data is a scene_mesh (scene.h) / a sphere_set. */
-extern const geometry_ops geometry_triangles_ops;
-extern const geometry_ops geometry_spheres_ops;
+/* The built-in kinds are in engine/geometry/: triangles (triangle_kind.h),
+ * spheres (sphere_kind.h), particles, volumes. */
 
 #endif

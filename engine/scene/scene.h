@@ -23,10 +23,12 @@
 #include "engine/base/camera.h"
 #include "engine/base/err.h"
 #include "engine/accel/geometry.h"
+#include "engine/geometry/spheres/sphere_kind.h"
 #include "engine/geometry/triangles/mesh.h"
+#include "engine/geometry/triangles/triangle_kind.h"
 #include "engine/base/vec3.h"
 
-#define SCENE_NAME_BYTES 64
+#define SCENE_NAME_BYTES GEOMETRY_NAME_BYTES
 
 typedef enum material_model {
     MATERIAL_LAMBERT, /* diffuse only */
@@ -55,34 +57,6 @@ typedef struct light {
     float intensity;  /* scale on color: irradiance for directional, W/sr-like for point */
     bool casts_shadows;
 } light;
-
-/* One mesh in the scene and how its triangles are shaded. */
-typedef struct scene_mesh {
-    mesh *mesh;            /* owned, world space */
-    uint32_t material_id;  /* index into scene.materials, used when the mesh has no own materials */
-    uint32_t *mesh_material_ids; /* mesh->material_count scene material ids for a mesh with its own
-                                    materials (OBJ+MTL), else NULL; owned */
-    char name[SCENE_NAME_BYTES];
-    /* build its tree with spatial splits (bvh_spatial.h; set before the
-     * first accel build, part of the cache key): the mesh then stores a
-     * triangle once per leaf that holds it (mesh.h canon) */
-    bool spatial_splits;
-    /* its wide BVH (mesh_tree.h), NULL until the first accel is built;
-     * building it put the mesh in the tree's order. Owned */
-    _Atomic(struct wbvh *) tree;
-    /* the structure cache (mesh_cache.h): a mesh_cache_state, and the key
-     * the cache is written under after the tree's build (state PENDING) */
-    int cache_state;
-    uint64_t cache_key[2];
-} scene_mesh;
-
-/* All spheres of a scene, structure of arrays (millions of particles later). */
-typedef struct sphere_set {
-    uint32_t count, capacity;
-    float *center_x, *center_y, *center_z; /* world units */
-    float *radius;                          /* world units, > 0 */
-    uint32_t *material_id;                  /* per sphere */
-} sphere_set;
 
 /* PARTICIPATING MEDIA: what is integrated along rays rather than hit (a
  * volume rendered directly). A medium lies in its own box (object space),

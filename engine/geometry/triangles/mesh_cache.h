@@ -18,7 +18,7 @@
 #include "engine/base/cache_file.h"
 #include "engine/base/err.h"
 #include "mesh.h"
-#include "engine/scene/scene.h"
+#include "triangle_kind.h"
 
 /* What decides a cached mesh besides its file's bytes. */
 typedef struct mesh_cache_params {

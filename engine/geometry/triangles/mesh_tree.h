@@ -12,7 +12,7 @@
 #define TESSERA_MESH_TREE_H
 
 #include "engine/base/err.h"
-#include "engine/scene/scene.h"
+#include "triangle_kind.h"
 #include "engine/accel/wbvh.h"
 
 /* The mesh's tree, built over `threads` threads on the first call (which
