@@ -15,6 +15,10 @@
 #include "engine/render/render.h"
 
 _Static_assert(sizeof(((txn_record *)0)->args.status.text) == TXN_TEXT_BYTES, "status text");
+_Static_assert(TXN_MAX_CHANNELS == FRAME_STATE_MAX_CHANNELS && TXN_MAX_THREADS == FRAME_STATE_MAX_THREADS &&
+                   TXN_TEXT_BYTES == FRAME_STATE_TEXT_BYTES && TXN_NAME_BYTES == FRAME_STATE_NAME_BYTES &&
+                   TXN_POINTERS == FRAME_STATE_POINTERS,
+               "a record's sizes are the frame state's");
 _Static_assert(TXN_CLIP_PLANES == CLIP_MAX_PLANES, "a clip-plane record's index is a frame state's plane");
 
 static const char *const kind_names[TXN_KIND_COUNT] = {

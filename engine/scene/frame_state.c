@@ -428,7 +428,7 @@ bool frame_state_set_value(frame_state *st, uint32_t first, uint32_t count, floa
 bool frame_state_set_colormap(frame_state *st, uint32_t first, uint32_t count, const char *name)
 {
     if (!st->colormap) {
-        char(*a)[TXN_NAME_BYTES] = calloc((size_t)(st->geometry_count ? st->geometry_count : 1), sizeof *a);
+        char(*a)[FRAME_STATE_NAME_BYTES] = calloc((size_t)(st->geometry_count ? st->geometry_count : 1), sizeof *a);
         if (!a || !ensure_bits(st, &st->mapped)) {
             free(a);
             return false;
@@ -438,7 +438,7 @@ bool frame_state_set_colormap(frame_state *st, uint32_t first, uint32_t count, c
     bool changed = false;
     for (uint64_t id = first; id < (uint64_t)first + count; id++) {
         changed |= !bit(st->mapped, (uint32_t)id) || strcmp(st->colormap[id], name) != 0;
-        snprintf(st->colormap[id], TXN_NAME_BYTES, "%s", name);
+        snprintf(st->colormap[id], FRAME_STATE_NAME_BYTES, "%s", name);
         st->mapped[id / 64] |= 1ull << (id % 64);
     }
     widen(&st->map_first, &st->map_end, first, count);

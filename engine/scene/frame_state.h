@@ -75,13 +75,18 @@
 #include "engine/accel/clip.h"
 #include "engine/accel/geometry.h"
 #include "engine/base/err.h"
-#include "engine/frame/txn.h"
 #include "engine/base/vec3.h"
 
 struct accel;
 struct renderer;
 
-#define FRAME_STATE_MAX_CHANNELS TXN_MAX_CHANNELS
+/* The state's sizes; the records that edit it (txn.h) have the same ones
+ * (checked at compile time in txn.c). */
+#define FRAME_STATE_MAX_CHANNELS 16 /* = TXN_MAX_CHANNELS */
+#define FRAME_STATE_MAX_THREADS 256 /* = TXN_MAX_THREADS */
+#define FRAME_STATE_TEXT_BYTES 128  /* = TXN_TEXT_BYTES: status text with its NUL */
+#define FRAME_STATE_NAME_BYTES 32   /* = TXN_NAME_BYTES: a colour map's or transfer function's name */
+#define FRAME_STATE_POINTERS 8      /* = TXN_POINTERS: remote viewers' pointers */
 
 typedef struct frame_state {
     uint64_t version;        /* every applied change */
@@ -97,14 +102,14 @@ typedef struct frame_state {
                                                           (the wall's camera) passes it by; only
                                                           records naming it set its camera */
 
-    int threads;             /* render threads wanted, 1..TXN_MAX_THREADS */
+    int threads;             /* render threads wanted, 1..FRAME_STATE_MAX_THREADS */
 
     /* the overlay's inputs (the pipeline composes the drawn line) */
-    char status[TXN_TEXT_BYTES]; /* the status text asked for */
+    char status[FRAME_STATE_TEXT_BYTES]; /* the status text asked for */
     bool cursor_visible;
     float cursor_sx, cursor_sy;
-    bool pointer_visible[TXN_POINTERS]; /* remote viewers' pointers, by viewer slot */
-    float pointer_sx[TXN_POINTERS], pointer_sy[TXN_POINTERS];
+    bool pointer_visible[FRAME_STATE_POINTERS]; /* remote viewers' pointers, by viewer slot */
+    float pointer_sx[FRAME_STATE_POINTERS], pointer_sy[FRAME_STATE_POINTERS];
     bool governor_status_shown;
 
     /* render options */
@@ -138,11 +143,11 @@ typedef struct frame_state {
                                 `valued`; NULL until the first value record */
     uint64_t *valued;        /* bit set: value[id] was given */
     uint32_t value_first, value_end; /* ids [first, end) whose value may differ from their kind's */
-    char (*colormap)[TXN_NAME_BYTES]; /* geometry_count map names given by records, with `mapped`;
+    char (*colormap)[FRAME_STATE_NAME_BYTES]; /* geometry_count map names given by records, with `mapped`;
                                 NULL until the first colormap record */
     uint64_t *mapped;        /* bit set: colormap[id] was given */
     uint32_t map_first, map_end; /* ids [first, end) whose map may differ from their kind's */
-    char transfer[TXN_NAME_BYTES]; /* the transfer function every medium should use; "" until a record */
+    char transfer[FRAME_STATE_NAME_BYTES]; /* the transfer function every medium should use; "" until a record */
     bool transfer_dirty;     /* `transfer` may differ from what the media use */
     uint32_t time_step;      /* the step every time series shows (0 at start) */
     bool time_step_dirty;    /* time_step may differ from what the geometries show */
@@ -171,7 +176,7 @@ void frame_state_set_active(frame_state *st, int channel, bool on);
 void frame_state_set_threads(frame_state *st, int threads);
 void frame_state_set_status(frame_state *st, const char *text);
 void frame_state_set_cursor(frame_state *st, bool on, float sx, float sy);
-void frame_state_set_pointer(frame_state *st, int slot, bool on, float sx, float sy); /* slot 0..TXN_POINTERS-1 */
+void frame_state_set_pointer(frame_state *st, int slot, bool on, float sx, float sy); /* slot 0..FRAME_STATE_POINTERS-1 */
 void frame_state_set_governor_status(frame_state *st, bool shown);
 void frame_state_set_shadows(frame_state *st, bool on);
 void frame_state_set_renderer(frame_state *st, const struct renderer *r);
