@@ -18,6 +18,7 @@
 #include "engine/geometry/triangles/mesh.h"
 #include "engine/scene/part_tree.h"
 #include "support.h"
+#include "engine/load/mesh_load.h"
 
 #define PATH_BYTES 512
 

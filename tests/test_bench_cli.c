@@ -14,8 +14,10 @@
 
 #include "engine/geometry/triangles/mesh.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "support.h"
 #include "wall/dump.h"
+#include "engine/load/mesh_load.h"
 
 /* Seconds one bench command may take before the test counts it as a hang. */
 #define BENCH_TIMEOUT_S 60

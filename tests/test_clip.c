@@ -30,6 +30,7 @@
 #include "engine/accel/intersect.h"
 #include "engine/geometry/triangles/mesh.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 
 TestSuite(clip);
 

@@ -21,6 +21,7 @@
 #include "cluster/cluster.h"
 #include "engine/scene/accel.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "engine/frame/txn.h"
 #include "input/record.h"
 #include "support.h"

@@ -52,6 +52,7 @@
 #include "engine/base/log.h"
 #include "engine/render/render.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "support.h"
 
 #define SCENES_DIR "../configs/scenes"

@@ -15,6 +15,7 @@
 #include "engine/geometry/triangles/mesh.h"
 #include "engine/scene/part_tree.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "input/controller.h"
 #include "tools/cli/input_pick.h"
 

@@ -23,6 +23,7 @@
 #include "engine/base/err.h"
 #include "engine/geometry/triangles/mesh.h"
 #include "support.h"
+#include "engine/load/mesh_load.h"
 
 #define TEXT_BYTES 8192
 #define PATH_BYTES 512

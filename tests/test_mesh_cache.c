@@ -17,6 +17,7 @@
 #include "engine/scene/accel.h"
 #include "engine/geometry/triangles/mesh_cache.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 
 static char dir[64];
 static char cache_dir_path[128];

@@ -17,6 +17,7 @@
 
 #include "engine/geometry/particles/particles.h"
 #include "support.h"
+#include "engine/load/particle_load.h"
 
 #define PATH_BYTES 512
 

@@ -18,6 +18,7 @@
 #include "engine/geometry/particles/particle_kind.h"
 #include "engine/render/render.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "engine/frame/txn.h"
 #include "support.h"
 #include "tools/cli/input_pick.h"

@@ -15,6 +15,7 @@
 #include "engine/scene/accel.h"
 #include "engine/render/render.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "wall/dump.h"
 
 #define REF_MAX_CHANNEL_DIFF 2   /* 8-bit levels: allows libm/rounding differences between machines */

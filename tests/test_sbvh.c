@@ -24,6 +24,7 @@
 #include "engine/geometry/triangles/mesh_cache.h"
 #include "engine/accel/packet.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "engine/accel/wbvh.h"
 
 static uint64_t seed;

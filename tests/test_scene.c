@@ -17,6 +17,7 @@
 
 #include "engine/scene/part_tree.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 
 #define EXAMPLE_SCENES_DIR "../configs/scenes"
 

@@ -18,6 +18,7 @@
 #include "engine/scene/accel.h"
 #include "support.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 
 /* Seconds one run of the binary may take before it counts as a hang. */
 #define TRACE_TIMEOUT_S 60

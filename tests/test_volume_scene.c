@@ -13,6 +13,7 @@
 #include "engine/scene/frame_state.h"
 #include "engine/render/render.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "engine/frame/txn.h"
 #include "engine/geometry/volume/iso_kind.h"
 #include "support.h"

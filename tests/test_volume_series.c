@@ -18,6 +18,7 @@
 #include "engine/scene/frame_state.h"
 #include "engine/render/render.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "engine/base/series.h"
 #include "engine/frame/txn.h"
 #include "engine/render/dvr_medium.h"

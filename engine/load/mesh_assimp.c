@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "assimp_import.h"
+#include "mesh_load.h"
 
 /* PreTransformVertices bakes the node hierarchy into the vertices, so all
  * meshes share one object space (assimp_import_file adds triangulation,

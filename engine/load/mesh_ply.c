@@ -17,6 +17,7 @@
 
 #include "ply_read.h"
 #include "engine/base/progress.h"
+#include "mesh_load.h"
 
 /* What the loader does with a property (its ply_property.role). ROLE_X..ROLE_BLUE
  * are consecutive: role - ROLE_X is the property's slot in a vertex (see

@@ -24,7 +24,7 @@
  * (LAMMPS) or stops where the data ends (PLY) without a large allocation.
  *
  * Nothing here is global: loads run in parallel. */
-#include "engine/geometry/particles/particles.h"
+#include "particle_load.h"
 
 #include <errno.h>
 #include <inttypes.h>

@@ -80,6 +80,7 @@
  * strings, trailing commas and any-case true/false/null, which are not part of
  * the format. */
 #include "engine/scene/scene.h"
+#include "scene_load.h"
 
 #include <errno.h>
 #include <math.h>
@@ -95,6 +96,8 @@
 #include "particle_json.h"
 #include "engine/base/series.h"
 #include "volume_json.h"
+#include "mesh_load.h"
+#include "particle_load.h"
 
 /* Scene files describe; the geometry lives in mesh files. Refusing anything
  * larger keeps a mistaken path (a mesh, /dev/zero) from eating memory. */
@@ -500,7 +503,7 @@ static bool load_mesh(loader *L, json_object *v)
     params.drop_materials = named >= 0;
     params.spatial_splits = spatial_splits;
     mesh_cache_load cached;
-    mesh *m = mesh_cache_load_file(resolved, &params, &cached, &why);
+    mesh *m = mesh_cache_load_file(resolved, &params, mesh_load, &cached, &why);
     if (!m)
         return jr_member_fail(c, "file", why.msg[0] ? why.msg : "cannot load the mesh");
     if (cached.state != MESH_CACHE_HIT) { /* a mapped mesh has them applied */
@@ -667,7 +670,7 @@ static bool load_particles(loader *L, json_object *v)
     }
     particle_kind *k = particle_json_kind(c, v, set, material_id);
     if (k && e.steps.count > 0 &&
-        !particle_kind_attach_series(k, (const char *const *)e.steps.paths, e.steps.count, &why)) {
+        !particle_kind_attach_series(k, (const char *const *)e.steps.paths, e.steps.count, particles_load, &why)) {
         particle_kind_destroy(k);
         k = NULL;
         jr_member_fail(c, e.key, why.msg);

@@ -217,13 +217,6 @@ int scene_add_mesh_geometry(scene *s, mesh *m, uint32_t material_id, const char 
  * O(log instances). */
 void scene_part_instances(const scene *s, uint32_t part, uint32_t *first, uint32_t *end);
 
-/* Load an assembly (assembly_load.h: glTF 2.0 .gltf/.glb, OBJ groups, ...)
- * into s: its materials, meshes (stored once) and parts (under the root of
- * s->parts, made on first use) with their instances, each placed by
- * `placement` (NULL: as in the file) after its own transform. An error names
- * the file. */
-bool scene_load_assembly(scene *s, const char *path, const affine3 *placement, tess_error *err);
-
 /* Give the instances of every part whose path matches `pattern`
  * (part_tree.h patterns) and of their subtrees material `material_id`.
  * Returns the number of parts matched (0 is not an error). */
@@ -286,26 +279,7 @@ light light_default_directional(void);    /* direction (0.4, 1, 0.3), white, cas
  * mesh, a group of spheres and two lights. NULL only on allocation failure. */
 scene *scene_create_default(tess_error *err);
 
-/* Load a JSON scene file (see README "Scene files"), or a mesh file directly
- * (any extension mesh_load() reads): then a grey Lambert material, the default
- * directional light, and no camera (so the caller frames the bounds). */
-scene *scene_load(const char *path, tess_error *err);
-scene *scene_load_json(const char *path, tess_error *err);
-/* The same from `len` bytes of JSON text (need not be NUL-terminated): `path`
- * names the text in messages, and relative mesh paths resolve from its
- * directory. */
-scene *scene_parse_json(const char *path, const char *text, size_t len, tess_error *err);
-
-/* What a caller decides of a scene beyond its file (all false: scene_load). */
-typedef struct scene_load_options {
-    /* meshes get trees with spatial splits: a mesh file, and every JSON
-     * "meshes" entry that does not say "spatial_splits" itself (assembly
-     * parts never) */
-    bool spatial_splits;
-} scene_load_options;
-scene *scene_load_with(const char *path, const scene_load_options *opts, tess_error *err);
-scene *scene_load_json_with(const char *path, const scene_load_options *opts, tess_error *err);
-scene *scene_parse_json_with(const char *path, const char *text, size_t len, const scene_load_options *opts,
-                             tess_error *err);
+/* Loading a scene from files (a JSON scene file, a mesh, an assembly, a
+ * particle file) is engine/load/scene_load.h. */
 
 #endif

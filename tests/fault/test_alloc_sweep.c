@@ -26,6 +26,7 @@
 #include "engine/geometry/particles/particles.h"
 #include "engine/frame/pipeline.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "input/bindings.h"
 #include "input/record.h"
 #include "fault.h"
@@ -34,6 +35,8 @@
 #include "wall/display.h"
 #include "wall/edid.h"
 #include "wall/wall_config.h"
+#include "engine/load/mesh_load.h"
+#include "engine/load/particle_load.h"
 
 #define PATH_BYTES 512
 

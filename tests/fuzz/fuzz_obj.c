@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "engine/geometry/triangles/mesh.h"
+#include "engine/load/mesh_load.h"
 
 #define MTL_SPLIT "\n#--mtl--\n"
 

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "engine/geometry/particles/particles.h"
+#include "engine/load/particle_load.h"
 
 /* What a loaded set promises (particles.h): counts within capacity, finite
  * positions and values, each attribute's min and max bounding its values,

@@ -4,6 +4,7 @@
 #include "fuzz.h"
 
 #include "engine/geometry/triangles/mesh.h"
+#include "engine/load/mesh_load.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

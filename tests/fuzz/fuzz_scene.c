@@ -11,6 +11,7 @@
 #include <stdio.h>
 
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 
 static const char quad_ply[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
                                "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"

@@ -44,8 +44,10 @@
 #include "engine/render/render.h"
 #include "engine/render/render_ao.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 #include "engine/frame/txn.h"
 #include "wall/dump.h"
+#include "engine/load/mesh_load.h"
 
 /* Defaults: the size, frames and warm-up of the peer's 1920x1080 runs
  * (tools/bench.sh asks for more frames, see there). */

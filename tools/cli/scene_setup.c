@@ -6,6 +6,7 @@
 #include "cli.h"
 #include "engine/scene/accel.h"
 #include "engine/scene/scene.h"
+#include "engine/load/scene_load.h"
 
 bool cli_scene_prepare(const char *scene_path, int threads, cli_scene *out)
 {

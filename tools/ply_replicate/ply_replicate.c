@@ -26,6 +26,7 @@
 
 #include "engine/base/err.h"
 #include "engine/geometry/triangles/mesh.h"
+#include "engine/load/mesh_load.h"
 
 #define MAX_GRID 1000
 #define PLY_MAX_VERTICES 2147483647ull /* indices are PLY `int` */

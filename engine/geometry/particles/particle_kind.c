@@ -41,6 +41,7 @@ struct particle_kind {
     particle_set *set;     /* owned; capacity >= count + GEOMETRY_POINTS_PAD (kernels read past) */
     /* the attributes by name (resolved in every step's set: step_layout) */
     char radius_name[PARTICLE_NAME_BYTES], crop_name[PARTICLE_NAME_BYTES], colour_name[PARTICLE_NAME_BYTES];
+    particle_file_reader *read; /* TIME STEPS: how a step's file is read (set with series) */
     series *series;        /* TIME STEPS (series.h): NULL: one set. The shown step's set and tree are
                               set and tree below; they change only in particle_kind_set_step, which
                               runs where nothing traces (a serial section) */
@@ -260,7 +261,7 @@ static void *load_step(void *ctx, const char *path, uint32_t step, tess_error *e
         tess_error_set(err, "%s: out of memory", path);
         return NULL;
     }
-    st->set = particles_load(path, err);
+    st->set = k->read(path, err);
     if (!st->set || !resolve_layout(k, st->set, &st->lay, path, err) ||
         !build_tree(k, st->set, &st->lay, &st->tree, 1, err)) {
         free_step(NULL, st);
@@ -269,8 +270,10 @@ static void *load_step(void *ctx, const char *path, uint32_t step, tess_error *e
     return st;
 }
 
-bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, tess_error *err)
+bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, particle_file_reader *read,
+                                 tess_error *err)
 {
+    k->read = read;
     k->series = series_create(paths, count, 0, load_step, free_step, k, err);
     if (!k->series)
         tess_error_prefix(err, "particles: ");

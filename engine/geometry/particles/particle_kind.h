@@ -80,8 +80,12 @@ const colormap *particle_kind_colormap(const particle_kind *k);
  * two steps are in memory; setting a step that is ready swaps at once,
  * one that is not waits for its load. Every step must have the attributes
  * the kind reads (radius, crop, colour); a colour map keeps step 0's range.
- * attach: paths copied; false on no memory. */
-bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, tess_error *err);
+ * attach: paths copied, each step read by `read` (the kind does not know
+ * file formats: engine/load/particle_load.h's particles_load is one); false
+ * on no memory. */
+typedef particle_set *particle_file_reader(const char *path, tess_error *err);
+bool particle_kind_attach_series(particle_kind *k, const char *const *paths, uint32_t count, particle_file_reader *read,
+                                 tess_error *err);
 uint32_t particle_kind_step_count(const particle_kind *k); /* 1 without a series */
 uint32_t particle_kind_step(const particle_kind *k);       /* the step shown */
 /* Whether `step` (mod the count) can be shown without waiting: it is shown

@@ -88,14 +88,6 @@ size_t particle_set_bytes(const particle_set *p);
 /* Bounds of the centres; false for an empty set. */
 bool particle_set_bounds(const particle_set *p, float lo[3], float hi[3]);
 
-/* Load a particle file: PLY (vertex element only: x y z and any other
- * scalar vertex property as an attribute, ascii or binary) by the ".ply"
- * extension, a LAMMPS text dump ("ITEM: ATOMS id type x y z ...", also
- * xs/ys/zs scaled and xu/yu/zu unwrapped coordinates) by ".dump",
- * ".lammpstrj" or a first line "ITEM: TIMESTEP". An error names the file,
- * the line or element, and the problem. The set is finished. */
-particle_set *particles_load(const char *path, tess_error *err);
-particle_set *particles_load_ply(const char *path, tess_error *err);
-particle_set *particles_load_lammps(const char *path, tess_error *err);
+/* Reading a particle file is engine/load/particle_load.h. */
 
 #endif

@@ -232,19 +232,6 @@ size_t mesh_bytes(const mesh *m)
     return bytes;
 }
 
-static bool has_extension(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    return n >= e && strcasecmp(path + n - e, ext) == 0;
-}
-
-mesh *mesh_load(const char *path, tess_error *err)
-{
-    if (has_extension(path, ".ply"))
-        return mesh_load_ply(path, err);
-    return mesh_load_assimp(path, err);
-}
-
 /* REORDERING. Both reorderings gather: slot i of a new array takes item
  * from[i] of the old one, the slots written in order and the reads
  * prefetched a stretch ahead (from[] is read in order, so the random reads

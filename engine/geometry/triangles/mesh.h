@@ -100,11 +100,6 @@ bool mesh_renumber_vertices(mesh *m, int threads);
 /* Bytes held by the mesh's arrays (by count, not capacity). */
 size_t mesh_bytes(const mesh *m);
 
-/* Load by file extension: .ply (tessera's streaming reader) or anything
- * assimp reads (.obj with .mtl, .stl, .off, .gltf, ...). The result is
- * validated. On failure returns NULL and err names the file and the problem. */
-mesh *mesh_load(const char *path, tess_error *err);
-mesh *mesh_load_ply(const char *path, tess_error *err);
-mesh *mesh_load_assimp(const char *path, tess_error *err);
+/* Reading a mesh from a file is engine/load/mesh_load.h. */
 
 #endif

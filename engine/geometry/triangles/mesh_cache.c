@@ -130,17 +130,18 @@ static mesh *mesh_from_cache(cache_file *c, wbvh **tree_out, tess_error *err)
     return m;
 }
 
-mesh *mesh_cache_load_file(const char *path, const mesh_cache_params *params, mesh_cache_load *out, tess_error *err)
+mesh *mesh_cache_load_file(const char *path, const mesh_cache_params *params, mesh_file_reader *read,
+                           mesh_cache_load *out, tess_error *err)
 {
     memset(out, 0, sizeof *out);
     struct stat st;
     if (!cache_enabled() || stat(path, &st) != 0 || (uint64_t)st.st_size < mesh_cache_min_bytes())
-        return mesh_load(path, err);
+        return read(path, err);
     tess_error why = {{0}};
     char cache_path[CACHE_PATH_BYTES];
     if (!key_of(path, params, &out->key, &why) || !cache_path_for_key(out->key, cache_path, sizeof cache_path, &why)) {
         log_warn("%s: no structure cache: %s", path, why.msg);
-        return mesh_load(path, err);
+        return read(path, err);
     }
     cache_file *c = NULL;
     cache_status status = cache_open(cache_path, out->key, MESH_CACHE_CONTENT_VERSION, &c, &why);
@@ -157,7 +158,7 @@ mesh *mesh_cache_load_file(const char *path, const mesh_cache_params *params, me
     } else if (status != CACHE_MISSING) {
         log_warn("%s - rebuilding", why.msg);
     }
-    mesh *m = mesh_load(path, err);
+    mesh *m = read(path, err);
     if (m)
         out->state = MESH_CACHE_PENDING;
     return m;

@@ -46,12 +46,16 @@ typedef struct mesh_cache_load {
  * (TESSERA_CACHE_MIN_BYTES overrides the default of 16 MiB). */
 uint64_t mesh_cache_min_bytes(void);
 
+/* How a mesh file is read when the cache does not have it (the cache does
+ * not know file formats: engine/load/mesh_load.h's mesh_load is one). */
+typedef mesh *mesh_file_reader(const char *path, tess_error *err);
+
 /* The mesh of the file at path. HIT: mapped from the cache with params
- * applied already, its tree in out->tree. Else loaded by mesh_load, params
- * NOT applied (the caller applies them, then mesh_cache_adopt). NULL with
- * err set when the file cannot be loaded. */
-mesh *mesh_cache_load_file(const char *path, const mesh_cache_params *params, mesh_cache_load *out,
-                           tess_error *err);
+ * applied already, its tree in out->tree. Else read by `read`, params NOT
+ * applied (the caller applies them, then mesh_cache_adopt). NULL with err
+ * set when the file cannot be loaded. */
+mesh *mesh_cache_load_file(const char *path, const mesh_cache_params *params, mesh_file_reader *read,
+                           mesh_cache_load *out, tess_error *err);
 /* Give the scene_mesh holding the loaded mesh what the load found: a HIT's
  * tree, or the key under which mesh_tree writes the cache after building. */
 void mesh_cache_adopt(scene_mesh *sm, mesh_cache_load *load);
