@@ -159,7 +159,7 @@ TEST_CLI_OBJ := $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ))
 $(TEST_BIN): $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 
-# fault injection (tests/fault/, README "Tests"): a Criterion binary of its own whose link
+# fault injection (tests/fault/, docs/tests.md): a Criterion binary of its own whose link
 # routes every allocation call in our objects (engine, wall, input, the CLI but main.o, the
 # tests) through tests/fault/fault_alloc.c, so the n-th allocation of one operation can be
 # made to fail, and their pwrite/close through fault_io.c (EIO on demand); the libraries'
@@ -197,7 +197,7 @@ test:
 # the unit suite alone (what make test runs before the VM tests)
 test-unit:
 	@sh tools/deps.sh --test
-	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers
+	$(MAKE) $(TEST_BIN) tessera $(BUILD)/gen-assembly $(PLY_REPLICATE) check-headers check-layers
 	cd tests && ../$(TEST_BIN) --jobs 2
 
 # the kernel, robustness and image tests again as a CPU with only AVX2, then only SSE2, would
@@ -251,7 +251,7 @@ tessera-asan: $(CLI_OBJ) $(LIB)
 tessera-tsan: $(CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(CLI_OBJ) $(LIB) $(LDLIBS)
 
-# the soak (tests/soak.sh, README: Soak): the kiosk (run --wall, headless) under random
+# the soak (tests/soak.sh, docs/tests.md): the kiosk (run --wall, headless) under random
 # transactions from several threads for SOAK_S seconds (default 3600), RSS, descriptors,
 # frame gaps and transaction counts checked. SOAK_SAN=1: under ASan + UBSan in its own tree
 # (build-soak-asan/; never build/ or ./tessera). SOAK_SEED, SOAK_THREADS (<= 2 here), SOAK_DIR.
@@ -297,6 +297,14 @@ fuzz-smoke:
 clean: clean-fuzz
 clean-fuzz:
 	rm -rf build-fuzz
+
+# the rooms of the tree and the uses each may make of the others (docs/layers.md): every
+# include, then every call between our objects (a low room's header cannot hide a call up)
+.PHONY: check-layers
+check-layers: $(LIB_OBJ) $(CLI_OBJ)
+	sh tools/check_layers.sh
+	sh tools/check_layers.sh --objects $(filter %.o,$(LIB_OBJ) $(CLI_OBJ))
+	@echo "check-layers: every include and every call goes down the layers"
 
 # every header compiles on its own
 HEADERS := $(sort $(filter-out engine/accel/isa/%,$(shell find engine -name '*.h'))) $(wildcard wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
@@ -401,7 +409,7 @@ scaling-model: deps
 	$(MAKE) tessera $(BUILD)/tile-contention
 	sh tools/scaling_model.sh
 
-# the speed-against-error report (README "Speed against error: make report"): REPORT.md and
+# the speed-against-error report (docs/report.md): REPORT.md and
 # report/*.png from tools/report/report.sh, one section per quality knob (tools/report/knob_*.sh);
 # REPORT_SIZE, REPORT_RUNS, REPORT_FRAMES, REPORT_THREADS tune it. report_img averages renders
 # into the reference and cuts the crops.
