@@ -1,5 +1,5 @@
 #!/bin/sh
-# soak.sh - the kiosk under a long load (make soak; README: Soak).
+# soak.sh - the kiosk under a long load (make soak; docs/tests.md).
 #
 # Runs tests/soak/soak_driver: `tessera run --wall tests/soak/wall_2x2.json`
 # (4 headless outputs, the built-in scene, convert-tiles display, input on with

@@ -52,7 +52,7 @@ Test(cli, help_lists_commands_and_options)
     cr_expect_eq(run_tessera(out, sizeof out, "run --help"), 0);
 }
 
-/* The help states each command's own defaults of --time and --rate (the README's table):
+/* The help states each command's own defaults of --time and --rate (docs/command-line.md's table):
  * render fixed at 30 Hz, run fixed at 24 Hz headless and real time on a DRM wall. */
 Test(cli, help_gives_each_commands_time_default)
 {

@@ -24,7 +24,7 @@
 # Environment: BENCH_ROUNDS, BENCH_FRAMES, BENCH_QUICK, BENCH_MAX_WAIT (seconds of waiting for
 # quiet per whole run, default 600), TMPDIR, TESSERA_SHARED (default ../shared).
 set -eu
-# build times are measured: the structure cache (README "Structure cache") stays off
+# build times are measured: the structure cache (docs/scenes.md "Structure cache") stays off
 TESSERA_CACHE=off
 export TESSERA_CACHE
 

@@ -6,7 +6,7 @@
 # machine's busy ticks in it stay at most 4 % of one CPU (at least 4 ticks).
 WAIT_MS=0
 WAIT_BUDGET_SPENT=0
-# The benchmarks time loading and building: the structure cache (README "Structure cache") is off,
+# The benchmarks time loading and building: the structure cache (docs/scenes.md "Structure cache") is off,
 # or every run after the first would map what the first built. bench_massive.sh turns it on for
 # its second starts, in a directory of its own.
 TESSERA_CACHE=off

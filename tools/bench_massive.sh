@@ -103,7 +103,7 @@ measure() {
     STEPS=$WORK/steps.tsv
     : > "$LOG"
     : > "$STEPS"
-    # the structure cache (README "Structure cache") starts empty: the first start builds and writes it,
+    # the structure cache (docs/scenes.md "Structure cache") starts empty: the first start builds and writes it,
     # the second maps it; removed at the end (several GB)
     TESSERA_CACHE_DIR=$WORK/cache
     export TESSERA_CACHE_DIR

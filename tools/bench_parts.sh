@@ -29,7 +29,7 @@
 # Environment: BENCH_PARTS_ROUNDS (3), BENCH_PARTS_FRAMES (10), BENCH_PARTS_TXNS
 # (50), BENCH_PARTS_ATTEMPTS (3), BENCH_MAX_WAIT (seconds of waiting for quiet per whole run, 300), TMPDIR.
 set -eu
-# build times are measured: the structure cache (README "Structure cache") stays off
+# build times are measured: the structure cache (docs/scenes.md "Structure cache") stays off
 TESSERA_CACHE=off
 export TESSERA_CACHE
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench_sbvh.sh - spatial splits (README "Spatial splits"): every mesh traced with and without
+# bench_sbvh.sh - spatial splits (docs/scenes.md "Spatial splits"): every mesh traced with and without
 # `tessera bench --spatial-splits`, for the gain (primary and primary + shadow Mrays/s) and the
 # cost (build seconds, bytes a triangle, references a triangle). Prints a markdown section
 # ("## Spatial splits") on stdout, keeps it in $WORK/sbvh_section.md (WORK is printed on stderr)
@@ -163,7 +163,7 @@ function add(key, x) { cnt[key]++; val[key, cnt[key]] = x }
 END {
     printf "## Spatial splits\n\n"
     printf "%s, revision %s; %d CPUs, %s (lscpu); load average at start %s. `sh tools/bench_sbvh.sh`:\n", date, rev, cpus, cpu, load
-    printf "`tessera bench` at %s, %d threads, with and without `--spatial-splits` (README \"Spatial splits\"),\n", size, threads
+    printf "`tessera bench` at %s, %d threads, with and without `--spatial-splits` (docs/scenes.md \"Spatial splits\"),\n", size, threads
     printf "%d rounds of alternating runs (plain, splits; primary rays, then `--shadows`), %d timed frames each;\n", rounds, frames
     printf "medians over the rounds. Primary: Mrays/s of primary rays alone; + shadows: primary + shadow rays\n"
     printf "per second of a `--shadows` frame. Build: seconds of accel_build (the binned builder is parallel,\n"

@@ -1,6 +1,6 @@
 /* service.h - telling the service manager (systemd, sd_notify(3)) how the
  * kiosk is doing, so that a wall that stops moving is restarted without
- * anybody there (configs/systemd/tessera-kiosk.service, README: installing a
+ * anybody there (configs/systemd/tessera-kiosk.service, docs/kiosk.md: installing a
  * kiosk). A platform service like the seat (seat/session.h): the engine knows
  * nothing of it; the run command attaches it to the pipeline.
  *

@@ -1,4 +1,4 @@
-/* soak_driver.c - the kiosk under a soak (tests/soak.sh, README: Soak).
+/* soak_driver.c - the kiosk under a soak (tests/soak.sh, docs/tests.md).
  *
  * It runs `tessera run --wall WALL` in this process through cli_run_with,
  * so the options, the set-up (headless wall outputs as pipeline channels,

@@ -205,7 +205,7 @@ static void bench_usage(FILE *f)
           "  geometries       geometries stored (meshes, the sphere set)\n"
           "  triangles_instanced  triangles over all instances: what the picture holds\n"
           "  bytes_per_instanced_tri  (mesh_bytes + accel_bytes) / triangles_instanced\n"
-          "  cache            the structure cache (README, \"Structure cache\") over the meshes:\n"
+          "  cache            the structure cache (docs/scenes.md, \"Structure cache\") over the meshes:\n"
           "                   hit (every cached mesh and its tree mapped from it), written (built,\n"
           "                   then written), failed (built; writing failed), unused (none cached)\n"
           "  spatial_splits   1 with --spatial-splits, else 0\n"

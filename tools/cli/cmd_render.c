@@ -365,7 +365,7 @@ static void run_usage(FILE *f)
     fputs("usage: tessera run [options]\n"
           "The main job. With --wall FILE and a DRM card (/dev/dri/card0) it is the kiosk: every\n"
           "output of the wall is driven through DRM/KMS (--display drm), in real time, until\n"
-          "SIGINT/SIGTERM, following hotplug and VT switches (see README, display walls).\n"
+          "SIGINT/SIGTERM, following hotplug and VT switches (see docs/walls.md).\n"
           "Otherwise it runs the pipeline headless with the dump display: the camera orbits the\n"
           "scene (one turn per 2 s of frame time) or follows --path, frames go to\n"
           "out/frame_NNNN.png, and it prints the frame rate.\n"

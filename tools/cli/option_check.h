@@ -1,6 +1,6 @@
 /* option_check.h - options given on the command line that do not apply in
  * the combination they were given in are said, never silently dropped
- * (README, "Options that do not apply").
+ * (docs/command-line.md, "Errors").
  *
  * The rule: `render` and `run` warn (one line `tessera: warning: --X is
  * ignored ... (why)`) and go on, as the picture is what it would be without

@@ -42,7 +42,7 @@ bool cli_remote_option(int argc, char **argv, int *i, remote_config *c, bool *ha
 
 void cli_remote_usage(FILE *f)
 {
-    fputs("remote view (run; docs/remote-protocol.md, README: Remote view):\n"
+    fputs("remote view (run; docs/remote-protocol.md, docs/remote-view.md):\n"
           "  --remote PORT    serve the remote view's page on PORT (0: a free one); prints its URL\n"
           "  --remote-bind A  the address to listen on (default 127.0.0.1; 0.0.0.0: every network)\n"
           "  --remote-token T the token the URL must carry (8..64 of A-Z a-z 0-9 - _; default random)\n",
