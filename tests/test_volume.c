@@ -17,6 +17,7 @@
 
 #include "engine/geometry/volume/volume.h"
 #include "support.h"
+#include "engine/load/volume_read.h"
 
 #define PATH_BYTES 512
 

@@ -98,6 +98,7 @@
 #include "volume_json.h"
 #include "mesh_load.h"
 #include "particle_load.h"
+#include "volume_read.h"
 
 /* Scene files describe; the geometry lives in mesh files. Refusing anything
  * larger keeps a mistaken path (a mesh, /dev/zero) from eating memory. */

@@ -9,6 +9,7 @@
 #include "engine/render/dvr_medium.h"
 #include "engine/geometry/volume/iso_kind.h"
 #include "engine/geometry/volume/macrocell.h"
+#include "volume_read.h"
 
 /* most iso-surfaces one entry may show (each is a geometry of its own) */
 #define VOLUME_JSON_MAX_ISO 16
@@ -113,7 +114,7 @@ bool volume_json_add(jr_ctx *c, json_object *obj, volume *v, const char *const *
     iso_volume *shared = iso_volume_create(v, grid, &why); /* takes both */
     if (!shared)
         return jr_field_fail(c, "%s", why.msg);
-    bool ok = !steps || iso_volume_attach_series(shared, steps, step_count, &why) ||
+    bool ok = !steps || iso_volume_attach_series(shared, steps, step_count, volume_load, &why) ||
               jr_member_fail(c, "files", why.msg);
     if (ok && has_iso) {
         size_t outer = jr_field_key(c, "iso");

@@ -22,6 +22,7 @@
 #include "engine/geometry/volume/iso_cell.h"
 #include "engine/geometry/volume/macrocell.h"
 #include "engine/geometry/volume/volume.h"
+#include "engine/load/volume_read.h"
 
 #define DATA_SPLIT "\n#--data--\n"
 

@@ -41,9 +41,10 @@ struct iso_volume {
     atomic_uint refs;            /* kinds + the creator's reference until released */
     iso_field now;               /* the step shown; changes only in iso_volume_set_step (a serial
                                     section), read by every query */
-    /* TIME STEPS: NULL: one field. The loader thread reads only `first` and
-     * macrocell_k, which never change once the series is attached */
+    /* TIME STEPS: NULL: one field. The loader thread reads only `first`,
+     * macrocell_k and read, which never change once the series is attached */
     series *series;
+    volume_file_reader *read;    /* how a step's file is read */
     volume first;                /* step 0's layout (no samples: data, map, buffer NULL) */
     uint32_t macrocell_k;        /* every step's grid block edge: step 0's */
     iso_volume_watcher *watchers; /* told of every swap; changed only where nothing traces */
@@ -222,7 +223,7 @@ static void *load_step(void *ctx, const char *path, uint32_t step, tess_error *e
         tess_error_set(err, "%s: out of memory", path);
         return NULL;
     }
-    f->v = f->owned_v = volume_load(path, err); /* its errors name the path */
+    f->v = f->owned_v = s->read(path, err); /* its errors name the path */
     bool ok = f->v && volume_same_layout(&s->first, f->v, path, err);
     if (ok && !(f->grid = f->owned_grid = macrocell_grid_create(f->v, s->macrocell_k, err))) {
         tess_error_prefix(err, "%s: ", path);
@@ -237,7 +238,8 @@ static void *load_step(void *ctx, const char *path, uint32_t step, tess_error *e
     return f;
 }
 
-bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint32_t count, tess_error *err)
+bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint32_t count, volume_file_reader *read,
+                              tess_error *err)
 {
     if (!shared->now.owned_v)
         return tess_error_set(err, "iso surface: a borrowed volume cannot have time steps");
@@ -245,6 +247,7 @@ bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint
     shared->first.data = shared->first.map = shared->first.buffer = NULL;
     shared->first.map_bytes = 0;
     shared->macrocell_k = shared->now.grid->k;
+    shared->read = read;
     shared->series = series_create(paths, count, 0, load_step, free_step, shared, err);
     if (!shared->series)
         tess_error_prefix(err, "volume: ");

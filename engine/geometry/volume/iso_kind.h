@@ -110,8 +110,12 @@ const macrocell_grid *iso_volume_grid(const iso_volume *shared);
  * points at the samples): only where nothing traces. The active box (the
  * kinds' bounds) and the boundary range (`closed`) follow the step: an
  * accel rebuilds the kinds' one-primitive trees (accel_set_time_step).
- * attach: paths copied; false for a borrowed volume or on no memory. */
-bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint32_t count, tess_error *err);
+ * attach: paths copied, each step read by `read` (the kind does not know
+ * file formats: engine/load/volume_read.h's volume_load is one); false for a
+ * borrowed volume or on no memory. */
+typedef volume *volume_file_reader(const char *path, tess_error *err);
+bool iso_volume_attach_series(iso_volume *shared, const char *const *paths, uint32_t count, volume_file_reader *read,
+                              tess_error *err);
 uint32_t iso_volume_step_count(const iso_volume *shared); /* 1 without a series */
 uint32_t iso_volume_step(const iso_volume *shared);       /* the step shown */
 /* Whether `step` (mod the count) can be shown without waiting; when not,

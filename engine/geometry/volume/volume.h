@@ -11,16 +11,7 @@
  * trilinear field is defined on [origin, origin + (n - 1) * spacing]; its
  * cells span samples i..i+1 on each axis (macrocell.h, iso_cell.h).
  *
- * LOADING. volume_load picks the reader by name: ".nrrd" and ".nhdr" (or a
- * first line "NRRD000N") are NRRD, ".txt" is a raw file described by a
- * text header (the shape of /work/shared/data/volumes/), ".raw" looks for
- * the .txt header beside it. Raw data is memory-mapped when its byte order
- * and alignment are the host's (then loading costs the min/max scan), and
- * read and byte-swapped otherwise. Every size is checked against the data
- * file's size before anything is allocated, and the voxel count is capped
- * (VOLUME_MAX_VOXELS), so a broken header costs neither a crash nor memory.
- * A mapped file that is truncated by someone else while mapped raises
- * SIGBUS on access: the one thing the loader cannot check.
+ * LOADING from files is engine/load/volume_read.h.
  *
  * Ownership: the volume owns its samples (mapping or buffer);
  * volume_destroy releases them. Threading: none inside; a finished volume is
@@ -111,13 +102,6 @@ static inline float volume_sample(const volume *v, uint32_t i, uint32_t j, uint3
  * (i < nx - 1, j < ny - 1, k < nz - 1), in the order corner[x + 2y + 4z]. */
 void volume_cell_corners(const volume *v, uint32_t i, uint32_t j, uint32_t k, float corner[8]);
 
-/* Load by name (see LOADING above). Errors are one line:
- *   "PATH:LINE: field 'dims': expected 'NX x NY x NZ', got '301 x 370'"
- *   "PATH: data file DATA: truncated: 1000 bytes, the header says 301*370*316 uint8 = 35192920"
- * (always starting with the path given, then the data file's when it is to blame).
- * The returned volume has its range computed. */
-volume *volume_load(const char *path, tess_error *err);
-
 /* Whether `v` (loaded from `path`) lays its samples out as `first` does:
  * the same dimensions, type, spacing and origin (what the steps of a time
  * series must share). False with err naming the path and the first field
@@ -126,29 +110,12 @@ volume *volume_load(const char *path, tess_error *err);
  * may be gone). */
 bool volume_same_layout(const volume *first, const volume *v, const char *path, tess_error *err);
 
-/* The raw + text header reader. Fields "name: value", one a line; an
- * indented line continues the field above and is ignored, as is any field
- * not named here and a comment in parentheses after a value:
- *   dims:    NX x NY x NZ                required
- *   type:    uint8 | int16 | uint16 | float32 (also uchar, short, ushort,
- *            float), or a width "16-bit" with "signed"/"unsigned"; "read as
- *            TYPE" (or "read as signed") overrides; "little endian" or "big
- *            endian" (default little)            required
- *   file:    the raw file, relative to the header's directory   required
- *   bytes:   N (the data file's size; checked when given)
- *   spacing: SX SY SZ [unit]            default 1 1 1
- *   origin:  OX OY OZ [unit]            default 0 0 0 */
-volume *volume_load_raw_txt(const char *header_path, tess_error *err);
-
-/* The NRRD reader (http://teem.sourceforge.net/nrrd/format.html), NRRD0001
- * to NRRD0005: ".nhdr" with "data file:" (relative to the header's
- * directory) or ".nrrd" with the data after the header's blank line.
- * encoding raw only; dimension 3; type uchar/uint8/unsigned char,
- * short/int16, ushort/uint16, float; endian little or big (required for
- * more than one byte); "spacings" or axis-aligned "space directions" (a
- * positive diagonal); "space origin"; "byte skip" N >= 0 or -1 (data at the
- * end). Anything else that changes how the bytes are read (line skip,
- * gzip, a rotated or flipped axis, a data file list) is refused by name. */
-volume *volume_load_nrrd(const char *path, tess_error *err);
+/* For the readers (engine/load/volume_read.c): whether dims n lie within the
+ * caps (VOLUME_MAX_DIM, VOLUME_MAX_VOXELS), false with err naming `what` (a
+ * file and field); and a volume of dims n and `type` with no samples yet
+ * (spacing 1, origin 0; the reader sets data and the range), NULL on no
+ * memory. */
+bool volume_check_dims(const uint32_t n[3], const char *what, tess_error *err);
+volume *volume_alloc_header(const uint32_t n[3], volume_type type);
 
 #endif
