@@ -1,4 +1,4 @@
-/* fuzz_volume_header.c - volume headers (engine/geometry/volume/volume.c): NRRD
+/* fuzz_volume_header.c - volume headers (engine/load/volume_read.c): NRRD
  * (detached or attached) when the input starts with "NRRD", else the text
  * header of a raw file. The input is written to in.nrrd or in.txt in a
  * scratch directory; a line "#--data--" splits it, and what follows goes to
