@@ -309,16 +309,16 @@ Test(iso_kind, setting_the_value_moves_the_surface_without_a_rebuild)
     cr_assert_float_eq(h.t, (float)(centre[0] + 5.0 - 10.0), SPHERE_TOL);
     float value, lo, hi;
     const geometry_ops *ops = ops_of(s, inst);
-    cr_assert(ops->value(k, &value, &lo, &hi));
+    cr_assert(ops->controls->value(k, &value, &lo, &hi));
     cr_assert_eq(value, 10.f);
     /* the volume's range */
     cr_assert(lo >= 0.f && lo < 1.f && hi > 39.f && hi < 42.f, "range %g..%g", (double)lo, (double)hi);
-    cr_assert(ops->set_value(k, 17.f));
+    cr_assert(ops->controls->set_value(k, 17.f));
     cr_assert_eq(iso_kind_value(k), 17.f);
     cr_assert(accel_intersect(a, &r, &h));
     cr_assert_float_eq(h.t, (float)(centre[0] + 5.0 - 17.0), SPHERE_TOL);
     cr_assert(!iso_kind_set_value(k, NAN));
-    cr_assert(!ops->set_value(k, INFINITY));
+    cr_assert(!ops->controls->set_value(k, INFINITY));
     cr_assert_eq(iso_kind_value(k), 17.f, "a refused value changes nothing");
     /* above the volume's max: nothing to hit */
     cr_assert(iso_kind_set_value(k, hi + 1.f));

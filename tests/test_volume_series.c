@@ -162,8 +162,8 @@ Test(volume_series, iso_surfaces_and_dvr_follow_the_step, .timeout = 60)
     accel *a = accel_build(s, 2, &err);
     cr_assert(a, "%s", err.msg);
     cr_assert_eq(scene_time_steps(s), (uint32_t)STEPS);
-    cr_assert_eq(s->geometries[0].ops->step_count(s->geometries[0].data), (uint32_t)STEPS);
-    cr_assert_eq(s->media[0].ops->step_count(s->media[0].data), (uint32_t)STEPS);
+    cr_assert_eq(s->geometries[0].ops->controls->step_count(s->geometries[0].data), (uint32_t)STEPS);
+    cr_assert_eq(s->media[0].ops->controls->step_count(s->media[0].data), (uint32_t)STEPS);
     expect_step(s, a, 0);
     cr_assert_float_eq(hit_z(a, 0, 5.f), -1.f, 0.f, "the ball of radius 3 is not at x = 5");
 

@@ -104,3 +104,5 @@ bool geometry_hit_boxes(const geometry_ops *ops, const void *data, int threads, 
     *kept_out = kept;
     return true;
 }
+
+const geometry_controls geometry_controls_none = {0};

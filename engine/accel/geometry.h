@@ -98,6 +98,53 @@ typedef struct geometry_surface {
     uint32_t material_id; /* index into scene.materials */
 } geometry_surface;
 
+/* USER CONTROLS: what input and records may change of a geometry (and of a
+ * medium: scene.h) without knowing its kind, in one optional table the kind
+ * points to (geometry_ops.controls, medium_ops.controls). Any member may be
+ * NULL: the kind has no such control. geometry_controls_of gives an empty
+ * table for a kind without one, so callers test members only. */
+typedef struct geometry_controls {
+    /* Kinds that crop (geometry_points.crop_value): set the range. Only
+     * where nothing traces (a serial section). NULL: the kind has no crop. */
+    void (*set_crop)(void *data, geometry_crop crop);
+    /* The attribute it crops by, its range and the crop now; false when
+     * this geometry crops by none (a set without "crop"). NULL: no crop. */
+    bool (*crop_attribute)(const void *data, geometry_crop_attribute *out);
+    /* TIME STEPS (a series of files; NULL: one state only). step_count:
+     * how many. step_ready: whether `step` can be shown without waiting
+     * (else it is loaded in the background); any thread. set_step: show
+     * `step`, only where nothing traces; false with err when its data
+     * cannot be had (the step shown stays). A GEOMETRY_LEAF_POINTS kind's
+     * tree changes with the step: the accel takes it again; any other
+     * kind's bottom level is rebuilt from prim_bounds at every step, so
+     * such a kind should have few primitives (an iso-surface has one)
+     * (accel_set_time_step). Several geometries may share one series
+     * (the iso-surfaces of one volume): each is set, the first swaps. */
+    uint32_t (*step_count)(const void *data);
+    bool (*step_ready)(void *data, uint32_t step);
+    bool (*set_step)(void *data, uint32_t step, tess_error *err);
+    /* ONE SCALAR PARAMETER (an iso-surface's iso-value; NULL: the kind has
+     * none), so the engine can step it without knowing the kind. value:
+     * the parameter now and the range it is useful over (lo <= hi, the
+     * data's min and max; any thread); false when there is none. set_value:
+     * only where nothing traces (a serial section); false, and nothing
+     * changes, for a value the kind refuses (not finite). The kind's
+     * primitives and bounds must not depend on the value (an accel built
+     * before stays valid, no rebuild), but its `closed` answer may: the
+     * caller drops the scene's cached answer (scene_geometry_closed). */
+    bool (*set_value)(void *data, float value);
+    bool (*value)(const void *data, float *value, float *lo, float *hi);
+    /* A kind coloured through a colour map (particles by an attribute, a
+     * volume's transfer function): use the built-in map `name`
+     * (colormap.h), keeping the range it has. False: no such map. Only
+     * where nothing traces. NULL: the kind has none. */
+    bool (*set_colormap)(void *data, const char *name);
+    /* The map in use (its range fitted), NULL when this geometry is not
+     * coloured through one; NULL op: the kind never is. Where nothing
+     * changes it (the input thread at start, a serial section). */
+    const struct colormap *(*colormap)(const void *data);
+} geometry_controls;
+
 typedef struct geometry_ops {
     const char *name; /* the kind, for logs and `tessera parts` ("triangles", "spheres", ...) */
     geometry_leaf_layout leaf;
@@ -141,45 +188,9 @@ typedef struct geometry_ops {
      * kept with the data: every accel borrows it. Safe to call from several threads at once; NULL
      * with err set on failure. */
     const struct wbvh *(*tree)(void *data, int threads, tess_error *err);
-    /* Kinds that crop (geometry_points.crop_value): set the range. Only
-     * where nothing traces (a serial section). NULL: the kind has no crop. */
-    void (*set_crop)(void *data, geometry_crop crop);
-    /* The attribute it crops by, its range and the crop now; false when
-     * this geometry crops by none (a set without "crop"). NULL: no crop. */
-    bool (*crop_attribute)(const void *data, geometry_crop_attribute *out);
-    /* TIME STEPS (a series of files; NULL: one state only). step_count:
-     * how many. step_ready: whether `step` can be shown without waiting
-     * (else it is loaded in the background); any thread. set_step: show
-     * `step`, only where nothing traces; false with err when its data
-     * cannot be had (the step shown stays). A GEOMETRY_LEAF_POINTS kind's
-     * tree changes with the step: the accel takes it again; any other
-     * kind's bottom level is rebuilt from prim_bounds at every step, so
-     * such a kind should have few primitives (an iso-surface has one)
-     * (accel_set_time_step). Several geometries may share one series
-     * (the iso-surfaces of one volume): each is set, the first swaps. */
-    uint32_t (*step_count)(const void *data);
-    bool (*step_ready)(void *data, uint32_t step);
-    bool (*set_step)(void *data, uint32_t step, tess_error *err);
-    /* ONE SCALAR PARAMETER (an iso-surface's iso-value; NULL: the kind has
-     * none), so the engine can step it without knowing the kind. value:
-     * the parameter now and the range it is useful over (lo <= hi, the
-     * data's min and max; any thread); false when there is none. set_value:
-     * only where nothing traces (a serial section); false, and nothing
-     * changes, for a value the kind refuses (not finite). The kind's
-     * primitives and bounds must not depend on the value (an accel built
-     * before stays valid, no rebuild), but its `closed` answer may: the
-     * caller drops the scene's cached answer (scene_geometry_closed). */
-    bool (*set_value)(void *data, float value);
-    bool (*value)(const void *data, float *value, float *lo, float *hi);
-    /* A kind coloured through a colour map (particles by an attribute, a
-     * volume's transfer function): use the built-in map `name`
-     * (colormap.h), keeping the range it has. False: no such map. Only
-     * where nothing traces. NULL: the kind has none. */
-    bool (*set_colormap)(void *data, const char *name);
-    /* The map in use (its range fitted), NULL when this geometry is not
-     * coloured through one; NULL op: the kind never is. Where nothing
-     * changes it (the input thread at start, a serial section). */
-    const struct colormap *(*colormap)(const void *data);
+    /* What a person may change of this geometry (crop, time steps, a
+     * scalar value, a colour map); NULL: nothing. */
+    const struct geometry_controls *controls;
 } geometry_ops;
 
 /* An affine map, row-major 3x4 [L | t]: p' = L p + t. */
@@ -260,6 +271,15 @@ aabb affine3_box(const affine3 *a, aabb b);
  * caller frees both arrays. False: out of memory. */
 bool geometry_hit_boxes(const geometry_ops *ops, const void *data, int threads, aabb **boxes, uint32_t **ids,
                         uint32_t *kept);
+
+/* Every member NULL: the controls of a kind that has none. */
+extern const geometry_controls geometry_controls_none;
+
+/* ops' controls, or geometry_controls_none. */
+static inline const geometry_controls *geometry_controls_of(const geometry_ops *ops)
+{
+    return ops->controls ? ops->controls : &geometry_controls_none;
+}
 
 /* The built-in kinds are in engine/geometry/: triangles (triangle_kind.h),
  * spheres (sphere_kind.h), particles, volumes. */

@@ -122,14 +122,18 @@ static const colormap *medium_colormap(const void *data)
     return &m->dvr->tf;
 }
 
-const medium_ops dvr_medium_ops = {
-    .name = "dvr",
-    .bounds = medium_bounds,
-    .integrate = medium_integrate,
-    .destroy = medium_destroy,
+static const geometry_controls medium_controls = {
     .set_colormap = medium_set_colormap,
     .colormap = medium_colormap,
     .step_count = medium_step_count,
     .step_ready = medium_step_ready,
     .set_step = medium_set_step,
+};
+
+const medium_ops dvr_medium_ops = {
+    .name = "dvr",
+    .bounds = medium_bounds,
+    .integrate = medium_integrate,
+    .destroy = medium_destroy,
+    .controls = &medium_controls,
 };

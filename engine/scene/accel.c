@@ -169,8 +169,9 @@ void accel_set_crop(const accel *a, uint32_t geom_id, geometry_crop crop)
     if (geom_id >= a->instance_count)
         return;
     const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
-    if (g->ops->set_crop)
-        g->ops->set_crop(g->data, crop);
+    const geometry_controls *c = geometry_controls_of(g->ops);
+    if (c->set_crop)
+        c->set_crop(g->data, crop);
 }
 
 void accel_set_value(const accel *a, uint32_t geom_id, float value)
@@ -180,7 +181,8 @@ void accel_set_value(const accel *a, uint32_t geom_id, float value)
     const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
     /* the kind's `closed` answer may follow its value: drop the cached one (a serial section's
      * change, like the value itself) */
-    if (g->ops->set_value && g->ops->set_value(g->data, value))
+    const geometry_controls *c = geometry_controls_of(g->ops);
+    if (c->set_value && c->set_value(g->data, value))
         scene_forget_closed((scene *)(uintptr_t)a->scene, a->scene->instances[geom_id].geometry);
 }
 
@@ -189,16 +191,19 @@ void accel_set_colormap(const accel *a, uint32_t geom_id, const char *name)
     if (geom_id >= a->instance_count)
         return;
     const scene_geometry *g = scene_instance_geometry(a->scene, geom_id);
-    if (g->ops->set_colormap)
-        g->ops->set_colormap(g->data, name);
+    const geometry_controls *c = geometry_controls_of(g->ops);
+    if (c->set_colormap)
+        c->set_colormap(g->data, name);
 }
 
 void accel_set_transfer(const accel *a, const char *name)
 {
     const scene *s = a->scene;
-    for (uint32_t m = 0; m < s->medium_count; m++)
-        if (s->media[m].ops->set_colormap)
-            s->media[m].ops->set_colormap(s->media[m].data, name);
+    for (uint32_t m = 0; m < s->medium_count; m++) {
+        const geometry_controls *c = medium_controls_of(s->media[m].ops);
+        if (c->set_colormap)
+            c->set_colormap(s->media[m].data, name);
+    }
 }
 
 size_t accel_bytes(const accel *a)
@@ -481,10 +486,11 @@ bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
     pthread_mutex_lock(&a->refit_lock);
     for (uint32_t g = 0; g < a->geom_count; g++) {
         const scene_geometry *sg = &s->geometries[g];
+        const geometry_controls *c = geometry_controls_of(sg->ops);
         /* one state only: nothing changes (no tree to take or rebuild) */
-        if (!sg->ops->set_step || (sg->ops->step_count && sg->ops->step_count(sg->data) <= 1))
+        if (!c->set_step || (c->step_count && c->step_count(sg->data) <= 1))
             continue;
-        if (!sg->ops->set_step(sg->data, step, ok ? err : NULL)) {
+        if (!c->set_step(sg->data, step, ok ? err : NULL)) {
             ok = false;
             continue;
         }
@@ -519,7 +525,8 @@ bool accel_set_time_step(const accel *ca, uint32_t step, tess_error *err)
      * a series with a geometry above finds the step shown already */
     for (uint32_t m = 0; m < s->medium_count; m++) {
         const scene_medium *sm = &s->media[m];
-        if (sm->ops->set_step && !sm->ops->set_step(sm->data, step, ok ? err : NULL))
+        const geometry_controls *c = medium_controls_of(sm->ops);
+        if (c->set_step && !c->set_step(sm->data, step, ok ? err : NULL))
             ok = false;
     }
     wbvh_refit_stale(&a->top, a->instance_bounds);

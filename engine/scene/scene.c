@@ -458,16 +458,20 @@ bool scene_bounds(const scene *s, vec3 *lo, vec3 *hi)
 uint32_t scene_time_steps(const scene *s)
 {
     uint32_t most = 1;
-    for (uint32_t g = 0; g < s->geometry_count; g++)
-        if (s->geometries[g].ops->step_count) {
-            uint32_t n = s->geometries[g].ops->step_count(s->geometries[g].data);
+    for (uint32_t g = 0; g < s->geometry_count; g++) {
+        const geometry_controls *c = geometry_controls_of(s->geometries[g].ops);
+        if (c->step_count) {
+            uint32_t n = c->step_count(s->geometries[g].data);
             most = n > most ? n : most;
         }
-    for (uint32_t m = 0; m < s->medium_count; m++)
-        if (s->media[m].ops->step_count) {
-            uint32_t n = s->media[m].ops->step_count(s->media[m].data);
+    }
+    for (uint32_t m = 0; m < s->medium_count; m++) {
+        const geometry_controls *c = medium_controls_of(s->media[m].ops);
+        if (c->step_count) {
+            uint32_t n = c->step_count(s->media[m].data);
             most = n > most ? n : most;
         }
+    }
     return most;
 }
 
@@ -475,12 +479,16 @@ bool scene_step_ready(const scene *s, uint32_t step)
 {
     bool ready = true;
     /* no early exit: every series not ready is asked to load the step */
-    for (uint32_t g = 0; g < s->geometry_count; g++)
-        if (s->geometries[g].ops->step_ready)
-            ready &= s->geometries[g].ops->step_ready(s->geometries[g].data, step);
-    for (uint32_t m = 0; m < s->medium_count; m++)
-        if (s->media[m].ops->step_ready)
-            ready &= s->media[m].ops->step_ready(s->media[m].data, step);
+    for (uint32_t g = 0; g < s->geometry_count; g++) {
+        const geometry_controls *c = geometry_controls_of(s->geometries[g].ops);
+        if (c->step_ready)
+            ready &= c->step_ready(s->geometries[g].data, step);
+    }
+    for (uint32_t m = 0; m < s->medium_count; m++) {
+        const geometry_controls *c = medium_controls_of(s->media[m].ops);
+        if (c->step_ready)
+            ready &= c->step_ready(s->media[m].data, step);
+    }
     return ready;
 }
 

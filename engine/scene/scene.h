@@ -80,18 +80,18 @@ typedef struct medium_ops {
     void (*integrate)(const void *data, const ray *r, float jitter, vec3 *rgb, float *transmittance);
     /* Free data with the scene (NULL: the caller owns it). */
     void (*destroy)(void *data);
-    /* Use the built-in transfer function `name` (colormap.h); false: no
-     * such map. Only where nothing traces. NULL: not changeable. */
-    bool (*set_colormap)(void *data, const char *name);
-    /* The transfer function in use (range fitted); NULL op: not changeable.
-     * Where nothing changes it (as geometry_ops.colormap). */
-    const struct colormap *(*colormap)(const void *data);
-    /* TIME STEPS, as a geometry's (geometry.h; NULL: one state only). The
-     * medium's bounds must not change with the step. */
-    uint32_t (*step_count)(const void *data);
-    bool (*step_ready)(void *data, uint32_t step);
-    bool (*set_step)(void *data, uint32_t step, tess_error *err);
+    /* What a person may change, as a geometry's (geometry.h: USER
+     * CONTROLS); NULL: nothing. A medium uses set_colormap / colormap for
+     * its transfer function and the time steps, whose change must leave
+     * its bounds as they are; it has no crop or value. */
+    const geometry_controls *controls;
 } medium_ops;
+
+/* ops' controls, or geometry_controls_none. */
+static inline const geometry_controls *medium_controls_of(const medium_ops *ops)
+{
+    return ops->controls ? ops->controls : &geometry_controls_none;
+}
 
 typedef struct scene_medium {
     const medium_ops *ops;

@@ -327,8 +327,9 @@ static void crop_targets(const scene *s, input_controller_config *cc)
 {
     for (uint32_t i = 0; i < s->instance_count && cc->crop_count < INPUT_CROP_MAX; i++) {
         const scene_geometry *g = scene_instance_geometry(s, i);
+        const geometry_controls *c = geometry_controls_of(g->ops);
         geometry_crop_attribute a;
-        if (!g->ops->crop_attribute || !g->ops->crop_attribute(g->data, &a))
+        if (!c->crop_attribute || !c->crop_attribute(g->data, &a))
             continue;
         input_crop_target *t = &cc->crops[cc->crop_count++];
         *t = (input_crop_target){.first = i, .count = 1, .min = a.min, .max = a.max, .crop = a.crop};
@@ -347,10 +348,11 @@ static void value_and_map_targets(const scene *s, input_controller_config *cc)
             inst++;
         if (inst == s->instance_count)
             continue;
+        const geometry_controls *c = geometry_controls_of(sg->ops);
         float v, lo, hi;
-        if (sg->ops->value && cc->value_count < INPUT_VALUE_MAX && sg->ops->value(sg->data, &v, &lo, &hi))
+        if (c->value && cc->value_count < INPUT_VALUE_MAX && c->value(sg->data, &v, &lo, &hi))
             cc->values[cc->value_count++] = (input_value_target){inst, 1, v, lo, hi};
-        const colormap *cm = sg->ops->colormap ? sg->ops->colormap(sg->data) : NULL;
+        const colormap *cm = c->colormap ? c->colormap(sg->data) : NULL;
         if (cm && cc->map_count < INPUT_MAP_MAX) {
             input_map_target *t = &cc->maps[cc->map_count++];
             *t = (input_map_target){.first = inst, .count = 1};
@@ -403,8 +405,9 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     cc.time_steps = scene_time_steps(cs->scene);
     value_and_map_targets(cs->scene, &cc);
     cc.media = cs->scene->medium_count > 0;
-    if (cc.media && cs->scene->media[0].ops->colormap)
-        snprintf(cc.transfer, sizeof cc.transfer, "%s", cs->scene->media[0].ops->colormap(cs->scene->media[0].data)->name);
+    const geometry_controls *media_controls = cc.media ? medium_controls_of(cs->scene->media[0].ops) : NULL;
+    if (media_controls && media_controls->colormap)
+        snprintf(cc.transfer, sizeof cc.transfer, "%s", media_controls->colormap(cs->scene->media[0].data)->name);
     /* libinput's devices with --input on; the remote view's viewers with --remote */
     input_source *sources[INPUT_MAX_SOURCES];
     int source_count = 0;

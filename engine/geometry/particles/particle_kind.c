@@ -487,6 +487,16 @@ static bool kind_set_step(void *data, uint32_t step, tess_error *err)
     return particle_kind_set_step(data, step, err);
 }
 
+static const geometry_controls kind_controls = {
+    .set_crop = kind_set_crop,
+    .crop_attribute = kind_crop_attribute,
+    .step_count = kind_step_count,
+    .step_ready = kind_step_ready,
+    .set_step = kind_set_step,
+    .set_colormap = kind_set_colormap,
+    .colormap = kind_colormap,
+};
+
 const geometry_ops particle_kind_ops = {
     .name = "particles",
     .leaf = GEOMETRY_LEAF_POINTS,
@@ -501,11 +511,5 @@ const geometry_ops particle_kind_ops = {
     .closed = kind_closed,
     .points = kind_points,
     .tree = kind_tree,
-    .set_crop = kind_set_crop,
-    .step_count = kind_step_count,
-    .step_ready = kind_step_ready,
-    .set_step = kind_set_step,
-    .set_colormap = kind_set_colormap,
-    .colormap = kind_colormap,
-    .crop_attribute = kind_crop_attribute,
+    .controls = &kind_controls,
 };

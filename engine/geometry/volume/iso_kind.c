@@ -682,6 +682,14 @@ static bool kind_value(const void *data, float *value, float *lo, float *hi)
     return true;
 }
 
+static const geometry_controls kind_controls = {
+    .step_count = kind_step_count,
+    .step_ready = kind_step_ready,
+    .set_step = kind_set_step,
+    .set_value = kind_set_value,
+    .value = kind_value,
+};
+
 const geometry_ops iso_kind_ops = {
     .name = "iso-surface",
     .leaf = GEOMETRY_LEAF_PRIMS,
@@ -693,9 +701,5 @@ const geometry_ops iso_kind_ops = {
     .bytes = kind_bytes,
     .destroy = kind_destroy,
     .closed = kind_closed,
-    .step_count = kind_step_count,
-    .step_ready = kind_step_ready,
-    .set_step = kind_set_step,
-    .set_value = kind_set_value,
-    .value = kind_value,
+    .controls = &kind_controls,
 };
