@@ -9,7 +9,9 @@
  * are drm_atomic.c and drm_legacy.c behind drm_card.h's drm_kms_ops) ->
  * drm_wall_attach (the pipeline whose
  * channels the outputs are) -> frames through the displays it returns ->
- * drm_card_close (restores the saved CRTCs, frees the buffers).
+ * drm_card_close (restores the saved CRTCs, frees the buffers). The commands
+ * reach this life only through the display-backend table: drm_backend.c is
+ * drm's display_lifecycle (display_backend.h) over these calls.
  *
  * Frames: each output is a pipeline channel. Its display's write_tile hook
  * (engine/render/display.h) has the render threads convert each finished tile into

@@ -9,9 +9,9 @@
 #include "cli.h"
 #include "pipeline_cli.h"
 #include "cluster/cluster.h"
-#include "wall/drm.h"
 #include "engine/base/log.h"
 #include "engine/frame/pipeline.h"
+#include "wall/display_backend.h"
 #include "wall/wall_config.h"
 
 /* The cluster of this process (one a process). */
@@ -87,12 +87,12 @@ bool cli_cluster_agree(const accel *a)
     return true;
 }
 
-/* drm_flip_fn: a DRM output's flip is the frame on screen; the cluster keeps its time
+/* display_flip_fn: an output's flip is the frame on screen; the cluster keeps its time
  * (CLOCK_REALTIME, the clock the processes compare) for the scan-out skew. */
 static void note_flip(void *ctx, uint64_t frame, const char *output, unsigned vblank_sequence,
                       int64_t vblank_monotonic_us)
 {
-    (void)output, (void)vblank_sequence; /* drm.c logs them */
+    (void)output, (void)vblank_sequence; /* the backend logs them */
     struct timespec real, mono;
     clock_gettime(CLOCK_REALTIME, &real);
     clock_gettime(CLOCK_MONOTONIC, &mono);
@@ -100,12 +100,12 @@ static void note_flip(void *ctx, uint64_t frame, const char *output, unsigned vb
     cluster_note_scanout(ctx, frame, vblank_monotonic_us + offset_us);
 }
 
-bool cli_cluster_attach(struct pipeline *p)
+bool cli_cluster_attach(struct pipeline *p, display_instance *outputs)
 {
     if (!active.c)
         return true;
-    if (cli_pipeline_card()) /* scan-out on a card: its flips say when each frame reached the screen */
-        drm_card_set_flip_hook(cli_pipeline_card(), note_flip, active.c);
+    /* scan-out on a device: its flips say when each frame reached the screen */
+    display_instance_set_flip_hook(outputs, note_flip, active.c);
     tess_error err = {{0}};
     if (!cluster_attach(active.c, p, &err)) {
         cli_error("%s", err.msg);

@@ -39,8 +39,11 @@ const bool *cli_cluster_outputs(void);
  * cluster; false after printing an error. */
 bool cli_cluster_agree(const accel *a);
 
-/* The frame and display syncs on p, before it runs. True without a cluster. */
-bool cli_cluster_attach(struct pipeline *p);
+/* The frame and display syncs on p, before it runs; with outputs on a device
+ * that reports flips (display_instance_set_flip_hook), their times for the
+ * scan-out skew. True without a cluster. */
+struct display_instance;
+bool cli_cluster_attach(struct pipeline *p, struct display_instance *outputs);
 
 /* After the run: print the cluster's counts; whether it failed (a process
  * died or stopped answering). False without a cluster. */

@@ -382,7 +382,8 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_sam
     spec->channels[0].camera = camera_path_eval(&path, path.keys[0].time_s);
     spec->channels[0].have_camera = true;
     spec->frames = 0; /* until the path ends */
-    pipeline *p = s.applied_at ? cli_pipeline_create(spec, cs) : NULL;
+    display_instance *outputs = NULL; /* a wall on a device: the started backend */
+    pipeline *p = s.applied_at ? cli_pipeline_create(spec, cs, &outputs) : NULL;
     int code = 1;
     if (p) {
         s.p = p;
@@ -403,6 +404,7 @@ static int bench_path(cli_pipeline_spec *spec, const cli_scene *cs, int flip_sam
         }
     }
     pipeline_destroy(p);
+    cli_pipeline_release_outputs(outputs);
     if (!p)
         image_display_destroy(tap.inner);
     free(tap.samples);
@@ -441,7 +443,8 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
 {
     tess_error err = {{0}};
     spec->threads = threads;
-    pipeline *p = cli_pipeline_create(spec, cs);
+    display_instance *outputs = NULL; /* a wall on a device: the started backend */
+    pipeline *p = cli_pipeline_create(spec, cs, &outputs);
     if (!p)
         return false;
     bool wall = spec->wall_file[0] != '\0';
@@ -469,6 +472,7 @@ static bool scaling_run_once(cli_pipeline_spec *spec, const cli_scene *cs, const
     out->wait_ms = 1e3 * st.barrier_s / ((double)threads * barriers);
     out->cpu_ms = st.frames_rendered ? 1e3 * (own1 - own0) / (double)st.frames_rendered : 0.0;
     pipeline_destroy(p);
+    cli_pipeline_release_outputs(outputs);
     return ok;
 }
 

@@ -1,5 +1,5 @@
 /* cmd_render.c - `tessera render` (headless frames of one camera) and
- * `tessera run` (the main job: with no DRM output it runs the pipeline with
+ * `tessera run` (the main job: with no device output it runs the pipeline with
  * the dump display into out/, the camera orbiting or following a path). Both
  * run the parallel pipeline (engine/frame/pipeline.h) with components chosen by
  * name (pipeline_cli.h). */
@@ -20,7 +20,6 @@
 #include "cluster_cli.h"
 #include "remote_cli.h"
 #include "wall/display_backend.h"
-#include "wall/drm.h"
 #include "wall/dump.h"
 #include "wall/service.h"
 
@@ -185,12 +184,13 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
     cli_orbit orbit_state;
     cli_input *input = NULL;
     pipeline *p = NULL;
+    display_instance *outputs = NULL; /* a wall on a device: the started backend (after p is destroyed) */
     tess_error err = {{0}};
     /* live input steers the camera (a --path becomes its idle tour); a replay steers it alone */
     bool steered = s->input.enabled == 1 || s->input.replay_file[0] || s->remote.port >= 0;
     if (!cli_cluster_agree(cs.accel)) /* the same scene, built the same way, on every machine */
         goto done;
-    p = cli_pipeline_create(s, &cs);
+    p = cli_pipeline_create(s, &cs, &outputs);
     if (!p)
         goto done;
     if (steered || cli_cluster_follower()) {
@@ -212,16 +212,16 @@ static int run_job(cli_pipeline_spec *s, const char *scene_path, bool orbit, ser
         cli_error("service notifier: too many pipeline callbacks");
         goto done;
     }
-    if (service && cli_pipeline_card())
-        drm_card_set_pause_hook(cli_pipeline_card(), wall_paused, service);
+    if (service)
+        display_instance_set_pause_hook(outputs, wall_paused, service);
     if (cli_input_wanted(&s->input) &&
-        !(input = cli_input_start(&s->input, p, &cs, &input_files)))
+        !(input = cli_input_start(&s->input, p, &cs, &input_files, display_instance_seat(outputs))))
         goto done;
     if (!cli_remote_start(p)) /* after input: viewers' events go to its runner */
         goto done;
     if (run_hooks && run_hooks->started && !run_hooks->started(run_hooks->ctx, p, input))
         goto done;
-    if (!cli_cluster_attach(p)) /* last: the syncs meet the other processes from the first frame on */
+    if (!cli_cluster_attach(p, outputs)) /* last: the syncs meet the other processes from the first frame on */
         goto done;
     catch_stop_signals(p); /* the frame in flight is finished and shown, then outputs are restored */
     bool ran = pipeline_run(p, &err);
@@ -295,7 +295,7 @@ done:
     cli_input_files_free(&input_files);
     pipeline_destroy(p);
     cli_remote_release(); /* after the pipeline, which owns its display */
-    cli_pipeline_release_outputs(); /* a DRM card: the CRTCs as they were */
+    cli_pipeline_release_outputs(outputs); /* a device: as it was found (a card: its CRTCs) */
     camera_path_free(&player.path);
     if (s->record_file[0] && p)
         camera_path_free(&recorder.path);
@@ -362,23 +362,27 @@ int cli_run_with(int argc, char **argv, const cli_run_hooks *hooks)
 
 static void run_usage(FILE *f)
 {
-    fputs("usage: tessera run [options]\n"
-          "The main job. With --wall FILE and a DRM card (/dev/dri/card0) it is the kiosk: every\n"
-          "output of the wall is driven through DRM/KMS (--display drm), in real time, until\n"
-          "SIGINT/SIGTERM, following hotplug and VT switches (see docs/walls.md).\n"
-          "Otherwise it runs the pipeline headless with the dump display: the camera orbits the\n"
-          "scene (one turn per 2 s of frame time) or follows --path, frames go to\n"
-          "out/frame_NNNN.png, and it prints the frame rate.\n"
-          "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
-          "  --size WxH       image size in pixels (default 1280x720)\n"
-          "  --frames N       frames to render (headless default 48: one turn at 24 Hz; drm, --remote: until\n"
-          "                   stopped)\n"
-          "  --out PATTERN    frame file pattern (default out/frame_####.png)\n"
-          "  --camera ...     start camera, as for 'tessera render'\n"
-          "  (headless, run's default time is fixed at 24 Hz: frame k shows time k/24 s; with\n"
-          "  drm it is real time: give --time fixed --rate HZ for reproducible frames on a wall)\n",
-          f);
-    cli_pipeline_usage(f, "fixed; real on a DRM wall", "24");
+    /* the kiosk's backend, as the table describes it */
+    const display_backend *kiosk = display_backend_kiosk_kind();
+    const display_lifecycle *kl = kiosk ? kiosk->lifecycle : NULL;
+    const char *kiosk_name = kiosk ? kiosk->name : "a device";
+    fprintf(f, "usage: tessera run [options]\nThe main job. %s", kl && kl->kiosk_help ? kl->kiosk_help : "\n");
+    fprintf(f,
+            "Otherwise it runs the pipeline headless with the dump display: the camera orbits the\n"
+            "scene (one turn per 2 s of frame time) or follows --path, frames go to\n"
+            "out/frame_NNNN.png, and it prints the frame rate.\n"
+            "  --scene FILE     JSON scene or mesh file (default: the built-in scene)\n"
+            "  --size WxH       image size in pixels (default 1280x720)\n"
+            "  --frames N       frames to render (headless default 48: one turn at 24 Hz; %s, --remote: until\n"
+            "                   stopped)\n"
+            "  --out PATTERN    frame file pattern (default out/frame_####.png)\n"
+            "  --camera ...     start camera, as for 'tessera render'\n"
+            "  (headless, run's default time is fixed at 24 Hz: frame k shows time k/24 s; with\n"
+            "  %s it is real time: give --time fixed --rate HZ for reproducible frames on a wall)\n",
+            kiosk_name, kiosk_name);
+    char time_default[64];
+    snprintf(time_default, sizeof time_default, "fixed; real on a %s wall", kl ? kl->device_label : "device");
+    cli_pipeline_usage(f, time_default, "24");
 }
 
 int cli_run(int argc, char **argv)
@@ -393,10 +397,11 @@ int cli_run(int argc, char **argv)
     cli_given given = {.count = 0};
     if (!parse_options(argc, argv, &s, &scene_path, run_usage, &code, &given, false))
         return code;
-    /* the kiosk: a wall on a card when there is one, until stopped, in real time */
-    if (s.wall_file[0] && !s.display_given && access("/dev/dri/card0", F_OK) == 0)
-        snprintf(s.channels[0].display, sizeof s.channels[0].display, "drm");
-    if (display_backend_by_name(s.channels[0].display)->needs & DISPLAY_NEEDS_CARD) {
+    /* the kiosk: a wall on a device when there is one, until stopped, in real time */
+    const display_backend *kiosk = s.wall_file[0] && !s.display_given ? display_backend_kiosk() : NULL;
+    if (kiosk)
+        snprintf(s.channels[0].display, sizeof s.channels[0].display, "%s", kiosk->name);
+    if (display_backend_by_name(s.channels[0].display)->needs & DISPLAY_NEEDS_DEVICE) {
         if (!s.wall_file[0]) {
             cli_error("--display %s needs --wall FILE (configs/walls/desk.json for one monitor)", s.channels[0].display);
             return 2;

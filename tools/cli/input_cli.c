@@ -20,6 +20,7 @@
 #include "input_pick.h"
 #include "pipeline_cli.h"
 #include "remote_cli.h"
+#include "wall/display_backend.h"
 
 #define CLI_TOUR_ORBIT_PERIOD_S 24.0 /* the default tour: one turn around the home view */
 
@@ -151,9 +152,11 @@ bool cli_input_option(int argc, char **argv, int *i, cli_input_spec *s, bool *ha
 
 void cli_input_usage(FILE *f)
 {
-    fputs("input options (a config's \"input\" object sets the same; docs/pipeline-config.md):\n"
-          "  --input on|off   libinput devices steer the camera (default: on for `run` on a DRM wall)\n"
-          "  --bindings FILE  keys, buttons and gestures (configs/bindings.json; default: its contents)\n"
+    const display_backend *kiosk = display_backend_kiosk_kind(); /* whose wall turns input on */
+    fprintf(f, "input options (a config's \"input\" object sets the same; docs/pipeline-config.md):\n"
+               "  --input on|off   libinput devices steer the camera (default: on for `run` on a %s wall)\n",
+            kiosk ? kiosk->lifecycle->device_label : "device");
+    fputs("  --bindings FILE  keys, buttons and gestures (configs/bindings.json; default: its contents)\n"
           "  --seat NAME      libinput's udev seat (default seat0)\n"
           "  --input-device PATH  use only these devices (libinput's path backend; repeatable)\n"
           "  --map-input DEVICE=OUTPUT  a touchscreen or tablet (name or /dev/input node) covers that\n"
@@ -370,7 +373,7 @@ static bool step_ready(void *ctx, uint32_t step)
 }
 
 static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, const cli_scene *cs,
-                          const cli_input_files *files)
+                          const cli_input_files *files, struct session *seat)
 {
     tess_error err = {{0}};
     input_controller_config cc;
@@ -413,7 +416,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
     int source_count = 0;
     bool ok = true;
     if (s->enabled == 1)
-        ok = (sources[source_count++] = input_libinput_open(&sc, cli_pipeline_session(), &err)) != NULL;
+        ok = (sources[source_count++] = input_libinput_open(&sc, seat, &err)) != NULL;
     input_source *remote = cli_remote_take_source();
     if (remote)
         sources[source_count++] = remote;
@@ -422,7 +425,7 @@ static bool start_devices(cli_input *in, const cli_input_spec *s, pipeline *p, c
         source_count = 0;
     }
     in->runner = ok && source_count ? input_runner_start(sources, source_count, &cc, pick, step_ready, (void *)cs,
-                                                         in->sink, cli_pipeline_session(), &err)
+                                                         in->sink, seat, &err)
                                     : NULL;
     if (!in->runner) {
         cli_error("%s", err.msg);
@@ -457,7 +460,8 @@ static bool replay_checks(const pipeline *p, const input_record *rec)
     return false;
 }
 
-cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files)
+cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files,
+                           struct session *seat)
 {
     cli_input *in = calloc(1, sizeof *in);
     if (!in) {
@@ -504,7 +508,7 @@ cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene
         }
         fprintf(stderr, "tessera: replaying %zu input transactions from %s\n", count, s->replay_file);
     }
-    if ((s->enabled == 1 || cli_remote_channel() >= 0) && !start_devices(in, s, p, cs, files))
+    if ((s->enabled == 1 || cli_remote_channel() >= 0) && !start_devices(in, s, p, cs, files, seat))
         goto fail;
     return in;
 fail:

@@ -70,10 +70,14 @@ bool cli_input_wanted(const cli_input_spec *s);
 typedef struct cli_input cli_input;
 
 /* Before pipeline_run: the sink (tour, recording), replay, and with
- * s->enabled == 1 the input thread on the devices, with the files read by
+ * s->enabled == 1 the input thread on the devices, opened through `seat`
+ * (the one the outputs' device was opened through: display_instance_seat;
+ * NULL: none, as input_libinput_open takes it), with the files read by
  * cli_input_load_files (their tour is taken over: files->tour is left empty).
  * NULL after printing the error. */
-cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files);
+struct session;
+cli_input *cli_input_start(const cli_input_spec *s, pipeline *p, const cli_scene *cs, cli_input_files *files,
+                           struct session *seat);
 
 /* The sink input's transactions go through (for an embedding: cli_run_hooks). */
 input_sink *cli_input_sink(cli_input *in);

@@ -5,25 +5,43 @@
 #include "cli.h"
 #include "engine/accel/kernels.h"
 #include "engine/base/progress.h"
-#include "wall/drm.h"
+#include "wall/display_backend.h"
 
-/* tessera outputs: what the cards offer, to help write a wall config. */
+/* tessera outputs: what the display backends' devices offer, to help write a wall config. */
 static int cli_outputs(int argc, char **argv)
 {
     (void)argv;
     if (argc > 1) {
-        printf("usage: tessera outputs\n"
-               "List every DRM card, its connectors (names as wall configs use them), the EDID identity\n"
-               "of each connected monitor and its modes.\n");
+        printf("usage: tessera outputs\n");
+        for (size_t i = 0; i < display_backend_count; i++) {
+            const display_lifecycle *l = display_backends[i].lifecycle;
+            if (l && l->print_outputs)
+                fputs(l->outputs_help, stdout);
+        }
         return strcmp(argv[1], "--help") && strcmp(argv[1], "-h") ? 2 : 0;
     }
-    return drm_print_outputs(stdout) > 0 ? 0 : 1;
+    return display_backends_print_outputs(stdout) > 0 ? 0 : 1;
+}
+
+/* The summary of `tessera outputs`: what the backends that list devices list. */
+static void outputs_summary(char *out, size_t out_bytes)
+{
+    size_t used = snprintf(out, out_bytes, "list ");
+    for (size_t i = 0, listed = 0; i < display_backend_count && used < out_bytes; i++) {
+        const display_lifecycle *l = display_backends[i].lifecycle;
+        if (!l || !l->print_outputs)
+            continue;
+        int n = snprintf(out + used, out_bytes - used, "%s%s", listed++ ? "; " : "", l->outputs_what);
+        used += n < 0 ? out_bytes - used : (size_t)n;
+    }
+    if (used < out_bytes)
+        snprintf(out + used, out_bytes - used, ", for wall configs");
 }
 
 typedef struct command {
     const char *name;
     int (*run)(int argc, char **argv); /* argv[0] is the command name */
-    const char *summary;
+    const char *summary; /* NULL: made from the display-backend table (outputs_summary) */
 } command;
 
 static const command commands[] = {
@@ -34,7 +52,7 @@ static const command commands[] = {
     {"compare", cli_compare, "how much an image differs from a reference: FLIP, RMSE, PSNR (one line)"},
     {"robust", cli_robust, "wrong hits and leaks of the kernels on hard cases, and their speed (one line a case)"},
     {"parts", cli_parts, "the part tree of an assembly (glTF nodes, OBJ groups): paths, instances, triangles"},
-    {"outputs", cli_outputs, "list DRM cards, connectors, monitors (EDID) and modes, for wall configs"},
+    {"outputs", cli_outputs, NULL}, /* outputs_summary */
 };
 
 static void usage(FILE *f)
@@ -42,8 +60,12 @@ static void usage(FILE *f)
     fputs("usage: tessera COMMAND [options]\n"
           "tessera - an interactive ray tracer for display walls.\n\ncommands:\n",
           f);
-    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(f, "  %-8s %s\n", commands[i].name, commands[i].summary);
+    char summary[256];
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++) {
+        if (!commands[i].summary)
+            outputs_summary(summary, sizeof summary);
+        fprintf(f, "  %-8s %s\n", commands[i].name, commands[i].summary ? commands[i].summary : summary);
+    }
     fputs("\n'tessera COMMAND --help' describes the options of each command.\n", f);
 }
 

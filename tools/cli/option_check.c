@@ -36,6 +36,7 @@ void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s
 {
     const char *display = s->channels[0].display;
     const display_backend *backend = display_backend_by_name(display); /* checked when parsed */
+    const display_backend *kiosk = display_backend_kiosk_kind(); /* whose wall turns input on by default */
     bool live_input = s->input.enabled == 1;
     if (s->wall_file[0] && cli_given_has(g, "--size"))
         cli_warn("--size is ignored with --wall (each output's size comes from the wall config)");
@@ -44,11 +45,12 @@ void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s
         display_backend_names(DISPLAY_OPTION_OUT, " or ", takers, sizeof takers);
         cli_warn("--out is ignored with --display %s (only the %s display writes files)", display, takers);
     }
-    if (s->time_mode == PIPELINE_TIME_REAL && cli_given_has(g, "--rate"))
-        cli_warn("--rate is ignored in real time (it is the frame rate of --time fixed)%s",
-                 (backend->needs & DISPLAY_NEEDS_CARD) && !s->time_given
-                     ? "; the kiosk on a DRM card runs in real time"
-                     : "");
+    if (s->time_mode == PIPELINE_TIME_REAL && cli_given_has(g, "--rate")) {
+        bool kiosk_time = (backend->needs & DISPLAY_NEEDS_DEVICE) && !s->time_given;
+        cli_warn("--rate is ignored in real time (it is the frame rate of --time fixed)%s%s%s",
+                 kiosk_time ? "; the kiosk on a " : "", kiosk_time ? backend->lifecycle->device_label : "",
+                 kiosk_time ? " card runs in real time" : "");
+    }
     if (!(backend->options & DISPLAY_OPTION_CARD) && cli_given_has(g, "--card")) {
         display_backend_names(DISPLAY_OPTION_CARD, " or ", takers, sizeof takers);
         cli_warn("--card is ignored with --display %s (only the %s display drives a card)", display, takers);
@@ -71,10 +73,15 @@ void cli_check_ignored_render_run(const cli_given *g, const cli_pipeline_spec *s
         cli_warn("--replay-speed is ignored without --replay-input");
     if (!live_input)
         for (const char *const *o = live_input_options; *o; o++)
-            if (cli_given_has(g, *o))
-                cli_warn("%s is ignored: 'tessera %s' reads no input devices here (%s)", *o, command,
-                         !strcmp(command, "render") ? "render never does; 'tessera run' can"
-                                                    : "--input on, the default on a DRM wall, turns them on");
+            if (cli_given_has(g, *o)) {
+                if (!strcmp(command, "render"))
+                    cli_warn("%s is ignored: 'tessera %s' reads no input devices here (render never does; "
+                             "'tessera run' can)", *o, command);
+                else
+                    cli_warn("%s is ignored: 'tessera %s' reads no input devices here (--input on, the default "
+                             "on a %s wall, turns them on)", *o, command, kiosk ? kiosk->lifecycle->device_label
+                                                                                : "device");
+            }
 }
 
 bool cli_check_ignored_bench(const cli_given *g, const cli_pipeline_spec *s, const char *mode)

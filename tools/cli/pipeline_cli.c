@@ -16,8 +16,6 @@
 #include "engine/scene/scene.h"
 #include "option_check.h"
 #include "wall/display_backend.h"
-#include "wall/drm.h"
-#include "seat/session.h"
 #include "wall/wall_headless.h"
 
 #define CONFIG_MAX_BYTES (1u << 20) /* a pipeline config is a few hundred bytes */
@@ -642,8 +640,11 @@ void cli_pipeline_usage(FILE *f, const char *time_default, const char *rate_defa
           f);
     for (size_t i = 0; i < display_backend_count; i++)
         fprintf(f, "                     %-14s %s\n", display_backends[i].name, display_backends[i].what);
-    fputs("  --card PATH      DRM card for --display drm (default: the first with a connected monitor)\n"
-          "  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
+    for (size_t i = 0; i < display_backend_count; i++) /* the options of a backend on a device */
+        if ((display_backends[i].options & DISPLAY_OPTION_CARD) && display_backends[i].lifecycle &&
+            display_backends[i].lifecycle->card_help)
+            fprintf(f, "  --card PATH      %s\n", display_backends[i].lifecycle->card_help);
+    fputs("  --path FILE      camera path (configs/paths/*.json) for the main channel\n"
           "  --record FILE    write the main channel's camera changes as a camera path\n"
           "  --wall FILE      render a display wall's layout (configs/walls/*.json, docs/wall-format.md):\n"
           "                   one channel per output, each its part of one picture; with the dump\n"
@@ -665,11 +666,6 @@ void cli_pipeline_usage(FILE *f, const char *time_default, const char *rate_defa
 
 /* ---------------------------------------------------------------- making the pipeline */
 
-/* The DRM card of a running wall and the seat it was opened through (closed
- * by cli_pipeline_release_outputs). */
-static drm_card *active_card;
-static session *active_session;
-
 /* The wall cli_pipeline_create laid out (for input: where each output is). */
 static struct {
     bool valid;
@@ -677,9 +673,6 @@ static struct {
     int count;
     input_output_area areas[WALL_MAX_OUTPUTS];
 } active_layout;
-
-session *cli_pipeline_session(void) { return active_session; }
-drm_card *cli_pipeline_card(void) { return active_card; }
 
 int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_area *areas, int max)
 {
@@ -700,83 +693,28 @@ int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_are
     return n;
 }
 
-void cli_pipeline_release_outputs(void)
+void cli_pipeline_release_outputs(display_instance *outputs)
 {
-    drm_card_close(active_card);
-    active_card = NULL;
-    session_close(active_session);
-    active_session = NULL;
+    display_instance_destroy(outputs);
     active_layout.valid = false;
 }
 
-/* Open the card, match the wall's outputs to its connectors (which resolves
- * their modes), bring them up. On one machine of several (cluster_cli.h) the
- * card holds that machine's outputs only: they are matched and brought up as
- * a wall of their own (the card's output k is mine's), and the others' sizes
- * come from their explicit modes, as on that machine, so that every process
- * derives the same picture size. displays[i]: output i's, NULL for others'. */
-static bool start_drm(const cli_pipeline_spec *s, wall_config *wall, image_display **displays, tess_error *err)
-{
-    const bool *present = cli_cluster_outputs();
-    bool every[WALL_MAX_OUTPUTS];
-    for (int i = 0; i < WALL_MAX_OUTPUTS; i++)
-        every[i] = !present || present[i];
-    wall_config mine, others;
-    int mine_index[WALL_MAX_OUTPUTS], other_index[WALL_MAX_OUTPUTS];
-    bool elsewhere[WALL_MAX_OUTPUTS];
-    for (int i = 0; i < WALL_MAX_OUTPUTS; i++)
-        elsewhere[i] = !every[i];
-    int mine_count = wall_config_subset(wall, every, &mine, mine_index);
-    int other_count = wall_config_subset(wall, elsewhere, &others, other_index);
-    for (int j = 0; j < other_count; j++)
-        if (others.outputs[j].mode_preferred) {
-            char label[WALL_LABEL_BYTES];
-            return tess_error_set(err, "outputs[%d] (%s, another machine's): a wall of several machines needs every "
-                                       "output's mode in the file (\"mode\": \"WxH\"): each machine sees only its "
-                                       "own monitors",
-                                  other_index[j], wall_output_label(wall, other_index[j], label, sizeof label));
-        }
-    if (!wall_config_headless_sizes(&others, err)) /* explicit modes: cannot fail */
-        return false;
-    active_session = session_open();
-    if (!active_session)
-        return tess_error_set(err, "seat: out of memory");
-    active_card = drm_card_open(s->card_path[0] ? s->card_path : NULL, active_session, err);
-    if (!active_card)
-        return false;
-    const wall_device_connector *conns;
-    size_t n = drm_card_connectors(active_card, &conns);
-    image_display *mine_displays[WALL_MAX_OUTPUTS] = {NULL};
-    if (!wall_config_match_device(&mine, conns, n, err)) {
-        tess_error_prefix(err, "%s: ", drm_card_path(active_card));
-        return false;
-    }
-    if (!drm_wall_start(active_card, &mine, mine_displays, err))
-        return false;
-    for (int j = 0; j < mine_count; j++) {
-        wall->outputs[mine_index[j]] = mine.outputs[j];
-        displays[mine_index[j]] = mine_displays[j];
-    }
-    for (int j = 0; j < other_count; j++)
-        wall->outputs[other_index[j]] = others.outputs[j];
-    fprintf(stderr, "tessera: %s: %d outputs up (%s modesetting)\n", drm_card_path(active_card), mine_count,
-            drm_card_atomic(active_card) ? "atomic" : "legacy");
-    return true;
-}
-
-/* The wall's outputs as channels: on the card (display drm), else headless
+/* The wall's outputs as channels: on a device (a DISPLAY_NEEDS_DEVICE backend, started into
+ * *outputs: on a wall of several machines, this process's outputs only), else headless
  * (explicit modes) with the display asked for. */
-static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli_scene *cs)
+static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli_scene *cs,
+                              display_instance **outputs)
 {
     tess_error err = {{0}};
     wall_config wall;
     const cli_channel_spec *main_ch = &s->channels[0];
-    const display_backend *backend = display_backend_by_name(main_ch->display);
-    bool on_device = backend->needs & DISPLAY_NEEDS_CARD;
+    const display_backend *backend = s->wall_backend ? s->wall_backend : display_backend_by_name(main_ch->display);
+    bool on_device = backend->needs & DISPLAY_NEEDS_DEVICE;
     image_display *displays[WALL_MAX_OUTPUTS] = {NULL};
     bool ok = wall_config_load(s->wall_file, &wall, &err);
-    if (ok && on_device)
-        ok = start_drm(s, &wall, displays, &err);
+    display_start_args start = {.card_path = s->card_path};
+    if (ok && on_device) /* a wall of several machines: this process's outputs (cluster_cli.h) */
+        ok = (*outputs = display_backend_start(backend, &start, cli_cluster_outputs(), &wall, displays, &err));
     else if (ok && !wall_config_headless_sizes(&wall, &err)) /* its messages name the output, not the file */
         ok = false;
     if (!ok) {
@@ -818,7 +756,7 @@ static bool add_wall_channels(pipeline *p, const cli_pipeline_spec *s, const cli
         }
     }
     if (ok && on_device)
-        drm_wall_attach(active_card, p, first_channel); /* hotplug switches the outputs' channels */
+        display_instance_attach(*outputs, p, first_channel); /* hotplug switches the outputs' channels */
     if (ok && !cli_remote_add_channel(p, &s->remote, &cam, wall_plane_aspect(&wall)))
         return false;
     /* the status line at the bottom-left corner of the wall's outputs, whatever this process
@@ -862,9 +800,10 @@ pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene 
     return cfg;
 }
 
-pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
+pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs, display_instance **outputs)
 {
     tess_error err = {{0}};
+    *outputs = NULL;
     pipeline_config cfg = cli_pipeline_config(s, cs);
     pipeline *p = pipeline_create(&cfg, &err);
     if (!p) {
@@ -874,8 +813,10 @@ pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs)
     if (s->wall_file[0]) {
         if (s->channel_count > 1)
             cli_warn("the config's extra channels are ignored with --wall (a wall's channels are its outputs)");
-        if (!add_wall_channels(p, s, cs)) {
+        if (!add_wall_channels(p, s, cs, outputs)) {
             pipeline_destroy(p);
+            cli_pipeline_release_outputs(*outputs); /* after the displays that refer to it */
+            *outputs = NULL;
             return NULL;
         }
         return p;

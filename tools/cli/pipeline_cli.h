@@ -16,6 +16,7 @@
 #include "input_cli.h"
 #include "remote/remote.h"
 #include "input/source.h"
+#include "wall/display_backend.h"
 
 #define CLI_PATTERN_BYTES 4096
 
@@ -45,7 +46,7 @@ typedef struct cli_pipeline_spec {
     char path_file[CLI_PATTERN_BYTES];   /* camera path for channel 0, "" for none */
     char record_file[CLI_PATTERN_BYTES]; /* --record: write channel 0's camera changes, "" for none */
     char wall_file[CLI_PATTERN_BYTES];   /* --wall: the channels are a wall's outputs, "" for none */
-    char card_path[CLI_PATTERN_BYTES];   /* --card: the DRM card for display drm, "" = the first connected */
+    char card_path[CLI_PATTERN_BYTES];   /* --card: the device of a DISPLAY_OPTION_CARD backend, "" = its choice */
     bool display_given, frames_given, time_given; /* on the command line or in --config */
     cli_input_spec input;        /* --input ..., the config's "input" object */
     remote_config remote;        /* --remote ..., the config's "remote" object (port -1: none) */
@@ -72,6 +73,9 @@ typedef struct cli_pipeline_spec {
      * returns the display to add, owning `inner` (destroyed on failure, then NULL with err) */
     image_display *(*wrap_display)(void *ctx, int channel, image_display *inner, tess_error *err);
     void *wrap_ctx;
+    /* optional (NULL): the backend of a --wall's outputs when it is not one of the table's (a test's
+     * own, tests/test_display_backend.c); NULL: the table's called channels[0].display */
+    const display_backend *wall_backend;
 } cli_pipeline_spec;
 
 /* Defaults for a command: one channel of 1280x720 with `display` writing to
@@ -105,24 +109,22 @@ pipeline_config cli_pipeline_config(const cli_pipeline_spec *s, const cli_scene 
 /* Make the pipeline: channels with their cameras (given, else the scene's,
  * else framed) and displays; with --wall, one channel per output of the wall
  * (each its window of the one camera's image plane) and, with the dump
- * display, per-output images beside the stitched wall image. NULL after
- * printing the error. */
-pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs);
+ * display, per-output images beside the stitched wall image. With --wall and
+ * a backend on a device (DISPLAY_NEEDS_DEVICE), *outputs is the started
+ * backend (display_backend_start) and the pipeline is attached to it; else
+ * NULL. The caller hands it to cli_pipeline_release_outputs after
+ * pipeline_destroy. NULL after printing the error (*outputs NULL: released). */
+pipeline *cli_pipeline_create(const cli_pipeline_spec *s, const cli_scene *cs, display_instance **outputs);
 
 /* The image plane the pipeline's channels show: its aspect (width / height)
  * in *plane_aspect, and per channel its output's name (a wall: the
  * connector; else "channel-N") and window; returns the count (<= max). */
 int cli_pipeline_layout(const pipeline *p, float *plane_aspect, input_output_area *areas, int max);
 
-/* The seat cli_pipeline_create opened for a DRM wall, else NULL. */
-struct session *cli_pipeline_session(void);
-/* The DRM card cli_pipeline_create opened for a wall, else NULL. */
-struct drm_card *cli_pipeline_card(void);
-
-
-/* Release what cli_pipeline_create opened besides the pipeline (a DRM card:
- * its CRTCs are restored): after pipeline_destroy. */
-void cli_pipeline_release_outputs(void);
+/* Release what cli_pipeline_create opened besides the pipeline: the started
+ * backend (display_instance_destroy: the device as it was found; NULL is
+ * fine) and the wall's layout. After pipeline_destroy. */
+void cli_pipeline_release_outputs(display_instance *outputs);
 
 /* Channel 0 follows a camera path: a serial animation callback sets the
  * camera at each frame's time (time_offset_s added). */
