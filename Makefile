@@ -48,7 +48,7 @@ CLUSTER_SRC := $(wildcard cluster/*.c)
 METRICS_SRC := $(wildcard metrics/*.c)
 # the hard cases of numerical robustness, shared by tests/test_robust.c and `tessera robust`
 ROBUST_SRC := $(wildcard tools/robust/*.c)
-CLI_SRC := $(wildcard tools/cli/*.c)
+CLI_SRC := $(wildcard app/*.c)
 # tools/gen_assembly/README.md: the assembly generator, a program of its own (libm only)
 GEN_ASSEMBLY_SRC := $(wildcard tools/gen_assembly/*.c)
 # the tile counter's cost per tile at many thread counts (tools/scaling_model.sh)
@@ -153,9 +153,9 @@ endif
 # (the suite runs ./tessera too: `make test` builds it; the ASan build makes its own tessera-asan
 # and must never overwrite ./tessera)
 # the tests also link the CLI but its main (as the soak driver does): the input pick hook
-# (tools/cli/input_pick.h: a scene's parts as input sees them) and the pipeline config parser
+# (app/input_pick.h: a scene's parts as input sees them) and the pipeline config parser
 # (tests/test_pipeline_config.c reads back what a config sets)
-TEST_CLI_OBJ := $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ))
+TEST_CLI_OBJ := $(filter-out $(BUILD)/app/main.o,$(CLI_OBJ))
 $(TEST_BIN): $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(TEST_OBJ) $(TEST_CLI_OBJ) $(LIB) $(LDLIBS) $(TEST_LDLIBS)
 
@@ -170,7 +170,7 @@ FAULT_BIN := $(BUILD)/tessera_fault_tests
 FAULT_WRAP := -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=aligned_alloc,--wrap=posix_memalign \
               -Wl,--wrap=strdup,--wrap=strndup,--wrap=getline,--wrap=open_memstream,--wrap=fopen \
               -Wl,--wrap=pwrite,--wrap=close
-$(FAULT_BIN): $(FAULT_OBJ) $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ)) $(LIB)
+$(FAULT_BIN): $(FAULT_OBJ) $(filter-out $(BUILD)/app/main.o,$(CLI_OBJ)) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) $(FAULT_WRAP) -o $@ $^ $(LDLIBS) $(TEST_LDLIBS)
 
 # the fault tests alone, without sanitizers (make test-asan runs them with LeakSanitizer)
@@ -256,7 +256,7 @@ tessera-tsan: $(CLI_OBJ) $(LIB)
 # frame gaps and transaction counts checked. SOAK_SAN=1: under ASan + UBSan in its own tree
 # (build-soak-asan/; never build/ or ./tessera). SOAK_SEED, SOAK_THREADS (<= 2 here), SOAK_DIR.
 .PHONY: soak clean-soak
-SOAK_DRIVER_OBJ := $(filter-out $(BUILD)/tools/cli/main.o,$(CLI_OBJ)) $(BUILD)/tests/soak/soak_driver.o
+SOAK_DRIVER_OBJ := $(filter-out $(BUILD)/app/main.o,$(CLI_OBJ)) $(BUILD)/tests/soak/soak_driver.o
 $(BUILD)/soak_driver: $(SOAK_DRIVER_OBJ) $(LIB)
 	$(CXX) $(LDFLAGS) -pthread $(SAN) -o $@ $(SOAK_DRIVER_OBJ) $(LIB) $(LDLIBS)
 # tools/flip_check/check.sh: image pairs for checking tessera compare against NVlabs' FLIP
@@ -307,7 +307,7 @@ check-layers: $(LIB_OBJ) $(CLI_OBJ)
 	@echo "check-layers: every include and every call goes down the layers"
 
 # every header compiles on its own
-HEADERS := $(sort $(filter-out engine/accel/isa/%,$(shell find engine -name '*.h'))) $(wildcard wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h tools/cli/*.h tools/robust/*.h tools/gen_assembly/*.h)
+HEADERS := $(sort $(filter-out engine/accel/isa/%,$(shell find engine -name '*.h'))) $(wildcard wall/*.h seat/*.h input/*.h remote/*.h cluster/*.h metrics/*.h app/*.h tools/robust/*.h tools/gen_assembly/*.h)
 # isa/simd.h needs an ISA macro: it is checked by compiling the kernels
 # (one target a header, so that make -j checks them side by side)
 HEADER_CHECKS := $(addprefix check-header/,$(HEADERS))

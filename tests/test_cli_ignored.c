@@ -1,5 +1,5 @@
 /* test_cli_ignored.c - options that do not apply are said, never silently
- * dropped (tools/cli/option_check.h): render and run warn and go on (exit 0,
+ * dropped (app/option_check.h): render and run warn and go on (exit 0,
  * the same result as without the option); the benchmarks refuse (exit 2).
  * Runs ../tessera (or $TESSERA_BIN) from the tests/ directory. */
 #include <criterion/criterion.h>

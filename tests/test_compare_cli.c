@@ -1,4 +1,4 @@
-/* test_compare_cli.c - `tessera compare` (tools/cli/cmd_compare.c) end to
+/* test_compare_cli.c - `tessera compare` (app/cmd_compare.c) end to
  * end: its one line of numbers, the map file, the viewing distance from a
  * wall config, and every bad input with a message naming the file. Runs
  * ../tessera (or $TESSERA_BIN) from the tests/ directory on images written

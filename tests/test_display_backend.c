@@ -20,8 +20,8 @@
 
 #include "engine/frame/pipeline.h"
 #include "support.h"
-#include "tools/cli/cli.h"
-#include "tools/cli/pipeline_cli.h"
+#include "app/cli.h"
+#include "app/pipeline_cli.h"
 #include "wall/display_backend.h"
 
 Test(display_backend, every_headless_backend_made_by_name)

@@ -2,7 +2,7 @@
  * part commands (pick, hide-object, show, isolate, select-parent, highlight,
  * show-all) on keys, buttons and touch (long press, two-finger tap) with a
  * fake pick hook that reports parts with ranges and ancestors, on a synthetic
- * clock; and the command line's pick hook (tools/cli/input_pick.h) on the
+ * clock; and the command line's pick hook (app/input_pick.h) on the
  * shipped assembly: a ray at a known bolt names its path and its subtree. */
 #include <criterion/criterion.h>
 #include <linux/input-event-codes.h>
@@ -17,7 +17,7 @@
 #include "engine/scene/scene.h"
 #include "engine/load/scene_load.h"
 #include "input/controller.h"
-#include "tools/cli/input_pick.h"
+#include "app/input_pick.h"
 
 #define ASPECT (16.f / 9.f)
 #define MAX_TXNS 1024

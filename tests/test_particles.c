@@ -21,7 +21,7 @@
 #include "engine/load/scene_load.h"
 #include "engine/frame/txn.h"
 #include "support.h"
-#include "tools/cli/input_pick.h"
+#include "app/input_pick.h"
 
 /* A scene holding only `set` as particles (options as given), and its accel. */
 static scene *particle_scene(particle_set *set, particle_kind_options opt, accel **a)

@@ -17,7 +17,7 @@
 #include "engine/frame/pipeline.h"
 #include "engine/render/render.h"
 #include "engine/scene/scene.h"
-#include "tools/cli/pipeline_cli.h"
+#include "app/pipeline_cli.h"
 
 static bool parse(const char *text, cli_pipeline_spec *s)
 {

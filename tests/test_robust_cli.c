@@ -1,4 +1,4 @@
-/* test_robust_cli.c - `tessera robust` (tools/cli/cmd_robust.c) end to end:
+/* test_robust_cli.c - `tessera robust` (app/cmd_robust.c) end to end:
  * one line per case with every field, the default (robust) kernels giving 0
  * wrong hits and 0 leaks on the small cases, and bad options refused with a
  * message naming them. Runs ../tessera (or $TESSERA_BIN) from tests/. */

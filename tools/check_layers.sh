@@ -41,7 +41,7 @@ input                        seat engine/*
 remote                       input seat engine/*
 cluster                      engine/*
 tools/robust                 engine/*
-tools/cli                    cluster remote input wall seat metrics tools/robust engine/*
+app                          cluster remote input wall seat metrics tools/robust engine/*
 '
 
 root=$(dirname "$0")/..

@@ -174,7 +174,7 @@ typedef enum pipeline_time_mode {
 } pipeline_time_mode;
 
 /* What stays fixed for a pipeline's life (components chosen by name are
- * resolved into this by the caller; see tools/cli). */
+ * resolved into this by the caller; see app). */
 typedef struct pipeline_config {
     const struct scene *scene; /* read-only while the pipeline exists */
     const struct accel *accel; /* built from scene */

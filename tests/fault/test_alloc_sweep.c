@@ -31,7 +31,7 @@
 #include "input/record.h"
 #include "fault.h"
 #include "tests/support.h"
-#include "tools/cli/pipeline_cli.h"
+#include "app/pipeline_cli.h"
 #include "wall/display.h"
 #include "wall/edid.h"
 #include "wall/wall_config.h"

@@ -17,7 +17,7 @@ FZ_TARGETS := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
 FZ_BINS := $(addprefix $(FZ)/fuzz_,$(FZ_TARGETS))
 
 # the whole product but main(), as one archive: a target links what it uses
-FZ_LIB_C := $(filter-out engine/accel/isa/%,$(shell find engine -name '*.c')) $(wildcard wall/*.c seat/*.c input/*.c remote/*.c cluster/*.c metrics/*.c) $(filter-out tools/cli/main.c,$(wildcard tools/cli/*.c))
+FZ_LIB_C := $(filter-out engine/accel/isa/%,$(shell find engine -name '*.c')) $(wildcard wall/*.c seat/*.c input/*.c remote/*.c cluster/*.c metrics/*.c) $(filter-out app/main.c,$(wildcard app/*.c))
 FZ_LIB_OBJ := $(patsubst %.c,$(FZ)/%.o,$(FZ_LIB_C)) $(FZ)/wall/dump_module_blob.o \
               $(FZ)/engine/accel/isa/traverse_sse2.o $(FZ)/engine/accel/isa/traverse_avx2.o $(FZ)/engine/accel/isa/traverse_avx512.o \
               $(FZ)/remote/page_html.o

@@ -1,5 +1,5 @@
 /* fuzz_pipeline_config.c - pipeline configs (--config FILE,
- * tools/cli/pipeline_cli.c, with the "input" object of tools/cli/input_cli.c)
+ * app/pipeline_cli.c, with the "input" object of app/input_cli.c)
  * through cli_pipeline_config_parse. Its errors go to stderr through
  * cli_error (run.sh silences it with -close_fd_mask=2); what a parse accepts
  * must be within the documented ranges. */
@@ -7,7 +7,7 @@
 
 #include <string.h>
 
-#include "tools/cli/pipeline_cli.h"
+#include "app/pipeline_cli.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -52,8 +52,8 @@
 #include "engine/scene/scene.h"
 #include "input/record.h"
 #include "input/sink.h"
-#include "tools/cli/cli.h"
-#include "tools/cli/input_cli.h"
+#include "app/cli.h"
+#include "app/input_cli.h"
 
 #define SOAK_MAX_SENDERS 8
 #define SOAK_MEAN_PAUSE_S 0.004     /* between one sender's transactions: ~250/s per sender */

@@ -93,11 +93,11 @@ report_time_run() { # scene_arg, then render options
 }
 
 # The key of the sources that make a picture, into SOURCE_KEY: engine/,
-# tools/cli/, wall/ (committed state and any uncommitted diff), or the
+# app/, wall/ (committed state and any uncommitted diff), or the
 # tessera binary outside a git tree.
 report_source_key() {
     if git rev-parse --git-dir > /dev/null 2>&1; then
-        SOURCE_KEY=$({ git ls-files -s engine tools/cli wall; git diff HEAD -- engine tools/cli wall; } | sha256sum | cut -c1-16)
+        SOURCE_KEY=$({ git ls-files -s engine app wall; git diff HEAD -- engine app wall; } | sha256sum | cut -c1-16)
     else
         SOURCE_KEY=$(sha256sum "$TESSERA" | cut -c1-16)
     fi
@@ -157,7 +157,7 @@ report_ref_for() { # knob scene-label
 # The reference of a scene: REFERENCE_RENDERS renders of jittered:REFERENCE_K
 # (seeds 1..N: the curves use seed 0) averaged by report_img mean, cached in
 # $CACHE under a key of the scene, the size, the recipe and the sources that
-# make the picture (engine/, tools/cli/, wall/: committed state and any
+# make the picture (engine/, app/, wall/: committed state and any
 # uncommitted diff). Also the two halves (seeds 1..N/2 against the rest)
 # compared, which bounds how far the reference itself is from converged.
 # Sets REF (path) and REF_HALVES (tessera compare's line for the halves).

@@ -177,7 +177,7 @@ report=$WORK/REPORT.md
         echo "  Reference: the mean of $REFERENCE_RENDERS renders of jittered:$REFERENCE_K ($REFERENCE_K×$REFERENCE_K strata, seeds"
         echo "  1..$REFERENCE_RENDERS; the curves use seed 0), so $((REFERENCE_RENDERS * REFERENCE_K * REFERENCE_K)) rays per pixel, averaged in double"
         echo "  (\`build/report_img mean\`), kept as linear EXR in $CACHE (key: scene, size, recipe and the"
-        echo "  sources of engine/, tools/cli/, wall/); made in $REF_SECONDS s. Its two halves"
+        echo "  sources of engine/, app/, wall/); made in $REF_SECONDS s. Its two halves"
         echo "  ($((REFERENCE_RENDERS / 2 * REFERENCE_K * REFERENCE_K)) rays per pixel each) against each other: \`$REF_HALVES\`."
     done
     if [ -n "$SKIPPED" ]; then

@@ -1,6 +1,6 @@
 /* hard_cases.h - the hard cases of numerical robustness, generated from fixed
  * seeds: shared by tests/test_robust.c (which holds the criteria) and
- * `tessera robust` (tools/cli/cmd_robust.c, which measures the kernels on
+ * `tessera robust` (app/cmd_robust.c, which measures the kernels on
  * them for the report's robustness knob). Nothing here traces a ray: the
  * generators make meshes, rays and double-precision references, so the same
  * cases hold for any kernels behind the accel.
