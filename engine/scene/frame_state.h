@@ -23,9 +23,9 @@
  *
  * WHO CHANGES IT. Only txn_apply (txn.h) and the setters below, and in a
  * pipeline only in the serial section of the frame barrier (transactions,
- * serial callbacks) or while no loop runs: pipeline.c enforces it. So while
- * a frame renders the state does not change: the state at the barrier IS
- * the frame's snapshot, and render threads read it through a const pointer
+ * serial callbacks) or while no loop runs: pipeline_state.c enforces it. So
+ * while a frame renders the state does not change: the state at the barrier
+ * IS the frame's snapshot, and render threads read it through a const pointer
  * (render_view.state) without locks; the barrier orders their reads after
  * the serial section's writes.
  *
