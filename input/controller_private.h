@@ -2,6 +2,11 @@
  * includes: the controller's state and the functions one of them calls in
  * another. The public contract is controller.h.
  *
+ * THE FILES. controller.c: the controller's life (create, destroy), its
+ * entry points (events, ticks, the deadline); commands.c: what was
+ * recognised turned into records (commands_*). Every function here takes
+ * the controller the entry point was called with.
+ *
  * Threading (controller.h): one thread, the input thread, calls everything;
  * nothing here is shared with another thread. */
 #ifndef TESSERA_INPUT_CONTROLLER_PRIVATE_H
@@ -123,5 +128,41 @@ struct input_controller {
     bool touring, started;
     uint64_t last_input_us;
 };
+
+/* ---- commands.c ---- */
+
+/* Every record goes out here (a private view's controller says only where its
+ * channel's camera goes). */
+void commands_emit(input_controller *c, input_txn *t);
+/* End of an input frame or tick: the camera, cursor, plane, value and viewer
+ * pointer records that accumulated, at most one of each. */
+void commands_flush(input_controller *c);
+/* The camera becomes `next` (to go out at the next flush) when the event being
+ * handled may move it (CAMERA HOLDER, controller.h). */
+void commands_set_camera(input_controller *c, camera_desc next);
+void commands_show_cursor(input_controller *c, bool visible);
+/* The point under plane point (sx, sy): the first surface, else the cursor
+ * ray at the look-at depth. hit_out (may be NULL) gets the pick as the
+ * controller uses it: a hit always names a part (else its instance), labels
+ * end in NUL, ancestor_count lies in [0, INPUT_HIT_ANCESTORS]. */
+vec3 commands_point_under(input_controller *c, double sx, double sy, input_hit *hit_out);
+/* A drag of (dx, dy) plane units with `action` (orbit, pan, dolly, value-drag,
+ * plane-push; others do nothing) about `point`. */
+void commands_drag(input_controller *c, input_action action, vec3 point, double dx, double dy);
+/* The held flight keys as a direction (-1, 0 or +1 along each; forward,
+ * right and up all NULL or none); whether any is held. */
+bool commands_flight_direction(const input_controller *c, double *forward, double *right, double *up);
+bool commands_flight_held(const input_controller *c);
+/* The selection becomes the part hit (nothing on a miss); a highlight follows. */
+void commands_select_hit(input_controller *c, const input_hit *pk);
+/* Playing time steps: the next one when it is due and ready. */
+void commands_play_if_due(input_controller *c, uint64_t now_us);
+/* A command action (bindings.h) at plane point (sx, sy); a drag action or
+ * INPUT_ACTION_NONE does nothing. */
+void commands_run(input_controller *c, input_action action, double sx, double sy, uint64_t now_us);
+/* A person touched something: the tour hands over, the idle clock restarts. */
+void commands_user_input(input_controller *c, uint64_t now_us);
+/* The idle tour starts: drags and animations stop, cursor and status go. */
+void commands_start_tour(input_controller *c);
 
 #endif
