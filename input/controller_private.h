@@ -3,9 +3,14 @@
  * another. The public contract is controller.h.
  *
  * THE FILES. controller.c: the controller's life (create, destroy), its
- * entry points (events, ticks, the deadline); commands.c: what was
- * recognised turned into records (commands_*). Every function here takes
- * the controller the entry point was called with.
+ * entry points (events, ticks, the deadline), which hand each event to
+ * gesture.c or commands.c (the wheel, the touchpad's pinch and swipe and the
+ * viewers' pointers, one event each, it turns into motions itself); gesture.c: what a person is doing, recognised
+ * from keys, buttons, the pointer and touch (gesture_*), each thing
+ * recognised handed to commands.c as an action (commands_run) or a motion
+ * (commands_drag); commands.c: what was recognised turned into records
+ * (commands_*). Every function here takes the controller the entry point
+ * was called with.
  *
  * Threading (controller.h): one thread, the input thread, calls everything;
  * nothing here is shared with another thread. */
@@ -129,13 +134,37 @@ struct input_controller {
     uint64_t last_input_us;
 };
 
+/* ---- gesture.c ---- */
+
+/* A key or button pressed or released (INPUT_KEY, INPUT_BUTTON): held counts,
+ * the quit chord, a drag button's drag or click, flight keys, commands. */
+void gesture_key_or_button(input_controller *c, const input_event *e);
+/* The cursor moved to plane point (nx, ny) (clamped by the caller): it shows,
+ * and a button drag going moves by the difference. */
+void gesture_pointer_moved(input_controller *c, double nx, double ny);
+/* A touch down, motion, up or cancel: the slot table and the touch sequence
+ * (what it did is recognised at its frame, gesture_touch_frame). */
+void gesture_touch_event(input_controller *c, const input_event *e);
+/* A touch frame's end: fingers that came or went anchor again; else the one,
+ * two or three fingers drag and pinch; the last finger up ends the sequence
+ * (a tap, double tap, two- or three-finger tap). */
+void gesture_touch_frame(input_controller *c, uint64_t now_us);
+/* Whether the finger down may become a long press (one finger this sequence,
+ * within the tap slop, not fired yet, a long press bound), and when (*due_us). */
+bool gesture_long_press_due(const input_controller *c, uint64_t *due_us);
+/* The long press, when its time came by now_us (and no tour plays). */
+void gesture_long_press_if_due(input_controller *c, uint64_t now_us);
+/* `device` went away: its keys, buttons, drag and fingers let go. */
+void gesture_device_removed(input_controller *c, int device);
+
 /* ---- commands.c ---- */
 
 /* Every record goes out here (a private view's controller says only where its
  * channel's camera goes). */
 void commands_emit(input_controller *c, input_txn *t);
-/* End of an input frame or tick: the camera, cursor, plane, value and viewer
- * pointer records that accumulated, at most one of each. */
+/* End of an input frame or tick: what accumulated goes out, at most one camera,
+ * one cursor, one plane, one value record per value target, one pointer per
+ * viewer. */
 void commands_flush(input_controller *c);
 /* The camera becomes `next` (to go out at the next flush) when the event being
  * handled may move it (CAMERA HOLDER, controller.h). */
