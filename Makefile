@@ -33,7 +33,7 @@ LDLIBS := $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ldl -lm -pthread
 IMAGE_LDLIBS := $(shell pkg-config --libs $(IMAGE_PKGS) 2>/dev/null)
 TEST_LDLIBS := $(shell pkg-config --libs $(TEST_PKGS) 2>/dev/null)
 
-# the engine in layers (engine/LAYERS.md): every .c below engine/ but the kernels' one source,
+# the engine in layers (docs/layers.md): every .c below engine/ but the kernels' one source,
 # which is compiled once per instruction set (ISA_OBJ)
 ENGINE_SRC := $(sort $(filter-out engine/accel/isa/%,$(shell find engine -name '*.c')))
 WALL_SRC := $(wildcard wall/*.c)
