@@ -4,17 +4,12 @@
 #include "txn.h"
 #include "txn_private.h"
 
-#include <ctype.h>
-#include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "engine/base/colormap.h"
 #include "engine/scene/frame_state.h"
-#include "engine/accel/geometry.h"
 #include "engine/render/render.h"
 
 _Static_assert(sizeof(((txn_record *)0)->args.status.text) == TXN_TEXT_BYTES, "status text");

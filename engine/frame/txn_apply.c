@@ -2,8 +2,6 @@
 #include "txn.h"
 #include "txn_private.h"
 
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "engine/base/colormap.h"

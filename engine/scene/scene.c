@@ -7,14 +7,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
 
-#include "engine/geometry/triangles/mesh_cache.h"
 #include "engine/geometry/triangles/mesh_tree.h"
 #include "engine/base/parallel.h"
 #include "part_tree.h"
-#include "engine/geometry/particles/particle_kind.h"
 
 /* First capacity of a growing array; it doubles from there. Small because most
  * scenes hold a handful of materials, lights and meshes. */

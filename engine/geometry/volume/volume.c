@@ -2,16 +2,10 @@
  * engine/load/volume_read.c. */
 #include "volume.h"
 
-#include <ctype.h>
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 size_t volume_type_size(volume_type type)
 {
