@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "assimp_import.h"
+#include "engine/base/path.h"
 #include "engine/geometry/triangles/mesh.h"
 #include "engine/scene/part_tree.h"
 
@@ -296,7 +297,7 @@ static void name_file(loader *L, const char *path)
     char *dot = strrchr(L->stem, '.');
     if (dot && dot != L->stem)
         *dot = '\0';
-    L->obj = assimp_has_extension(path, ".obj");
+    L->obj = path_has_extension(path, ".obj");
 }
 
 bool assembly_load(const char *path, const assembly_sink *sink, tess_error *err)

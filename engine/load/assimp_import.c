@@ -46,6 +46,7 @@
 #include <sys/stat.h>
 
 #include "engine/geometry/triangles/mesh.h"
+#include "engine/base/path.h"
 #include "engine/base/progress.h"
 
 /* ValidateDataStructure turns out-of-range indices into an import failure
@@ -65,12 +66,6 @@
 static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
 
 /* ---- OBJ numbers, checked before assimp sees them ---------------------- */
-
-static bool has_extension(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    return n >= e && strcasecmp(path + n - e, ext) == 0;
-}
 
 /* How many numbers an OBJ vertex-data line holds: the counts assimp 5.2's
  * reader takes; it drops a "v" line of any other count without a word
@@ -469,7 +464,6 @@ static bool check_obj_numbers(const char *path, tess_error *err)
     return ok;
 }
 
-bool assimp_has_extension(const char *path, const char *ext) { return has_extension(path, ext); }
 
 /* ---- the scene ---------------------------------------------------------- */
 
@@ -614,7 +608,7 @@ static void *import_on_deep_stack(void *arg)
     import_job *job = arg;
     const char *path = job->path;
     tess_error *err = job->err;
-    if (has_extension(path, ".obj") ? !check_obj_numbers(path, err) : !assimp_check_gltf(path, err))
+    if (path_has_extension(path, ".obj") ? !check_obj_numbers(path, err) : !assimp_check_gltf(path, err))
         return NULL;
     const struct aiScene *scene = import_scene(path, BASE_FLAGS | job->flags, err);
     if (!scene)

@@ -49,7 +49,4 @@ bool assimp_append_triangles(struct mesh *m, const struct aiMesh *am, uint32_t f
  * Run by assimp_import_file on every file but .obj. */
 bool assimp_check_gltf(const char *path, tess_error *err);
 
-/* Does path end in ext (ASCII case-insensitive, ext with its dot)? */
-bool assimp_has_extension(const char *path, const char *ext);
-
 #endif

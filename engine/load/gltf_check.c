@@ -48,6 +48,7 @@
 #include <sys/stat.h>
 
 #include "engine/base/json_read.h"
+#include "engine/base/path.h"
 
 /* A .gltf's text may be as large as assimp reads (it refuses 4 GiB). */
 #define GLTF_TEXT_MAX_BYTES ((size_t)UINT32_MAX - 1)
@@ -334,7 +335,7 @@ static bool check_glb(const char *path, FILE *file, long long file_size, tess_er
 
 bool assimp_check_gltf(const char *path, tess_error *err)
 {
-    bool named_gltf = assimp_has_extension(path, ".gltf"), named_glb = assimp_has_extension(path, ".glb");
+    bool named_gltf = path_has_extension(path, ".gltf"), named_glb = path_has_extension(path, ".glb");
     FILE *file = fopen(path, "rb");
     if (!file) /* assimp names the file and the problem */
         return errno != ENOMEM || tess_error_set(err, "%s: out of memory opening it", path);

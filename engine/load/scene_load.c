@@ -9,23 +9,11 @@
 #include <sys/stat.h>
 
 #include "engine/geometry/particles/particle_kind.h"
+#include "engine/base/path.h"
 #include "engine/geometry/triangles/mesh_cache.h"
 #include "mesh_load.h"
 #include "particle_load.h"
 #include "ply_read.h"
-
-static bool has_extension(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    return n >= e && strcasecmp(path + n - e, ext) == 0;
-}
-
-/* The last path component, for naming a mesh after its file. */
-static const char *path_basename(const char *path)
-{
-    const char *slash = strrchr(path, '/');
-    return slash ? slash + 1 : path;
-}
 
 static scene *scene_load_particle_file(const char *path, tess_error *err);
 
@@ -40,7 +28,7 @@ static scene *scene_load_mesh_file(const char *path, bool spatial_splits, tess_e
     mesh *m = mesh_cache_load_file(path, &params, mesh_load, &cached, err);
     if (!m)
         return NULL;
-    if (m->triangle_count == 0 && m->vertex_count > 0 && has_extension(path, ".ply")) {
+    if (m->triangle_count == 0 && m->vertex_count > 0 && path_has_extension(path, ".ply")) {
         /* vertices only: a point set, drawn as particles (as the Embree peer does) */
         mesh_cache_abandon(&cached);
         mesh_destroy(m);
@@ -52,7 +40,7 @@ static scene *scene_load_mesh_file(const char *path, bool spatial_splits, tess_e
         uint64_t vertices = 0;
         int64_t faces = 0;
         tess_error probe = {{0}};
-        if (has_extension(path, ".ply") && ply_probe_counts(path, &vertices, &faces, &probe) && faces < 0)
+        if (path_has_extension(path, ".ply") && ply_probe_counts(path, &vertices, &faces, &probe) && faces < 0)
             tess_error_set(err, "%s: scene has no geometry (the point set has no points: 0 vertices)", path);
         else
             tess_error_set(err, "%s: scene has no geometry (the mesh has no triangles)", path);
@@ -153,11 +141,11 @@ scene *scene_load_with(const char *path, const scene_load_options *opts, tess_er
     const scene_load_options none = {0};
     if (!opts)
         opts = &none;
-    if (has_extension(path, ".json"))
+    if (path_has_extension(path, ".json"))
         return scene_load_json_with(path, opts, err);
-    if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
+    if (path_has_extension(path, ".gltf") || path_has_extension(path, ".glb"))
         return scene_load_assembly_file(path, err);
-    if (has_extension(path, ".dump") || has_extension(path, ".lammpstrj"))
+    if (path_has_extension(path, ".dump") || path_has_extension(path, ".lammpstrj"))
         return scene_load_particle_file(path, err);
     return scene_load_mesh_file(path, opts->spatial_splits, err);
 }

@@ -13,6 +13,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "engine/base/path.h"
+
 /* a header is text of a few hundred bytes; anything longer than this is not
  * one (and an attached NRRD's blank line must come within it) */
 #define HEADER_MAX_BYTES (1u << 20)
@@ -931,24 +933,13 @@ fail:
 
 /* ---- by name -------------------------------------------------------------- */
 
-static bool ends_with(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    if (n < m)
-        return false;
-    for (size_t i = 0; i < m; i++)
-        if (tolower((unsigned char)s[n - m + i]) != suffix[i])
-            return false;
-    return true;
-}
-
 volume *volume_load(const char *path, tess_error *err)
 {
-    if (ends_with(path, ".nrrd") || ends_with(path, ".nhdr"))
+    if (path_has_extension(path, ".nrrd") || path_has_extension(path, ".nhdr"))
         return volume_load_nrrd(path, err);
-    if (ends_with(path, ".txt"))
+    if (path_has_extension(path, ".txt"))
         return volume_load_raw_txt(path, err);
-    if (ends_with(path, ".raw")) {
+    if (path_has_extension(path, ".raw")) {
         char header[PATH_BYTES];
         if (snprintf(header, sizeof header, "%.*s.txt", (int)(strlen(path) - 4), path) >= (int)sizeof header) {
             tess_error_set(err, "%s: path too long", path);
